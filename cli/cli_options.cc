@@ -1,0 +1,91 @@
+#include "cli/cli_options.h"
+
+#include <tbb/global_control.h>
+
+#include <filesystem>
+
+#include "pipeline/errors.h"
+#include "pipeline/file_util.h"
+#include "pipeline/format.h"
+#include "pipeline/log.h"
+#include "pipeline/progress.h"
+#include "stages/stages.h"
+
+namespace p2n {
+namespace fs = std::filesystem;
+
+void AddCommonFlags(CLI::App& app, const OptionRegistry& registry, CommonFlags* flags) {
+  app.add_option("-w,--workspace", flags->workspace, "workspace folder (results, logs, cache)")->required();
+  app.add_option("--config", flags->config_file, "JSON file of options, nested or as dotted keys");
+  for (const OptionSpec& spec : registry.specs()) {
+    std::string help = spec.help;
+    if (!spec.unit.empty()) help += " [" + spec.unit + "]";
+    if (!spec.choices.empty()) {
+      std::string choices;
+      for (const std::string& choice : spec.choices) choices += (choices.empty() ? "" : "|") + choice;
+      help += " {" + choices + "}";
+    }
+    if (spec.kind == OptionKind::kRuntime) help += " (not remembered, not in the cache key)";
+    const std::string default_text = spec.default_value.is_string() ? spec.default_value.get<std::string>()
+                                                                     : spec.default_value.dump();
+    app.add_option_function<std::string>(
+           "--" + spec.key, [flags, key = spec.key](const std::string& text) { flags->option_text[key] = text; },
+           help)
+        ->default_str(default_text)
+        ->group("Options (remembered by the workspace; see README)");
+  }
+}
+
+std::optional<int> Parse(CLI::App& app, const OptionRegistry& registry, int argc, char** argv) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ExtrasError&) {
+    std::string message;
+    for (const std::string& extra : app.remaining()) {
+      if (extra.rfind("--", 0) != 0) {
+        message = format("unexpected argument '{}'", extra);
+        break;
+      }
+      const std::string key = extra.substr(2, extra.find('=') == std::string::npos ? std::string::npos
+                                                                                    : extra.find('=') - 2);
+      message = format("unknown option '--{}'", key);
+      const std::string suggestion = registry.Suggest(key);
+      if (!suggestion.empty()) message += format("; did you mean '--{}'?", suggestion);
+      break;
+    }
+    throw UserError(format("{} (see `photo2nerf {} --help`)", message, app.get_name()));
+  } catch (const CLI::ParseError& e) {
+    throw UserError(format("{} (see `photo2nerf {} --help`)", e.what(), app.get_name()));
+  }
+  return std::nullopt;
+}
+
+Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace, const CommonFlags& flags,
+                     bool remember) {
+  Config config(registry);
+  const fs::path remembered = workspace.root() / "options.json";
+  if (fs::exists(remembered)) config.Merge(ReadJsonFile(remembered), remembered.string());
+  if (!flags.config_file.empty()) config.MergeFile(flags.config_file);
+  for (const auto& [key, text] : flags.option_text) config.SetFromText(key, text, "--" + key);
+  CheckAllOptions(config);
+  if (!remember) return config;
+  WriteJsonAtomic(remembered, config.ExplicitResultOptions());
+  WriteJsonAtomic(workspace.ConfigPath(), config.ToJson());
+  return config;
+}
+
+std::unique_ptr<tbb::global_control> ApplyRunOptions(const Config& config, const Workspace& workspace) {
+  const RunOptions options = ReadOptions<RunOptions>(config, "run");
+  SetLogLevel(ParseLogLevel(options.log_level));
+  SetProgressStyle(ParseProgressStyle(options.progress));
+  SetLogFile(workspace.LogDir() / "photo2nerf.log");
+  if (options.threads == 0) return nullptr;
+  return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                               static_cast<size_t>(options.threads));
+}
+
+}  // namespace p2n

@@ -1,0 +1,43 @@
+#pragma once
+// What the pipeline subcommands share: the workspace flag, dotted option flags generated from the option
+// registry, config resolution, and runtime settings (threads, logging, progress).
+
+#include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "pipeline/options.h"
+#include "pipeline/workspace.h"
+
+namespace p2n {
+
+// The flags of one pipeline subcommand as typed.
+struct CommonFlags {
+  std::string workspace;
+  std::string config_file;
+  std::map<std::string, std::string> option_text;  // dotted key -> text, for the --section.key flags given
+};
+
+// Adds -w/--workspace, --config, and one --section.key flag for every registered option (with its help,
+// unit and default) to `app`.
+void AddCommonFlags(CLI::App& app, const OptionRegistry& registry, CommonFlags* flags);
+
+// Parses argv into `app`. Returns an exit code when the process should end now (--help: 0); throws UserError
+// for a malformed command line, naming the unknown option and the nearest known one.
+std::optional<int> Parse(CLI::App& app, const OptionRegistry& registry, int argc, char** argv);
+
+// The resolved configuration: defaults, then what the workspace remembers (options.json), then --config, then
+// the flags; every value checked. With `remember`, writes options.json (the result options set so far) and
+// config.json (everything) into the workspace.
+Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace, const CommonFlags& flags,
+                     bool remember);
+
+// Applies run.threads, run.log_level and run.progress and sends the log to the workspace's log file. The
+// returned object keeps the thread limit alive.
+std::unique_ptr<tbb::global_control> ApplyRunOptions(const Config& config, const Workspace& workspace);
+
+}  // namespace p2n

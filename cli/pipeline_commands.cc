@@ -1,0 +1,145 @@
+// run, the per-stage commands, status and clean.
+
+#include <tbb/global_control.h>
+
+#include <filesystem>
+#include <iostream>
+
+#include "cli/cli_options.h"
+#include "cli/commands.h"
+#include "pipeline/errors.h"
+#include "pipeline/format.h"
+#include "pipeline/log.h"
+#include "pipeline/runner.h"
+#include "stages/stages.h"
+
+namespace p2n {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr size_t kMaxReasonsShown = 5;
+
+std::string CommandLine(int argc, char** argv) {
+  std::string line = "photo2nerf";
+  for (int i = 0; i < argc; ++i) line += std::string(" ") + argv[i];
+  return line;
+}
+
+// Shared by `run` and the stage commands: `stage` is empty for `run`.
+int RunPipeline(int argc, char** argv, const std::string& stage) {
+  const OptionRegistry registry = AllOptions();
+  const Runner runner = MakeRunner();
+  const bool is_run = stage.empty();
+  CLI::App app(is_run ? "Run every stage that is not fresh, from photos to results."
+                      : format("Run the {} stage (its upstream stages must be fresh).", stage),
+               argv[0]);
+  CommonFlags flags;
+  std::string photos;
+  RunRequest request;
+  bool force = false;
+  if (is_run || runner.Get(stage).upstream().empty()) {
+    app.add_option("photos", photos, "folder of photos (remembered by the workspace after the first run)");
+  }
+  if (is_run) {
+    app.add_option("--from", request.from, "start at this stage; the stages before it must be fresh");
+    app.add_option("--until", request.until, "stop after this stage");
+    app.add_option("--force", request.force, "rerun this stage and everything after it, even if fresh");
+  } else {
+    app.add_flag("--force", force, "rerun the stage even if it is fresh");
+  }
+  AddCommonFlags(app, registry, &flags);
+  if (auto code = Parse(app, registry, argc, argv)) return *code;
+  if (!is_run) {
+    request.from = request.until = stage;
+    if (force) request.force.push_back(stage);
+  }
+  for (const auto& name : {request.from, request.until}) {
+    if (name) runner.Get(*name);  // unknown stage names fail before anything is written
+  }
+  for (const std::string& name : request.force) runner.Get(name);
+
+  if (!photos.empty() && !fs::is_directory(photos)) {
+    throw UserError(fs::exists(photos) ? format("'{}' is a file, not a folder; give the folder that holds your photos", photos)
+                                       : format("photo folder '{}' does not exist", photos));
+  }
+  Workspace workspace = Workspace::Open(flags.workspace, /*create=*/!photos.empty());
+  WorkspaceLock lock(workspace, CommandLine(argc, argv));
+  if (!photos.empty()) {
+    if (fs::equivalent(photos, workspace.root())) {
+      throw UserError("the workspace must not be the photo folder itself; choose another folder with -w");
+    }
+    workspace.SetInput(photos);
+  }
+  const Config config = ResolveConfig(registry, workspace, flags, /*remember=*/true);
+  const auto thread_limit = ApplyRunOptions(config, workspace);
+  LogInfo(format("{} (workspace {})", CommandLine(argc, argv), workspace.root().string()));
+
+  const std::vector<StageRun> runs = runner.Run(workspace, config, request);
+  size_t ran = 0;
+  double seconds = 0;
+  for (const StageRun& run : runs) {
+    ran += run.ran;
+    seconds += run.wall_seconds;
+  }
+  LogInfo(format("{} of {} stages ran ({:.2f} s), {} fresh; results in {}", ran, runs.size(), seconds,
+                 runs.size() - ran, workspace.root().string()));
+  return kExitOk;
+}
+
+}  // namespace
+
+int RunRun(int argc, char** argv) { return RunPipeline(argc, argv, ""); }
+
+int RunStage(int argc, char** argv) { return RunPipeline(argc, argv, argv[0]); }
+
+int RunStatus(int argc, char** argv) {
+  const OptionRegistry registry = AllOptions();
+  const Runner runner = MakeRunner();
+  CLI::App app("Say for each stage whether it is fresh, missing, incomplete or stale, and why.", argv[0]);
+  CommonFlags flags;
+  AddCommonFlags(app, registry, &flags);
+  if (auto code = Parse(app, registry, argc, argv)) return *code;
+  const Workspace workspace = Workspace::Open(flags.workspace, /*create=*/false);
+  const Config config = ResolveConfig(registry, workspace, flags, /*remember=*/false);
+
+  std::cout << "workspace " << workspace.root().string() << "\n";
+  if (workspace.input()) std::cout << "photos    " << workspace.input()->string() << "\n";
+  for (const StageStatus& status : runner.Status(workspace, config)) {
+    std::string detail;
+    if (status.state == StageState::kFresh) {
+      detail = format("key {}, {:.2f} s", status.expected_key.substr(0, 12), status.manifest->wall_seconds);
+      for (const auto& [name, value] : status.manifest->summary.items()) detail += format(", {} {}", value.dump(), name);
+    }
+    std::cout << format("{:<10} {:<11} {}\n", status.stage->name(), StageStateName(status.state), detail);
+    for (size_t i = 0; i < status.reasons.size() && i < kMaxReasonsShown; ++i) {
+      std::cout << format("{:<22} {}\n", "", status.reasons[i]);
+    }
+    if (status.reasons.size() > kMaxReasonsShown) {
+      std::cout << format("{:<22} ... and {} more\n", "", status.reasons.size() - kMaxReasonsShown);
+    }
+  }
+  return kExitOk;
+}
+
+int RunClean(int argc, char** argv) {
+  const Runner runner = MakeRunner();
+  CLI::App app("Remove stage results from a workspace (all stages unless --stage is given).", argv[0]);
+  std::string workspace_path;
+  std::vector<std::string> stages;
+  app.add_option("-w,--workspace", workspace_path, "workspace folder")->required();
+  app.add_option("--stage", stages, "a stage whose results to remove (repeatable)");
+  if (auto code = Parse(app, OptionRegistry(), argc, argv)) return *code;
+  const Workspace workspace = Workspace::Open(workspace_path, /*create=*/false);
+  WorkspaceLock lock(workspace, CommandLine(argc, argv));
+  if (stages.empty()) {
+    for (const auto& stage : runner.stages()) stages.push_back(stage->name());
+  }
+  for (const std::string& name : stages) runner.Get(name);
+  for (const std::string& name : stages) {
+    runner.Clean(workspace, name);
+    LogInfo(format("{}: removed", name));
+  }
+  return kExitOk;
+}
+
+}  // namespace p2n

@@ -1,0 +1,113 @@
+#include "nerf/image_io.h"
+
+#include <OpenImageIO/hash.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+
+namespace p2n {
+namespace {
+
+int OpenCvDepth(OIIO::TypeDesc type) {
+  if (type == OIIO::TypeDesc::UINT8) return CV_8U;
+  if (type == OIIO::TypeDesc::UINT16) return CV_16U;
+  return CV_32F;
+}
+
+}  // namespace
+
+ReadImageResult ReadImage(const std::filesystem::path& path) {
+  ReadImageResult result;
+  std::error_code error;
+  if (std::filesystem::file_size(path, error) == 0 && !error) {
+    result.error = "empty file (0 bytes)";
+    return result;
+  }
+  auto input = OIIO::ImageInput::open(path.string());
+  if (!input) {
+    result.error = "not a readable image: " + OIIO::geterror();
+    return result;
+  }
+  OIIO::ImageSpec spec = input->spec();
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
+    result.error = "the image has no pixels";
+    return result;
+  }
+  if (spec.width > kMaxImageSide || spec.height > kMaxImageSide ||
+      int64_t{spec.width} * spec.height > kMaxImagePixels || spec.nchannels > 16) {
+    result.error = "declared size " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + "x" +
+                   std::to_string(spec.nchannels) + " is beyond what photo2nerf reads";
+    return result;
+  }
+  // Keep 8- and 16-bit integers; everything else (half, float, 32-bit ints) becomes float.
+  if (spec.format != OIIO::TypeDesc::UINT8 && spec.format != OIIO::TypeDesc::UINT16) {
+    spec.format = OIIO::TypeDesc::FLOAT;
+  }
+  spec.x = spec.y = spec.z = 0;
+  spec.full_x = spec.full_y = spec.full_z = 0;
+  spec.full_width = spec.width;
+  spec.full_height = spec.height;
+  OIIO::ImageBuf image(spec, OIIO::InitializePixels::No);
+  const bool read_ok = input->read_image(0, 0, 0, spec.nchannels, spec.format, image.localpixels());
+  const std::string decoder_message = input->geterror();
+  if (!read_ok || !decoder_message.empty()) {
+    result.error = "cannot decode: " + (decoder_message.empty() ? std::string("unknown decoder error") : decoder_message);
+    return result;
+  }
+  result.orientation = spec.get_int_attribute("Orientation", 1);
+  if (result.orientation != 1) {
+    result.image = OIIO::ImageBufAlgo::reorient(image);
+    if (result.image.has_error()) {
+      result.error = "cannot apply EXIF orientation: " + result.image.geterror();
+      return result;
+    }
+  } else {
+    result.image = std::move(image);
+  }
+  return result;
+}
+
+OIIO::ImageBuf DownsizeToFit(const OIIO::ImageBuf& image, int max_side) {
+  const OIIO::ImageSpec& spec = image.spec();
+  const int longest = std::max(spec.width, spec.height);
+  if (max_side <= 0 || longest <= max_side) return image;
+  const double scale = static_cast<double>(max_side) / longest;
+  const int width = std::max(1, static_cast<int>(std::lround(spec.width * scale)));
+  const int height = std::max(1, static_cast<int>(std::lround(spec.height * scale)));
+  const int depth = OpenCvDepth(spec.format);
+  const cv::Mat source(spec.height, spec.width, CV_MAKETYPE(depth, spec.nchannels),
+                       const_cast<void*>(image.localpixels()));
+  OIIO::ImageSpec out_spec(width, height, spec.nchannels, spec.format);
+  out_spec.channelnames = spec.channelnames;
+  out_spec.alpha_channel = spec.alpha_channel;
+  OIIO::ImageBuf out(out_spec, OIIO::InitializePixels::No);
+  cv::Mat target(height, width, CV_MAKETYPE(depth, spec.nchannels), out.localpixels());
+  cv::resize(source, target, target.size(), 0, 0, cv::INTER_AREA);
+  return out;
+}
+
+std::string PixelFingerprint(const OIIO::ImageBuf& image) {
+  const OIIO::ImageSpec& spec = image.spec();
+  const std::string layout = std::to_string(spec.width) + "x" + std::to_string(spec.height) + "x" +
+                             std::to_string(spec.nchannels) + ":" + spec.format.c_str();
+  OIIO::SHA1 sha1;
+  sha1.append(layout.data(), layout.size());
+  sha1.append(image.localpixels(), spec.image_bytes());
+  return sha1.digest();
+}
+
+std::string WriteImage(const OIIO::ImageBuf& image, const std::filesystem::path& path) {
+  auto output = OIIO::ImageOutput::create(path.string());
+  if (!output) return "cannot write '" + path.string() + "': " + OIIO::geterror();
+  OIIO::ImageSpec spec = image.spec();
+  spec.attribute("png:compressionLevel", 3);  // fast: ingest writes many large PNGs
+  if (!output->open(path.string(), spec) ||
+      !output->write_image(spec.format, image.localpixels()) || !output->close()) {
+    return "cannot write '" + path.string() + "': " + output->geterror();
+  }
+  return "";
+}
+
+}  // namespace p2n

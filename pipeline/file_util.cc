@@ -1,0 +1,76 @@
+#include "pipeline/file_util.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+
+#include "pipeline/errors.h"
+#include "pipeline/format.h"
+
+namespace p2n {
+namespace fs = std::filesystem;
+
+void WriteFileAtomic(const fs::path& path, std::string_view contents) {
+  const fs::path temporary = path.string() + ".tmp";
+  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  const auto fail = [&](const char* what) {
+    const std::string reason = std::strerror(errno);
+    if (fd >= 0) ::close(fd);
+    ::unlink(temporary.c_str());
+    throw UserError(format("cannot {} '{}': {}", what, path.string(), reason));
+  };
+  if (fd < 0) fail("create");
+  size_t written = 0;
+  while (written < contents.size()) {
+    const ssize_t n = ::write(fd, contents.data() + written, contents.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) fail("write");
+    written += static_cast<size_t>(n);
+  }
+  if (::fsync(fd) != 0) fail("write");
+  if (::close(fd) != 0) {
+    const std::string reason = std::strerror(errno);
+    ::unlink(temporary.c_str());
+    throw UserError(format("cannot write '{}': {}", path.string(), reason));
+  }
+  if (::rename(temporary.c_str(), path.c_str()) != 0) {
+    const std::string reason = std::strerror(errno);
+    ::unlink(temporary.c_str());
+    throw UserError(format("cannot write '{}': {}", path.string(), reason));
+  }
+}
+
+void WriteJsonAtomic(const fs::path& path, const nlohmann::json& value) {
+  WriteFileAtomic(path, value.dump(2) + "\n");
+}
+
+nlohmann::json ReadJsonFile(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw UserError(format("cannot read '{}'", path.string()));
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw UserError(format("'{}' is not valid JSON: {}", path.string(), e.what()));
+  }
+}
+
+void SyncDirectory(const fs::path& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
+std::string LowerExtension(const fs::path& path) {
+  std::string extension = path.extension().string();
+  if (!extension.empty()) extension.erase(0, 1);
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension;
+}
+
+}  // namespace p2n

@@ -1,0 +1,23 @@
+#pragma once
+// File helpers with the guarantees the cache rule needs: writes are atomic (temporary file, fsync, rename).
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace p2n {
+
+// Writes `contents` to `path` atomically; UserError naming the file when it cannot (disk full, no permission).
+void WriteFileAtomic(const std::filesystem::path& path, std::string_view contents);
+// Pretty JSON, classic locale, doubles that round-trip; atomic.
+void WriteJsonAtomic(const std::filesystem::path& path, const nlohmann::json& value);
+// Reads a JSON file; UserError naming the file when it is missing or malformed.
+nlohmann::json ReadJsonFile(const std::filesystem::path& path);
+// fsync on a folder, so that a rename inside it is durable.
+void SyncDirectory(const std::filesystem::path& path);
+// Lower-case extension without the dot ("JPG" -> "jpg").
+std::string LowerExtension(const std::filesystem::path& path);
+
+}  // namespace p2n

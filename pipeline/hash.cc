@@ -1,0 +1,55 @@
+#include "pipeline/hash.h"
+
+#include <OpenImageIO/hash.h>
+
+#include <fstream>
+#include <vector>
+
+#include "pipeline/errors.h"
+
+namespace p2n {
+
+struct Hasher::Impl {
+  OIIO::SHA1 sha1;
+  bool finished = false;
+};
+
+Hasher::Hasher() : impl_(std::make_unique<Impl>()) {}
+Hasher::~Hasher() = default;
+
+Hasher& Hasher::Bytes(const void* data, size_t size) {
+  P2N_CHECK(!impl_->finished, "Hasher used after HexDigest()");
+  impl_->sha1.append(data, size);
+  return *this;
+}
+
+Hasher& Hasher::Field(std::string_view value) {
+  const uint64_t size = value.size();
+  Bytes(&size, sizeof(size));
+  return Bytes(value.data(), value.size());
+}
+
+Hasher& Hasher::Field(int64_t value) { return Field(std::to_string(value)); }
+
+std::string Hasher::HexDigest() {
+  P2N_CHECK(!impl_->finished, "HexDigest() called twice");
+  impl_->finished = true;
+  return impl_->sha1.digest();
+}
+
+std::string Sha1Hex(std::string_view data) { return Hasher().Bytes(data.data(), data.size()).HexDigest(); }
+
+std::string Sha1OfFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw UserError("cannot read '" + path.string() + "': check that it exists and is readable");
+  Hasher hasher;
+  std::vector<char> buffer(1 << 20);
+  while (in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    hasher.Bytes(buffer.data(), static_cast<size_t>(in.gcount()));
+  }
+  if (in.bad()) throw UserError("error while reading '" + path.string() + "'");
+  return hasher.HexDigest();
+}
+
+}  // namespace p2n

@@ -1,0 +1,196 @@
+#include "pipeline/options.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+
+#include "pipeline/errors.h"
+#include "pipeline/format.h"
+
+namespace p2n {
+namespace {
+
+size_t EditDistance(std::string_view a, std::string_view b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t substitution = diagonal + (a[i - 1] == b[j - 1] ? 0 : 1);
+      diagonal = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, substitution});
+    }
+  }
+  return row[b.size()];
+}
+
+std::string TypeName(const nlohmann::json& value) {
+  if (value.is_boolean()) return "true or false";
+  if (value.is_number_integer()) return "an integer";
+  if (value.is_number()) return "a number";
+  return "a string";
+}
+
+template <class T>
+bool ParseNumber(std::string_view text, T* value) {
+  const char* end = text.data() + text.size();
+  auto [ptr, error] = std::from_chars(text.data(), end, *value);
+  return error == std::errc() && ptr == end;
+}
+
+std::string UnknownKeyMessage(const OptionRegistry& registry, std::string_view key, std::string_view origin) {
+  std::string message = format("unknown option '{}' (from {})", key, origin);
+  const std::string suggestion = registry.Suggest(key);
+  if (!suggestion.empty()) message += format("; did you mean '{}'?", suggestion);
+  return message + "; `photo2nerf run --help` lists every option";
+}
+
+}  // namespace
+
+void OptionRegistry::Add(OptionSpec spec) {
+  P2N_CHECK(spec.key.find('.') != std::string::npos, "option key without a section: " + spec.key);
+  P2N_CHECK(Find(spec.key) == nullptr, "option registered twice: " + spec.key);
+  specs_.push_back(std::move(spec));
+}
+
+const OptionSpec* OptionRegistry::Find(std::string_view key) const {
+  for (const OptionSpec& spec : specs_) {
+    if (spec.key == key) return &spec;
+  }
+  return nullptr;
+}
+
+std::string OptionRegistry::Suggest(std::string_view key) const {
+  std::string best;
+  size_t best_distance = std::max<size_t>(3, key.size() / 3) + 1;
+  for (const OptionSpec& spec : specs_) {
+    const size_t distance = EditDistance(key, spec.key);
+    if (distance < best_distance) {
+      best_distance = distance;
+      best = spec.key;
+    }
+  }
+  return best;
+}
+
+Config::Config(const OptionRegistry& registry) : registry_(&registry), values_(nlohmann::json::object()) {
+  for (const OptionSpec& spec : registry.specs()) values_[spec.key] = spec.default_value;
+}
+
+void Config::Set(std::string_view key, const nlohmann::json& value, std::string_view origin) {
+  const OptionSpec* spec = registry_->Find(key);
+  if (spec == nullptr) throw UserError(UnknownKeyMessage(*registry_, key, origin));
+  const nlohmann::json& expected = spec->default_value;
+  const bool type_ok = (expected.is_boolean() && value.is_boolean()) ||
+                       (expected.is_number_integer() && value.is_number_integer()) ||
+                       (expected.is_number_float() && value.is_number()) ||
+                       (expected.is_string() && value.is_string());
+  if (!type_ok) {
+    throw UserError(format("option '{}' (from {}) must be {}, not {}", key, origin, TypeName(expected),
+                           value.dump()));
+  }
+  if (!spec->choices.empty() &&
+      std::find(spec->choices.begin(), spec->choices.end(), value.get<std::string>()) == spec->choices.end()) {
+    std::string allowed;
+    for (const std::string& choice : spec->choices) allowed += (allowed.empty() ? "" : ", ") + choice;
+    throw UserError(format("option '{}' (from {}) must be one of: {}; got '{}'", key, origin, allowed,
+                           value.get<std::string>()));
+  }
+  explicit_keys_.insert(std::string(key));
+  values_[std::string(key)] = expected.is_number_float() ? nlohmann::json(value.get<double>()) : value;
+}
+
+void Config::SetFromText(std::string_view key, std::string_view text, std::string_view origin) {
+  const OptionSpec* spec = registry_->Find(key);
+  if (spec == nullptr) throw UserError(UnknownKeyMessage(*registry_, key, origin));
+  const nlohmann::json& expected = spec->default_value;
+  const auto bad_value = [&] {
+    return UserError(format("option '{}' (from {}) must be {}, not '{}'", key, origin, TypeName(expected), text));
+  };
+  if (expected.is_boolean()) {
+    if (text == "true" || text == "1" || text == "yes" || text == "on") return Set(key, true, origin);
+    if (text == "false" || text == "0" || text == "no" || text == "off") return Set(key, false, origin);
+    throw bad_value();
+  }
+  if (expected.is_number_integer()) {
+    int64_t value = 0;
+    if (!ParseNumber(text, &value)) throw bad_value();
+    return Set(key, value, origin);
+  }
+  if (expected.is_number_float()) {
+    double value = 0;
+    if (!ParseNumber(text, &value) || !std::isfinite(value)) throw bad_value();
+    return Set(key, value, origin);
+  }
+  Set(key, std::string(text), origin);
+}
+
+void Config::Merge(const nlohmann::json& object, std::string_view origin) {
+  if (!object.is_object()) throw UserError(format("{}: expected a JSON object of options", origin));
+  for (const auto& [name, value] : object.items()) {
+    if (!value.is_object()) {
+      Set(name, value, origin);
+      continue;
+    }
+    for (const auto& [sub_name, sub_value] : value.items()) {
+      if (sub_value.is_object()) {
+        throw UserError(format("{}: option '{}.{}' is nested too deeply", origin, name, sub_name));
+      }
+      Set(name + "." + sub_name, sub_value, origin);
+    }
+  }
+}
+
+void Config::MergeFile(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw UserError(format("cannot read config file '{}'", path.string()));
+  nlohmann::json object;
+  try {
+    object = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw UserError(format("config file '{}' is not valid JSON: {}", path.string(), e.what()));
+  }
+  Merge(object, path.string());
+}
+
+const nlohmann::json& Config::Get(std::string_view key) const {
+  const auto it = values_.find(std::string(key));
+  P2N_CHECK(it != values_.end(), "option not registered: " + std::string(key));
+  return *it;
+}
+
+nlohmann::json Config::ResultOptions(std::string_view section) const {
+  nlohmann::json result = nlohmann::json::object();
+  const std::string prefix = std::string(section) + ".";
+  for (const OptionSpec& spec : registry_->specs()) {
+    if (spec.kind == OptionKind::kResult && spec.key.rfind(prefix, 0) == 0) result[spec.key] = Get(spec.key);
+  }
+  return result;
+}
+
+nlohmann::json Config::ToJson() const {
+  nlohmann::json nested = nlohmann::json::object();
+  for (const OptionSpec& spec : registry_->specs()) {
+    const size_t dot = spec.key.find('.');
+    nested[spec.key.substr(0, dot)][spec.key.substr(dot + 1)] = Get(spec.key);
+  }
+  return nested;
+}
+
+nlohmann::json Config::ExplicitResultOptions() const {
+  nlohmann::json nested = nlohmann::json::object();
+  for (const std::string& key : explicit_keys_) {
+    if (registry_->Find(key)->kind == OptionKind::kRuntime) continue;
+    const size_t dot = key.find('.');
+    nested[key.substr(0, dot)][key.substr(dot + 1)] = Get(key);
+  }
+  return nested;
+}
+
+void CheckOption(bool condition, std::string_view key, std::string_view rule) {
+  if (!condition) throw UserError(format("option {} {}", key, rule));
+}
+
+}  // namespace p2n

@@ -1,0 +1,64 @@
+#pragma once
+// Runs a graph of stages in a workspace, skipping fresh ones, and tells the state of each (DESIGN.md §2).
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pipeline/manifest.h"
+#include "pipeline/stage.h"
+
+namespace p2n {
+
+enum class StageState { kFresh, kMissing, kIncomplete, kStale };
+const char* StageStateName(StageState state);
+
+struct StageStatus {
+  const Stage* stage = nullptr;
+  StageState state = StageState::kMissing;
+  std::vector<std::string> reasons;  // why it is not fresh
+  KeyInputs expected;                // what a fresh result would be made from
+  std::string expected_key;
+  std::optional<Manifest> manifest;  // of the result on disk, if complete
+};
+
+struct RunRequest {
+  std::optional<std::string> from;   // stages before it are not run (they must be fresh)
+  std::optional<std::string> until;  // stages after it are not run
+  std::vector<std::string> force;    // rerun these and everything downstream of them, even if fresh
+};
+
+struct StageRun {
+  std::string stage;
+  bool ran = false;  // false: skipped as fresh
+  double wall_seconds = 0;
+};
+
+class Runner {
+ public:
+  // Stages in an order where every stage comes after its upstream stages; InternalError otherwise.
+  explicit Runner(std::vector<std::unique_ptr<Stage>> stages);
+
+  const std::vector<std::unique_ptr<Stage>>& stages() const { return stages_; }
+  // The stage of that name; UserError listing the stages when there is none.
+  const Stage& Get(std::string_view name) const;
+
+  std::vector<StageStatus> Status(const Workspace& workspace, const Config& config) const;
+  // Runs what the request asks for. Throws what a stage throws (its staging folder stays, so `status` says
+  // incomplete); the caller holds the workspace lock.
+  std::vector<StageRun> Run(const Workspace& workspace, const Config& config, const RunRequest& request) const;
+  // Removes the stage's result and any partial or old copies of it.
+  void Clean(const Workspace& workspace, std::string_view name) const;
+
+ private:
+  size_t IndexOf(std::string_view name) const;
+  // Whether stage `i` depends on stage `j`, directly or not.
+  bool DependsOn(size_t i, size_t j) const;
+  void RunOne(const Workspace& workspace, const Config& config, const StageStatus& status) const;
+
+  std::vector<std::unique_ptr<Stage>> stages_;
+};
+
+}  // namespace p2n

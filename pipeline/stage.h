@@ -1,0 +1,51 @@
+#pragma once
+// The stage contract (DESIGN.md §2): a stage declares its name, folder, format version, upstream stages, the
+// option sections whose result options change its output, and any inputs from outside the workspace. Its
+// cache key is a stable hash of those plus its upstream stages' keys. Run() writes into the staging folder;
+// the pipeline writes the manifest and moves the folder into place.
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "pipeline/options.h"
+#include "pipeline/workspace.h"
+
+namespace p2n {
+
+// What a stage's Run() sees.
+struct StageContext {
+  std::filesystem::path output_dir;                             // the staging folder to write into
+  const Workspace& workspace;
+  const Config& config;
+  std::map<std::string, std::filesystem::path> upstream_dirs;  // upstream name -> its complete result folder
+  nlohmann::json summary = nlohmann::json::object();           // short facts kept in the manifest
+};
+
+class Stage {
+ public:
+  virtual ~Stage() = default;
+
+  virtual std::string name() const = 0;
+  // The folder inside the workspace ("00_ingest"); defaults to the name.
+  virtual std::string folder() const { return name(); }
+  // Bump when the stage's output changes for the same inputs; results of another version are stale.
+  virtual int format_version() const = 0;
+  virtual std::vector<std::string> upstream() const { return {}; }
+  // Sections whose kResult options are part of the key; defaults to the stage's own name.
+  virtual std::vector<std::string> option_sections() const { return {name()}; }
+  // Inputs from outside the workspace, as label -> fingerprint ("image 0001.jpg" -> SHA-1,
+  // "tool colmap" -> "3.8"). Labels appear in `status` messages ("input image 0001.jpg changed").
+  virtual std::map<std::string, std::string> ExternalInputs(const Workspace& workspace,
+                                                            const Config& config) const {
+    (void)workspace;
+    (void)config;
+    return {};
+  }
+  virtual void Run(StageContext& context) const = 0;
+};
+
+}  // namespace p2n

@@ -1,0 +1,198 @@
+#include "stages/ingest_stage.h"
+
+#include <OpenImageIO/imagebufalgo.h>
+#include <tbb/parallel_for.h>
+
+#include <mutex>
+#include <set>
+#include <variant>
+
+#include "nerf/image_io.h"
+#include "pipeline/cancel.h"
+#include "pipeline/errors.h"
+#include "pipeline/file_util.h"
+#include "pipeline/format.h"
+#include "pipeline/hash.h"
+#include "pipeline/log.h"
+#include "pipeline/progress.h"
+
+namespace p2n {
+namespace fs = std::filesystem;
+namespace {
+
+const std::set<std::string> kImageExtensions = {"jpg", "jpeg", "png", "tif", "tiff", "exr"};
+
+fs::path InputFolder(const Workspace& workspace) {
+  if (!workspace.input()) {
+    throw UserError(format("workspace '{}' has no photo folder yet; run `photo2nerf run PHOTOS -w {}`",
+                           workspace.root().string(), workspace.root().string()));
+  }
+  return *workspace.input();
+}
+
+struct IngestedImage {
+  std::string name;    // output file name inside images/
+  std::string source;  // input file name
+  int width = 0, height = 0, channels = 0;
+  int source_width = 0, source_height = 0;
+  int orientation = 1;
+  std::string fingerprint;
+};
+
+struct Skipped {
+  std::string file;
+  std::string reason;
+};
+
+// Decodes one photo and writes what later stages read. Files that need no change are copied byte for byte.
+std::variant<IngestedImage, Skipped> IngestOne(const fs::path& source, const fs::path& images_dir,
+                                               const IngestOptions& options) {
+  const std::string file = source.filename().string();
+  ReadImageResult read = ReadImage(source);
+  if (!read.ok()) return Skipped{file, read.error};
+  IngestedImage out;
+  out.source = file;
+  out.orientation = read.orientation;
+  out.fingerprint = PixelFingerprint(read.image);
+  out.source_width = read.image.spec().width;
+  out.source_height = read.image.spec().height;
+  OIIO::ImageBuf image = DownsizeToFit(read.image, options.max_image_size);
+  const bool is_float = image.spec().format == OIIO::TypeDesc::FLOAT;
+  const std::string extension = LowerExtension(source);
+  const bool unchanged = read.orientation == 1 && image.spec().width == out.source_width && !is_float &&
+                         (extension == "jpg" || extension == "jpeg" || extension == "png");
+  out.width = image.spec().width;
+  out.height = image.spec().height;
+  out.channels = image.spec().nchannels;
+  if (unchanged) {
+    out.name = file;
+    std::error_code error;
+    fs::copy_file(source, images_dir / out.name, fs::copy_options::overwrite_existing, error);
+    if (error) throw UserError(format("cannot write '{}': {}", (images_dir / out.name).string(), error.message()));
+    return out;
+  }
+  // Anything else becomes a PNG, named after the file and its extension so that names stay unique
+  // (a.png, a_tif.png, a_PNG.png); HDR (float) images are encoded to sRGB, 16 bits.
+  const std::string original_extension = source.extension().string().substr(1);
+  out.name = source.stem().string() + (original_extension == "png" ? "" : "_" + original_extension) + ".png";
+  if (is_float) {
+    image = OIIO::ImageBufAlgo::colorconvert(image, "linear", "sRGB");
+    OIIO::ImageBuf sixteen(OIIO::ImageSpec(image.spec().width, image.spec().height, image.spec().nchannels,
+                                           OIIO::TypeDesc::UINT16));
+    sixteen.copy_pixels(image);
+    image = std::move(sixteen);
+  }
+  const std::string error = WriteImage(image, images_dir / out.name);
+  if (!error.empty()) throw UserError(error);
+  return out;
+}
+
+}  // namespace
+
+void IngestOptions::Check() const {
+  CheckOption(max_image_size == 0 || max_image_size >= 16, "ingest.max_image_size",
+              format("must be 0 (keep the size) or at least 16 pixels, not {}", max_image_size));
+  CheckOption(min_images >= 1, "ingest.min_images", format("must be at least 1, not {}", min_images));
+}
+
+std::vector<fs::path> ListPhotos(const fs::path& folder) {
+  std::error_code error;
+  const fs::file_status status = fs::status(folder, error);
+  if (!fs::exists(status)) {
+    throw UserError(format("photo folder '{}' does not exist; give the folder that holds your photos",
+                           folder.string()));
+  }
+  if (!fs::is_directory(status)) {
+    throw UserError(format("'{}' is a file, not a folder; give the folder that holds your photos", folder.string()));
+  }
+  std::vector<fs::path> photos;
+  size_t other_files = 0;
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder, error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.empty() || name[0] == '.' || !entry.is_regular_file()) continue;
+    if (kImageExtensions.count(LowerExtension(entry.path()))) {
+      photos.push_back(entry.path());
+    } else {
+      ++other_files;
+    }
+  }
+  if (error) throw UserError(format("cannot list the photo folder '{}': {}", folder.string(), error.message()));
+  if (photos.empty()) {
+    throw UserError(format("no photos in '{}' (looked for .jpg, .jpeg, .png, .tif, .tiff, .exr{})", folder.string(),
+                           other_files ? format("; {} other files were ignored", other_files) : ""));
+  }
+  std::sort(photos.begin(), photos.end());
+  return photos;
+}
+
+std::map<std::string, std::string> IngestStage::ExternalInputs(const Workspace& workspace, const Config&) const {
+  const fs::path folder = InputFolder(workspace);
+  std::vector<fs::path> photos;
+  try {
+    photos = ListPhotos(folder);
+  } catch (const UserError&) {
+    return {{"folder " + folder.string(), "unreadable or without photos"}};  // Run() says why
+  }
+  std::vector<std::string> digests(photos.size());
+  tbb::parallel_for(size_t{0}, photos.size(), [&](size_t i) { digests[i] = Sha1OfFile(photos[i]); });
+  std::map<std::string, std::string> inputs;
+  for (size_t i = 0; i < photos.size(); ++i) inputs["image " + photos[i].filename().string()] = digests[i];
+  return inputs;
+}
+
+void IngestStage::Run(StageContext& context) const {
+  const IngestOptions options = ReadOptions<IngestOptions>(context.config, "ingest");
+  const fs::path folder = InputFolder(context.workspace);
+  const std::vector<fs::path> photos = ListPhotos(folder);
+  const fs::path images_dir = context.output_dir / "images";
+  fs::create_directories(images_dir);
+
+  std::vector<std::variant<IngestedImage, Skipped>> results(photos.size());
+  {
+    Progress progress("ingest: decoding", static_cast<int64_t>(photos.size()), "images");
+    tbb::parallel_for(size_t{0}, photos.size(), [&](size_t i) {
+      if (CancelRequested()) return;
+      results[i] = IngestOne(photos[i], images_dir, options);
+      progress.Add();
+    });
+  }
+  ThrowIfCancelled();
+
+  nlohmann::json images = nlohmann::json::array(), skipped = nlohmann::json::array();
+  std::set<std::string> names;
+  std::map<std::string, std::string> first_with_fingerprint;
+  std::set<std::pair<int, int>> sizes;
+  for (const auto& result : results) {
+    if (const Skipped* skip = std::get_if<Skipped>(&result)) {
+      LogWarning(format("ingest: skipped {}: {}", skip->file, skip->reason));
+      skipped.push_back({{"file", skip->file}, {"reason", skip->reason}});
+      continue;
+    }
+    const IngestedImage& image = std::get<IngestedImage>(result);
+    if (!names.insert(image.name).second) {
+      throw UserError(format("two photos in '{}' map to the image name {}; rename one of them", folder.string(),
+                             image.name));
+    }
+    const auto [it, first] = first_with_fingerprint.emplace(image.fingerprint, image.source);
+    if (!first) LogWarning(format("ingest: {} has the same pixels as {}", image.source, it->second));
+    sizes.insert({image.width, image.height});
+    images.push_back({{"name", image.name}, {"source", image.source}, {"width", image.width},
+                      {"height", image.height}, {"channels", image.channels},
+                      {"source_width", image.source_width}, {"source_height", image.source_height},
+                      {"exif_orientation", image.orientation}, {"fingerprint", image.fingerprint}});
+  }
+  if (sizes.size() > 1) {
+    LogWarning(format("ingest: the photos have {} different sizes; cameras are estimated per size", sizes.size()));
+  }
+  const nlohmann::json report = {{"input_folder", folder.string()}, {"images", images}, {"skipped", skipped}};
+  WriteJsonAtomic(context.output_dir / "ingest_report.json", report);
+  if (static_cast<int>(images.size()) < options.min_images) {
+    throw UserError(format("only {} usable images in '{}' ({} skipped, see the warnings above); photo2nerf needs at "
+                           "least {} (ingest.min_images): add more photos of the scene",
+                           images.size(), folder.string(), skipped.size(), options.min_images));
+  }
+  context.summary = {{"images", images.size()}, {"skipped", skipped.size()}};
+  LogInfo(format("ingest: {} images, {} skipped", images.size(), skipped.size()));
+}
+
+}  // namespace p2n

@@ -1,0 +1,39 @@
+#pragma once
+// The ingest stage: validates every photo by decoding it, applies EXIF orientation, optionally downsizes, and
+// writes the images the later stages use plus ingest_report.json. Bad files are skipped with a named reason.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "pipeline/stage.h"
+
+namespace p2n {
+
+struct IngestOptions {
+  int max_image_size = 0;  // Longest image side after downsizing (area filter), in pixels; 0 keeps the size.
+  int min_images = 3;      // Fewer usable images than this is an error.
+
+  template <class V>
+  void Visit(V& v) {
+    v("max_image_size", max_image_size, "longest image side after downsizing (area filter); 0 keeps the size", "px");
+    v("min_images", min_images, "fewer usable images than this is an error", "images");
+  }
+  void Check() const;
+};
+
+// Image files of the folder that ingest reads (jpg, jpeg, png, tif, tiff, exr; any case; not hidden), sorted.
+// UserError when the folder is missing, is a file, or has none.
+std::vector<std::filesystem::path> ListPhotos(const std::filesystem::path& folder);
+
+class IngestStage : public Stage {
+ public:
+  std::string name() const override { return "ingest"; }
+  std::string folder() const override { return "00_ingest"; }
+  int format_version() const override { return 1; }
+  // "image NAME" -> SHA-1 of the file's bytes, for every photo of the input folder.
+  std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
+  void Run(StageContext& context) const override;
+};
+
+}  // namespace p2n

@@ -1,0 +1,30 @@
+#include "stages/stages.h"
+
+#include "pipeline/format.h"
+#include "stages/ingest_stage.h"
+
+namespace p2n {
+
+void RunOptions::Check() const {
+  CheckOption(threads >= 0, "run.threads", format("must be 0 (every core) or more, not {}", threads));
+}
+
+OptionRegistry AllOptions() {
+  OptionRegistry registry;
+  RegisterOptions<RunOptions>(registry, "run");
+  RegisterOptions<IngestOptions>(registry, "ingest");
+  return registry;
+}
+
+void CheckAllOptions(const Config& config) {
+  ReadOptions<RunOptions>(config, "run");
+  ReadOptions<IngestOptions>(config, "ingest");
+}
+
+Runner MakeRunner() {
+  std::vector<std::unique_ptr<Stage>> stages;
+  stages.push_back(std::make_unique<IngestStage>());
+  return Runner(std::move(stages));
+}
+
+}  // namespace p2n

@@ -1,0 +1,114 @@
+// The photo2nerf program: exit codes and messages of the error cases, help, and a real run.
+
+#include <catch2/catch.hpp>
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+
+#include "pipeline/workspace.h"
+#include "tests/test_util.h"
+
+namespace p2n::testing {
+namespace fs = std::filesystem;
+namespace {
+
+struct Result {
+  int code;
+  std::string output;
+};
+
+Result Photo2Nerf(std::vector<std::string> args) {
+  args.insert(args.begin(), P2N_BINARY);
+  Result result;
+  result.code = RunCommand(args, &result.output);
+  return result;
+}
+
+void MakePhotos(const fs::path& folder, int count) {
+  fs::create_directories(folder);
+  for (int i = 0; i < count; ++i) {
+    OIIO::ImageBuf image(OIIO::ImageSpec(24, 16, 3, OIIO::TypeDesc::UINT8));
+    OIIO::ImageBufAlgo::fill(image, {0.1f * i, 0.5f, 0.9f});
+    REQUIRE(image.write((folder / ("photo " + std::to_string(i) + ".png")).string()));
+  }
+}
+
+}  // namespace
+
+TEST_CASE("cli: help, version and unknown commands", "[cli]") {
+  CHECK(Photo2Nerf({"--version"}).code == 0);
+  const Result usage = Photo2Nerf({});
+  CHECK(usage.code == 1);
+  CHECK_THAT(usage.output, Catch::Contains("run") && Catch::Contains("status") && Catch::Contains("ingest"));
+  const Result unknown = Photo2Nerf({"trian"});
+  CHECK(unknown.code == 1);
+  CHECK_THAT(unknown.output, Catch::Contains("unknown command 'trian'") && Catch::Contains("run, status, clean"));
+  const Result help = Photo2Nerf({"run", "--help"});
+  CHECK(help.code == 0);
+  CHECK_THAT(help.output, Catch::Contains("--ingest.max_image_size") && Catch::Contains("[px]") &&
+                              Catch::Contains("--force"));
+}
+
+TEST_CASE("cli: a run, a fresh rerun, status and clean", "[cli]") {
+  TempDir dir;
+  MakePhotos(dir / "photos", 3);
+  const std::string ws = (dir / "ws").string();
+  Result first = Photo2Nerf({"run", (dir / "photos").string(), "-w", ws});
+  REQUIRE(first.code == 0);
+  CHECK_THAT(first.output, Catch::Contains("ingest: 3 images, 0 skipped"));
+  Result second = Photo2Nerf({"run", "-w", ws});
+  CHECK(second.code == 0);
+  CHECK_THAT(second.output, Catch::Contains("ingest: fresh, skipped"));
+  // An option given once is remembered; the stage command reruns the stage with it.
+  CHECK(Photo2Nerf({"ingest", "-w", ws, "--ingest.max_image_size", "16"}).code == 0);
+  CHECK_THAT(Photo2Nerf({"status", "-w", ws}).output, Catch::Contains("fresh"));
+  Result status = Photo2Nerf({"status", "-w", ws, "--ingest.max_image_size", "20"});
+  CHECK_THAT(status.output, Catch::Contains("stale") && Catch::Contains("option ingest.max_image_size changed (16 -> 20)"));
+  CHECK(Photo2Nerf({"clean", "-w", ws}).code == 0);
+  CHECK_THAT(Photo2Nerf({"status", "-w", ws}).output, Catch::Contains("missing"));
+  CHECK(fs::exists(dir / "photos" / "photo 0.png"));
+  CHECK(fs::exists(fs::path(ws) / "logs" / "photo2nerf.log"));
+}
+
+TEST_CASE("cli: user errors exit 1 with a message naming what is wrong", "[cli]") {
+  TempDir dir;
+  MakePhotos(dir / "photos", 3);
+  const std::string photos = (dir / "photos").string();
+  const std::string ws = (dir / "ws").string();
+
+  auto expect = [](const Result& result, const std::string& text) {
+    INFO(result.output);
+    CHECK(result.code == 1);
+    CHECK_THAT(result.output, Catch::Contains(text));
+  };
+  expect(Photo2Nerf({"run", (dir / "missing").string(), "-w", ws}), "does not exist");
+  CHECK_FALSE(fs::exists(ws));
+  WriteText(dir / "file.txt", "x");
+  expect(Photo2Nerf({"run", (dir / "file.txt").string(), "-w", ws}), "is a file, not a folder");
+  fs::create_directories(dir / "empty");
+  expect(Photo2Nerf({"run", (dir / "empty").string(), "-w", ws}), "no photos in");
+  expect(Photo2Nerf({"run", photos, "-w", (dir / "file.txt" / "ws").string()}), "cannot create the workspace");
+  fs::create_directories(dir / "mine");
+  WriteText(dir / "mine" / "thesis.tex", "precious");
+  expect(Photo2Nerf({"run", photos, "-w", (dir / "mine").string()}), "is not empty and is not a photo2nerf workspace");
+  CHECK(ReadText(dir / "mine" / "thesis.tex") == "precious");
+  CHECK(fs::directory_iterator(dir / "mine") != fs::directory_iterator());
+  expect(Photo2Nerf({"run", photos, "-w", ws, "--ingest.max_image_siz", "100"}),
+         "unknown option '--ingest.max_image_siz'; did you mean '--ingest.max_image_size'?");
+  expect(Photo2Nerf({"run", photos, "-w", ws, "--ingest.max_image_size", "big"}), "must be an integer");
+  expect(Photo2Nerf({"run", photos, "-w", ws, "--ingest.max_image_size", "-3"}), "option ingest.max_image_size must be");
+  WriteText(dir / "config.json", R"({"ingest": {"max_size": 3}})");
+  expect(Photo2Nerf({"run", photos, "-w", ws, "--config", (dir / "config.json").string()}),
+         "unknown option 'ingest.max_size'");
+  expect(Photo2Nerf({"run", photos, "-w", ws, "--from", "trian"}), "unknown stage 'trian'");
+  expect(Photo2Nerf({"status", "-w", (dir / "nowhere").string()}), "is not a photo2nerf workspace");
+  expect(Photo2Nerf({"run", "-w", (dir / "nowhere").string()}), "is not a photo2nerf workspace");
+  {
+    const Workspace workspace = Workspace::Open(ws, true);
+    WorkspaceLock lock(workspace, "a test holding the lock");
+    expect(Photo2Nerf({"run", photos, "-w", ws}), "is in use by process");
+  }
+  MakePhotos(dir / "two", 2);
+  expect(Photo2Nerf({"run", (dir / "two").string(), "-w", (dir / "ws2").string()}), "only 2 usable images");
+}
+
+}  // namespace p2n::testing

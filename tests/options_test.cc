@@ -1,0 +1,90 @@
+// Dotted-key options: registration from XxxOptions structs, typed parsing, config files, unknown keys.
+
+#include <catch2/catch.hpp>
+
+#include "pipeline/errors.h"
+#include "pipeline/options.h"
+#include "tests/test_util.h"
+
+namespace p2n::testing {
+namespace {
+
+struct ExampleOptions {
+  int steps = 100;            // an integer
+  double learning_rate = 0.01;
+  bool verbose = false;
+  std::string mode = "fast";
+
+  template <class V>
+  void Visit(V& v) {
+    v("steps", steps, "number of steps", "steps");
+    v("learning_rate", learning_rate, "learning rate");
+    v("verbose", verbose, "print more", "", OptionKind::kRuntime);
+    v("mode", mode, "preset", "", OptionKind::kResult, {"fast", "slow"});
+  }
+  void Check() const { CheckOption(steps > 0, "train.steps", "must be positive, not " + std::to_string(steps)); }
+};
+
+OptionRegistry Registry() {
+  OptionRegistry registry;
+  RegisterOptions<ExampleOptions>(registry, "train");
+  return registry;
+}
+
+}  // namespace
+
+TEST_CASE("options come from the struct with its defaults and are read back", "[options]") {
+  const OptionRegistry registry = Registry();
+  REQUIRE(registry.specs().size() == 4);
+  CHECK(registry.Find("train.steps")->default_value == 100);
+  CHECK(registry.Find("train.steps")->unit == "steps");
+  Config config(registry);
+  config.SetFromText("train.steps", "5000", "--train.steps");
+  config.SetFromText("train.learning_rate", "1e-3", "--train.learning_rate");
+  config.SetFromText("train.verbose", "true", "--train.verbose");
+  const ExampleOptions options = ReadOptions<ExampleOptions>(config, "train");
+  CHECK(options.steps == 5000);
+  CHECK(options.learning_rate == 1e-3);
+  CHECK(options.verbose);
+  CHECK(config.ResultOptions("train") ==
+        nlohmann::json{{"train.steps", 5000}, {"train.learning_rate", 1e-3}, {"train.mode", "fast"}});
+  CHECK(config.ExplicitResultOptions() == nlohmann::json{{"train", {{"steps", 5000}, {"learning_rate", 1e-3}}}});
+}
+
+TEST_CASE("bad option values and unknown keys are user errors that name the key", "[options]") {
+  const OptionRegistry registry = Registry();
+  Config config(registry);
+  CHECK_THROWS_WITH(config.SetFromText("train.step", "5", "--train.step"),
+                    Catch::Contains("unknown option 'train.step'") && Catch::Contains("did you mean 'train.steps'?"));
+  CHECK_THROWS_WITH(config.SetFromText("train.steps", "5.5", "--train.steps"),
+                    Catch::Contains("'train.steps'") && Catch::Contains("must be an integer"));
+  CHECK_THROWS_WITH(config.SetFromText("train.steps", "", "--train.steps"), Catch::Contains("must be an integer"));
+  CHECK_THROWS_WITH(config.SetFromText("train.learning_rate", "nan", "x"), Catch::Contains("must be a number"));
+  CHECK_THROWS_WITH(config.SetFromText("train.verbose", "maybe", "x"), Catch::Contains("true or false"));
+  CHECK_THROWS_WITH(config.SetFromText("train.mode", "medium", "x"), Catch::Contains("one of: fast, slow"));
+  CHECK_THROWS_WITH(config.Set("train.steps", "many", "x"), Catch::Contains("must be an integer"));
+  config.Set("train.steps", 0, "x");
+  CHECK_THROWS_WITH(ReadOptions<ExampleOptions>(config, "train"),
+                    Catch::Equals("option train.steps must be positive, not 0"));
+}
+
+TEST_CASE("config files: nested or dotted keys; unknown keys rejected with their name and file", "[options]") {
+  const OptionRegistry registry = Registry();
+  TempDir dir;
+  Config config(registry);
+  WriteText(dir / "nested.json", R"({"train": {"steps": 7, "mode": "slow"}})");
+  config.MergeFile(dir / "nested.json");
+  CHECK(config.Get<int>("train.steps") == 7);
+  CHECK(config.Get<std::string>("train.mode") == "slow");
+  WriteText(dir / "flat.json", R"({"train.learning_rate": 2})");
+  config.MergeFile(dir / "flat.json");
+  CHECK(config.Get<double>("train.learning_rate") == 2.0);
+  WriteText(dir / "unknown.json", R"({"train": {"stepz": 7}})");
+  CHECK_THROWS_WITH(config.MergeFile(dir / "unknown.json"),
+                    Catch::Contains("unknown option 'train.stepz'") && Catch::Contains("unknown.json"));
+  WriteText(dir / "broken.json", R"({"train": )");
+  CHECK_THROWS_WITH(config.MergeFile(dir / "broken.json"), Catch::Contains("broken.json' is not valid JSON"));
+  CHECK_THROWS_WITH(config.MergeFile(dir / "missing.json"), Catch::Contains("cannot read config file"));
+}
+
+}  // namespace p2n::testing

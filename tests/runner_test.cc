@@ -1,0 +1,226 @@
+// The stage framework with fake stages that count their runs (issue 2).
+
+#include <catch2/catch.hpp>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <chrono>
+#include <thread>
+
+#include "pipeline/errors.h"
+#include "pipeline/file_util.h"
+#include "tests/fake_stages.h"
+#include "tests/test_util.h"
+
+namespace p2n::testing {
+namespace fs = std::filesystem;
+namespace {
+
+struct Fixture {
+  TempDir dir;
+  fs::path counters = dir / "counters";
+  OptionRegistry registry = FakeOptionsRegistry();
+  Config config{registry};
+  Workspace workspace = Workspace::Open(dir / "ws", true);
+
+  Fixture() { fs::create_directories(counters); }
+  std::vector<StageRun> Run(const RunRequest& request = {}) { return MakeFakeRunner(counters).Run(workspace, config, request); }
+  std::vector<StageStatus> Status() { return MakeFakeRunner(counters).Status(workspace, config); }
+  std::vector<int> Counts() { return {RunCount(counters, "a"), RunCount(counters, "b"), RunCount(counters, "c")}; }
+};
+
+std::vector<StageState> States(const std::vector<StageStatus>& statuses) {
+  std::vector<StageState> states;
+  for (const StageStatus& status : statuses) states.push_back(status.state);
+  return states;
+}
+
+RunRequest From(const std::string& stage) {
+  RunRequest request;
+  request.from = stage;
+  return request;
+}
+RunRequest Until(const std::string& stage) {
+  RunRequest request;
+  request.until = stage;
+  return request;
+}
+RunRequest Force(const std::string& stage) {
+  RunRequest request;
+  request.force = {stage};
+  return request;
+}
+
+constexpr StageState kFresh = StageState::kFresh;
+constexpr StageState kStale = StageState::kStale;
+
+}  // namespace
+
+TEST_CASE("a second run runs nothing", "[runner]") {
+  Fixture f;
+  CHECK(States(f.Status()) == std::vector{StageState::kMissing, StageState::kMissing, StageState::kMissing});
+  f.Run();
+  CHECK(f.Counts() == std::vector{1, 1, 1});
+  CHECK(States(f.Status()) == std::vector{kFresh, kFresh, kFresh});
+  const auto runs = f.Run();
+  CHECK(f.Counts() == std::vector{1, 1, 1});
+  for (const StageRun& run : runs) CHECK_FALSE(run.ran);
+  CHECK(ReadText(f.workspace.StageDir("c") / "out.txt") == "c=1;b=1;a=1");
+}
+
+TEST_CASE("an option change reruns its stage and everything downstream, nothing upstream", "[runner]") {
+  Fixture f;
+  f.Run();
+  f.config.Set("b.value", 2, "test");
+  const auto statuses = f.Status();
+  CHECK(States(statuses) == std::vector{kFresh, kStale, kStale});
+  CHECK(statuses[1].reasons == std::vector<std::string>{"option b.value changed (1 -> 2)"});
+  CHECK(statuses[2].reasons == std::vector<std::string>{"upstream b changed"});
+  f.Run();
+  CHECK(f.Counts() == std::vector{1, 2, 2});
+  CHECK(ReadText(f.workspace.StageDir("c") / "out.txt") == "c=1;b=2;a=1");
+  // Going back to the old value is a change too: the cache holds one result per stage.
+  f.config.Set("b.value", 1, "test");
+  f.Run();
+  CHECK(f.Counts() == std::vector{1, 3, 3});
+}
+
+TEST_CASE("a runtime-only option reruns nothing", "[runner]") {
+  Fixture f;
+  f.Run();
+  f.config.Set("run.threads", 7, "test");
+  f.config.Set("a.block", false, "test");
+  CHECK(States(f.Status()) == std::vector{kFresh, kFresh, kFresh});
+  f.Run();
+  CHECK(f.Counts() == std::vector{1, 1, 1});
+}
+
+TEST_CASE("status names changed inputs, format versions and outputs", "[runner]") {
+  Fixture f;
+  WriteText(f.counters / "input.txt", "one");
+  f.Run();
+  SECTION("input") {
+    WriteText(f.counters / "input.txt", "two");
+    const auto statuses = f.Status();
+    CHECK(statuses[0].reasons == std::vector<std::string>{"input file input.txt changed"});
+    CHECK(statuses[1].reasons == std::vector<std::string>{"upstream a changed"});
+    fs::remove(f.counters / "input.txt");
+    CHECK(f.Status()[0].reasons == std::vector<std::string>{"input file input.txt removed"});
+  }
+  SECTION("format version") {
+    WriteText(f.counters / "b.version", "2");
+    const auto statuses = f.Status();
+    CHECK(States(statuses) == std::vector{kFresh, kStale, kStale});
+    CHECK(statuses[1].reasons == std::vector<std::string>{"format version 1 -> 2"});
+  }
+  SECTION("output deleted or modified") {
+    WriteText(f.workspace.StageDir("b") / "out.txt", "edited by hand, longer than before");
+    const auto statuses = f.Status();
+    CHECK(States(statuses) == std::vector{kFresh, kStale, kFresh});
+    CHECK(statuses[1].reasons == std::vector<std::string>{"output out.txt is missing or was modified"});
+    f.Run();
+    CHECK(f.Counts() == std::vector{1, 2, 1});  // b's key is unchanged, so c's is too
+  }
+  SECTION("a touched input file is not a change") {
+    const auto time = fs::last_write_time(f.counters / "input.txt");
+    fs::last_write_time(f.counters / "input.txt", time + std::chrono::hours(1));
+    CHECK(States(f.Status()) == std::vector{kFresh, kFresh, kFresh});
+  }
+}
+
+TEST_CASE("a stage that throws is redone next time and never reported fresh", "[runner]") {
+  Fixture f;
+  f.config.Set("b.fail", true, "test");
+  CHECK_THROWS_AS(f.Run(), UserError);
+  CHECK(f.Counts() == std::vector{1, 1, 0});
+  const auto statuses = f.Status();
+  CHECK(States(statuses) == std::vector{kFresh, StageState::kIncomplete, StageState::kMissing});
+  CHECK_THAT(statuses[1].reasons.at(0), Catch::Contains("interrupted or failed"));
+  f.config.Set("b.fail", false, "test");
+  f.Run();
+  CHECK(f.Counts() == std::vector{1, 2, 1});
+  CHECK(States(f.Status()) == std::vector{kFresh, kFresh, kFresh});
+  CHECK_FALSE(fs::exists(f.workspace.StagingDir("b")));
+}
+
+TEST_CASE("a process killed with SIGKILL mid-stage leaves the stage incomplete; the next run redoes it",
+          "[runner][kill]") {
+  Fixture f;
+  f.Run();  // a complete earlier result of every stage, with b.value = 1
+  const std::vector<std::string> args = {P2N_FAKE_PIPELINE, f.workspace.root().string(), f.counters.string(),
+                                         "b.value=5", "b.block=true"};
+  std::vector<char*> argv;
+  for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  REQUIRE(posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) == 0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!fs::exists(f.counters / "started.flag") && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  REQUIRE(fs::exists(f.counters / "started.flag"));
+  // The lock is held: a second run on the workspace fails at once and names the holder.
+  CHECK_THROWS_WITH(WorkspaceLock(f.workspace, "test"), Catch::Contains("in use by process " + std::to_string(pid)));
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  REQUIRE(WIFSIGNALED(status));
+
+  f.config.Set("b.value", 5, "test");
+  const auto statuses = f.Status();
+  CHECK(States(statuses) == std::vector{kFresh, StageState::kIncomplete, kStale});
+  WorkspaceLock lock(f.workspace, "test");  // released by the kill
+  f.Run();
+  CHECK(f.Counts() == std::vector{1, 3, 2});
+  CHECK(States(f.Status()) == std::vector{kFresh, kFresh, kFresh});
+  CHECK(ReadText(f.workspace.StageDir("c") / "out.txt") == "c=1;b=5;a=1");
+}
+
+TEST_CASE("run requests: from, until and force", "[runner]") {
+  Fixture f;
+  SECTION("--until stops early") {
+    f.Run(Until("b"));
+    CHECK(f.Counts() == std::vector{1, 1, 0});
+  }
+  SECTION("--force reruns a stage and what depends on it") {
+    f.Run();
+    f.Run(Force("b"));
+    CHECK(f.Counts() == std::vector{1, 2, 2});
+  }
+  SECTION("--from needs fresh upstream stages") {
+    CHECK_THROWS_WITH(f.Run(From("b")), Catch::Contains("the stage a it needs is missing"));
+    f.Run(Until("a"));
+    f.Run(From("b"));
+    CHECK(f.Counts() == std::vector{1, 1, 1});
+    f.config.Set("a.value", 3, "test");
+    CHECK_THROWS_WITH(f.Run(From("c")), Catch::Contains("option a.value changed (1 -> 3)"));
+  }
+  SECTION("unknown stage names are listed") {
+    CHECK_THROWS_WITH(f.Run(From("x")), Catch::Contains("unknown stage 'x'; the stages are: a, b, c"));
+  }
+}
+
+TEST_CASE("a manifest that is damaged is reported, not trusted", "[runner]") {
+  Fixture f;
+  f.Run();
+  WriteText(f.workspace.StageDir("b") / "manifest.json", "{\"stage\": \"b\"}");
+  auto statuses = f.Status();
+  CHECK(statuses[1].state == StageState::kIncomplete);
+  CHECK_THAT(statuses[1].reasons.at(0), Catch::Contains("manifest.json' is damaged"));
+  fs::remove(f.workspace.StageDir("b") / "manifest.json");
+  CHECK(f.Status()[1].state == StageState::kIncomplete);
+  f.Run();
+  CHECK(f.Counts() == std::vector{1, 2, 1});
+}
+
+TEST_CASE("Clean removes one stage's results", "[runner]") {
+  Fixture f;
+  f.Run();
+  MakeFakeRunner(f.counters).Clean(f.workspace, "b");
+  CHECK(States(f.Status()) == std::vector{kFresh, StageState::kMissing, kFresh});
+  f.Run();
+  CHECK(f.Counts() == std::vector{1, 2, 1});
+}
+
+}  // namespace p2n::testing
