@@ -1,0 +1,261 @@
+#include "nerf/synthetic_scene.h"
+
+#include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+
+#include "nerf/image_io.h"
+
+namespace p2n {
+namespace {
+
+using Eigen::Vector3d;
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kNoHit = std::numeric_limits<double>::infinity();
+
+// Value noise on the integer lattice with a fixed integer hash: the same on every platform.
+double LatticeValue(int64_t x, int64_t y, int64_t z, uint32_t channel) {
+  uint64_t h = static_cast<uint64_t>(x) * 0x9E3779B97F4A7C15ull ^ static_cast<uint64_t>(y) * 0xC2B2AE3D27D4EB4Full ^
+               static_cast<uint64_t>(z) * 0x165667B19E3779F9ull ^ (uint64_t{channel} << 32);
+  h ^= h >> 33;
+  h *= 0xFF51AFD7ED558CCDull;
+  h ^= h >> 33;
+  h *= 0xC4CEB9FE1A85EC53ull;
+  h ^= h >> 33;
+  return static_cast<double>(h >> 11) / static_cast<double>(uint64_t{1} << 53);
+}
+
+double Smooth(double t) { return t * t * (3 - 2 * t); }
+
+double ValueNoise(const Vector3d& p, uint32_t channel) {
+  const Vector3d floor = p.array().floor();
+  const Vector3d f = p - floor;
+  const int64_t x = static_cast<int64_t>(floor.x()), y = static_cast<int64_t>(floor.y()),
+                z = static_cast<int64_t>(floor.z());
+  double result = 0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const int dx = corner & 1, dy = (corner >> 1) & 1, dz = (corner >> 2) & 1;
+    const double weight = (dx ? Smooth(f.x()) : 1 - Smooth(f.x())) * (dy ? Smooth(f.y()) : 1 - Smooth(f.y())) *
+                          (dz ? Smooth(f.z()) : 1 - Smooth(f.z()));
+    result += weight * LatticeValue(x + dx, y + dy, z + dz, channel);
+  }
+  return result;
+}
+
+// Fractal noise in [0, 1): octaves of value noise.
+double Fractal(const Vector3d& p, uint32_t channel) {
+  double sum = 0, amplitude = 0.5, frequency = 1, total = 0;
+  for (int octave = 0; octave < 5; ++octave) {
+    sum += amplitude * ValueNoise(p * frequency, channel + 17 * octave);
+    total += amplitude;
+    amplitude *= 0.5;
+    frequency *= 2.03;
+  }
+  return sum / total;
+}
+
+struct Material {
+  Vector3d base;    // mean colour
+  double scale;     // texture frequency
+  uint32_t seed;
+};
+
+// A solid texture: coloured fractal blotches with sharp dark speckles (corners for SIFT).
+Vector3d Texture(const Vector3d& p, const Material& material) {
+  const Vector3d q = p * material.scale;
+  const Vector3d tint(Fractal(q, material.seed), Fractal(q, material.seed + 1), Fractal(q, material.seed + 2));
+  Vector3d colour = (material.base + 0.8 * (tint.array() - 0.5).matrix()).cwiseMax(0.0).cwiseMin(1.0);
+  if (ValueNoise(q * 3.1, material.seed + 3) > 0.78) colour *= 0.25;
+  return colour;
+}
+
+struct Sphere {
+  Vector3d centre;
+  double radius;
+  Material material;
+};
+
+struct Box {
+  Vector3d low, high;
+  Material material;
+};
+
+const Material kGround{{0.55, 0.5, 0.4}, 2.0, 11};
+const Sphere kSpheres[] = {
+    {{0.0, 0.0, 0.7}, 0.7, {{0.7, 0.35, 0.3}, 3.0, 23}},
+    {{-1.2, 0.9, 0.4}, 0.4, {{0.3, 0.5, 0.75}, 5.0, 37}},
+};
+const Box kBoxes[] = {
+    {{0.8, -1.1, 0.0}, {1.5, -0.4, 0.9}, {{0.35, 0.65, 0.35}, 4.0, 51}},
+    {{-1.4, -1.2, 0.0}, {-0.6, -0.5, 0.5}, {{0.75, 0.7, 0.3}, 4.5, 67}},
+};
+constexpr double kGroundHalfSize = 4.0;
+const Vector3d kSkyColour(0.62, 0.72, 0.85);
+const Vector3d kLightDirection = Vector3d(0.4, 0.3, 1.0).normalized();
+
+double HitSphere(const Vector3d& origin, const Vector3d& direction, const Sphere& sphere) {
+  const Vector3d oc = origin - sphere.centre;
+  const double b = oc.dot(direction);
+  const double c = oc.squaredNorm() - sphere.radius * sphere.radius;
+  const double discriminant = b * b - c;
+  if (discriminant < 0) return kNoHit;
+  const double root = std::sqrt(discriminant);
+  if (-b - root > 1e-9) return -b - root;
+  return -b + root > 1e-9 ? -b + root : kNoHit;
+}
+
+double HitBox(const Vector3d& origin, const Vector3d& direction, const Box& box, Vector3d* normal) {
+  double t_near = -kNoHit, t_far = kNoHit;
+  int axis_near = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (std::abs(direction[axis]) < 1e-12) {
+      if (origin[axis] < box.low[axis] || origin[axis] > box.high[axis]) return kNoHit;
+      continue;
+    }
+    double t0 = (box.low[axis] - origin[axis]) / direction[axis];
+    double t1 = (box.high[axis] - origin[axis]) / direction[axis];
+    if (t0 > t1) std::swap(t0, t1);
+    if (t0 > t_near) {
+      t_near = t0;
+      axis_near = axis;
+    }
+    t_far = std::min(t_far, t1);
+  }
+  if (t_near > t_far || t_near <= 1e-9) return kNoHit;
+  *normal = Vector3d::Zero();
+  (*normal)[axis_near] = direction[axis_near] > 0 ? -1 : 1;
+  return t_near;
+}
+
+Vector3d Shade(const Vector3d& origin, const Vector3d& direction) {
+  double best = kNoHit;
+  Vector3d normal = Vector3d::UnitZ();
+  const Material* material = nullptr;
+  if (direction.z() < 0) {
+    const double t = -origin.z() / direction.z();
+    const Vector3d p = origin + t * direction;
+    if (std::abs(p.x()) < kGroundHalfSize && std::abs(p.y()) < kGroundHalfSize) {
+      best = t;
+      material = &kGround;
+    }
+  }
+  for (const Sphere& sphere : kSpheres) {
+    const double t = HitSphere(origin, direction, sphere);
+    if (t < best) {
+      best = t;
+      normal = (origin + t * direction - sphere.centre).normalized();
+      material = &sphere.material;
+    }
+  }
+  for (const Box& box : kBoxes) {
+    Vector3d box_normal;
+    const double t = HitBox(origin, direction, box, &box_normal);
+    if (t < best) {
+      best = t;
+      normal = box_normal;
+      material = &box.material;
+    }
+  }
+  if (material == nullptr) return kSkyColour;
+  const Vector3d point = origin + best * direction;
+  const double diffuse = std::max(0.0, normal.dot(kLightDirection));
+  return Texture(point, *material) * (0.35 + 0.65 * diffuse);
+}
+
+}  // namespace
+
+PinholeCamera LookAtCamera(const Vector3d& position, const Vector3d& target, int width, int height,
+                           double fov_x_deg) {
+  PinholeCamera camera;
+  camera.width = width;
+  camera.height = height;
+  camera.fx = camera.fy = 0.5 * width / std::tan(0.5 * fov_x_deg * kPi / 180);
+  camera.cx = 0.5 * width;
+  camera.cy = 0.5 * height;
+  const Vector3d forward = (target - position).normalized();
+  const Vector3d right = forward.cross(Vector3d::UnitZ()).normalized();
+  const Vector3d up = right.cross(forward);
+  camera.world_from_cam.block<3, 1>(0, 0) = right;
+  camera.world_from_cam.block<3, 1>(0, 1) = up;
+  camera.world_from_cam.block<3, 1>(0, 2) = -forward;  // OpenGL cameras look down -z
+  camera.world_from_cam.block<3, 1>(0, 3) = position;
+  return camera;
+}
+
+std::vector<PinholeCamera> SyntheticCameras(const SyntheticSceneOptions& options) {
+  std::vector<PinholeCamera> cameras;
+  const Vector3d target(0, 0, 0.4);
+  for (int i = 0; i < options.num_views; ++i) {
+    const double t = options.num_views > 1 ? static_cast<double>(i) / (options.num_views - 1) : 0.0;
+    const double azimuth = 2 * kPi * i / options.num_views;
+    const double elevation =
+        (options.min_elevation_deg + t * (options.max_elevation_deg - options.min_elevation_deg)) * kPi / 180;
+    const Vector3d position = target + options.radius * Vector3d(std::cos(elevation) * std::cos(azimuth),
+                                                                 std::cos(elevation) * std::sin(azimuth),
+                                                                 std::sin(elevation));
+    cameras.push_back(LookAtCamera(position, target, options.width, options.height, options.fov_x_deg));
+  }
+  return cameras;
+}
+
+OIIO::ImageBuf RenderSyntheticView(const PinholeCamera& camera, int supersampling) {
+  OIIO::ImageBuf image(OIIO::ImageSpec(camera.width, camera.height, 3, OIIO::TypeDesc::UINT8));
+  uint8_t* pixels = static_cast<uint8_t*>(image.localpixels());
+  const Eigen::Matrix3d rotation = camera.world_from_cam.block<3, 3>(0, 0);
+  const Vector3d origin = camera.world_from_cam.block<3, 1>(0, 3);
+  const int n = std::max(1, supersampling);
+  tbb::parallel_for(0, camera.height, [&](int row) {
+    for (int column = 0; column < camera.width; ++column) {
+      Vector3d sum = Vector3d::Zero();
+      for (int sy = 0; sy < n; ++sy) {
+        for (int sx = 0; sx < n; ++sx) {
+          const double u = column + (sx + 0.5) / n, v = row + (sy + 0.5) / n;
+          const Vector3d in_cam((u - camera.cx) / camera.fx, -(v - camera.cy) / camera.fy, -1.0);
+          sum += Shade(origin, (rotation * in_cam).normalized());
+        }
+      }
+      const Vector3d colour = sum / (n * n);
+      for (int c = 0; c < 3; ++c) {
+        // Encode as sRGB-like gamma so the photos look like photos.
+        const double encoded = std::pow(std::clamp(colour[c], 0.0, 1.0), 1 / 2.2);
+        pixels[(static_cast<size_t>(row) * camera.width + column) * 3 + c] =
+            static_cast<uint8_t>(std::lround(encoded * 255));
+      }
+    }
+  });
+  return image;
+}
+
+void WriteSyntheticScene(const SyntheticSceneOptions& options, const std::filesystem::path& folder) {
+  std::filesystem::create_directories(folder);
+  const std::vector<PinholeCamera> cameras = SyntheticCameras(options);
+  nlohmann::json frames = nlohmann::json::array();
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "view_%03zu.png", i);
+    const std::string error = WriteImage(RenderSyntheticView(cameras[i], options.supersampling), folder / name);
+    if (!error.empty()) throw std::runtime_error(error);
+    nlohmann::json matrix = nlohmann::json::array();
+    for (int r = 0; r < 4; ++r) {
+      matrix.push_back({cameras[i].world_from_cam(r, 0), cameras[i].world_from_cam(r, 1),
+                        cameras[i].world_from_cam(r, 2), cameras[i].world_from_cam(r, 3)});
+    }
+    frames.push_back({{"file_path", name}, {"transform_matrix", matrix}});
+  }
+  const PinholeCamera& first = cameras.front();
+  const nlohmann::json truth = {{"camera_angle_x", options.fov_x_deg * kPi / 180},
+                                {"fl_x", first.fx}, {"fl_y", first.fy}, {"cx", first.cx}, {"cy", first.cy},
+                                {"w", first.width}, {"h", first.height}, {"frames", frames}};
+  const std::filesystem::path path = folder / "ground_truth_cameras.json";
+  std::ofstream out(path);
+  out.precision(17);
+  out << truth.dump(2) << "\n";
+  if (!out) throw std::runtime_error("cannot write '" + path.string() + "'");
+}
+
+}  // namespace p2n

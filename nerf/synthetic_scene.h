@@ -1,0 +1,48 @@
+#pragma once
+// A synthetic scene with exact ground truth: textured objects (spheres, boxes) on a textured ground, ray-cast
+// from known pinhole cameras. The textures are solid (a function of the 3D point), so a surface point looks
+// the same from every view and SIFT finds plenty of features. Used by the demo and by tests.
+//
+// World: z up, ground at z = 0, objects around the origin. Cameras: OpenGL axes (x right, y up, looking down
+// -z), pixel (i, j)'s centre at (i + 0.5, j + 0.5), as in transforms.json.
+
+#include <Eigen/Core>
+#include <OpenImageIO/imagebuf.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+namespace p2n {
+
+struct PinholeCamera {
+  int width = 0;
+  int height = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;   // pixels
+  Eigen::Matrix4d world_from_cam = Eigen::Matrix4d::Identity();
+};
+
+struct SyntheticSceneOptions {
+  int num_views = 24;          // cameras on an upward spiral around the scene
+  int width = 320;             // pixels
+  int height = 240;            // pixels
+  double fov_x_deg = 55;       // horizontal field of view, degrees
+  double radius = 4.5;         // distance of the cameras from the scene centre, scene units
+  double min_elevation_deg = 20;
+  double max_elevation_deg = 45;
+  int supersampling = 2;       // samples per pixel along each axis (anti-aliasing)
+};
+
+// A camera at `position` looking at `target` with world +z as up.
+PinholeCamera LookAtCamera(const Eigen::Vector3d& position, const Eigen::Vector3d& target, int width, int height,
+                           double fov_x_deg);
+// The cameras of the scene: a spiral from min to max elevation, one full turn.
+std::vector<PinholeCamera> SyntheticCameras(const SyntheticSceneOptions& options);
+// Renders one view (RGB, 8 bits), in parallel over rows.
+OIIO::ImageBuf RenderSyntheticView(const PinholeCamera& camera, int supersampling);
+// Writes view_000.png ... and ground_truth_cameras.json (transforms.json layout, camera_angle_x, fl_x, fl_y,
+// cx, cy, w, h, frames with file_path and transform_matrix) into `folder`. Throws std::runtime_error naming
+// the file when a write fails.
+void WriteSyntheticScene(const SyntheticSceneOptions& options, const std::filesystem::path& folder);
+
+}  // namespace p2n
