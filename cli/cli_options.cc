@@ -20,19 +20,23 @@ void AddCommonFlags(CLI::App& app, const OptionRegistry& registry, CommonFlags* 
   for (const OptionSpec& spec : registry.specs()) {
     std::string help = spec.help;
     if (!spec.unit.empty()) help += " [" + spec.unit + "]";
+    std::string type = spec.default_value.is_boolean()          ? "BOOL"
+                       : spec.default_value.is_number_integer() ? "INT"
+                       : spec.default_value.is_number()         ? "NUMBER"
+                                                                : "TEXT";
     if (!spec.choices.empty()) {
-      std::string choices;
-      for (const std::string& choice : spec.choices) choices += (choices.empty() ? "" : "|") + choice;
-      help += " {" + choices + "}";
+      type.clear();
+      for (const std::string& choice : spec.choices) type += (type.empty() ? "" : "|") + choice;
     }
-    if (spec.kind == OptionKind::kRuntime) help += " (not remembered, not in the cache key)";
     const std::string default_text = spec.default_value.is_string() ? spec.default_value.get<std::string>()
                                                                      : spec.default_value.dump();
     app.add_option_function<std::string>(
            "--" + spec.key, [flags, key = spec.key](const std::string& text) { flags->option_text[key] = text; },
            help)
+        ->type_name(type)
         ->default_str(default_text)
-        ->group("Options (remembered by the workspace; see README)");
+        ->group(spec.kind == OptionKind::kResult ? "Options that change results (remembered by the workspace)"
+                                                 : "Runtime options (not remembered, not in any cache key)");
   }
 }
 
@@ -57,9 +61,9 @@ std::optional<int> Parse(CLI::App& app, const OptionRegistry& registry, int argc
       if (!suggestion.empty()) message += format("; did you mean '--{}'?", suggestion);
       break;
     }
-    throw UserError(format("{} (see `photo2nerf {} --help`)", message, app.get_name()));
+    throw UserError(format("{} (see `{} --help`)", message, app.get_name()));
   } catch (const CLI::ParseError& e) {
-    throw UserError(format("{} (see `photo2nerf {} --help`)", e.what(), app.get_name()));
+    throw UserError(format("{} (see `{} --help`)", e.what(), app.get_name()));
   }
   return std::nullopt;
 }

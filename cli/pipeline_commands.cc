@@ -32,7 +32,7 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
   const bool is_run = stage.empty();
   CLI::App app(is_run ? "Run every stage that is not fresh, from photos to results."
                       : format("Run the {} stage (its upstream stages must be fresh).", stage),
-               argv[0]);
+               std::string("photo2nerf ") + argv[0]);
   CommonFlags flags;
   std::string photos;
   RunRequest request;
@@ -95,7 +95,8 @@ int RunStage(int argc, char** argv) { return RunPipeline(argc, argv, argv[0]); }
 int RunStatus(int argc, char** argv) {
   const OptionRegistry registry = AllOptions();
   const Runner runner = MakeRunner();
-  CLI::App app("Say for each stage whether it is fresh, missing, incomplete or stale, and why.", argv[0]);
+  CLI::App app("Say for each stage whether it is fresh, missing, incomplete or stale, and why.",
+               "photo2nerf status");
   CommonFlags flags;
   AddCommonFlags(app, registry, &flags);
   if (auto code = Parse(app, registry, argc, argv)) return *code;
@@ -123,7 +124,8 @@ int RunStatus(int argc, char** argv) {
 
 int RunClean(int argc, char** argv) {
   const Runner runner = MakeRunner();
-  CLI::App app("Remove stage results from a workspace (all stages unless --stage is given).", argv[0]);
+  CLI::App app("Remove stage results from a workspace (all stages unless --stage is given).",
+               "photo2nerf clean");
   std::string workspace_path;
   std::vector<std::string> stages;
   app.add_option("-w,--workspace", workspace_path, "workspace folder")->required();
