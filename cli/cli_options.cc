@@ -17,6 +17,10 @@ namespace fs = std::filesystem;
 void AddCommonFlags(CLI::App& app, const OptionRegistry& registry, CommonFlags* flags) {
   app.add_option("-w,--workspace", flags->workspace, "workspace folder (results, logs, cache)")->required();
   app.add_option("--config", flags->config_file, "JSON file of options, nested or as dotted keys");
+  AddOptionFlags(app, registry, &flags->option_text);
+}
+
+void AddOptionFlags(CLI::App& app, const OptionRegistry& registry, std::map<std::string, std::string>* option_text) {
   for (const OptionSpec& spec : registry.specs()) {
     std::string help = spec.help;
     if (!spec.unit.empty()) help += " [" + spec.unit + "]";
@@ -31,7 +35,7 @@ void AddCommonFlags(CLI::App& app, const OptionRegistry& registry, CommonFlags* 
     const std::string default_text = spec.default_value.is_string() ? spec.default_value.get<std::string>()
                                                                      : spec.default_value.dump();
     app.add_option_function<std::string>(
-           "--" + spec.key, [flags, key = spec.key](const std::string& text) { flags->option_text[key] = text; },
+           "--" + spec.key, [option_text, key = spec.key](const std::string& text) { (*option_text)[key] = text; },
            help)
         ->type_name(type)
         ->default_str(default_text)
@@ -82,11 +86,11 @@ Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace,
   return config;
 }
 
-std::unique_ptr<tbb::global_control> ApplyRunOptions(const Config& config, const Workspace& workspace) {
+std::unique_ptr<tbb::global_control> ApplyRunOptions(const Config& config, const fs::path& log_file) {
   const RunOptions options = ReadOptions<RunOptions>(config, "run");
   SetLogLevel(ParseLogLevel(options.log_level));
   SetProgressStyle(ParseProgressStyle(options.progress));
-  SetLogFile(workspace.LogDir() / "photo2nerf.log");
+  SetLogFile(log_file);
   if (options.threads == 0) return nullptr;
   return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                static_cast<size_t>(options.threads));

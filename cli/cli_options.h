@@ -22,8 +22,10 @@ struct CommonFlags {
   std::map<std::string, std::string> option_text;  // dotted key -> text, for the --section.key flags given
 };
 
-// Adds -w/--workspace, --config, and one --section.key flag for every registered option (with its help,
-// unit and default) to `app`.
+// Adds one --section.key flag for every registered option (with its help, type, unit and default) to `app`;
+// the text of each flag given lands in `option_text`.
+void AddOptionFlags(CLI::App& app, const OptionRegistry& registry, std::map<std::string, std::string>* option_text);
+// Adds -w/--workspace, --config and the option flags.
 void AddCommonFlags(CLI::App& app, const OptionRegistry& registry, CommonFlags* flags);
 
 // Parses argv into `app`. Returns an exit code when the process should end now (--help: 0); throws UserError
@@ -36,8 +38,8 @@ std::optional<int> Parse(CLI::App& app, const OptionRegistry& registry, int argc
 Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace, const CommonFlags& flags,
                      bool remember);
 
-// Applies run.threads, run.log_level and run.progress and sends the log to the workspace's log file. The
-// returned object keeps the thread limit alive.
-std::unique_ptr<tbb::global_control> ApplyRunOptions(const Config& config, const Workspace& workspace);
+// Applies run.threads, run.log_level and run.progress and sends the log also to `log_file`. The returned
+// object keeps the thread limit alive.
+std::unique_ptr<tbb::global_control> ApplyRunOptions(const Config& config, const std::filesystem::path& log_file);
 
 }  // namespace p2n

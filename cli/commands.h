@@ -8,5 +8,6 @@ int RunRun(int argc, char** argv);
 int RunStage(int argc, char** argv);  // argv[0] names the stage: `photo2nerf ingest -w WS`
 int RunStatus(int argc, char** argv);
 int RunClean(int argc, char** argv);
+int RunFitImage(int argc, char** argv);
 
 }  // namespace p2n

@@ -27,6 +27,7 @@ std::vector<Command> Commands() {
       {"run", p2n::RunRun, "run every stage that is not fresh: photo2nerf run PHOTOS -w WORKSPACE"},
       {"status", p2n::RunStatus, "say which stages are fresh, and why the others are not"},
       {"clean", p2n::RunClean, "remove stage results from a workspace"},
+      {"fit-image", p2n::RunFitImage, "fit a neural field to one image (the 2D warm-up): photo2nerf fit-image IMG -o DIR"},
   };
   const p2n::Runner runner = p2n::MakeRunner();
   for (const auto& stage : runner.stages()) {

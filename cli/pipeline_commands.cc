@@ -71,7 +71,7 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
     workspace.SetInput(photos);
   }
   const Config config = ResolveConfig(registry, workspace, flags, /*remember=*/true);
-  const auto thread_limit = ApplyRunOptions(config, workspace);
+  const auto thread_limit = ApplyRunOptions(config, workspace.LogDir() / "photo2nerf.log");
   LogInfo(format("{} (workspace {})", CommandLine(argc, argv), workspace.root().string()));
 
   const std::vector<StageRun> runs = runner.Run(workspace, config, request);

@@ -25,7 +25,10 @@ ReadImageResult ReadImage(const std::filesystem::path& path) {
     result.error = "empty file (0 bytes)";
     return result;
   }
-  auto input = OIIO::ImageInput::open(path.string());
+  // Straight (unassociated) alpha, as the file stores it: a transparent pixel keeps its colour.
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto input = OIIO::ImageInput::open(path.string(), &config);
   if (!input) {
     result.error = "not a readable image: " + OIIO::geterror();
     return result;

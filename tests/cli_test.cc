@@ -112,3 +112,58 @@ TEST_CASE("cli: user errors exit 1 with a message naming what is wrong", "[cli]"
 }
 
 }  // namespace p2n::testing
+
+namespace p2n::testing {
+
+TEST_CASE("cli: fit-image writes the reconstruction, the curve, the plot and the snapshots", "[cli][fit]") {
+  TempDir dir;
+  MakePhotos(dir / "in", 1);
+  const std::string image = (dir / "in" / "photo 0.png").string();
+  const std::string out = (dir / "out").string();
+  const Result fit = Photo2Nerf({"fit-image", image, "-o", out, "--fit.model", "hashgrid", "--fit.max_steps", "30",
+                                 "--fit.time_budget", "0", "--fit.snapshot_steps", "1,10"});
+  INFO(fit.output);
+  REQUIRE(fit.code == 0);
+  for (const char* file : {"reconstruction.png", "psnr.png", "snapshots.png", "snapshot_step_000001.png",
+                           "snapshot_step_000010.png", "fit_report.json", "config.json", "fit.log"}) {
+    CHECK(fs::exists(fs::path(out) / file));
+  }
+  const std::string csv = ReadText(fs::path(out) / "metrics.csv");
+  CHECK(csv.rfind("wall_seconds,step,psnr\n", 0) == 0);
+  CHECK_THAT(csv, Catch::Contains(",30,"));
+  CHECK_THAT(ReadText(fs::path(out) / "fit_report.json"), Catch::Contains("\"steps\": 30"));
+  // The same folder can take another fit (it holds fit-image results).
+  CHECK(Photo2Nerf({"fit-image", image, "-o", out, "--fit.max_steps", "2", "--fit.time_budget", "0",
+                    "--fit.width", "8"}).code == 0);
+
+  const std::string sweep = (dir / "sweep").string();
+  const Result swept = Photo2Nerf({"fit-image", image, "-o", sweep, "--sweep", "--fit.max_steps", "3",
+                                   "--fit.time_budget", "0", "--fit.width", "8"});
+  INFO(swept.output);
+  REQUIRE(swept.code == 0);
+  const std::string table = ReadText(fs::path(sweep) / "sweep.csv");
+  CHECK(std::count(table.begin(), table.end(), '\n') == 9);  // header + 2 x 2 x 2 runs
+  CHECK(fs::exists(fs::path(sweep) / "sweep.png"));
+}
+
+TEST_CASE("cli: fit-image refuses bad input with a clear error", "[cli][fit]") {
+  TempDir dir;
+  MakePhotos(dir / "in", 1);
+  const std::string image = (dir / "in" / "photo 0.png").string();
+  auto expect = [](const Result& result, const std::string& text) {
+    INFO(result.output);
+    CHECK(result.code == 1);
+    CHECK_THAT(result.output, Catch::Contains(text));
+  };
+  WriteText(dir / "notes.png", "text");
+  expect(Photo2Nerf({"fit-image", (dir / "notes.png").string(), "-o", (dir / "o1").string()}), "notes.png");
+  expect(Photo2Nerf({"fit-image", (dir / "missing.png").string(), "-o", (dir / "o2").string()}), "missing.png");
+  expect(Photo2Nerf({"fit-image", image, "-o", (dir / "o3").string(), "--fit.batch_size", "0"}),
+         "option fit.batch_size must be");
+  expect(Photo2Nerf({"fit-image", image, "-o", (dir / "o4").string(), "--fit.model", "siren"}),
+         "option fit.model must be pe or hashgrid");
+  expect(Photo2Nerf({"fit-image", image, "-o", (dir / "in").string()}), "is not empty");
+  CHECK(fs::exists(dir / "in" / "photo 0.png"));
+}
+
+}  // namespace p2n::testing

@@ -1,0 +1,54 @@
+#include "nerf/adam.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace p2n {
+
+template <typename T>
+Adam<T>::Adam(AdamOptions options, size_t num_params, int entry_size)
+    : options_(options),
+      entry_size_(entry_size),
+      first_moment_(num_params, T(0)),
+      second_moment_(num_params, T(0)),
+      entry_steps_(num_params / entry_size, 0) {
+  if (entry_size <= 0 || num_params % entry_size != 0) {
+    throw std::invalid_argument("Adam: the parameter count must be a multiple of the entry size");
+  }
+}
+
+template <typename T>
+void Adam<T>::UpdateRange(T* params, const T* grads, size_t begin, size_t end, uint32_t step) {
+  while (beta1_powers_.size() <= step) {
+    beta1_powers_.push_back(beta1_powers_.back() * options_.beta1);
+    beta2_powers_.push_back(beta2_powers_.back() * options_.beta2);
+  }
+  // p -= lr * m_hat / (sqrt(v_hat) + eps), with m_hat = m / (1 - beta1^t) and v_hat = v / (1 - beta2^t).
+  const T step_size = static_cast<T>(options_.learning_rate / (1 - beta1_powers_[step]));
+  const T inv_sqrt_correction2 = static_cast<T>(1 / std::sqrt(1 - beta2_powers_[step]));
+  const T beta1 = static_cast<T>(options_.beta1), beta2 = static_cast<T>(options_.beta2);
+  const T epsilon = static_cast<T>(options_.epsilon);
+  for (size_t k = begin; k < end; ++k) {
+    const T g = grads[k];
+    first_moment_[k] = beta1 * first_moment_[k] + (1 - beta1) * g;
+    second_moment_[k] = beta2 * second_moment_[k] + (1 - beta2) * g * g;
+    params[k] -= step_size * first_moment_[k] / (std::sqrt(second_moment_[k]) * inv_sqrt_correction2 + epsilon);
+  }
+}
+
+template <typename T>
+void Adam<T>::Step(T* params, const T* grads) {
+  UpdateRange(params, grads, 0, first_moment_.size(), ++dense_step_);
+}
+
+template <typename T>
+void Adam<T>::StepSparse(T* params, const T* grads, const std::vector<uint32_t>& entries) {
+  for (const uint32_t entry : entries) {
+    UpdateRange(params, grads, size_t{entry} * entry_size_, size_t{entry + 1} * entry_size_, ++entry_steps_[entry]);
+  }
+}
+
+template class Adam<float>;
+template class Adam<double>;
+
+}  // namespace p2n

@@ -1,0 +1,123 @@
+#pragma once
+// Encodings map points in [0, 1]^D to feature vectors for an MLP (columns are points). Components are made
+// from nested JSON-like configs with an "otype" (as in tiny-cuda-nn) and can print their full config.
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace p2n {
+
+template <typename T>
+class Encoding {
+ public:
+  using Matrix = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic>;
+
+  virtual ~Encoding() = default;
+  virtual int input_dims() const = 0;
+  virtual int output_dims() const = 0;
+  virtual nlohmann::json Config() const = 0;
+  // output (output_dims x n) for input (input_dims x n); coordinates outside [0, 1] are clamped.
+  virtual void Forward(const Matrix& input, Matrix* output) const = 0;
+
+  // Trainable encodings (a hash grid) override these; fixed ones (positional encoding) have no parameters.
+  virtual size_t num_params() const { return 0; }
+  virtual T* params() { return nullptr; }
+  virtual const T* grads() const { return nullptr; }
+  // Values that share one optimiser step count (the features of one table entry).
+  virtual int entry_size() const { return 1; }
+  // Starts a step: the gradient of the previous step is forgotten.
+  virtual void ZeroGrad() {}
+  // Adds dL/d(params) for `input` given dL/d(output) (output_dims x n).
+  virtual void Backward(const Matrix& input, const Matrix& d_output) {
+    (void)input;
+    (void)d_output;
+  }
+  // The entries that received a gradient since ZeroGrad(), each once.
+  virtual const std::vector<uint32_t>& touched_entries() const {
+    static const std::vector<uint32_t> kNone;
+    return kNone;
+  }
+};
+
+// [x, sin(2^k pi x), cos(2^k pi x) for k < levels] per coordinate: the NeRF paper's encoding, keeping the
+// raw input. levels = 0 gives the raw coordinates only.
+template <typename T>
+class PositionalEncoding : public Encoding<T> {
+ public:
+  using typename Encoding<T>::Matrix;
+  PositionalEncoding(int dims, int levels);
+  int input_dims() const override { return dims_; }
+  int output_dims() const override { return dims_ * (1 + 2 * levels_); }
+  nlohmann::json Config() const override;
+  void Forward(const Matrix& input, Matrix* output) const override;
+
+ private:
+  int dims_, levels_;
+};
+
+struct HashGridConfig {
+  int levels = 16;               // resolutions, from base to finest, growing geometrically
+  int features_per_level = 2;
+  int log2_table_size = 19;      // entries per level (at most; coarse levels that fit are stored densely)
+  int base_resolution = 16;      // cells per axis of the coarsest level
+  int finest_resolution = 2048;  // cells per axis of the finest level
+
+  nlohmann::json ToJson() const;
+};
+
+// Multiresolution hash encoding (Mueller et al. 2022), D-linear interpolation of per-vertex features at each
+// level. Each level's table is contiguous. Backward runs one level per task (no two threads write one
+// entry) and tracks touched entries for a sparse optimiser step.
+template <typename T>
+class HashGridEncoding : public Encoding<T> {
+ public:
+  using typename Encoding<T>::Matrix;
+  HashGridEncoding(int dims, const HashGridConfig& config, uint64_t seed);
+
+  int input_dims() const override { return dims_; }
+  int output_dims() const override { return config_.levels * config_.features_per_level; }
+  nlohmann::json Config() const override;
+  void Forward(const Matrix& input, Matrix* output) const override;
+
+  size_t num_params() const override { return params_.size(); }
+  T* params() override { return params_.data(); }
+  const T* grads() const override { return grads_.data(); }
+  int entry_size() const override { return config_.features_per_level; }
+  void ZeroGrad() override;
+  void Backward(const Matrix& input, const Matrix& d_output) override;
+  const std::vector<uint32_t>& touched_entries() const override { return touched_; }
+
+ private:
+  struct Level {
+    double scale;        // a coordinate in [0, 1] maps to scale * x in grid units
+    uint32_t size;       // entries
+    uint32_t offset;     // first entry
+    bool dense;          // indexed directly rather than hashed
+    uint32_t vertices;   // vertices per axis (dense levels)
+  };
+  // Entry of a grid vertex at `level`.
+  uint32_t EntryIndex(const Level& level, const uint32_t* vertex) const;
+  // Calls visit(entry, weight) for the 2^D vertices around point `p` at `level`.
+  template <class Visit>
+  void ForEachCorner(const Level& level, const T* p, Visit visit) const;
+
+  int dims_;
+  HashGridConfig config_;
+  std::vector<Level> levels_;
+  std::vector<T> params_, grads_;
+  std::vector<uint32_t> stamps_;  // step id of each entry's last gradient
+  uint32_t step_id_ = 0;
+  std::vector<std::vector<uint32_t>> touched_per_level_;
+  std::vector<uint32_t> touched_;
+};
+
+extern template class PositionalEncoding<float>;
+extern template class PositionalEncoding<double>;
+extern template class HashGridEncoding<float>;
+extern template class HashGridEncoding<double>;
+
+}  // namespace p2n

@@ -1,0 +1,164 @@
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include "nerf/denormals.h"
+#include "nerf/encoding.h"
+
+namespace p2n {
+namespace {
+
+constexpr uint32_t kPrimes[3] = {1u, 2654435761u, 805459861u};
+constexpr Eigen::Index kChunk = 1024;
+
+}  // namespace
+
+nlohmann::json HashGridConfig::ToJson() const {
+  return {{"otype", "HashGrid"},
+          {"levels", levels},
+          {"features_per_level", features_per_level},
+          {"log2_table_size", log2_table_size},
+          {"base_resolution", base_resolution},
+          {"finest_resolution", finest_resolution}};
+}
+
+template <typename T>
+HashGridEncoding<T>::HashGridEncoding(int dims, const HashGridConfig& config, uint64_t seed)
+    : dims_(dims), config_(config) {
+  if (dims < 1 || dims > 3 || config.levels < 1 || config.features_per_level < 1 || config.log2_table_size < 4 ||
+      config.log2_table_size > 26 || config.base_resolution < 1 || config.finest_resolution < config.base_resolution) {
+    throw std::invalid_argument("hash grid: invalid config " + config.ToJson().dump());
+  }
+  const double growth = config.levels > 1 ? std::exp((std::log(config.finest_resolution) -
+                                                      std::log(config.base_resolution)) / (config.levels - 1))
+                                          : 1.0;
+  const uint64_t max_size = uint64_t{1} << config.log2_table_size;
+  uint64_t offset = 0;
+  for (int l = 0; l < config.levels; ++l) {
+    Level level;
+    level.scale = config.base_resolution * std::pow(growth, l);
+    level.vertices = static_cast<uint32_t>(std::ceil(level.scale)) + 2;
+    const double dense_size = std::pow(static_cast<double>(level.vertices), dims);
+    level.dense = dense_size <= static_cast<double>(max_size);
+    level.size = static_cast<uint32_t>(level.dense ? dense_size : max_size);
+    level.offset = static_cast<uint32_t>(offset);
+    offset += level.size;
+    levels_.push_back(level);
+  }
+  const size_t values = offset * config.features_per_level;
+  params_.resize(values);
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> uniform(-1e-4, 1e-4);
+  for (T& value : params_) value = static_cast<T>(uniform(random));
+  grads_.assign(values, T(0));
+  stamps_.assign(offset, 0);
+  touched_per_level_.resize(config.levels);
+}
+
+template <typename T>
+nlohmann::json HashGridEncoding<T>::Config() const {
+  nlohmann::json config = config_.ToJson();
+  config["dims"] = dims_;
+  return config;
+}
+
+template <typename T>
+uint32_t HashGridEncoding<T>::EntryIndex(const Level& level, const uint32_t* vertex) const {
+  uint32_t index = 0;
+  if (level.dense) {
+    uint32_t stride = 1;
+    for (int d = 0; d < dims_; ++d) {
+      index += vertex[d] * stride;
+      stride *= level.vertices;
+    }
+  } else {
+    for (int d = 0; d < dims_; ++d) index ^= vertex[d] * kPrimes[d];
+    index %= level.size;
+  }
+  return level.offset + index;
+}
+
+template <typename T>
+template <class Visit>
+void HashGridEncoding<T>::ForEachCorner(const Level& level, const T* p, Visit visit) const {
+  uint32_t base[3];
+  T fraction[3];
+  for (int d = 0; d < dims_; ++d) {
+    const double position = std::clamp(static_cast<double>(p[d]), 0.0, 1.0) * level.scale;
+    const double floor = std::floor(position);
+    base[d] = static_cast<uint32_t>(floor);
+    fraction[d] = static_cast<T>(position - floor);
+  }
+  for (int corner = 0; corner < (1 << dims_); ++corner) {
+    uint32_t vertex[3];
+    T weight = T(1);
+    for (int d = 0; d < dims_; ++d) {
+      const bool upper = (corner >> d) & 1;
+      vertex[d] = base[d] + upper;
+      weight *= upper ? fraction[d] : T(1) - fraction[d];
+    }
+    visit(EntryIndex(level, vertex), weight);
+  }
+}
+
+template <typename T>
+void HashGridEncoding<T>::Forward(const Matrix& input, Matrix* output) const {
+  const Eigen::Index n = input.cols();
+  const int features = config_.features_per_level;
+  output->setZero(output_dims(), n);
+  tbb::parallel_for(Eigen::Index{0}, (n + kChunk - 1) / kChunk, [&](Eigen::Index chunk) {
+    FlushDenormalsOnThisThread();
+    const Eigen::Index end = std::min(n, (chunk + 1) * kChunk);
+    for (int l = 0; l < config_.levels; ++l) {
+      for (Eigen::Index i = chunk * kChunk; i < end; ++i) {
+        T* out = output->col(i).data() + l * features;
+        ForEachCorner(levels_[l], input.col(i).data(), [&](uint32_t entry, T weight) {
+          const T* feature = params_.data() + size_t{entry} * features;
+          for (int f = 0; f < features; ++f) out[f] += weight * feature[f];
+        });
+      }
+    }
+  });
+}
+
+template <typename T>
+void HashGridEncoding<T>::ZeroGrad() {
+  ++step_id_;
+  if (step_id_ == 0) {  // wrapped: every stamp is stale again
+    std::fill(stamps_.begin(), stamps_.end(), 0);
+    step_id_ = 1;
+  }
+  for (auto& touched : touched_per_level_) touched.clear();
+  touched_.clear();
+}
+
+template <typename T>
+void HashGridEncoding<T>::Backward(const Matrix& input, const Matrix& d_output) {
+  const int features = config_.features_per_level;
+  tbb::parallel_for(0, config_.levels, [&](int l) {
+    FlushDenormalsOnThisThread();
+    std::vector<uint32_t>& touched = touched_per_level_[l];
+    for (Eigen::Index i = 0; i < input.cols(); ++i) {
+      const T* d_out = d_output.col(i).data() + l * features;
+      ForEachCorner(levels_[l], input.col(i).data(), [&](uint32_t entry, T weight) {
+        T* grad = grads_.data() + size_t{entry} * features;
+        if (stamps_[entry] != step_id_) {
+          stamps_[entry] = step_id_;
+          std::fill(grad, grad + features, T(0));
+          touched.push_back(entry);
+        }
+        for (int f = 0; f < features; ++f) grad[f] += weight * d_out[f];
+      });
+    }
+  });
+  touched_.clear();
+  for (const auto& touched : touched_per_level_) touched_.insert(touched_.end(), touched.begin(), touched.end());
+}
+
+template class HashGridEncoding<float>;
+template class HashGridEncoding<double>;
+
+}  // namespace p2n

@@ -1,0 +1,121 @@
+#include "nerf/plot.h"
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+
+namespace p2n {
+namespace {
+
+constexpr int kWidth = 900, kHeight = 560;
+constexpr int kLeft = 80, kRight = 220, kTop = 50, kBottom = 60;
+const cv::Scalar kColours[] = {{200, 80, 30}, {40, 120, 230}, {60, 170, 60}, {180, 60, 180},
+                               {30, 180, 200}, {120, 120, 120}, {0, 0, 200}, {140, 90, 20}};
+
+// A "nice" tick spacing for a range: 1, 2 or 5 times a power of ten.
+double TickStep(double range) {
+  const double raw = range / 6;
+  const double magnitude = std::pow(10, std::floor(std::log10(raw)));
+  for (double factor : {1.0, 2.0, 5.0}) {
+    if (factor * magnitude >= raw) return factor * magnitude;
+  }
+  return 10 * magnitude;
+}
+
+std::string Number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g", std::abs(value) < 1e-12 ? 0.0 : value);
+  return text;
+}
+
+void Text(cv::Mat& image, const std::string& text, cv::Point at, double scale = 0.45) {
+  cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, scale, {30, 30, 30}, 1, cv::LINE_AA);
+}
+
+}  // namespace
+
+void WriteLinePlot(const std::filesystem::path& path, const PlotLabels& labels, const std::vector<PlotSeries>& series) {
+  double x_min = std::numeric_limits<double>::infinity(), x_max = -x_min, y_min = x_min, y_max = -x_min;
+  for (const PlotSeries& s : series) {
+    for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
+      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
+      x_min = std::min(x_min, s.x[i]);
+      x_max = std::max(x_max, s.x[i]);
+      y_min = std::min(y_min, s.y[i]);
+      y_max = std::max(y_max, s.y[i]);
+    }
+  }
+  if (!std::isfinite(x_min)) x_min = 0, x_max = 1, y_min = 0, y_max = 1;
+  if (x_max - x_min < 1e-12) x_max = x_min + 1;
+  if (y_max - y_min < 1e-12) y_max = y_min + 1;
+  const double x_step = TickStep(x_max - x_min), y_step = TickStep(y_max - y_min);
+  x_min = std::floor(x_min / x_step) * x_step;
+  x_max = std::ceil(x_max / x_step) * x_step;
+  y_min = std::floor(y_min / y_step) * y_step;
+  y_max = std::ceil(y_max / y_step) * y_step;
+
+  cv::Mat image(kHeight, kWidth, CV_8UC3, cv::Scalar(255, 255, 255));
+  const int plot_width = kWidth - kLeft - kRight, plot_height = kHeight - kTop - kBottom;
+  const auto to_pixel = [&](double x, double y) {
+    return cv::Point(kLeft + static_cast<int>(std::lround((x - x_min) / (x_max - x_min) * plot_width)),
+                     kTop + plot_height - static_cast<int>(std::lround((y - y_min) / (y_max - y_min) * plot_height)));
+  };
+  for (double x = x_min; x <= x_max + 1e-9 * x_step; x += x_step) {
+    const cv::Point p = to_pixel(x, y_min);
+    cv::line(image, {p.x, kTop}, {p.x, kTop + plot_height}, {230, 230, 230});
+    Text(image, Number(x), {p.x - 10, kTop + plot_height + 20});
+  }
+  for (double y = y_min; y <= y_max + 1e-9 * y_step; y += y_step) {
+    const cv::Point p = to_pixel(x_min, y);
+    cv::line(image, {kLeft, p.y}, {kLeft + plot_width, p.y}, {230, 230, 230});
+    Text(image, Number(y), {10, p.y + 5});
+  }
+  cv::rectangle(image, {kLeft, kTop}, {kLeft + plot_width, kTop + plot_height}, {60, 60, 60});
+  Text(image, labels.title, {kLeft, 22}, 0.6);
+  Text(image, labels.x_axis, {kLeft + plot_width / 2 - 40, kHeight - 15});
+  Text(image, labels.y_axis, {10, kTop - 12});
+  for (size_t k = 0; k < series.size(); ++k) {
+    const cv::Scalar colour = kColours[k % std::size(kColours)];
+    std::vector<cv::Point> points;
+    for (size_t i = 0; i < series[k].x.size() && i < series[k].y.size(); ++i) {
+      if (std::isfinite(series[k].x[i]) && std::isfinite(series[k].y[i])) {
+        points.push_back(to_pixel(series[k].x[i], series[k].y[i]));
+      }
+    }
+    cv::polylines(image, points, false, colour, 2, cv::LINE_AA);
+    const int legend_y = kTop + 20 + 22 * static_cast<int>(k);
+    cv::line(image, {kWidth - kRight + 15, legend_y - 4}, {kWidth - kRight + 40, legend_y - 4}, colour, 2);
+    Text(image, series[k].name, {kWidth - kRight + 45, legend_y});
+  }
+  if (!cv::imwrite(path.string(), image)) throw std::runtime_error("cannot write the plot '" + path.string() + "'");
+}
+
+void WriteImageStrip(const std::filesystem::path& path, const std::vector<CaptionedImage>& images) {
+  constexpr int kCaption = 28;
+  int height = 0;
+  for (const CaptionedImage& item : images) height = std::max(height, std::min(item.image->height, 400));
+  std::vector<cv::Mat> tiles;
+  for (const CaptionedImage& item : images) {
+    const FloatImage& image = *item.image;
+    cv::Mat floats(image.height, image.width, CV_32FC(image.channels), const_cast<float*>(image.pixels.data()));
+    cv::Mat bytes, colour, scaled;
+    floats.convertTo(bytes, CV_8U, 255.0);
+    cv::cvtColor(bytes, colour, image.channels == 1 ? cv::COLOR_GRAY2BGR : cv::COLOR_RGB2BGR);
+    const int width = std::max(1, static_cast<int>(std::lround(static_cast<double>(image.width) * height / image.height)));
+    cv::resize(colour, scaled, {width, height}, 0, 0, cv::INTER_AREA);
+    cv::Mat tile(height + kCaption, width + 6, CV_8UC3, cv::Scalar(255, 255, 255));
+    scaled.copyTo(tile(cv::Rect(3, 0, width, height)));
+    Text(tile, item.caption, {6, height + 19});
+    tiles.push_back(tile);
+  }
+  cv::Mat strip;
+  cv::hconcat(tiles, strip);
+  if (!cv::imwrite(path.string(), strip)) throw std::runtime_error("cannot write '" + path.string() + "'");
+}
+
+}  // namespace p2n

@@ -1,0 +1,32 @@
+#pragma once
+// Line plots written as PNG (OpenCV drawing): for error-against-time curves.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "nerf/float_image.h"
+
+namespace p2n {
+
+struct PlotSeries {
+  std::string name;
+  std::vector<double> x, y;
+};
+
+struct PlotLabels {
+  std::string title, x_axis, y_axis;
+};
+
+// Draws the series (finite points only) with axes, ticks and a legend; throws std::runtime_error naming the
+// file when it cannot be written.
+void WriteLinePlot(const std::filesystem::path& path, const PlotLabels& labels, const std::vector<PlotSeries>& series);
+
+struct CaptionedImage {
+  std::string caption;
+  const FloatImage* image;
+};
+// The images side by side (scaled to one height), each with its caption below; PNG.
+void WriteImageStrip(const std::filesystem::path& path, const std::vector<CaptionedImage>& images);
+
+}  // namespace p2n

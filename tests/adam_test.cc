@@ -1,0 +1,50 @@
+// Adam: the textbook update, and the sparse variant's per-entry step counts.
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "nerf/adam.h"
+
+namespace p2n::testing {
+
+TEST_CASE("the first Adam step moves each parameter by the learning rate against its gradient", "[adam]") {
+  Adam<double> adam({0.1, 0.9, 0.999, 1e-12}, 3);
+  std::vector<double> params = {1, 2, 3}, grads = {0.5, -2, 1e-3};
+  adam.Step(params.data(), grads.data());
+  CHECK(params[0] == Approx(0.9));
+  CHECK(params[1] == Approx(2.1));
+  CHECK(params[2] == Approx(2.9));
+}
+
+TEST_CASE("Adam minimises a quadratic", "[adam]") {
+  Adam<double> adam({0.05, 0.9, 0.999, 1e-8}, 2);
+  std::vector<double> x = {3, -4};
+  for (int step = 0; step < 2000; ++step) {
+    std::vector<double> grads = {2 * (x[0] - 1), 8 * (x[1] + 2)};
+    adam.Step(x.data(), grads.data());
+  }
+  CHECK(x[0] == Approx(1).margin(1e-3));
+  CHECK(x[1] == Approx(-2).margin(1e-3));
+}
+
+TEST_CASE("sparse Adam equals dense Adam when every entry is touched, and counts steps per entry", "[adam]") {
+  Adam<double> dense({0.01, 0.9, 0.99, 1e-15}, 4, 2), sparse({0.01, 0.9, 0.99, 1e-15}, 4, 2);
+  std::vector<double> a = {1, 2, 3, 4}, b = a;
+  for (int step = 0; step < 5; ++step) {
+    std::vector<double> grads = {0.1 * step, -0.2, 0.3, 0.05 * step};
+    dense.Step(a.data(), grads.data());
+    sparse.StepSparse(b.data(), grads.data(), {0, 1});
+  }
+  for (int k = 0; k < 4; ++k) CHECK(a[k] == Approx(b[k]));
+  // An entry first touched at a later step gets the full first-step update (bias correction of step 1), not one
+  // shrunk by the steps it took no part in.
+  Adam<double> late({0.01, 0.9, 0.99, 1e-15}, 4, 2);
+  std::vector<double> params = {0, 0, 0, 0}, grads = {1, 1, 1, 1};
+  for (int step = 0; step < 10; ++step) late.StepSparse(params.data(), grads.data(), {0});
+  late.StepSparse(params.data(), grads.data(), {1});
+  CHECK(params[2] == Approx(-0.01));
+  CHECK(params[3] == Approx(-0.01));
+}
+
+}  // namespace p2n::testing

@@ -1,0 +1,159 @@
+// Gradients of the MLP and the encodings against central finite differences, in double precision.
+
+#include <catch2/catch.hpp>
+
+#include <random>
+
+#include "nerf/encoding.h"
+#include "nerf/mlp.h"
+
+namespace p2n::testing {
+namespace {
+
+using Matrix = Eigen::MatrixXd;
+
+Matrix Random(int rows, int cols, uint64_t seed, double low, double high) {
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> uniform(low, high);
+  Matrix m(rows, cols);
+  for (Eigen::Index i = 0; i < m.size(); ++i) m.data()[i] = uniform(random);
+  return m;
+}
+
+// L = sum(weights .* f(x)): a scalar loss with a known gradient dL/df = weights.
+double MlpLoss(const Mlp<double>& mlp, const Matrix& input, const Matrix& weights) {
+  Matrix out;
+  Mlp<double>::Cache cache;
+  mlp.Forward(input, &out, &cache);
+  return (out.array() * weights.array()).sum();
+}
+
+}  // namespace
+
+TEST_CASE("MLP gradients match finite differences", "[gradients]") {
+  for (const OutputActivation activation : {OutputActivation::kNone, OutputActivation::kSigmoid}) {
+    MlpConfig config{5, 3, 8, 2, activation};
+    Mlp<double> mlp(config, 7);
+    const Matrix input = Random(5, 6, 1, -1, 1);
+    const Matrix weights = Random(3, 6, 2, -1, 1);
+    Matrix out, d_input;
+    Mlp<double>::Cache cache;
+    mlp.Forward(input, &out, &cache);
+    std::vector<double> d_params(mlp.num_params(), 0.0);
+    mlp.Backward(cache, weights, d_params.data(), &d_input);
+
+    const double h = 1e-6;
+    double worst = 0;
+    for (int k = 0; k < mlp.num_params(); ++k) {
+      const double saved = mlp.params()[k];
+      mlp.params()[k] = saved + h;
+      const double plus = MlpLoss(mlp, input, weights);
+      mlp.params()[k] = saved - h;
+      const double minus = MlpLoss(mlp, input, weights);
+      mlp.params()[k] = saved;
+      worst = std::max(worst, std::abs((plus - minus) / (2 * h) - d_params[k]));
+    }
+    CHECK(worst < 1e-7);
+    for (Eigen::Index k = 0; k < input.size(); ++k) {
+      Matrix moved = input;
+      moved.data()[k] += h;
+      const double plus = MlpLoss(mlp, moved, weights);
+      moved.data()[k] -= 2 * h;
+      const double minus = MlpLoss(mlp, moved, weights);
+      CHECK(std::abs((plus - minus) / (2 * h) - d_input.data()[k]) < 1e-7);
+    }
+  }
+}
+
+TEST_CASE("sigmoid output stays finite and saturates for huge inputs", "[gradients]") {
+  MlpConfig config{1, 1, 1, 0, OutputActivation::kSigmoid};
+  Mlp<float> mlp(config, 1);
+  mlp.params()[0] = 1;  // weight
+  mlp.params()[1] = 0;  // bias
+  Eigen::MatrixXf input(1, 3), out;
+  input << -1e30f, 0.0f, 1e30f;
+  Mlp<float>::Cache cache;
+  mlp.Forward(input, &out, &cache);
+  CHECK(out(0, 0) == Approx(0.0f).margin(1e-20));
+  CHECK(out(0, 1) == Approx(0.5f));
+  CHECK(out(0, 2) == Approx(1.0f));
+  CHECK(out.allFinite());
+}
+
+TEST_CASE("hash-grid gradients match finite differences, in 2D and 3D, dense and hashed levels", "[gradients]") {
+  for (const int dims : {2, 3}) {
+    HashGridConfig config;
+    config.levels = 4;
+    config.features_per_level = 2;
+    config.log2_table_size = 6;  // 64 entries: the coarse level is dense, the fine ones are hashed
+    config.base_resolution = 2;
+    config.finest_resolution = 20;
+    HashGridEncoding<double> grid(dims, config, 3);
+    const Matrix input = Random(dims, 7, 4, 0, 1);
+    const Matrix weights = Random(grid.output_dims(), 7, 5, -1, 1);
+    grid.ZeroGrad();
+    grid.Backward(input, weights);
+    std::vector<double> analytic(grid.num_params(), 0.0);
+    for (const uint32_t entry : grid.touched_entries()) {
+      for (int f = 0; f < grid.entry_size(); ++f) {
+        analytic[entry * grid.entry_size() + f] = grid.grads()[entry * grid.entry_size() + f];
+      }
+    }
+    const auto loss = [&] {
+      Matrix out;
+      grid.Forward(input, &out);
+      return (out.array() * weights.array()).sum();
+    };
+    const double h = 1e-6;
+    double worst = 0;
+    size_t nonzero = 0;
+    for (size_t k = 0; k < grid.num_params(); ++k) {
+      const double saved = grid.params()[k];
+      grid.params()[k] = saved + h;
+      const double plus = loss();
+      grid.params()[k] = saved - h;
+      const double minus = loss();
+      grid.params()[k] = saved;
+      const double numeric = (plus - minus) / (2 * h);
+      worst = std::max(worst, std::abs(numeric - analytic[k]));
+      nonzero += std::abs(numeric) > 1e-9;
+    }
+    CHECK(worst < 1e-8);
+    CHECK(nonzero > 0);
+    // Every touched entry is listed once.
+    std::vector<uint32_t> touched = grid.touched_entries();
+    std::sort(touched.begin(), touched.end());
+    CHECK(std::adjacent_find(touched.begin(), touched.end()) == touched.end());
+  }
+}
+
+TEST_CASE("hash-grid interpolation reproduces vertex values and is continuous", "[gradients]") {
+  HashGridConfig config;
+  config.levels = 1;
+  config.features_per_level = 1;
+  config.log2_table_size = 10;
+  config.base_resolution = 4;
+  config.finest_resolution = 4;
+  HashGridEncoding<double> grid(2, config, 1);
+  Matrix points(2, 2), out;
+  points << 0.5 - 1e-9, 0.5 + 1e-9, 0.3, 0.3;
+  grid.Forward(points, &out);
+  CHECK(out(0, 0) == Approx(out(0, 1)).margin(1e-12));
+}
+
+TEST_CASE("positional encoding: raw input, then sin and cos of 2^k pi x", "[encoding]") {
+  PositionalEncoding<double> encoding(2, 3);
+  CHECK(encoding.output_dims() == 2 * (1 + 2 * 3));
+  Matrix point(2, 1), out;
+  point << 0.25, 0.5;
+  encoding.Forward(point, &out);
+  CHECK(out(0, 0) == 0.25);
+  CHECK(out(1, 0) == 0.5);
+  CHECK(out(2, 0) == Approx(std::sin(M_PI * 0.25)));      // k = 0, sin, x
+  CHECK(out(5, 0) == Approx(std::cos(M_PI * 0.5)).margin(1e-12));  // k = 0, cos, y
+  CHECK(out(6, 0) == Approx(std::sin(2 * M_PI * 0.25)));  // k = 1, sin, x: sin(pi / 2) = 1
+  CHECK(out(6, 0) == Approx(1.0));
+  CHECK(PositionalEncoding<double>(2, 10).output_dims() == 42);  // the seed's 2D encoding
+}
+
+}  // namespace p2n::testing
