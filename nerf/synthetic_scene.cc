@@ -65,12 +65,18 @@ struct Material {
   uint32_t seed;
 };
 
-// A solid texture: coloured fractal blotches with sharp dark speckles (corners for SIFT).
+// A solid texture: coloured fractal blotches with sharp speckles at three scales, dark and bright, so that SIFT
+// finds corners at every distance the cameras see the surface from.
 Vector3d Texture(const Vector3d& p, const Material& material) {
   const Vector3d q = p * material.scale;
   const Vector3d tint(Fractal(q, material.seed), Fractal(q, material.seed + 1), Fractal(q, material.seed + 2));
   Vector3d colour = (material.base + 0.8 * (tint.array() - 0.5).matrix()).cwiseMax(0.0).cwiseMin(1.0);
-  if (ValueNoise(q * 3.1, material.seed + 3) > 0.78) colour *= 0.25;
+  const double frequencies[] = {3.1, 8.3, 19.7};
+  for (int k = 0; k < 3; ++k) {
+    if (ValueNoise(q * frequencies[k], material.seed + 3 + k) > 0.76) {
+      colour = k == 1 ? (0.3 * colour).eval() : (0.25 * colour + Vector3d::Constant(0.75)).eval();
+    }
+  }
   return colour;
 }
 

@@ -13,14 +13,9 @@
 #include <filesystem>
 #include <vector>
 
-namespace p2n {
+#include "nerf/camera.h"
 
-struct PinholeCamera {
-  int width = 0;
-  int height = 0;
-  double fx = 0, fy = 0, cx = 0, cy = 0;   // pixels
-  Eigen::Matrix4d world_from_cam = Eigen::Matrix4d::Identity();
-};
+namespace p2n {
 
 struct SyntheticSceneOptions {
   int num_views = 24;          // cameras on an upward spiral around the scene

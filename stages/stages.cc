@@ -2,6 +2,8 @@
 
 #include "pipeline/format.h"
 #include "stages/ingest_stage.h"
+#include "stages/poses_stage.h"
+#include "stages/sfm_stage.h"
 
 namespace p2n {
 
@@ -13,17 +15,23 @@ OptionRegistry AllOptions() {
   OptionRegistry registry;
   RegisterOptions<RunOptions>(registry, "run");
   RegisterOptions<IngestOptions>(registry, "ingest");
+  RegisterOptions<SfmOptions>(registry, "sfm");
+  RegisterOptions<PosesOptions>(registry, "poses");
   return registry;
 }
 
 void CheckAllOptions(const Config& config) {
   ReadOptions<RunOptions>(config, "run");
   ReadOptions<IngestOptions>(config, "ingest");
+  ReadOptions<SfmOptions>(config, "sfm");
+  ReadOptions<PosesOptions>(config, "poses");
 }
 
 Runner MakeRunner() {
   std::vector<std::unique_ptr<Stage>> stages;
   stages.push_back(std::make_unique<IngestStage>());
+  stages.push_back(std::make_unique<SfmStage>());
+  stages.push_back(std::make_unique<PosesStage>());
   return Runner(std::move(stages));
 }
 

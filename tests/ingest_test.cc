@@ -46,7 +46,9 @@ struct IngestFixture {
     workspace.SetInput(photos);
   }
   nlohmann::json Run() {
-    runner.Run(workspace, config, {});
+    RunRequest request;
+    request.until = "ingest";
+    runner.Run(workspace, config, request);
     return ReadJsonFile(workspace.StageDir("00_ingest") / "ingest_report.json");
   }
   StageStatus Status() { return runner.Status(workspace, config).at(0); }

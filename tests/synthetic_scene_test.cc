@@ -8,17 +8,11 @@
 
 #include <fstream>
 
+#include "nerf/camera.h"
 #include "nerf/synthetic_scene.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {
-
-// Projects a world point through an OpenGL-axes camera to pixel coordinates.
-static Eigen::Vector2d Project(const PinholeCamera& camera, const Eigen::Vector3d& point_in_world) {
-  const Eigen::Matrix4d cam_from_world = camera.world_from_cam.inverse();
-  const Eigen::Vector3d p = (cam_from_world * point_in_world.homogeneous()).head<3>();
-  return {camera.cx + camera.fx * p.x() / -p.z(), camera.cy - camera.fy * p.y() / -p.z()};
-}
 
 TEST_CASE("look-at cameras: a proper rotation, the target at the image centre, up is up", "[synthetic]") {
   const PinholeCamera camera = LookAtCamera({3, -2, 1.5}, {0, 0, 0.4}, 320, 240, 60);

@@ -1,0 +1,33 @@
+#include "nerf/camera.h"
+
+namespace p2n {
+
+Eigen::Matrix3d OpenGlFromOpenCvCamera() { return Eigen::Vector3d(1, -1, -1).asDiagonal(); }
+Eigen::Matrix3d OpenCvFromOpenGlCamera() { return Eigen::Vector3d(1, -1, -1).asDiagonal(); }
+
+Eigen::Matrix4d WorldFromOpenGlCamera(const Eigen::Quaterniond& cam_from_world_rotation,
+                                      const Eigen::Vector3d& cam_from_world_translation) {
+  const Eigen::Matrix3d world_from_cv = cam_from_world_rotation.normalized().toRotationMatrix().transpose();
+  Eigen::Matrix4d world_from_gl = Eigen::Matrix4d::Identity();
+  world_from_gl.topLeftCorner<3, 3>() = world_from_cv * OpenCvFromOpenGlCamera();
+  world_from_gl.topRightCorner<3, 1>() = -world_from_cv * cam_from_world_translation;
+  return world_from_gl;
+}
+
+void OpenCvCamFromWorld(const Eigen::Matrix4d& world_from_gl_cam, Eigen::Quaterniond* cam_from_world_rotation,
+                        Eigen::Vector3d* cam_from_world_translation) {
+  const Eigen::Matrix3d world_from_cv = world_from_gl_cam.topLeftCorner<3, 3>() * OpenGlFromOpenCvCamera();
+  const Eigen::Matrix3d cv_from_world = world_from_cv.transpose();
+  *cam_from_world_rotation = Eigen::Quaterniond(cv_from_world).normalized();
+  *cam_from_world_translation = -cv_from_world * world_from_gl_cam.topRightCorner<3, 1>();
+}
+
+Eigen::Vector2d Project(const PinholeCamera& camera, const Eigen::Vector3d& point_in_world, double* depth) {
+  const Eigen::Matrix3d rotation = camera.world_from_cam.topLeftCorner<3, 3>();
+  const Eigen::Vector3d in_gl = rotation.transpose() * (point_in_world - camera.world_from_cam.topRightCorner<3, 1>());
+  const double z = -in_gl.z();  // distance in front of the camera
+  if (depth != nullptr) *depth = z;
+  return {camera.cx + camera.fx * in_gl.x() / z, camera.cy - camera.fy * in_gl.y() / z};
+}
+
+}  // namespace p2n

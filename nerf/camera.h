@@ -1,0 +1,35 @@
+#pragma once
+// Pinhole cameras and the one place where camera axis conventions change (DESIGN.md §3).
+//
+// COLMAP / OpenCV camera: x right, y down, z forward. NeRF / OpenGL / Blender camera (transforms.json): x right,
+// y up, looking down -z. Pixel (i, j)'s centre is at (i + 0.5, j + 0.5) in both. Transforms are named
+// target_from_source.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace p2n {
+
+struct PinholeCamera {
+  int width = 0;
+  int height = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;  // pixels
+  Eigen::Matrix4d world_from_cam = Eigen::Matrix4d::Identity();  // OpenGL camera axes
+};
+
+// Maps points in OpenCV camera axes to OpenGL camera axes (flips y and z); its inverse is the paired
+// OpenCvFromOpenGlCamera() (the same matrix: the flip is its own inverse).
+Eigen::Matrix3d OpenGlFromOpenCvCamera();
+Eigen::Matrix3d OpenCvFromOpenGlCamera();
+
+// world_from_cam in OpenGL camera axes from COLMAP's cam_from_world (OpenCV axes), and back.
+Eigen::Matrix4d WorldFromOpenGlCamera(const Eigen::Quaterniond& cam_from_world_rotation,
+                                      const Eigen::Vector3d& cam_from_world_translation);
+void OpenCvCamFromWorld(const Eigen::Matrix4d& world_from_gl_cam, Eigen::Quaterniond* cam_from_world_rotation,
+                        Eigen::Vector3d* cam_from_world_translation);
+
+// The pixel where `point_in_world` appears; its depth along the viewing direction in `depth` (negative:
+// behind the camera).
+Eigen::Vector2d Project(const PinholeCamera& camera, const Eigen::Vector3d& point_in_world, double* depth = nullptr);
+
+}  // namespace p2n

@@ -1,0 +1,233 @@
+#include "stages/sfm_stage.h"
+
+#include <Eigen/Geometry>
+
+#include <chrono>
+#include <fstream>
+#include <sstream>
+
+#include "pipeline/cancel.h"
+#include "pipeline/errors.h"
+#include "pipeline/file_util.h"
+#include "pipeline/format.h"
+#include "pipeline/log.h"
+#include "pipeline/subprocess.h"
+#include "stages/camera_geometry.h"
+#include "stages/colmap_flags.h"
+#include "stages/colmap_model.h"
+
+namespace p2n {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr double kSuspiciousFocusAngleDeg = 20;  // correct orbit models stay near 8 (DESIGN.md §7)
+constexpr size_t kMaxNamesListed = 20;
+
+std::string ReadText(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Runs the COLMAP steps in order with their own logs and timings.
+class StepRunner {
+ public:
+  StepRunner(fs::path log_dir, int total) : log_dir_(std::move(log_dir)), total_(total) {}
+
+  // Runs one step; returns its log. Failures throw ExternalToolError, unless `allow_failure`.
+  fs::path Run(const std::string& step, const std::vector<std::string>& argv, bool allow_failure = false) {
+    ++index_;
+    LogInfo(format("sfm: {} ({}/{})", step, index_, total_));
+    std::string file = step;
+    std::replace(file.begin(), file.end(), ' ', '_');
+    const fs::path log = log_dir_ / (file + ".log");
+    const SubprocessResult result =
+        allow_failure ? RunSubprocess(argv, log, step) : CheckSubprocess(argv, log, step);
+    last_ok_ = result.signal == 0 && result.exit_code == 0;
+    timings_.push_back({{"step", step}, {"wall_seconds", result.wall_seconds}, {"log", fs::relative(log, log_dir_.parent_path()).string()}});
+    ThrowIfCancelled();
+    return log;
+  }
+  bool last_ok() const { return last_ok_; }
+  const nlohmann::json& timings() const { return timings_; }
+
+ private:
+  fs::path log_dir_;
+  int total_;
+  int index_ = 0;
+  bool last_ok_ = true;
+  nlohmann::json timings_ = nlohmann::json::array();
+};
+
+std::vector<std::string> ImageNames(const fs::path& folder) {
+  std::vector<std::string> names;
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
+    if (entry.is_regular_file()) names.push_back(entry.path().filename().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+}  // namespace
+
+void SfmOptions::Check() const {
+  CheckOption(exhaustive_max_images >= 2, "sfm.exhaustive_max_images", "must be at least 2");
+  CheckOption(sequential_overlap >= 1, "sfm.sequential_overlap", "must be at least 1");
+  CheckOption(max_image_size >= 100, "sfm.max_image_size", format("must be at least 100 pixels, not {}", max_image_size));
+  CheckOption(max_num_features >= 100, "sfm.max_num_features", "must be at least 100");
+  CheckOption(min_registered > 0 && min_registered <= 1, "sfm.min_registered", "must be in (0, 1]");
+  CheckOption(!colmap.empty(), "sfm.colmap", "must name the COLMAP program");
+}
+
+std::map<std::string, std::string> SfmStage::ExternalInputs(const Workspace& workspace, const Config& config) const {
+  const std::string program = config.Get<std::string>("sfm.colmap");
+  try {
+    return {{"tool colmap", DetectColmapVersion(program, workspace.LogDir() / "colmap_version.log").ToString()}};
+  } catch (const std::exception&) {
+    return {{"tool colmap", "not found"}};  // Run() says why
+  }
+}
+
+void SfmStage::Run(StageContext& context) const {
+  const SfmOptions options = ReadOptions<SfmOptions>(context.config, "sfm");
+  const int threads = context.config.Get<int>("run.threads") > 0 ? context.config.Get<int>("run.threads") : -1;
+  const fs::path images = context.upstream_dirs.at("ingest") / "images";
+  const fs::path out = context.output_dir;
+  const fs::path logs = out / "logs";
+  const fs::path database = out / "database.db";  // always new: the staging folder starts empty
+  fs::create_directories(logs);
+  fs::create_directories(out / "sparse");
+
+  const ColmapVersion version = DetectColmapVersion(options.colmap, logs / "version.log");
+  const ColmapFlags flags = ColmapFlagsFor(version);
+  const std::vector<std::string> names = ImageNames(images);
+  const std::string matcher = options.matcher != "auto" ? options.matcher
+                              : static_cast<int>(names.size()) <= options.exhaustive_max_images ? "exhaustive"
+                                                                                                : "sequential";
+  LogInfo(format("sfm: COLMAP {}, {} photos, {} matching, features at {} px", version.ToString(), names.size(),
+                 matcher, options.max_image_size));
+  const std::string seed = std::to_string(options.seed), nthreads = std::to_string(threads);
+  StepRunner steps(logs, options.refine_principal_point ? 5 : 4);
+
+  steps.Run("feature extraction",
+            {options.colmap, "feature_extractor", "--database_path", database.string(), "--image_path",
+             images.string(), "--random_seed", seed, "--ImageReader.camera_model", options.camera_model,
+             "--ImageReader.single_camera", options.single_camera ? "1" : "0", flags.extraction_use_gpu, "0",
+             flags.extraction_num_threads, nthreads, flags.extraction_max_image_size,
+             std::to_string(options.max_image_size), flags.extraction_max_num_features,
+             std::to_string(options.max_num_features)});
+  std::vector<std::string> match = {options.colmap, matcher + "_matcher", "--database_path", database.string(),
+                                    "--random_seed", seed, flags.matching_use_gpu, "0", flags.matching_num_threads,
+                                    nthreads};
+  if (matcher == "sequential") {
+    match.insert(match.end(), {"--SequentialMatching.overlap", std::to_string(options.sequential_overlap),
+                               "--SequentialMatching.loop_detection", "0"});
+  }
+  steps.Run(matcher + " matching", match);
+  const fs::path mapper_log = steps.Run(
+      "mapping",
+      {options.colmap, "mapper", "--database_path", database.string(), "--image_path", images.string(),
+       "--output_path", (out / "sparse").string(), "--random_seed", seed, "--Mapper.num_threads", nthreads,
+       "--Mapper.min_model_size", "3"},
+      /*allow_failure=*/true);
+  const std::string advice = "try --sfm.matcher exhaustive, more features (--sfm.max_num_features), a larger "
+                             "--sfm.max_image_size, or photos with more overlap";
+  if (!steps.last_ok()) {
+    if (ReadText(mapper_log).find("No good initial image pair found") != std::string::npos) {
+      throw UserError(format("COLMAP found no pair of photos to start the reconstruction from (log: {}): the photos "
+                             "overlap too little or show too little texture; {}",
+                             mapper_log.string(), advice));
+    }
+    throw ExternalToolError(format("COLMAP's mapper failed; log: {}", mapper_log.string()));
+  }
+
+  // The model with the most registered images (COLMAP's exit code says nothing about that).
+  nlohmann::json models = nlohmann::json::array();
+  fs::path chosen;
+  size_t most = 0;
+  for (const fs::directory_entry& entry : fs::directory_iterator(out / "sparse")) {
+    if (!entry.is_directory()) continue;
+    const size_t registered = ReadColmapModel(entry.path()).images.size();
+    models.push_back({{"path", fs::relative(entry.path(), out).string()}, {"registered", registered}});
+    if (registered > most) {
+      most = registered;
+      chosen = entry.path();
+    }
+  }
+  if (chosen.empty()) {
+    throw UserError(format("COLMAP could not reconstruct any camera from the {} photos (log: {}); {}", names.size(),
+                           mapper_log.string(), advice));
+  }
+  fs::path model_dir = chosen;
+  if (options.refine_principal_point) {
+    model_dir = out / "refined";
+    fs::create_directories(model_dir);
+    steps.Run("bundle adjustment",
+              {options.colmap, "bundle_adjuster", "--input_path", chosen.string(), "--output_path",
+               model_dir.string(), "--BundleAdjustment.refine_principal_point", "1"});
+  }
+  steps.Run("undistortion", {options.colmap, "image_undistorter", "--image_path", images.string(), "--input_path",
+                             model_dir.string(), "--output_path", (out / "undistorted").string(),
+                             "--output_type", "COLMAP"});
+  for (const fs::directory_entry& entry : fs::directory_iterator(out / "undistorted")) {
+    if (entry.path().extension() == ".sh") fs::remove(entry.path());  // COLMAP's dense-stereo scripts
+  }
+
+  const ColmapModel model = ReadColmapModel(model_dir);
+  std::set<std::string> registered_names;
+  std::vector<Eigen::Vector3d> centres, axes;
+  for (const auto& [id, image] : model.images) {
+    registered_names.insert(image.name);
+    const Eigen::Matrix3d world_from_cam = image.cam_from_world_rotation.toRotationMatrix().transpose();
+    centres.push_back(-world_from_cam * image.cam_from_world_translation);
+    axes.push_back(world_from_cam.col(2));  // COLMAP cameras look along +z
+  }
+  std::vector<std::string> left_out;
+  for (const std::string& name : names) {
+    if (!registered_names.count(name)) left_out.push_back(name);
+  }
+  double error_sum = 0, observations = 0;
+  for (const auto& [id, point] : model.points) {
+    error_sum += point.error * point.track.size();
+    observations += point.track.size();
+  }
+  const double fraction = static_cast<double>(model.images.size()) / names.size();
+  nlohmann::json report = {
+      {"colmap_version", version.ToString()},
+      {"matcher", matcher},
+      {"images_given", names.size()},
+      {"registered", model.images.size()},
+      {"registered_percent", 100 * fraction},
+      {"left_out", left_out},
+      {"points", model.points.size()},
+      {"mean_reprojection_error_px", observations > 0 ? error_sum / observations : 0.0},
+      {"mean_track_length", model.points.empty() ? 0.0 : observations / model.points.size()},
+      {"models", models},
+      {"chosen_model", fs::relative(chosen, out).string()},
+      {"steps", steps.timings()}};
+  if (const auto focus = FindFocusPoint(centres, axes)) {
+    report["median_axis_to_focus_angle_deg"] = focus->median_angle_deg;
+    if (focus->median_angle_deg > kSuspiciousFocusAngleDeg) {
+      LogWarning(format("sfm: the cameras' optical axes miss their common focus point by a median {:.1f} degrees; "
+                        "for photos taken around an object this suggests a wrong reconstruction; {}",
+                        focus->median_angle_deg, advice));
+    }
+  }
+  WriteJsonAtomic(out / "sfm_report.json", report);
+  context.summary = {{"registered", model.images.size()}, {"images", names.size()}, {"points", model.points.size()}};
+  LogInfo(format("sfm: {}/{} photos registered, {} points, mean reprojection error {:.2f} px",
+                 model.images.size(), names.size(), model.points.size(),
+                 report["mean_reprojection_error_px"].get<double>()));
+  if (fraction < options.min_registered) {
+    std::string listed;
+    for (size_t i = 0; i < left_out.size() && i < kMaxNamesListed; ++i) listed += (i ? ", " : "") + left_out[i];
+    if (left_out.size() > kMaxNamesListed) listed += format(" and {} more", left_out.size() - kMaxNamesListed);
+    throw UserError(format("COLMAP registered only {} of {} photos ({:.0f}%, sfm.min_registered is {:.0f}%); left "
+                           "out: {}; {}",
+                           model.images.size(), names.size(), 100 * fraction, 100 * options.min_registered, listed,
+                           advice));
+  }
+}
+
+}  // namespace p2n

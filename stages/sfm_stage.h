@@ -1,0 +1,56 @@
+#pragma once
+// The sfm stage: COLMAP feature_extractor -> matcher -> mapper -> bundle_adjuster (principal point) ->
+// image_undistorter, each a subprocess with its own log, always on a fresh database. Picks the model with the
+// most registered images and writes sfm_report.json.
+
+#include <string>
+
+#include "pipeline/stage.h"
+
+namespace p2n {
+
+struct SfmOptions {
+  std::string camera_model = "OPENCV";  // COLMAP camera model of the photos
+  bool single_camera = true;            // one camera shared by every photo
+  std::string matcher = "auto";         // auto: exhaustive up to exhaustive_max_images, else sequential
+  int exhaustive_max_images = 40;       // photos above which auto matching is sequential
+  int sequential_overlap = 12;          // neighbours each photo is matched with (sequential)
+  int max_image_size = 1024;            // longest side for feature extraction, pixels
+  int max_num_features = 4096;          // features per photo at most
+  bool refine_principal_point = true;   // a final bundle adjustment that also refines cx, cy
+  double min_registered = 0.5;          // fraction of photos that must be registered
+  int seed = 0;                         // COLMAP's random seed
+  std::string colmap = "colmap";        // the COLMAP program (runtime)
+
+  template <class V>
+  void Visit(V& v) {
+    v("camera_model", camera_model, "COLMAP camera model", "", OptionKind::kResult,
+      {"SIMPLE_PINHOLE", "PINHOLE", "SIMPLE_RADIAL", "RADIAL", "OPENCV", "OPENCV_FISHEYE", "FULL_OPENCV"});
+    v("single_camera", single_camera, "one camera shared by every photo");
+    v("matcher", matcher, "feature matching: auto (exhaustive for small sets, else sequential), exhaustive, or "
+      "sequential (photos in file-name order, as video frames)", "", OptionKind::kResult,
+      {"auto", "exhaustive", "sequential"});
+    v("exhaustive_max_images", exhaustive_max_images, "photos above which auto matching is sequential", "images");
+    v("sequential_overlap", sequential_overlap, "neighbours each photo is matched with (sequential)", "images");
+    v("max_image_size", max_image_size, "longest image side for feature extraction", "px");
+    v("max_num_features", max_num_features, "features per photo at most", "features");
+    v("refine_principal_point", refine_principal_point, "final bundle adjustment that also refines cx, cy");
+    v("min_registered", min_registered, "fraction of photos that must be registered, else an error");
+    v("seed", seed, "COLMAP's random seed");
+    v("colmap", colmap, "the COLMAP program (name on PATH or a path)", "", OptionKind::kRuntime);
+  }
+  void Check() const;
+};
+
+class SfmStage : public Stage {
+ public:
+  std::string name() const override { return "sfm"; }
+  std::string folder() const override { return "10_sfm"; }
+  int format_version() const override { return 1; }
+  std::vector<std::string> upstream() const override { return {"ingest"}; }
+  // "tool colmap" -> its version: a result made with another COLMAP is stale.
+  std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
+  void Run(StageContext& context) const override;
+};
+
+}  // namespace p2n
