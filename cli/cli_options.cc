@@ -17,6 +17,9 @@ namespace fs = std::filesystem;
 void AddCommonFlags(CLI::App& app, const OptionRegistry& registry, CommonFlags* flags) {
   app.add_option("-w,--workspace", flags->workspace, "workspace folder (results, logs, cache)")->required();
   app.add_option("--config", flags->config_file, "JSON file of options, nested or as dotted keys");
+  app.add_option_function<std::string>(
+      "--colmap", [flags](const std::string& program) { flags->option_text["sfm.colmap"] = program; },
+      "the COLMAP program, when it is not `colmap` on PATH (same as --sfm.colmap)");
   AddOptionFlags(app, registry, &flags->option_text);
 }
 

@@ -25,7 +25,7 @@ struct CommonFlags {
 // Adds one --section.key flag for every registered option (with its help, type, unit and default) to `app`;
 // the text of each flag given lands in `option_text`.
 void AddOptionFlags(CLI::App& app, const OptionRegistry& registry, std::map<std::string, std::string>* option_text);
-// Adds -w/--workspace, --config and the option flags.
+// Adds -w/--workspace, --config, --colmap (an alias of --sfm.colmap) and the option flags.
 void AddCommonFlags(CLI::App& app, const OptionRegistry& registry, CommonFlags* flags);
 
 // Parses argv into `app`. Returns an exit code when the process should end now (--help: 0); throws UserError

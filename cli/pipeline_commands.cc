@@ -48,9 +48,6 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
     app.add_flag("--force", force, "rerun the stage even if it is fresh");
   }
   AddCommonFlags(app, registry, &flags);
-  app.add_option_function<std::string>(
-      "--colmap", [&flags](const std::string& program) { flags.option_text["sfm.colmap"] = program; },
-      "the COLMAP program, when it is not `colmap` on PATH (same as --sfm.colmap)");
   if (auto code = Parse(app, registry, argc, argv)) return *code;
   if (!is_run) {
     request.from = request.until = stage;

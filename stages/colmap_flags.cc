@@ -1,6 +1,8 @@
 #include "stages/colmap_flags.h"
 
 #include <fstream>
+#include <map>
+#include <mutex>
 #include <regex>
 #include <sstream>
 
@@ -21,6 +23,11 @@ ColmapVersion ParseColmapVersion(std::string_view banner) {
 }
 
 ColmapVersion DetectColmapVersion(const std::string& program, const std::filesystem::path& log_file) {
+  // Asked once per program and process: status and run both need it.
+  static std::mutex mutex;
+  static std::map<std::string, ColmapVersion> known;
+  std::lock_guard lock(mutex);
+  if (const auto it = known.find(program); it != known.end()) return it->second;
   // `colmap help` exits 0 on 3.x; its banner is the first line.
   const SubprocessResult result = RunSubprocess({program, "help"}, log_file, "reading the COLMAP version");
   std::ifstream in(log_file);
@@ -30,7 +37,7 @@ ColmapVersion DetectColmapVersion(const std::string& program, const std::filesys
     throw ExternalToolError(format("'{} help' did not print COLMAP's banner (exit {}, signal {}); log: {}", program,
                                    result.exit_code, result.signal, log_file.string()));
   }
-  return ParseColmapVersion(text.str());
+  return known[program] = ParseColmapVersion(text.str());
 }
 
 ColmapFlags ColmapFlagsFor(const ColmapVersion& version) {

@@ -22,8 +22,8 @@ struct ColmapVersion {
 // Throws UserError quoting the text when it holds no version.
 ColmapVersion ParseColmapVersion(std::string_view banner);
 
-// Runs `colmap help` (output to `log_file`) and parses its version; ExternalToolError naming the program when
-// it cannot be run.
+// Runs `colmap help` (output to `log_file`) once per program and process, and parses its version;
+// ExternalToolError naming the program when it cannot be run.
 ColmapVersion DetectColmapVersion(const std::string& program, const std::filesystem::path& log_file);
 
 // The option names for one COLMAP version, with their leading "--".

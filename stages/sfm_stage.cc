@@ -2,8 +2,9 @@
 
 #include <Eigen/Geometry>
 
-#include <chrono>
+#include <algorithm>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "pipeline/cancel.h"

@@ -167,3 +167,44 @@ TEST_CASE("cli: fit-image refuses bad input with a clear error", "[cli][fit]") {
 }
 
 }  // namespace p2n::testing
+
+namespace p2n::testing {
+
+TEST_CASE("cli: a missing, crashing or failing COLMAP gives a clear error and the right exit code", "[cli][sfm]") {
+  TempDir dir;
+  MakePhotos(dir / "photos", 3);
+  const std::string photos = (dir / "photos").string();
+  // A stand-in for COLMAP: prints 3.8's banner, then behaves as the test needs.
+  const auto fake_colmap = [&](const std::string& name, const std::string& behaviour) {
+    const fs::path path = dir / name;
+    WriteText(path, "#!/bin/sh\nif [ \"$1\" = help ]; then echo 'COLMAP 3.8 -- Structure-from-Motion'; exit 0; fi\n" +
+                        behaviour + "\n");
+    fs::permissions(path, fs::perms::owner_all);
+    return path.string();
+  };
+
+  Result missing = Photo2Nerf({"run", photos, "-w", (dir / "ws1").string(), "--colmap", (dir / "no_colmap").string()});
+  INFO(missing.output);
+  CHECK(missing.code == 2);
+  CHECK_THAT(missing.output, Catch::Contains("cannot start") && Catch::Contains("no_colmap"));
+
+  Result killed = Photo2Nerf({"run", photos, "-w", (dir / "ws2").string(), "--colmap",
+                              fake_colmap("crashing", "kill -9 $$")});
+  INFO(killed.output);
+  CHECK(killed.code == 2);
+  CHECK_THAT(killed.output, Catch::Contains("feature extraction was killed by signal 9") &&
+                                Catch::Contains("feature_extraction.log"));
+
+  const std::string no_pair = fake_colmap(
+      "no_pair", "if [ \"$1\" = mapper ]; then echo 'No good initial image pair found.'; exit 1; fi\nexit 0");
+  Result advice = Photo2Nerf({"run", photos, "-w", (dir / "ws3").string(), "--colmap", no_pair});
+  INFO(advice.output);
+  CHECK(advice.code == 1);
+  CHECK_THAT(advice.output, Catch::Contains("no pair of photos to start the reconstruction from") &&
+                                Catch::Contains("--sfm.matcher exhaustive"));
+  // The failed stage is incomplete, never fresh.
+  CHECK_THAT(Photo2Nerf({"status", "-w", (dir / "ws3").string(), "--colmap", no_pair}).output,
+             Catch::Contains("incomplete"));
+}
+
+}  // namespace p2n::testing
