@@ -11,6 +11,7 @@
 #include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/runner.h"
+#include "stages/dataset_import.h"
 #include "stages/stages.h"
 
 namespace p2n {
@@ -18,6 +19,12 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr size_t kMaxReasonsShown = 5;
+
+// The stages of a workspace's input, kept alive for the command.
+const Runner& MakeRunnerFor(const Workspace& workspace) {
+  static const Runner runner = MakeRunner(workspace.input());
+  return runner;
+}
 
 std::string CommandLine(int argc, char** argv) {
   std::string line = "photo2nerf";
@@ -28,17 +35,18 @@ std::string CommandLine(int argc, char** argv) {
 // Shared by `run` and the stage commands: `stage` is empty for `run`.
 int RunPipeline(int argc, char** argv, const std::string& stage) {
   const OptionRegistry registry = AllOptions();
-  const Runner runner = MakeRunner();
   const bool is_run = stage.empty();
-  CLI::App app(is_run ? "Run every stage that is not fresh, from photos to results."
+  CLI::App app(is_run ? "Run every stage that is not fresh, from photos (or a dataset with cameras) to results."
                       : format("Run the {} stage (its upstream stages must be fresh).", stage),
                std::string("photo2nerf ") + argv[0]);
   CommonFlags flags;
   std::string photos;
   RunRequest request;
   bool force = false;
-  if (is_run || runner.Get(stage).upstream().empty()) {
-    app.add_option("photos", photos, "folder of photos (remembered by the workspace after the first run)");
+  if (is_run || stage == "ingest") {
+    app.add_option("photos", photos,
+                   "folder of photos, or a dataset with cameras (transforms.json, Blender, LLFF, COLMAP project, "
+                   ".npz); remembered by the workspace");
   }
   if (is_run) {
     app.add_option("--from", request.from, "start at this stage; the stages before it must be fresh");
@@ -53,15 +61,19 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
     request.from = request.until = stage;
     if (force) request.force.push_back(stage);
   }
-  for (const auto& name : {request.from, request.until}) {
-    if (name) runner.Get(*name);  // unknown stage names fail before anything is written
+  if (!photos.empty() && !fs::exists(photos)) throw UserError(format("photo folder '{}' does not exist", photos));
+  if (!photos.empty() && !fs::is_directory(photos) && DatasetKind(photos).empty()) {
+    throw UserError(format("'{}' is a file, not a folder; give the folder that holds your photos", photos));
   }
-  for (const std::string& name : request.force) runner.Get(name);
+  // Unknown stage names fail before anything is written.
+  const Runner runner = MakeRunner(photos.empty() ? std::nullopt : std::optional<fs::path>(photos));
+  if (!photos.empty()) {
+    for (const auto& name : {request.from, request.until}) {
+      if (name) runner.Get(*name);
+    }
+    for (const std::string& name : request.force) runner.Get(name);
+  }
 
-  if (!photos.empty() && !fs::is_directory(photos)) {
-    throw UserError(fs::exists(photos) ? format("'{}' is a file, not a folder; give the folder that holds your photos", photos)
-                                       : format("photo folder '{}' does not exist", photos));
-  }
   Workspace workspace = Workspace::Open(flags.workspace, /*create=*/!photos.empty());
   WorkspaceLock lock(workspace, CommandLine(argc, argv));
   if (!photos.empty()) {
@@ -70,11 +82,12 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
     }
     workspace.SetInput(photos);
   }
+  const Runner& stages = photos.empty() ? MakeRunnerFor(workspace) : runner;
   const Config config = ResolveConfig(registry, workspace, flags, /*remember=*/true);
   const auto thread_limit = ApplyRunOptions(config, workspace.LogDir() / "photo2nerf.log");
   LogInfo(format("{} (workspace {})", CommandLine(argc, argv), workspace.root().string()));
 
-  const std::vector<StageRun> runs = runner.Run(workspace, config, request);
+  const std::vector<StageRun> runs = stages.Run(workspace, config, request);
   size_t ran = 0;
   double seconds = 0;
   for (const StageRun& run : runs) {
@@ -94,7 +107,6 @@ int RunStage(int argc, char** argv) { return RunPipeline(argc, argv, argv[0]); }
 
 int RunStatus(int argc, char** argv) {
   const OptionRegistry registry = AllOptions();
-  const Runner runner = MakeRunner();
   CLI::App app("Say for each stage whether it is fresh, missing, incomplete or stale, and why.",
                "photo2nerf status");
   CommonFlags flags;
@@ -103,8 +115,13 @@ int RunStatus(int argc, char** argv) {
   const Workspace workspace = Workspace::Open(flags.workspace, /*create=*/false);
   const Config config = ResolveConfig(registry, workspace, flags, /*remember=*/false);
 
+  const Runner& runner = MakeRunnerFor(workspace);
   std::cout << "workspace " << workspace.root().string() << "\n";
-  if (workspace.input()) std::cout << "photos    " << workspace.input()->string() << "\n";
+  if (workspace.input()) {
+    const std::string kind = DatasetKind(*workspace.input());
+    std::cout << (kind.empty() ? "photos    " : "dataset   ") << workspace.input()->string() << "\n";
+    if (!kind.empty()) std::cout << "          a " << kind << " dataset with cameras: ingest and sfm are not needed\n";
+  }
   for (const StageStatus& status : runner.Status(workspace, config)) {
     std::string detail;
     if (status.state == StageState::kFresh) {
@@ -123,7 +140,6 @@ int RunStatus(int argc, char** argv) {
 }
 
 int RunClean(int argc, char** argv) {
-  const Runner runner = MakeRunner();
   CLI::App app("Remove stage results from a workspace (all stages unless --stage is given).",
                "photo2nerf clean");
   std::string workspace_path;
@@ -133,6 +149,7 @@ int RunClean(int argc, char** argv) {
   if (auto code = Parse(app, OptionRegistry(), argc, argv)) return *code;
   const Workspace workspace = Workspace::Open(workspace_path, /*create=*/false);
   WorkspaceLock lock(workspace, CommandLine(argc, argv));
+  const Runner& runner = MakeRunnerFor(workspace);
   if (stages.empty()) {
     for (const auto& stage : runner.stages()) stages.push_back(stage->name());
   }

@@ -9,7 +9,7 @@ packages=(
   colmap                                   # structure from motion (the `colmap` program)
   libeigen3-dev libopencv-dev libtbb-dev
   libopenimageio-dev openimageio-tools
-  catch2 nlohmann-json3-dev libcli11-dev
+  catch2 nlohmann-json3-dev libcli11-dev zlib1g-dev
 )
 
 missing=()

@@ -90,7 +90,9 @@ Normalization NormalizeScene(const std::vector<Eigen::Vector3d>& centres, const 
     std::vector<double> distances;
     for (const Eigen::Vector3d& c : centres) distances.push_back((c - centre).norm());
     extent = 0.5 * Percentile(distances, 1.0);
-    if (extent >= kTiny) result.warnings.push_back("too few sparse points; the scale comes from the cameras");
+    if (extent >= kTiny && !points.empty()) {
+      result.warnings.push_back("too few sparse points; the scale comes from the cameras");
+    }
   }
   if (!(extent >= kTiny) || !std::isfinite(extent)) {
     throw UserError("every camera and point of the reconstruction is at one place; photo2nerf needs photos taken "

@@ -1,6 +1,8 @@
 #include "stages/stages.h"
 
 #include "pipeline/format.h"
+#include "stages/dataset_import.h"
+#include "stages/import_stage.h"
 #include "stages/ingest_stage.h"
 #include "stages/poses_stage.h"
 #include "stages/sfm_stage.h"
@@ -17,6 +19,7 @@ OptionRegistry AllOptions() {
   RegisterOptions<IngestOptions>(registry, "ingest");
   RegisterOptions<SfmOptions>(registry, "sfm");
   RegisterOptions<PosesOptions>(registry, "poses");
+  RegisterOptions<ImportOptions>(registry, "import");
   return registry;
 }
 
@@ -25,10 +28,15 @@ void CheckAllOptions(const Config& config) {
   ReadOptions<IngestOptions>(config, "ingest");
   ReadOptions<SfmOptions>(config, "sfm");
   ReadOptions<PosesOptions>(config, "poses");
+  ReadOptions<ImportOptions>(config, "import");
 }
 
-Runner MakeRunner() {
+Runner MakeRunner(const std::optional<std::filesystem::path>& input) {
   std::vector<std::unique_ptr<Stage>> stages;
+  if (input && !DatasetKind(*input).empty()) {
+    stages.push_back(std::make_unique<ImportStage>());
+    return Runner(std::move(stages));
+  }
   stages.push_back(std::make_unique<IngestStage>());
   stages.push_back(std::make_unique<SfmStage>());
   stages.push_back(std::make_unique<PosesStage>());

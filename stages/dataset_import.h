@@ -1,0 +1,41 @@
+#pragma once
+// Datasets that already have cameras, read as they are: instant-ngp / nerfstudio (transforms.json), Blender /
+// nerf_synthetic (transforms_{train,val,test}.json), LLFF (poses_bounds.npy), a COLMAP project (images/ +
+// sparse/), and the course layout (.npz with images_train, c2ws_train, images_val, c2ws_val, focal). Every
+// loader validates: finite numbers, orthonormal rotations, positive focal lengths, image paths inside the
+// dataset (others are refused).
+
+#include <OpenImageIO/imagebuf.h>
+
+#include <array>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "stages/transforms_json.h"
+
+namespace p2n {
+
+struct ImportedView {
+  CameraView view;                       // world_from_cam and intrinsics in the dataset's world
+  std::string name;                      // the image's file name in the stage's images/
+  std::filesystem::path source;          // the image file, or empty when `pixels` holds the image
+  OIIO::ImageBuf pixels;                 // the image, for datasets that store pixels (.npz)
+  std::array<double, 4> distortion{};    // OpenCV k1, k2, p1, p2 of the image (zero: none)
+};
+
+struct ImportedDataset {
+  std::string kind;                      // "transforms.json", "blender", "llff", "colmap", "npz"
+  std::vector<ImportedView> views;
+  std::vector<Eigen::Vector3d> points;   // sparse points, when the dataset has them
+  std::vector<std::array<uint8_t, 3>> colours;
+  std::vector<std::filesystem::path> files;  // every file the result depends on (for the cache key)
+  std::vector<std::string> warnings;
+};
+
+// The kind of dataset at `input` ("" for a plain photo folder).
+std::string DatasetKind(const std::filesystem::path& input);
+// Reads the cameras (not the pixels of image files) of a dataset; UserError naming the file and field.
+ImportedDataset LoadDataset(const std::filesystem::path& input);
+
+}  // namespace p2n

@@ -1,0 +1,160 @@
+#include "stages/import_stage.h"
+
+#include <OpenImageIO/imagebufalgo.h>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <tbb/parallel_for.h>
+
+#include "nerf/image_io.h"
+#include "pipeline/errors.h"
+#include "pipeline/file_util.h"
+#include "pipeline/format.h"
+#include "pipeline/hash.h"
+#include "pipeline/log.h"
+#include "pipeline/progress.h"
+#include "stages/dataset_import.h"
+#include "stages/ply.h"
+#include "stages/poses_stage.h"
+
+namespace p2n {
+namespace fs = std::filesystem;
+namespace {
+
+fs::path Input(const Workspace& workspace) {
+  if (!workspace.input()) throw UserError("the workspace has no dataset; run `photo2nerf run DATASET -w WS`");
+  return *workspace.input();
+}
+
+// Undistorts to the same pinhole intrinsics (OpenCV's k1, k2, p1, p2 model, as COLMAP's OPENCV).
+OIIO::ImageBuf Undistort(const OIIO::ImageBuf& image, const PinholeCamera& camera, const std::array<double, 4>& d) {
+  const OIIO::ImageSpec& spec = image.spec();
+  const int depth = spec.format == OIIO::TypeDesc::UINT8 ? CV_8U : spec.format == OIIO::TypeDesc::UINT16 ? CV_16U : CV_32F;
+  const cv::Mat source(spec.height, spec.width, CV_MAKETYPE(depth, spec.nchannels), const_cast<void*>(image.localpixels()));
+  OIIO::ImageBuf out(spec);
+  cv::Mat target(spec.height, spec.width, CV_MAKETYPE(depth, spec.nchannels), out.localpixels());
+  // Pixel centres: OpenCV puts pixel (0, 0)'s centre at (0, 0), we at (0.5, 0.5); shift the principal point.
+  const cv::Matx33d k_opencv(camera.fx, 0, camera.cx - 0.5, 0, camera.fy, camera.cy - 0.5, 0, 0, 1);
+  cv::Mat map_x, map_y;
+  cv::initUndistortRectifyMap(k_opencv, cv::Vec4d(d[0], d[1], d[2], d[3]), cv::Mat(), k_opencv, target.size(),
+                              CV_32FC1, map_x, map_y);
+  cv::remap(source, target, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  return out;
+}
+
+// Composites a straight-alpha image over a constant background; returns the colour channels only.
+OIIO::ImageBuf Composite(const OIIO::ImageBuf& image, float background) {
+  const OIIO::ImageSpec& spec = image.spec();
+  const int colours = spec.nchannels - 1;
+  const size_t pixels = static_cast<size_t>(spec.width) * spec.height;
+  std::vector<float> in(pixels * spec.nchannels), result(pixels * colours);
+  image.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::FLOAT, in.data());
+  for (size_t p = 0; p < pixels; ++p) {
+    const float alpha = in[p * spec.nchannels + colours];
+    for (int c = 0; c < colours; ++c) {
+      result[p * colours + c] = alpha * in[p * spec.nchannels + c] + (1 - alpha) * background;
+    }
+  }
+  OIIO::ImageBuf out(OIIO::ImageSpec(spec.width, spec.height, colours, spec.format));
+  out.set_pixels(OIIO::ROI::All(), OIIO::TypeDesc::FLOAT, result.data());
+  return out;
+}
+
+}  // namespace
+
+std::map<std::string, std::string> ImportStage::ExternalInputs(const Workspace& workspace, const Config&) const {
+  const fs::path input = Input(workspace);
+  std::vector<fs::path> files;
+  try {
+    files = LoadDataset(input).files;
+  } catch (const UserError&) {
+    return {{"dataset " + input.string(), "unreadable"}};  // Run() says why
+  }
+  std::vector<std::string> digests(files.size());
+  tbb::parallel_for(size_t{0}, files.size(), [&](size_t i) { digests[i] = Sha1OfFile(files[i]); });
+  std::map<std::string, std::string> inputs;
+  for (size_t i = 0; i < files.size(); ++i) inputs["file " + fs::relative(files[i], input.has_extension() ? input.parent_path() : input).string()] = digests[i];
+  return inputs;
+}
+
+void ImportStage::Run(StageContext& context) const {
+  const PosesOptions poses = ReadOptions<PosesOptions>(context.config, "poses");
+  const ImportOptions options = ReadOptions<ImportOptions>(context.config, "import");
+  const fs::path input = Input(context.workspace);
+  ImportedDataset dataset = LoadDataset(input);
+  for (const std::string& warning : dataset.warnings) LogWarning("import: " + warning);
+  LogInfo(format("import: {} dataset, {} views", dataset.kind, dataset.views.size()));
+  const fs::path images = context.output_dir / "images";
+  fs::create_directories(images);
+
+  std::atomic<int> undistorted{0}, composited{0};
+  {
+    Progress progress("import: images", static_cast<int64_t>(dataset.views.size()), "images");
+    tbb::parallel_for(size_t{0}, dataset.views.size(), [&](size_t i) {
+      ImportedView& view = dataset.views[i];
+      const PinholeCamera& camera = view.view.camera;
+      OIIO::ImageBuf image;
+      if (view.source.empty()) {
+        image = std::move(view.pixels);
+      } else {
+        ReadImageResult read = ReadImage(view.source);
+        if (!read.ok()) throw UserError(format("cannot use '{}': {}", view.source.string(), read.error));
+        image = std::move(read.image);
+      }
+      if (image.spec().width != camera.width || image.spec().height != camera.height) {
+        throw UserError(format("'{}' is {}x{} but the dataset declares {}x{}", view.source.string(),
+                               image.spec().width, image.spec().height, camera.width, camera.height));
+      }
+      bool changed = view.source.empty();
+      if (view.distortion != std::array<double, 4>{}) {
+        image = Undistort(image, camera, view.distortion);
+        changed = true;
+        ++undistorted;
+      }
+      if (options.background != "keep" && (image.spec().nchannels == 4 || image.spec().nchannels == 2)) {
+        image = Composite(image, options.background == "white" ? 1.0f : 0.0f);
+        changed = true;
+        ++composited;
+      }
+      if (!changed && (LowerExtension(view.source) == "png" || LowerExtension(view.source) == "jpg" ||
+                       LowerExtension(view.source) == "jpeg")) {
+        fs::copy_file(view.source, images / view.name, fs::copy_options::overwrite_existing);
+      } else {
+        if (fs::path(view.name).extension() != ".png") view.name = fs::path(view.name).replace_extension(".png").string();
+        view.view.file_path = "images/" + view.name;
+        const std::string error = WriteImage(image, images / view.name);
+        if (!error.empty()) throw UserError(error);
+      }
+      progress.Add();
+    });
+  }
+
+  std::vector<CameraView> views;
+  for (const ImportedView& view : dataset.views) views.push_back(view.view);
+  const bool has_split = std::any_of(views.begin(), views.end(), [](const CameraView& v) { return v.split != "train"; });
+  if (!has_split) AssignHoldout(&views, poses.holdout_every);
+  Normalization normalization;
+  if (poses.normalize) {
+    std::vector<Eigen::Vector3d> centres, ups, axes;
+    CameraFrames(views, &centres, &ups, &axes);
+    normalization = NormalizeScene(centres, ups, axes, dataset.points);
+    for (const std::string& warning : normalization.warnings) LogWarning("import: " + warning);
+  }
+  const nlohmann::json background = options.background == "white" ? nlohmann::json{1, 1, 1}
+                                    : options.background == "black" ? nlohmann::json{0, 0, 0}
+                                                                    : nlohmann::json(nullptr);
+  WriteTransformsJson(context.output_dir / "transforms.json", views, normalization,
+                      {{"dataset", {{"kind", dataset.kind}, {"path", input.string()}}}, {"background", background}});
+  if (!dataset.points.empty()) {
+    std::vector<ColouredPoint> cloud;
+    for (size_t i = 0; i < dataset.points.size(); ++i) {
+      cloud.push_back({(normalization.normalized_from_world * dataset.points[i].homogeneous()).head<3>().cast<float>(),
+                       dataset.colours[i]});
+    }
+    WritePly(context.output_dir / "sparse_points.ply", cloud);
+  }
+  context.summary = {{"views", views.size()}, {"dataset", dataset.kind}};
+  LogInfo(format("import: {} views ({} undistorted, {} composited on {}), scene scale {:.4g}", views.size(),
+                 undistorted.load(), composited.load(), options.background, normalization.scale));
+}
+
+}  // namespace p2n

@@ -1,0 +1,34 @@
+#pragma once
+// The poses stage of a dataset that already has cameras: validates and copies its images (decoding each,
+// undistorting distorted ones, compositing transparent ones on the chosen background), normalises the
+// cameras like the COLMAP path does and writes the same transforms.json. Replaces ingest -> sfm -> poses.
+
+#include <string>
+
+#include "pipeline/stage.h"
+
+namespace p2n {
+
+struct ImportOptions {
+  std::string background = "white";  // transparent images are composited on it; "keep" keeps the alpha
+
+  template <class V>
+  void Visit(V& v) {
+    v("background", background, "background that transparent (RGBA) images are composited on", "",
+      OptionKind::kResult, {"white", "black", "keep"});
+  }
+  void Check() const {}
+};
+
+class ImportStage : public Stage {
+ public:
+  std::string name() const override { return "poses"; }
+  std::string folder() const override { return "20_poses"; }
+  int format_version() const override { return 1; }
+  std::vector<std::string> option_sections() const override { return {"poses", "import"}; }
+  // Every file of the dataset that the result depends on, by SHA-1.
+  std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
+  void Run(StageContext& context) const override;
+};
+
+}  // namespace p2n

@@ -1,0 +1,188 @@
+// Importers of datasets with cameras: the shared datasets (skipped when absent), geometry kept up to a
+// similarity, and validation of hostile or broken files.
+
+#include <catch2/catch.hpp>
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <OpenImageIO/imagebuf.h>
+
+#include "nerf/synthetic_scene.h"
+#include "pipeline/errors.h"
+#include "pipeline/file_util.h"
+#include "stages/colmap_model.h"
+#include "stages/dataset_import.h"
+#include "stages/stages.h"
+#include "tests/test_util.h"
+
+namespace p2n::testing {
+namespace fs = std::filesystem;
+namespace {
+
+const fs::path kData = fs::path(P2N_SOURCE_DIR) / ".." / "shared" / "data";
+
+// Runs the import stage on `input`; returns the written transforms.json.
+nlohmann::json Import(const fs::path& input, const fs::path& workspace_path) {
+  const OptionRegistry registry = AllOptions();
+  Config config(registry);
+  config.Set("run.progress", "none", "test");
+  Workspace workspace = Workspace::Open(workspace_path, true);
+  workspace.SetInput(input);
+  MakeRunner(input).Run(workspace, config, {});
+  return ReadJsonFile(workspace_path / "20_poses" / "transforms.json");
+}
+
+Eigen::Matrix4d ReadMatrix(const nlohmann::json& rows) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 4; ++c) m(r, c) = rows[r][c].get<double>();
+  }
+  return m;
+}
+
+// The largest rotation difference (degrees) between two pose lists after the best similarity alignment.
+double WorstRotationAfterAlignment(const std::vector<Eigen::Matrix4d>& a, const std::vector<Eigen::Matrix4d>& b) {
+  Eigen::Matrix3Xd pa(3, a.size()), pb(3, b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    pa.col(i) = a[i].topRightCorner<3, 1>();
+    pb.col(i) = b[i].topRightCorner<3, 1>();
+  }
+  const Eigen::Matrix4d alignment = Eigen::umeyama(pa, pb, true);
+  const Eigen::Matrix3d rotation = alignment.topLeftCorner<3, 3>() / std::cbrt(alignment.topLeftCorner<3, 3>().determinant());
+  double worst = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const Eigen::Matrix3d d = b[i].topLeftCorner<3, 3>().transpose() * rotation * a[i].topLeftCorner<3, 3>();
+    worst = std::max(worst, Eigen::AngleAxisd(d).angle() * 180 / M_PI);
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("import: a transforms.json dataset keeps its cameras up to a similarity", "[import]") {
+  TempDir dir;
+  SyntheticSceneOptions scene;
+  scene.num_views = 6;
+  scene.width = 64;
+  scene.height = 48;
+  WriteSyntheticScene(scene, dir / "data");
+  fs::rename(dir / "data" / "ground_truth_cameras.json", dir / "data" / "transforms.json");
+  CHECK(DatasetKind(dir / "data") == "transforms.json");
+  const nlohmann::json transforms = Import(dir / "data", dir / "ws");
+  const nlohmann::json truth = ReadJsonFile(dir / "data" / "transforms.json");
+  REQUIRE(transforms["frames"].size() == 6);
+  std::vector<Eigen::Matrix4d> ours, theirs;
+  for (size_t i = 0; i < 6; ++i) {
+    ours.push_back(ReadMatrix(transforms["frames"][i]["transform_matrix"]));
+    theirs.push_back(ReadMatrix(truth["frames"][i]["transform_matrix"]));
+    CHECK(fs::exists(dir / "ws" / "20_poses" / transforms["frames"][i]["file_path"].get<std::string>()));
+  }
+  CHECK(WorstRotationAfterAlignment(ours, theirs) < 1e-6);
+  CHECK(transforms["frames"][0]["split"] == "val");  // every 8th, from the first
+  CHECK(transforms["fl_x"].get<double>() == Approx(truth["fl_x"].get<double>()));
+}
+
+TEST_CASE("import: a COLMAP project folder (images/ + sparse/0) keeps its cameras and points", "[import]") {
+  TempDir dir;
+  SyntheticSceneOptions scene;
+  scene.num_views = 5;
+  scene.width = 64;
+  scene.height = 48;
+  WriteSyntheticScene(scene, dir / "data" / "images");
+  fs::remove(dir / "data" / "images" / "ground_truth_cameras.json");
+  const std::vector<PinholeCamera> cameras = SyntheticCameras(scene);
+  ColmapModel model;
+  model.cameras[1] = {1, "PINHOLE", 64, 48, {cameras[0].fx, cameras[0].fy, cameras[0].cx, cameras[0].cy}};
+  for (uint32_t i = 0; i < 5; ++i) {
+    ColmapImage image;
+    image.id = i + 1;
+    image.camera_id = 1;
+    image.name = "view_00" + std::to_string(i) + ".png";
+    OpenCvCamFromWorld(cameras[i].world_from_cam, &image.cam_from_world_rotation, &image.cam_from_world_translation);
+    model.images[image.id] = image;
+  }
+  for (uint64_t p = 1; p <= 20; ++p) model.points[p] = {p, Eigen::Vector3d(0.05 * p, 0.1, 0.3), {1, 2, 3}, 0.5, {}};
+  WriteColmapModelBinary(model, dir / "data" / "sparse" / "0");
+  CHECK(DatasetKind(dir / "data") == "colmap");
+  const nlohmann::json transforms = Import(dir / "data", dir / "ws");
+  REQUIRE(transforms["frames"].size() == 5);
+  std::vector<Eigen::Matrix4d> ours, truth;
+  for (size_t i = 0; i < 5; ++i) {
+    ours.push_back(ReadMatrix(transforms["frames"][i]["transform_matrix"]));
+    truth.push_back(cameras[i].world_from_cam);
+  }
+  CHECK(WorstRotationAfterAlignment(ours, truth) < 1e-6);
+  CHECK(fs::exists(dir / "ws" / "20_poses" / "sparse_points.ply"));
+}
+
+TEST_CASE("import: broken and hostile datasets are refused, naming the file and field", "[import]") {
+  TempDir dir;
+  fs::create_directories(dir / "data");
+  OIIO::ImageBuf image(OIIO::ImageSpec(8, 6, 3, OIIO::TypeDesc::UINT8));
+  REQUIRE(image.write((dir / "data" / "a.png").string()));
+  const auto write = [&](const std::string& matrix, const std::string& path, const std::string& focal = "10") {
+    WriteText(dir / "data" / "transforms.json",
+              R"({"fl_x": )" + focal + R"(, "w": 8, "h": 6, "frames": [{"file_path": ")" + path +
+                  R"(", "transform_matrix": )" + matrix + "}]}");
+  };
+  const std::string identity = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
+  write(identity, "../../etc/passwd");
+  CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("frames[0].file_path") && Catch::Contains("outside the dataset"));
+  write(identity, "/etc/passwd");
+  CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("outside the dataset"));
+  write("[[2,0,0,0],[0,2,0,0],[0,0,2,0],[0,0,0,1]]", "a.png");
+  CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("not orthonormal"));
+  write("[[1,0,0,0],[0,1,0,0],[0,0,1,0]]", "a.png", "-5");
+  CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("focal length"));
+  write("[[1,0,0,\"x\"],[0,1,0,0],[0,0,1,0]]", "a.png");
+  CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("not a number"));
+  write(identity, "missing.png");
+  CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("no usable view"));
+  // Declared 8x6, but the image is 8x6... declare another size: refused when the images are read.
+  WriteText(dir / "data" / "transforms.json",
+            R"({"fl_x": 10, "w": 16, "h": 6, "frames": [{"file_path": "a.png", "transform_matrix": )" + identity + "}]}");
+  CHECK_THROWS_WITH(Import(dir / "data", dir / "ws"), Catch::Contains("a.png' is 8x6 but the dataset declares 16x6"));
+}
+
+TEST_CASE("import: the shared datasets (fox, lego, lego_200, fern)", "[import][data]") {
+  if (!fs::exists(kData / "lego")) {
+    WARN("../shared/data is absent: skipping the shared-dataset importer test");
+    return;
+  }
+  TempDir dir;
+  SECTION("instant-ngp fox: frames without images are left out; distorted images are undistorted") {
+    const ImportedDataset fox = LoadDataset(kData / "fox");
+    CHECK(fox.kind == "transforms.json");
+    CHECK(fox.views.size() == 50);
+    CHECK(fox.views[0].distortion[0] != 0.0);
+    CHECK(fox.warnings.size() == 1);
+  }
+  SECTION("Blender lego: the three splits") {
+    const ImportedDataset lego = LoadDataset(kData / "lego");
+    CHECK(lego.kind == "blender");
+    std::map<std::string, int> splits;
+    for (const ImportedView& view : lego.views) ++splits[view.view.split];
+    CHECK(splits == std::map<std::string, int>{{"test", 25}, {"train", 100}, {"val", 10}});
+    CHECK(lego.views[0].view.camera.fx == Approx(1111.111).epsilon(1e-3));  // 400 / tan(camera_angle_x / 2)
+  }
+  SECTION("the course's lego_200 .npz: train and val with their pixels, the same cameras as Blender's lego") {
+    const ImportedDataset npz = LoadDataset(kData / "lego_200" / "lego_200x200.npz");
+    CHECK(npz.kind == "npz");
+    CHECK(npz.views.size() == 110);
+    CHECK(npz.views[0].pixels.spec().width == 200);
+    CHECK(npz.views[0].view.camera.fx == Approx(277.7778).epsilon(1e-4));
+    const nlohmann::json transforms = Import(kData / "lego_200" / "lego_200x200.npz", dir / "ws");
+    CHECK(transforms["frames"].size() == 110);
+    CHECK(fs::exists(dir / "ws" / "20_poses" / "images" / "val_009.png"));
+  }
+  SECTION("LLFF fern: poses_bounds rows with their near and far") {
+    const ImportedDataset fern = LoadDataset(kData / "fern");
+    CHECK(fern.kind == "llff");
+    REQUIRE(fern.views.size() == 20);
+    CHECK(fern.views[0].view.near > 10);
+    CHECK(fern.views[0].view.camera.width == 1008);
+    CHECK(fern.views[0].view.camera.fx == Approx(3260.526 / 4).epsilon(1e-4));
+  }
+}
+
+}  // namespace p2n::testing
