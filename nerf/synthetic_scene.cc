@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <random>
 #include <stdexcept>
 
 #include "nerf/image_io.h"
@@ -194,17 +195,35 @@ PinholeCamera LookAtCamera(const Vector3d& position, const Vector3d& target, int
 }
 
 std::vector<PinholeCamera> SyntheticCameras(const SyntheticSceneOptions& options) {
+  if (options.path != "orbit" && options.path != "handheld") {
+    throw std::invalid_argument("unknown camera path '" + options.path + "': use orbit or handheld");
+  }
   std::vector<PinholeCamera> cameras;
   const Vector3d target(0, 0, 0.4);
+  const double degree = kPi / 180;
+  std::mt19937_64 random(options.seed);
+  std::normal_distribution<double> noise(0, 1);
   for (int i = 0; i < options.num_views; ++i) {
     const double t = options.num_views > 1 ? static_cast<double>(i) / (options.num_views - 1) : 0.0;
-    const double azimuth = 2 * kPi * i / options.num_views;
-    const double elevation =
-        (options.min_elevation_deg + t * (options.max_elevation_deg - options.min_elevation_deg)) * kPi / 180;
-    const Vector3d position = target + options.radius * Vector3d(std::cos(elevation) * std::cos(azimuth),
-                                                                 std::cos(elevation) * std::sin(azimuth),
-                                                                 std::sin(elevation));
-    cameras.push_back(LookAtCamera(position, target, options.width, options.height, options.fov_x_deg));
+    double azimuth = 2 * kPi * i / options.num_views;
+    double elevation = (options.min_elevation_deg + t * (options.max_elevation_deg - options.min_elevation_deg)) * degree;
+    double radius = options.radius;
+    Vector3d aim = target;
+    double roll = 0;
+    if (options.path == "handheld") {
+      // Someone walking 140 degrees around the front of the scene, the camera held unsteadily.
+      azimuth = (-70 + 140 * t) * degree + 2 * degree * noise(random);
+      elevation = 0.5 * (options.min_elevation_deg + options.max_elevation_deg) * degree + 3 * degree * noise(random);
+      radius *= 1 + 0.05 * noise(random);
+      aim += 0.1 * Vector3d(noise(random), noise(random), noise(random));
+      roll = 3 * degree * noise(random);
+    }
+    const Vector3d position = target + radius * Vector3d(std::cos(elevation) * std::cos(azimuth),
+                                                         std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
+    PinholeCamera camera = LookAtCamera(position, aim, options.width, options.height, options.fov_x_deg);
+    camera.world_from_cam.topLeftCorner<3, 3>() =
+        camera.world_from_cam.topLeftCorner<3, 3>() * Eigen::AngleAxisd(roll, Vector3d::UnitZ()).toRotationMatrix();
+    cameras.push_back(camera);
   }
   return cameras;
 }

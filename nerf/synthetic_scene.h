@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "nerf/camera.h"
@@ -18,7 +19,10 @@
 namespace p2n {
 
 struct SyntheticSceneOptions {
-  int num_views = 24;          // cameras on an upward spiral around the scene
+  std::string path = "orbit";  // "orbit": an upward spiral around the scene; "handheld": a walk along an arc
+                               // in front of it with jittered position, aim and roll
+  uint64_t seed = 1;           // the handheld path's jitter
+  int num_views = 24;          // cameras
   int width = 320;             // pixels
   int height = 240;            // pixels
   double fov_x_deg = 55;       // horizontal field of view, degrees
@@ -31,7 +35,7 @@ struct SyntheticSceneOptions {
 // A camera at `position` looking at `target` with world +z as up.
 PinholeCamera LookAtCamera(const Eigen::Vector3d& position, const Eigen::Vector3d& target, int width, int height,
                            double fov_x_deg);
-// The cameras of the scene: a spiral from min to max elevation, one full turn.
+// The cameras of the scene along options.path; std::invalid_argument for an unknown path.
 std::vector<PinholeCamera> SyntheticCameras(const SyntheticSceneOptions& options);
 // Renders one view (RGB, 8 bits), in parallel over rows.
 OIIO::ImageBuf RenderSyntheticView(const PinholeCamera& camera, int supersampling);

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 
 #include "pipeline/errors.h"
 #include "pipeline/format.h"
@@ -46,6 +47,13 @@ void WriteFileAtomic(const fs::path& path, std::string_view contents) {
 
 void WriteJsonAtomic(const fs::path& path, const nlohmann::json& value) {
   WriteFileAtomic(path, value.dump(2) + "\n");
+}
+
+std::string ReadTextFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
 }
 
 nlohmann::json ReadJsonFile(const fs::path& path) {

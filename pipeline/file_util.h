@@ -13,6 +13,8 @@ namespace p2n {
 void WriteFileAtomic(const std::filesystem::path& path, std::string_view contents);
 // Pretty JSON, classic locale, doubles that round-trip; atomic.
 void WriteJsonAtomic(const std::filesystem::path& path, const nlohmann::json& value);
+// The whole file as text; an empty string when it cannot be read (for logs and small files).
+std::string ReadTextFile(const std::filesystem::path& path);
 // Reads a JSON file; UserError naming the file when it is missing or malformed.
 nlohmann::json ReadJsonFile(const std::filesystem::path& path);
 // fsync on a folder, so that a rename inside it is durable.

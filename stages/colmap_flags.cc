@@ -1,12 +1,11 @@
 #include "stages/colmap_flags.h"
 
-#include <fstream>
 #include <map>
 #include <mutex>
 #include <regex>
-#include <sstream>
 
 #include "pipeline/errors.h"
+#include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/subprocess.h"
 
@@ -30,14 +29,12 @@ ColmapVersion DetectColmapVersion(const std::string& program, const std::filesys
   if (const auto it = known.find(program); it != known.end()) return it->second;
   // `colmap help` exits 0 on 3.x; its banner is the first line.
   const SubprocessResult result = RunSubprocess({program, "help"}, log_file, "reading the COLMAP version");
-  std::ifstream in(log_file);
-  std::stringstream text;
-  text << in.rdbuf();
-  if (result.signal != 0 || text.str().find("COLMAP") == std::string::npos) {
+  const std::string text = ReadTextFile(log_file);
+  if (result.signal != 0 || text.find("COLMAP") == std::string::npos) {
     throw ExternalToolError(format("'{} help' did not print COLMAP's banner (exit {}, signal {}); log: {}", program,
                                    result.exit_code, result.signal, log_file.string()));
   }
-  return known[program] = ParseColmapVersion(text.str());
+  return known[program] = ParseColmapVersion(text);
 }
 
 ColmapFlags ColmapFlagsFor(const ColmapVersion& version) {

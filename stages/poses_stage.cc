@@ -20,12 +20,6 @@ namespace {
 constexpr size_t kMinPointsForBounds = 8;
 constexpr double kNearMargin = 0.8, kFarMargin = 1.2;
 
-double Quantile(std::vector<double> values, double q) {
-  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * (values.size() - 1) + 0.5));
-  std::nth_element(values.begin(), values.begin() + k, values.end());
-  return values[k];
-}
-
 PinholeCamera Intrinsics(const ColmapCamera& camera) {
   PinholeCamera pinhole;
   pinhole.width = static_cast<int>(camera.width);

@@ -17,23 +17,23 @@ constexpr double kMinAgreement = 0.3;     // |mean of unit up vectors| below thi
 constexpr size_t kMinPoints = 10;
 constexpr double kTiny = 1e-12;
 
-double Percentile(std::vector<double> values, double fraction) {
-  const size_t k = std::min(values.size() - 1, static_cast<size_t>(fraction * (values.size() - 1) + 0.5));
-  std::nth_element(values.begin(), values.begin() + k, values.end());
-  return values[k];
-}
-
 Eigen::Vector3d Median(const std::vector<Eigen::Vector3d>& points) {
   Eigen::Vector3d median;
   for (int axis = 0; axis < 3; ++axis) {
     std::vector<double> values;
     for (const Eigen::Vector3d& p : points) values.push_back(p[axis]);
-    median[axis] = Percentile(values, 0.5);
+    median[axis] = Quantile(values, 0.5);
   }
   return median;
 }
 
 }  // namespace
+
+double Quantile(std::vector<double> values, double q) {
+  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * (values.size() - 1) + 0.5));
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return values[k];
+}
 
 Normalization NormalizeScene(const std::vector<Eigen::Vector3d>& centres, const std::vector<Eigen::Vector3d>& ups,
                              const std::vector<Eigen::Vector3d>& axes, const std::vector<Eigen::Vector3d>& points) {
@@ -85,11 +85,11 @@ Normalization NormalizeScene(const std::vector<Eigen::Vector3d>& centres, const 
   // Scale: the robust extent of the points around the centre, else of the cameras.
   std::vector<double> extents;
   for (const Eigen::Vector3d& p : points) extents.push_back((rotation * (p - centre)).cwiseAbs().maxCoeff());
-  double extent = extents.size() >= kMinPoints ? Percentile(extents, 0.95) : 0;
+  double extent = extents.size() >= kMinPoints ? Quantile(extents, 0.95) : 0;
   if (extent < kTiny) {
     std::vector<double> distances;
     for (const Eigen::Vector3d& c : centres) distances.push_back((c - centre).norm());
-    extent = 0.5 * Percentile(distances, 1.0);
+    extent = 0.5 * Quantile(distances, 1.0);
     if (extent >= kTiny && !points.empty()) {
       result.warnings.push_back("too few sparse points; the scale comes from the cameras");
     }

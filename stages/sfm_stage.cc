@@ -3,9 +3,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
-#include <fstream>
 #include <set>
-#include <sstream>
 
 #include "pipeline/cancel.h"
 #include "pipeline/errors.h"
@@ -23,13 +21,6 @@ namespace {
 
 constexpr double kSuspiciousFocusAngleDeg = 20;  // correct orbit models stay near 8 (DESIGN.md §7)
 constexpr size_t kMaxNamesListed = 20;
-
-std::string ReadText(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // Runs the COLMAP steps in order with their own logs and timings.
 class StepRunner {
@@ -135,7 +126,7 @@ void SfmStage::Run(StageContext& context) const {
   const std::string advice = "try --sfm.matcher exhaustive, more features (--sfm.max_num_features), a larger "
                              "--sfm.max_image_size, or photos with more overlap";
   if (!steps.last_ok()) {
-    if (ReadText(mapper_log).find("No good initial image pair found") != std::string::npos) {
+    if (ReadTextFile(mapper_log).find("No good initial image pair found") != std::string::npos) {
       throw UserError(format("COLMAP found no pair of photos to start the reconstruction from (log: {}): the photos "
                              "overlap too little or show too little texture; {}",
                              mapper_log.string(), advice));

@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "pipeline/errors.h"
+#include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/hash.h"
 
@@ -13,12 +14,7 @@ namespace p2n::testing {
 namespace fs = std::filesystem;
 namespace {
 
-std::string ReadText(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+std::string ReadText(const fs::path& path) { return ReadTextFile(path); }
 
 class FakeStage : public Stage {
  public:

@@ -36,11 +36,16 @@ TEST_CASE("sfm + poses recover the synthetic scene's cameras", "[colmap][e2e]") 
   }
   TempDir dir;
   SyntheticSceneOptions scene;
+  scene.path = GENERATE(as<std::string>(), "orbit", "handheld");
+  INFO("camera path: " << scene.path);
   scene.num_views = 24;
   WriteSyntheticScene(scene, dir / "photos");
   const OptionRegistry registry = AllOptions();
   Config config(registry);
   config.Set("run.progress", "none", "test");
+  // The renderer is an ideal pinhole. The orbit keeps the default OPENCV model; along the handheld arc (one
+  // side of the scene) OPENCV's extra parameters drift (worst 0.46 degrees seen), so that case states the truth.
+  if (scene.path == "handheld") config.Set("sfm.camera_model", "PINHOLE", "test");
   Workspace workspace = Workspace::Open(dir / "ws", true);
   workspace.SetInput(dir / "photos");
   RunRequest request;

@@ -6,6 +6,7 @@
 #include <random>
 #include <sstream>
 
+#include "pipeline/file_util.h"
 #include "pipeline/subprocess.h"
 
 namespace p2n::testing {
@@ -25,12 +26,7 @@ TempDir::~TempDir() {
 
 void WriteText(const fs::path& path, const std::string& text) { std::ofstream(path) << text; }
 
-std::string ReadText(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+std::string ReadText(const fs::path& path) { return ReadTextFile(path); }
 
 int RunCommand(const std::vector<std::string>& argv, std::string* output) {
   TempDir dir;
