@@ -1,0 +1,79 @@
+#include "nerf/volume_rendering.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace p2n {
+namespace {
+
+// Optical depth of a segment: finite and non-negative whatever the inputs (NaN density counts as none).
+template <typename T>
+T OpticalDepth(T sigma, T delta) {
+  const T s = std::max(sigma, T(0)) * std::max(delta, T(0));
+  return std::isnan(s) ? T(0) : std::min(s, std::numeric_limits<T>::max());
+}
+
+}  // namespace
+
+template <typename T>
+CompositeResult<T> Composite(const RaySegments<T>& ray, const T* background, T min_transmittance) {
+  CompositeResult<T> result;
+  T log_transmittance = 0;  // -sum sigma delta so far
+  for (size_t i = 0; i < ray.count; ++i) {
+    const T transmittance = std::exp(log_transmittance);
+    if (transmittance < min_transmittance) break;
+    const T s = OpticalDepth(ray.sigma[i], ray.delta[i]);
+    const T alpha = -std::expm1(-s);
+    const T weight = transmittance * alpha;
+    for (int c = 0; c < 3; ++c) result.rgb[c] += weight * ray.rgb[3 * i + c];
+    result.depth += weight * ray.t[i];
+    log_transmittance -= s;
+    result.used = i + 1;
+  }
+  result.transmittance = std::exp(log_transmittance);
+  result.opacity = -std::expm1(log_transmittance);  // 1 - T, accurate when T is near 1
+  for (int c = 0; c < 3; ++c) result.rgb[c] += result.transmittance * background[c];
+  return result;
+}
+
+template <typename T>
+void CompositeBackward(const RaySegments<T>& ray, const T* background, const CompositeResult<T>& forward,
+                       const T* d_rgb, T d_opacity, T d_depth, T* d_sigma, T* d_segment_rgb) {
+  std::fill(d_sigma, d_sigma + ray.count, T(0));
+  std::fill(d_segment_rgb, d_segment_rgb + 3 * ray.count, T(0));
+  // Behind sample k: R_k = sum_{i > k} w_i c_i + T_end * background, and the same for depth (no background).
+  T behind_rgb[3];
+  for (int c = 0; c < 3; ++c) behind_rgb[c] = forward.transmittance * background[c];
+  T behind_depth = 0;
+  // Transmittance before each used sample from the running sums (never by division, which fails once the
+  // transmittance underflows).
+  std::vector<T> log_before(forward.used + 1, T(0));
+  for (size_t i = 0; i < forward.used; ++i) log_before[i + 1] = log_before[i] - OpticalDepth(ray.sigma[i], ray.delta[i]);
+  for (size_t k = forward.used; k-- > 0;) {
+    const T transmittance_before = std::exp(log_before[k]);
+    const T transmittance_after = std::exp(log_before[k + 1]);
+    const T s = OpticalDepth(ray.sigma[k], ray.delta[k]);
+    const T weight = transmittance_before * -std::expm1(-s);
+    T d_s = d_opacity * forward.transmittance;
+    for (int c = 0; c < 3; ++c) {
+      d_s += d_rgb[c] * (transmittance_after * ray.rgb[3 * k + c] - behind_rgb[c]);
+      d_segment_rgb[3 * k + c] = d_rgb[c] * weight;
+      behind_rgb[c] += weight * ray.rgb[3 * k + c];
+    }
+    d_s += d_depth * (transmittance_after * ray.t[k] - behind_depth);
+    behind_depth += weight * ray.t[k];
+    // s = sigma * delta; no gradient where the density was clamped at zero.
+    d_sigma[k] = ray.sigma[k] > T(0) ? d_s * std::max(ray.delta[k], T(0)) : T(0);
+  }
+}
+
+template CompositeResult<float> Composite(const RaySegments<float>&, const float*, float);
+template CompositeResult<double> Composite(const RaySegments<double>&, const double*, double);
+template void CompositeBackward(const RaySegments<float>&, const float*, const CompositeResult<float>&,
+                                const float*, float, float, float*, float*);
+template void CompositeBackward(const RaySegments<double>&, const double*, const CompositeResult<double>&,
+                                const double*, double, double, double*, double*);
+
+}  // namespace p2n
