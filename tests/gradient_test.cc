@@ -157,3 +157,81 @@ TEST_CASE("positional encoding: raw input, then sin and cos of 2^k pi x", "[enco
 }
 
 }  // namespace p2n::testing
+
+#include "nerf/ngp_field.h"
+
+namespace p2n::testing {
+
+TEST_CASE("the ngp field's gradients (grid, density MLP, colour MLP) match finite differences", "[gradients]") {
+  NgpFieldConfig config;
+  config.grid.levels = 3;
+  config.grid.log2_table_size = 8;
+  config.grid.base_resolution = 2;
+  config.grid.finest_resolution = 8;
+  config.geometry_features = 3;
+  config.width = 8;
+  NgpField<double> field(config, 11);
+  // Larger grid values than the 1e-4 initialisation, so that every path carries gradient.
+  for (size_t k = 0; k < field.grid().num_params(); ++k) field.grid().params()[k] = 0.5 * std::sin(1.7 * k);
+  const Eigen::MatrixXd positions = Eigen::MatrixXd::Random(3, 5).array() * 0.5 + 0.5;
+  Eigen::MatrixXd directions = Eigen::MatrixXd::Random(3, 5);
+  directions.colwise().normalize();
+  const Eigen::MatrixXd w_density = Eigen::MatrixXd::Random(1, 5), w_rgb = Eigen::MatrixXd::Random(3, 5);
+  const auto loss = [&] {
+    Eigen::MatrixXd density, rgb;
+    NgpField<double>::Cache cache;
+    field.Forward(positions, directions, &density, &rgb, &cache);
+    return (density.array() * w_density.array()).sum() + (rgb.array() * w_rgb.array()).sum();
+  };
+  Eigen::MatrixXd density, rgb;
+  NgpField<double>::Cache cache;
+  field.Forward(positions, directions, &density, &rgb, &cache);
+  CHECK((density.array() > 0).all());
+  std::vector<double> d_density_mlp(field.density_mlp().num_params(), 0.0), d_colour_mlp(field.colour_mlp().num_params(), 0.0);
+  field.grid().ZeroGrad();
+  field.Backward(cache, w_density, w_rgb, d_density_mlp.data(), d_colour_mlp.data());
+  std::vector<double> d_grid(field.grid().num_params(), 0.0);
+  for (const uint32_t entry : field.grid().touched_entries()) {
+    for (int f = 0; f < field.grid().entry_size(); ++f) {
+      d_grid[entry * field.grid().entry_size() + f] = field.grid().grads()[entry * field.grid().entry_size() + f];
+    }
+  }
+  const auto check = [&](double* params, size_t count, const std::vector<double>& analytic) {
+    const double h = 1e-6;
+    double worst = 0, largest = 0;
+    for (size_t k = 0; k < count; ++k) {
+      const double saved = params[k];
+      params[k] = saved + h;
+      const double plus = loss();
+      params[k] = saved - h;
+      const double minus = loss();
+      params[k] = saved;
+      worst = std::max(worst, std::abs((plus - minus) / (2 * h) - analytic[k]));
+      largest = std::max(largest, std::abs(analytic[k]));
+    }
+    CHECK(largest > 1e-6);
+    CHECK(worst < 1e-6 * std::max(1.0, largest));
+  };
+  check(field.grid().params(), field.grid().num_params(), d_grid);
+  check(field.density_mlp().params(), field.density_mlp().num_params(), d_density_mlp);
+  check(field.colour_mlp().params(), field.colour_mlp().num_params(), d_colour_mlp);
+}
+
+TEST_CASE("the ngp field's density stays finite for huge raw outputs", "[gradients]") {
+  NgpFieldConfig config;
+  config.grid.levels = 2;
+  config.grid.log2_table_size = 6;
+  config.grid.finest_resolution = 32;
+  NgpField<float> field(config, 1);
+  for (int k = 0; k < field.density_mlp().num_params(); ++k) field.density_mlp().params()[k] = 1e3f;
+  for (size_t k = 0; k < field.grid().num_params(); ++k) field.grid().params()[k] = 10.0f;
+  Eigen::MatrixXf positions = Eigen::MatrixXf::Constant(3, 2, 0.5f), directions(3, 2), density, rgb;
+  directions << 0, 1, 0, 0, 1, 0;
+  NgpField<float>::Cache cache;
+  field.Forward(positions, directions, &density, &rgb, &cache);
+  CHECK(density.allFinite());
+  CHECK(density(0, 0) == Approx(std::exp(15.0f)));
+  CHECK(rgb.allFinite());
+}
+
+}  // namespace p2n::testing
