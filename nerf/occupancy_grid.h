@@ -1,0 +1,54 @@
+#pragma once
+// An occupancy grid over [0, 1]^3 (DESIGN.md §6): which cells may hold density, refreshed from the field during
+// training, so that ray marching takes no samples in empty space. Each cell keeps a decaying maximum of the
+// densities seen in it (as instant-ngp does) and a bit: occupied when that value exceeds the threshold.
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "nerf/rays.h"
+
+namespace p2n {
+
+struct MarchSample {
+  double t;      // distance along the ray of the sample (the middle of its segment)
+  double delta;  // length of its segment
+};
+
+class OccupancyGrid {
+ public:
+  explicit OccupancyGrid(int resolution = 128);
+
+  int resolution() const { return resolution_; }
+  // Densities at points (3 x n, in [0, 1]^3) -> n values.
+  using DensityFunction = std::function<Eigen::VectorXf(const Eigen::Matrix3Xf& points)>;
+  // Evaluates `density` at one random point in every cell, keeps max(decay * old, new), and sets the bits
+  // where that exceeds `threshold`.
+  void Update(const DensityFunction& density, float threshold, float decay, uint64_t seed);
+  // Marks every cell occupied (the start of training: nothing is known yet).
+  void MarkAllOccupied();
+
+  bool Occupied(const Eigen::Vector3d& point) const;
+  double OccupiedFraction() const;
+
+  // Samples every `step` along `ray` within [near, far] (in the grid's [0, 1]^3 frame), leaping over
+  // unoccupied cells to their exit; at most `max_samples`.
+  std::vector<MarchSample> March(const Ray& ray, double near, double far, double step, size_t max_samples) const;
+
+  const std::vector<float>& densities() const { return densities_; }
+  const std::vector<uint8_t>& bits() const { return bits_; }
+
+ private:
+  size_t CellIndex(int x, int y, int z) const {
+    return (static_cast<size_t>(z) * resolution_ + y) * resolution_ + x;
+  }
+
+  int resolution_;
+  std::vector<float> densities_;
+  std::vector<uint8_t> bits_;  // one bit per cell
+};
+
+}  // namespace p2n
