@@ -2,6 +2,7 @@
 
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -74,6 +75,10 @@ int main(int argc, char** argv) {
   } catch (const p2n::ExternalToolError& e) {
     p2n::LogError(e.what());
     return p2n::kExitToolFailed;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // Permissions, a full disk, a folder removed under us: the user's environment, not a bug.
+    p2n::LogError(std::string("file system: ") + e.what() + "; check the path, its permissions and free space");
+    return p2n::kExitUserError;
   } catch (const p2n::Cancelled& e) {
     p2n::LogError(std::string(e.what()) + "; the interrupted stage will be redone on the next run");
     return p2n::kExitInterrupted;

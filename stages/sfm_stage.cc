@@ -159,13 +159,6 @@ void SfmStage::Run(StageContext& context) const {
               {options.colmap, "bundle_adjuster", "--input_path", chosen.string(), "--output_path",
                model_dir.string(), "--BundleAdjustment.refine_principal_point", "1"});
   }
-  steps.Run("undistortion", {options.colmap, "image_undistorter", "--image_path", images.string(), "--input_path",
-                             model_dir.string(), "--output_path", (out / "undistorted").string(),
-                             "--output_type", "COLMAP"});
-  for (const fs::directory_entry& entry : fs::directory_iterator(out / "undistorted")) {
-    if (entry.path().extension() == ".sh") fs::remove(entry.path());  // COLMAP's dense-stereo scripts
-  }
-
   const ColmapModel model = ReadColmapModel(model_dir);
   std::set<std::string> registered_names;
   std::vector<Eigen::Vector3d> centres, axes;
@@ -206,7 +199,7 @@ void SfmStage::Run(StageContext& context) const {
                         focus->median_angle_deg, advice));
     }
   }
-  WriteJsonAtomic(out / "sfm_report.json", report);
+  WriteJsonAtomic(out / "sfm_report.json", report);  // also for a run that fails the check below
   context.summary = {{"registered", model.images.size()}, {"images", names.size()}, {"points", model.points.size()}};
   LogInfo(format("sfm: {}/{} photos registered, {} points, mean reprojection error {:.2f} px",
                  model.images.size(), names.size(), model.points.size(),
@@ -220,6 +213,18 @@ void SfmStage::Run(StageContext& context) const {
                            model.images.size(), names.size(), 100 * fraction, 100 * options.min_registered, listed,
                            advice));
   }
+  const fs::path undistortion_log = steps.Run(
+      "undistortion", {options.colmap, "image_undistorter", "--image_path", images.string(), "--input_path",
+                       model_dir.string(), "--output_path", (out / "undistorted").string(), "--output_type", "COLMAP"});
+  if (!fs::exists(out / "undistorted" / "sparse" / "cameras.bin")) {
+    throw ExternalToolError(format("COLMAP's image_undistorter wrote no model into '{}'; log: {}",
+                                   (out / "undistorted").string(), undistortion_log.string()));
+  }
+  for (const fs::directory_entry& entry : fs::directory_iterator(out / "undistorted")) {
+    if (entry.path().extension() == ".sh") fs::remove(entry.path());  // COLMAP's dense-stereo scripts
+  }
+  report["steps"] = steps.timings();
+  WriteJsonAtomic(out / "sfm_report.json", report);
 }
 
 }  // namespace p2n

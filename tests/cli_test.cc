@@ -4,7 +4,9 @@
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
 
+#include "pipeline/file_util.h"
 #include "pipeline/workspace.h"
+#include "stages/colmap_model.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {
@@ -205,6 +207,27 @@ TEST_CASE("cli: a missing, crashing or failing COLMAP gives a clear error and th
   // The failed stage is incomplete, never fresh.
   CHECK_THAT(Photo2Nerf({"status", "-w", (dir / "ws3").string(), "--colmap", no_pair}).output,
              Catch::Contains("incomplete"));
+
+  // A mapper that registers 1 photo of 3 (it copies a prepared model to --output_path/0).
+  ColmapModel model;
+  model.cameras[1] = {1, "PINHOLE", 24, 16, {20, 20, 12, 8}};
+  ColmapImage image;
+  image.id = 1;
+  image.camera_id = 1;
+  image.name = "photo 1.png";
+  model.images[1] = image;
+  WriteColmapModelBinary(model, dir / "prepared" / "0");
+  const std::string partial = fake_colmap(
+      "partial", "if [ \"$1\" = mapper ]; then while [ $# -gt 0 ]; do if [ \"$1\" = --output_path ]; then cp -r '" +
+                     (dir / "prepared" / "0").string() + "' \"$2\"/0; fi; shift; done; fi\nexit 0");
+  Result few = Photo2Nerf({"run", photos, "-w", (dir / "ws4").string(), "--colmap", partial,
+                           "--sfm.refine_principal_point", "false"});
+  INFO(few.output);
+  CHECK(few.code == 1);
+  CHECK_THAT(few.output, Catch::Contains("registered only 1 of 3 photos") && Catch::Contains("photo 0.png, photo 2.png") &&
+                             Catch::Contains("--sfm.matcher exhaustive"));
+  const nlohmann::json report = ReadJsonFile(dir / "ws4" / "10_sfm.partial" / "sfm_report.json");
+  CHECK(report["left_out"] == nlohmann::json{"photo 0.png", "photo 2.png"});
 }
 
 }  // namespace p2n::testing
