@@ -20,11 +20,6 @@ namespace {
 
 constexpr size_t kMaxReasonsShown = 5;
 
-// The stages of a workspace's input, kept alive for the command.
-const Runner& MakeRunnerFor(const Workspace& workspace) {
-  static const Runner runner = MakeRunner(workspace.input());
-  return runner;
-}
 
 std::string CommandLine(int argc, char** argv) {
   std::string line = "photo2nerf";
@@ -65,9 +60,9 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
   if (!photos.empty() && !fs::is_directory(photos) && DatasetKind(photos).empty()) {
     throw UserError(format("'{}' is a file, not a folder; give the folder that holds your photos", photos));
   }
-  // Unknown stage names fail before anything is written.
-  const Runner runner = MakeRunner(photos.empty() ? std::nullopt : std::optional<fs::path>(photos));
   if (!photos.empty()) {
+    // Unknown stage names fail before anything is written.
+    const Runner runner = MakeRunner(fs::path(photos));
     for (const auto& name : {request.from, request.until}) {
       if (name) runner.Get(*name);
     }
@@ -82,7 +77,7 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
     }
     workspace.SetInput(photos);
   }
-  const Runner& stages = photos.empty() ? MakeRunnerFor(workspace) : runner;
+  const Runner stages = MakeRunner(workspace.input());
   const Config config = ResolveConfig(registry, workspace, flags, /*remember=*/true);
   const auto thread_limit = ApplyRunOptions(config, workspace.LogDir() / "photo2nerf.log");
   LogInfo(format("{} (workspace {})", CommandLine(argc, argv), workspace.root().string()));
@@ -115,7 +110,7 @@ int RunStatus(int argc, char** argv) {
   const Workspace workspace = Workspace::Open(flags.workspace, /*create=*/false);
   const Config config = ResolveConfig(registry, workspace, flags, /*remember=*/false);
 
-  const Runner& runner = MakeRunnerFor(workspace);
+  const Runner runner = MakeRunner(workspace.input());
   std::cout << "workspace " << workspace.root().string() << "\n";
   if (workspace.input()) {
     const std::string kind = DatasetKind(*workspace.input());
@@ -149,7 +144,7 @@ int RunClean(int argc, char** argv) {
   if (auto code = Parse(app, OptionRegistry(), argc, argv)) return *code;
   const Workspace workspace = Workspace::Open(workspace_path, /*create=*/false);
   WorkspaceLock lock(workspace, CommandLine(argc, argv));
-  const Runner& runner = MakeRunnerFor(workspace);
+  const Runner runner = MakeRunner(workspace.input());
   if (stages.empty()) {
     for (const auto& stage : runner.stages()) stages.push_back(stage->name());
   }
