@@ -57,15 +57,20 @@ double WorstRotationAfterAlignment(const std::vector<Eigen::Matrix4d>& a, const 
   return worst;
 }
 
+// A small synthetic scene: `views` views of 64 x 48.
+SyntheticSceneOptions SmallScene(int views) {
+  SyntheticSceneOptions scene;
+  scene.num_views = views;
+  scene.width = 64;
+  scene.height = 48;
+  return scene;
+}
+
 }  // namespace
 
 TEST_CASE("import: a transforms.json dataset keeps its cameras up to a similarity", "[import]") {
   TempDir dir;
-  SyntheticSceneOptions scene;
-  scene.num_views = 6;
-  scene.width = 64;
-  scene.height = 48;
-  WriteSyntheticScene(scene, dir / "data");
+  WriteSyntheticScene(SmallScene(6), dir / "data");
   fs::rename(dir / "data" / "ground_truth_cameras.json", dir / "data" / "transforms.json");
   CHECK(DatasetKind(dir / "data") == "transforms.json");
   const nlohmann::json transforms = Import(dir / "data", dir / "ws");
@@ -84,10 +89,7 @@ TEST_CASE("import: a transforms.json dataset keeps its cameras up to a similarit
 
 TEST_CASE("import: a COLMAP project folder (images/ + sparse/0) keeps its cameras and points", "[import]") {
   TempDir dir;
-  SyntheticSceneOptions scene;
-  scene.num_views = 5;
-  scene.width = 64;
-  scene.height = 48;
+  const SyntheticSceneOptions scene = SmallScene(5);
   WriteSyntheticScene(scene, dir / "data" / "images");
   fs::remove(dir / "data" / "images" / "ground_truth_cameras.json");
   const std::vector<PinholeCamera> cameras = SyntheticCameras(scene);
