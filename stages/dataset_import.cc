@@ -117,6 +117,15 @@ void ReadTransforms(const fs::path& root, const fs::path& file, const std::strin
   }
 }
 
+// ReadTransforms, with a JSON value of the wrong type reported as a user error naming the file.
+void ReadTransformsChecked(const fs::path& root, const fs::path& file, const std::string& split, ImportedDataset* out) {
+  try {
+    ReadTransforms(root, file, split, out);
+  } catch (const nlohmann::json::exception& e) {
+    throw UserError(format("'{}' has a value of the wrong type ({}); fix the file", file.string(), e.what()));
+  }
+}
+
 void LoadLlff(const fs::path& root, ImportedDataset* out) {
   const fs::path file = root / "poses_bounds.npy";
   const NpyArray poses = ReadNpy(file);
@@ -272,11 +281,11 @@ ImportedDataset LoadDataset(const fs::path& input) {
   ImportedDataset dataset;
   dataset.kind = DatasetKind(input);
   if (dataset.kind == "transforms.json") {
-    ReadTransforms(input, input / "transforms.json", "train", &dataset);
+    ReadTransformsChecked(input, input / "transforms.json", "train", &dataset);
   } else if (dataset.kind == "blender") {
     for (const char* split : kBlenderSplits) {
       const fs::path file = input / (std::string("transforms_") + split + ".json");
-      if (fs::exists(file)) ReadTransforms(input, file, split, &dataset);
+      if (fs::exists(file)) ReadTransformsChecked(input, file, split, &dataset);
     }
   } else if (dataset.kind == "llff") {
     LoadLlff(input, &dataset);

@@ -138,6 +138,9 @@ TEST_CASE("import: broken and hostile datasets are refused, naming the file and 
   CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("focal length"));
   write("[[1,0,0,\"x\"],[0,1,0,0],[0,0,1,0]]", "a.png");
   CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("not a number"));
+  WriteText(dir / "data" / "transforms.json", R"({"fl_x": 10, "w": "wide", "h": 6, "frames": [{"file_path": "a.png",
+      "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]})");
+  CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("transforms.json' has a value of the wrong type"));
   write(identity, "missing.png");
   CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("no usable view"));
   // Declared 8x6, but the image is 8x6... declare another size: refused when the images are read.

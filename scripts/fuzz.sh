@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (clang, AddressSanitizer + UndefinedBehaviorSanitizer) and runs each for a fixed
+# time on a copy of its seed corpus (tests/fuzz/corpus/TARGET); prints executions and findings per target.
+# Crashing inputs are kept in build-fuzz/artifacts/. Usage: scripts/fuzz.sh [SECONDS_PER_TARGET (default 60)]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-60}
+bash scripts/install_deps.sh
+if ! dpkg-query -W -f='${Status}' clang libclang-rt-14-dev 2>/dev/null | grep -q "install ok installed"; then
+  ${SUDO:-} apt-get install -y -qq --no-install-recommends clang libclang-rt-14-dev
+fi
+flags="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
+cmake -S . -B build-fuzz -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo -DP2N_NATIVE=OFF \
+  -DP2N_BUILD_TESTS=OFF -DP2N_FUZZ=ON -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
+  > /dev/null
+targets=(colmap_model npy ply transforms)
+cmake --build build-fuzz -j"$(nproc)" --target "${targets[@]/%/_fuzz}"
+mkdir -p build-fuzz/artifacts
+status=0
+for target in "${targets[@]}"; do
+  work=$(mktemp -d)
+  cp tests/fuzz/corpus/"$target"/* "$work"/
+  log=build-fuzz/"$target".log
+  if build-fuzz/tests/fuzz/"$target"_fuzz "$work" -max_total_time="$seconds" -rss_limit_mb=2048 -print_final_stats=1 \
+      -artifact_prefix=build-fuzz/artifacts/"$target"- > "$log" 2>&1; then
+    result="no findings"
+  else
+    result="FINDING (see $log and build-fuzz/artifacts/)"
+    status=1
+  fi
+  printf '%-14s %12s executions in %ss, corpus %s: %s\n' "$target" \
+    "$(grep -o 'stat::number_of_executed_units: [0-9]*' "$log" | awk '{print $2}')" "$seconds" \
+    "$(ls "$work" | wc -l)" "$result"
+  rm -rf "$work"
+done
+exit $status
