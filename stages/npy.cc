@@ -2,6 +2,7 @@
 
 #include <zlib.h>
 
+#include <charconv>
 #include <cstring>
 #include <fstream>
 #include <regex>
@@ -14,6 +15,7 @@ namespace p2n {
 namespace {
 
 constexpr size_t kMaxValues = size_t{1} << 31;  // 2^31 values: far beyond any dataset we read
+constexpr uint64_t kMaxDeflateRatio = 1100;
 
 std::string ReadAll(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -28,6 +30,15 @@ T Load(const std::string& bytes, size_t offset) {
   T value;
   std::memcpy(&value, bytes.data() + offset, sizeof(T));
   return value;
+}
+
+// A name from a file, fit for a message: control and non-ASCII bytes become '?' (a NUL would cut it short).
+std::string Printable(const std::string& name) {
+  std::string printable = name.substr(0, 200);
+  for (char& c : printable) {
+    if (c < 0x20 || c > 0x7e) c = '?';
+  }
+  return printable;
 }
 
 [[noreturn]] void Bad(const std::string& source, const std::string& problem) {
@@ -66,7 +77,12 @@ NpyArray ParseNpy(const std::string& bytes, const std::string& source) {
   size_t count = 1;
   while (std::getline(dims, dim, ',')) {
     if (dim.find_first_not_of(" ") == std::string::npos) continue;
-    const size_t d = std::stoull(dim);
+    const size_t first = dim.find_first_not_of(" ");
+    size_t d = 0;
+    const auto [end, error] = std::from_chars(dim.data() + first, dim.data() + dim.size(), d);
+    if (error != std::errc() || dim.find_first_not_of(" L", end - dim.data()) != std::string::npos) {
+      Bad(source, "a shape that is not a list of sizes: (" + match[1].str() + ")");
+    }
     if (d != 0 && count > kMaxValues / d) Bad(source, "an absurd shape");
     count *= d;
     array.shape.push_back(d);
@@ -100,10 +116,12 @@ std::map<std::string, NpyArray> ReadNpz(const std::filesystem::path& path) {
     uint64_t compressed = Load<uint32_t>(zip, offset + 18), uncompressed = Load<uint32_t>(zip, offset + 22);
     const uint16_t name_length = Load<uint16_t>(zip, offset + 26), extra_length = Load<uint16_t>(zip, offset + 28);
     if (offset + 30 + name_length + extra_length > zip.size()) Bad(path.string(), "a truncated zip entry");
-    const std::string name = zip.substr(offset + 30, name_length);
-    // ZIP64: the sizes are in the extra field (NumPy writes it for large arrays).
-    for (size_t e = offset + 30 + name_length; e + 4 <= offset + 30 + name_length + extra_length;) {
+    const std::string name = Printable(zip.substr(offset + 30, name_length));
+    // ZIP64: the sizes are in the extra field (NumPy writes it for large arrays). Each record must fit in it.
+    const size_t extra_end = offset + 30 + name_length + extra_length;
+    for (size_t e = offset + 30 + name_length; e + 4 <= extra_end;) {
       const uint16_t id = Load<uint16_t>(zip, e), size = Load<uint16_t>(zip, e + 2);
+      if (e + 4 + size > extra_end) Bad(path.string(), "a damaged zip extra field");
       if (id == 1 && size >= 16) {
         uncompressed = Load<uint64_t>(zip, e + 4);
         compressed = Load<uint64_t>(zip, e + 12);
@@ -113,6 +131,12 @@ std::map<std::string, NpyArray> ReadNpz(const std::filesystem::path& path) {
     if (flags & 0x08) Bad(path.string(), "zip entries with data descriptors are not supported");
     const size_t data = offset + 30 + name_length + extra_length;
     if (compressed > zip.size() - data || uncompressed > kMaxValues * 8) Bad(path.string(), "a damaged zip entry");
+    // Deflate expands at most ~1032:1; a stored entry not at all. A larger declared size is a lie: refuse it
+    // before allocating.
+    if ((method == 8 && uncompressed > kMaxDeflateRatio * compressed + 1024) ||
+        (method == 0 && uncompressed != compressed)) {
+      Bad(path.string(), format("{} declares {} bytes from {} compressed ones", name, uncompressed, compressed));
+    }
     std::string bytes;
     if (method == 0) {
       bytes = zip.substr(data, compressed);

@@ -1,5 +1,6 @@
 #include "stages/ply.h"
 
+#include <charconv>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -43,7 +44,11 @@ std::vector<ColouredPoint> ReadPly(const std::filesystem::path& path) {
   if (!in || end == std::string::npos || element == std::string::npos || element > end) {
     throw UserError(format("'{}' is not a PLY point cloud photo2nerf reads", path.string()));
   }
-  count = std::stoull(data.substr(element + 15));
+  const char* digits = data.data() + element + 15;
+  const auto [end_of_count, error] = std::from_chars(digits, data.data() + end, count);
+  if (error != std::errc() || end_of_count == digits) {
+    throw UserError(format("'{}' is not a PLY point cloud photo2nerf reads (bad vertex count)", path.string()));
+  }
   const std::string expected = format(kHeaderFormat, count);
   const size_t body = end + 11;
   if (data.compare(0, body, expected) != 0 || (data.size() - body) / kRecordSize < count) {

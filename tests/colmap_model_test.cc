@@ -8,6 +8,7 @@
 #include "pipeline/errors.h"
 #include "stages/colmap_flags.h"
 #include "stages/colmap_model.h"
+#include "stages/npy.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {
@@ -122,6 +123,26 @@ TEST_CASE("COLMAP models: damaged and hostile files are refused with the file na
   SECTION("a folder without a model") {
     CHECK_THROWS_WITH(ReadColmapModel(dir.path()), Catch::Contains("holds no COLMAP model"));
   }
+}
+
+TEST_CASE("NumPy arrays: damaged headers are user errors (found by fuzzing)", "[colmap]") {
+  const std::string header = "{'descr': '<f8', 'fortran_order': False, 'shape': (2, x), }";
+  std::string bytes = std::string("\x93NUMPY\x01\x00", 8) + std::string(1, static_cast<char>(header.size())) +
+                      std::string(1, '\0') + header;
+  CHECK_THROWS_WITH(ParseNpy(bytes, "bad.npy"), Catch::Contains("bad.npy") && Catch::Contains("shape"));
+  const std::string good = "{'descr': '<f8', 'fortran_order': False, 'shape': (2,), }";
+  bytes = std::string("\x93NUMPY\x01\x00", 8) + std::string(1, static_cast<char>(good.size())) + std::string(1, '\0') +
+          good + std::string(16, '\0');
+  CHECK(ParseNpy(bytes, "good.npy").shape == std::vector<size_t>{2});
+  CHECK_THROWS_WITH(ParseNpy(bytes.substr(0, bytes.size() - 3), "short.npy"), Catch::Contains("truncated"));
+}
+
+TEST_CASE("an .npz that declares gigabytes from a few bytes is refused before allocating (found by fuzzing)",
+          "[colmap]") {
+  const fs::path path = fs::path(P2N_SOURCE_DIR) / "tests" / "data" / "npz_declares_2600_mb.npz";
+  CHECK_THROWS_WITH(ReadNpz(path), Catch::Contains("declares") && Catch::Contains("compressed"));
+  // A ZIP64 record longer than the extra field it is in (a heap overflow before the fix).
+  CHECK_THROWS_AS(ReadNpz(fs::path(P2N_SOURCE_DIR) / "tests" / "data" / "npz_extra_field_overflow.npz"), UserError);
 }
 
 TEST_CASE("COLMAP flags are built from the version the program reports", "[colmap]") {

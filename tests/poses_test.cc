@@ -116,6 +116,9 @@ TEST_CASE("PLY point clouds round trip", "[poses]") {
   CHECK_THAT(ReadText(dir / "p.ply"), Catch::StartsWith("ply\nformat binary_little_endian 1.0\n"));
   WriteText(dir / "bad.ply", "ply\nnonsense");
   CHECK_THROWS_WITH(ReadPly(dir / "bad.ply"), Catch::Contains("bad.ply"));
+  // Found by fuzzing: a vertex count that is not a number.
+  WriteText(dir / "count.ply", "ply\nelement vertex e\nend_header\n");
+  CHECK_THROWS_WITH(ReadPly(dir / "count.ply"), Catch::Contains("bad vertex count"));
 }
 
 }  // namespace p2n::testing
