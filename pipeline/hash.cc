@@ -1,6 +1,7 @@
 #include "pipeline/hash.h"
 
 #include <OpenImageIO/hash.h>
+#include <tbb/parallel_for.h>
 
 #include <fstream>
 #include <vector>
@@ -50,6 +51,12 @@ std::string Sha1OfFile(const std::filesystem::path& path) {
   }
   if (in.bad()) throw UserError("error while reading '" + path.string() + "'");
   return hasher.HexDigest();
+}
+
+std::vector<std::string> Sha1OfFiles(const std::vector<std::filesystem::path>& paths) {
+  std::vector<std::string> digests(paths.size());
+  tbb::parallel_for(size_t{0}, paths.size(), [&](size_t i) { digests[i] = Sha1OfFile(paths[i]); });
+  return digests;
 }
 
 }  // namespace p2n

@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace p2n {
 
@@ -33,5 +34,7 @@ std::string Sha1Hex(std::string_view data);
 
 // SHA-1 of a file's bytes (streamed). Throws UserError naming the file when it cannot be read.
 std::string Sha1OfFile(const std::filesystem::path& path);
+// Sha1OfFile of each file, hashed in parallel, in the same order.
+std::vector<std::string> Sha1OfFiles(const std::vector<std::filesystem::path>& paths);
 
 }  // namespace p2n

@@ -34,7 +34,9 @@ const char* LevelTag(LogLevel level) {
   return "?";
 }
 
-std::string Timestamp() {
+}  // namespace
+
+std::string UtcTimestamp() {
   const auto now = std::chrono::system_clock::now();
   const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
   std::tm utc{};
@@ -43,8 +45,6 @@ std::string Timestamp() {
   std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%SZ", &utc);
   return text;
 }
-
-}  // namespace
 
 LogLevel ParseLogLevel(std::string_view text) {
   if (text == "debug") return LogLevel::kDebug;
@@ -82,7 +82,7 @@ void Log(LogLevel level, std::string_view message) {
     }
   }
   if (state.file.is_open() && (level >= LogLevel::kInfo || level >= state.console_level)) {
-    state.file << Timestamp() << ' ' << LevelTag(level) << ' ' << message << '\n';
+    state.file << UtcTimestamp() << ' ' << LevelTag(level) << ' ' << message << '\n';
     state.file.flush();
   }
 }

@@ -2,6 +2,7 @@
 // Logging to the console (stderr) and, once a workspace is open, to its log file. Thread-safe.
 
 #include <filesystem>
+#include <string>
 #include <string_view>
 
 namespace p2n {
@@ -16,6 +17,8 @@ void SetLogLevel(LogLevel level);
 void SetLogFile(const std::filesystem::path& path);
 
 void Log(LogLevel level, std::string_view message);
+// The current time, UTC, as 2026-11-22T05:00:00Z.
+std::string UtcTimestamp();
 inline void LogDebug(std::string_view message) { Log(LogLevel::kDebug, message); }
 inline void LogInfo(std::string_view message) { Log(LogLevel::kInfo, message); }
 inline void LogWarning(std::string_view message) { Log(LogLevel::kWarning, message); }

@@ -1,7 +1,5 @@
 #include "pipeline/manifest.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 
 #include "pipeline/errors.h"
@@ -123,7 +121,10 @@ std::vector<OutputFile> ListOutputs(const fs::path& folder) {
     outputs.push_back({relative, entry.file_size(), ""});
   }
   std::sort(outputs.begin(), outputs.end(), [](const OutputFile& a, const OutputFile& b) { return a.path < b.path; });
-  tbb::parallel_for(size_t{0}, outputs.size(), [&](size_t i) { outputs[i].sha1 = Sha1OfFile(folder / outputs[i].path); });
+  std::vector<std::filesystem::path> paths;
+  for (const OutputFile& file : outputs) paths.push_back(folder / file.path);
+  const std::vector<std::string> digests = Sha1OfFiles(paths);
+  for (size_t i = 0; i < outputs.size(); ++i) outputs[i].sha1 = digests[i];
   return outputs;
 }
 

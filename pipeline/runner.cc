@@ -1,7 +1,6 @@
 #include "pipeline/runner.h"
 
 #include <chrono>
-#include <ctime>
 
 #include "photo2nerf/version.h"
 #include "pipeline/cancel.h"
@@ -13,15 +12,6 @@
 namespace p2n {
 namespace fs = std::filesystem;
 namespace {
-
-std::string UtcNow() {
-  const std::time_t now = std::time(nullptr);
-  std::tm utc{};
-  gmtime_r(&now, &utc);
-  char text[32];
-  std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%SZ", &utc);
-  return text;
-}
 
 void RemoveAll(const fs::path& path) {
   std::error_code error;
@@ -195,7 +185,7 @@ void Runner::RunOne(const Workspace& workspace, const Config& config, const Stag
   manifest.photo2nerf_version = kVersion;
   manifest.summary = context.summary;
   manifest.outputs = ListOutputs(staging);
-  manifest.finished_utc = UtcNow();
+  manifest.finished_utc = UtcTimestamp();
   manifest.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   WriteJsonAtomic(staging / kManifestName, manifest.ToJson());
   SyncDirectory(staging);

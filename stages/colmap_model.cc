@@ -315,6 +315,27 @@ std::string ColmapModelName(int model_id) {
   return "";
 }
 
+PinholeCamera PinholeFromColmap(const ColmapCamera& camera, std::array<double, 4>* distortion) {
+  PinholeCamera pinhole;
+  pinhole.width = static_cast<int>(camera.width);
+  pinhole.height = static_cast<int>(camera.height);
+  *distortion = {};
+  const std::vector<double>& p = camera.params;
+  if (camera.model == "SIMPLE_PINHOLE" || camera.model == "SIMPLE_RADIAL" || camera.model == "RADIAL") {
+    pinhole.fx = pinhole.fy = p[0], pinhole.cx = p[1], pinhole.cy = p[2];
+    if (camera.model != "SIMPLE_PINHOLE") (*distortion)[0] = p[3];
+    if (camera.model == "RADIAL") (*distortion)[1] = p[4];
+  } else if (camera.model == "PINHOLE" || camera.model == "OPENCV") {
+    pinhole.fx = p[0], pinhole.fy = p[1], pinhole.cx = p[2], pinhole.cy = p[3];
+    if (camera.model == "OPENCV") *distortion = {p[4], p[5], p[6], p[7]};
+  } else {
+    throw UserError(format("camera {} is a {} camera, which photo2nerf does not undistort; give the photo folder "
+                           "instead and let photo2nerf run COLMAP",
+                           camera.id, camera.model));
+  }
+  return pinhole;
+}
+
 ColmapModel ReadColmapModelBinary(const fs::path& folder) {
   ColmapModel model = ReadBinary(folder);
   ValidateModel(model, folder);

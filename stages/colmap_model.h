@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include "nerf/camera.h"
+
 namespace p2n {
 
 struct ColmapCamera {
@@ -55,6 +57,11 @@ struct ColmapModel {
 // unknown).
 int ColmapModelParamCount(const std::string& model);
 std::string ColmapModelName(int model_id);
+
+// Pinhole intrinsics (width, height, fx, fy, cx, cy) of a COLMAP camera, and its OpenCV distortion (k1, k2,
+// p1, p2; zero for pinhole models) in `distortion`. SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL and OPENCV;
+// UserError naming the camera for fisheye and the other models.
+PinholeCamera PinholeFromColmap(const ColmapCamera& camera, std::array<double, 4>* distortion);
 
 // Reads the model in `folder` (binary when cameras.bin exists, else text). Throws UserError naming the file and
 // the record when a file is missing, truncated or holds impossible values.

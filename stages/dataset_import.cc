@@ -190,21 +190,8 @@ void LoadColmapProject(const fs::path& root, ImportedDataset* out) {
     view.source = InsideDataset(root, sparse / "images", "images/" + image.name, format("image {}", id));
     if (!fs::exists(view.source)) Bad(sparse, format("image {}", id), format("names '{}', which is not there", view.source.string()));
     PinholeCamera& camera = view.view.camera;
+    camera = PinholeFromColmap(colmap, &view.distortion);
     camera.world_from_cam = WorldFromOpenGlCamera(image.cam_from_world_rotation, image.cam_from_world_translation);
-    camera.width = static_cast<int>(colmap.width);
-    camera.height = static_cast<int>(colmap.height);
-    const std::vector<double>& p = colmap.params;
-    if (colmap.model == "SIMPLE_PINHOLE" || colmap.model == "SIMPLE_RADIAL" || colmap.model == "RADIAL") {
-      camera.fx = camera.fy = p[0], camera.cx = p[1], camera.cy = p[2];
-      if (colmap.model != "SIMPLE_PINHOLE") view.distortion[0] = p[3];
-      if (colmap.model == "RADIAL") view.distortion[1] = p[4];
-    } else if (colmap.model == "PINHOLE" || colmap.model == "OPENCV") {
-      camera.fx = p[0], camera.fy = p[1], camera.cx = p[2], camera.cy = p[3];
-      if (colmap.model == "OPENCV") view.distortion = {p[4], p[5], p[6], p[7]};
-    } else {
-      Bad(sparse, format("camera {}", colmap.id),
-          format("is a {} camera; give the photo folder instead and let photo2nerf run COLMAP", colmap.model));
-    }
     CheckCamera(camera, sparse, format("image {}", id));
     out->files.push_back(view.source);
     out->views.push_back(std::move(view));

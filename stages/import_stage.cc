@@ -69,8 +69,7 @@ std::map<std::string, std::string> ImportStage::ExternalInputs(const Workspace& 
   } catch (const UserError&) {
     return {{"dataset " + input.string(), "unreadable"}};  // Run() says why
   }
-  std::vector<std::string> digests(files.size());
-  tbb::parallel_for(size_t{0}, files.size(), [&](size_t i) { digests[i] = Sha1OfFile(files[i]); });
+  const std::vector<std::string> digests = Sha1OfFiles(files);
   std::map<std::string, std::string> inputs;
   for (size_t i = 0; i < files.size(); ++i) inputs["file " + fs::relative(files[i], input.has_extension() ? input.parent_path() : input).string()] = digests[i];
   return inputs;

@@ -133,8 +133,7 @@ std::map<std::string, std::string> IngestStage::ExternalInputs(const Workspace& 
   } catch (const UserError&) {
     return {{"folder " + folder.string(), "unreadable or without photos"}};  // Run() says why
   }
-  std::vector<std::string> digests(photos.size());
-  tbb::parallel_for(size_t{0}, photos.size(), [&](size_t i) { digests[i] = Sha1OfFile(photos[i]); });
+  const std::vector<std::string> digests = Sha1OfFiles(photos);
   std::map<std::string, std::string> inputs;
   for (size_t i = 0; i < photos.size(); ++i) inputs["image " + photos[i].filename().string()] = digests[i];
   return inputs;

@@ -20,16 +20,12 @@ namespace {
 constexpr size_t kMinPointsForBounds = 8;
 constexpr double kNearMargin = 0.8, kFarMargin = 1.2;
 
+// The sfm stage's model is undistorted: its cameras are pinhole.
 PinholeCamera Intrinsics(const ColmapCamera& camera) {
-  PinholeCamera pinhole;
-  pinhole.width = static_cast<int>(camera.width);
-  pinhole.height = static_cast<int>(camera.height);
-  if (camera.model == "PINHOLE") {
-    pinhole.fx = camera.params[0], pinhole.fy = camera.params[1], pinhole.cx = camera.params[2], pinhole.cy = camera.params[3];
-  } else if (camera.model == "SIMPLE_PINHOLE") {
-    pinhole.fx = pinhole.fy = camera.params[0], pinhole.cx = camera.params[1], pinhole.cy = camera.params[2];
-  } else {
-    throw UserError(format("camera {} is a {} camera; the poses stage reads undistorted (pinhole) models",
+  std::array<double, 4> distortion;
+  const PinholeCamera pinhole = PinholeFromColmap(camera, &distortion);
+  if (distortion != std::array<double, 4>{}) {
+    throw UserError(format("camera {} is a {} camera with distortion; the poses stage reads undistorted models",
                            camera.id, camera.model));
   }
   return pinhole;
