@@ -48,6 +48,22 @@ void Adam<T>::StepSparse(T* params, const T* grads, const std::vector<uint32_t>&
   }
 }
 
+template <typename T>
+void Adam<T>::Save(BinaryWriter* writer) const {
+  writer->PutVector(first_moment_);
+  writer->PutVector(second_moment_);
+  writer->PutVector(entry_steps_);
+  writer->Put<uint32_t>(dense_step_);
+}
+
+template <typename T>
+void Adam<T>::Load(BinaryReader* reader) {
+  first_moment_ = reader->GetVector<T>(first_moment_.size());
+  second_moment_ = reader->GetVector<T>(second_moment_.size());
+  entry_steps_ = reader->GetVector<uint32_t>(entry_steps_.size());
+  dense_step_ = reader->Get<uint32_t>();
+}
+
 template class Adam<float>;
 template class Adam<double>;
 

@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "nerf/binary_io.h"
+
 namespace p2n {
 
 struct AdamOptions {
@@ -29,6 +31,10 @@ class Adam {
   void Step(T* params, const T* grads);
   // Updates only the listed entries (indices of entries, not of values); `grads` is indexed like `params`.
   void StepSparse(T* params, const T* grads, const std::vector<uint32_t>& entries);
+
+  // The moments and step counts, for checkpoints (Load() checks the sizes).
+  void Save(BinaryWriter* writer) const;
+  void Load(BinaryReader* reader);
 
  private:
   // Updates values [begin, end) as at step `step` (1-based).

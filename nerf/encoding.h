@@ -20,7 +20,8 @@ class Encoding {
   virtual int input_dims() const = 0;
   virtual int output_dims() const = 0;
   virtual nlohmann::json Config() const = 0;
-  // output (output_dims x n) for input (input_dims x n); coordinates outside [0, 1] are clamped.
+  // output (output_dims x n) for input (input_dims x n). Grids clamp coordinates into [0, 1]; the positional
+  // encoding takes any finite value.
   virtual void Forward(const Matrix& input, Matrix* output) const = 0;
 
   // Trainable encodings (a hash grid) override these; fixed ones (positional encoding) have no parameters.
@@ -67,6 +68,8 @@ struct HashGridConfig {
   int finest_resolution = 2048;  // cells per axis of the finest level
 
   nlohmann::json ToJson() const;
+  // The inverse of ToJson(); missing keys keep their defaults.
+  static HashGridConfig FromJson(const nlohmann::json& json);
 };
 
 // Multiresolution hash encoding (Mueller et al. 2022), D-linear interpolation of per-vertex features at each

@@ -25,6 +25,16 @@ nlohmann::json HashGridConfig::ToJson() const {
           {"finest_resolution", finest_resolution}};
 }
 
+HashGridConfig HashGridConfig::FromJson(const nlohmann::json& json) {
+  HashGridConfig config;
+  config.levels = json.value("levels", config.levels);
+  config.features_per_level = json.value("features_per_level", config.features_per_level);
+  config.log2_table_size = json.value("log2_table_size", config.log2_table_size);
+  config.base_resolution = json.value("base_resolution", config.base_resolution);
+  config.finest_resolution = json.value("finest_resolution", config.finest_resolution);
+  return config;
+}
+
 template <typename T>
 HashGridEncoding<T>::HashGridEncoding(int dims, const HashGridConfig& config, uint64_t seed)
     : dims_(dims), config_(config) {

@@ -13,7 +13,9 @@ nlohmann::json MlpConfig::ToJson() const {
           {"width", width},
           {"hidden_layers", hidden_layers},
           {"activation", "ReLU"},
-          {"output_activation", output_activation == OutputActivation::kSigmoid ? "Sigmoid" : "None"}};
+          {"output_activation", output_activation == OutputActivation::kSigmoid ? "Sigmoid"
+                                : output_activation == OutputActivation::kRelu  ? "ReLU"
+                                                                                : "None"}};
 }
 
 template <typename T>
@@ -52,7 +54,7 @@ void Mlp<T>::Forward(const Matrix& input, Matrix* output, Cache* cache) const {
     Matrix& out = cache->activations[i + 1];
     out.noalias() = weight * cache->activations[i];
     out.colwise() += bias;
-    if (i + 1 < layers_.size()) {
+    if (i + 1 < layers_.size() || config_.output_activation == OutputActivation::kRelu) {
       out = out.cwiseMax(T(0));
     } else if (config_.output_activation == OutputActivation::kSigmoid) {
       // 1 / (1 + exp(-x)), with the exponent clamped so that no step overflows.
@@ -68,6 +70,8 @@ void Mlp<T>::Backward(const Cache& cache, const Matrix& d_output, T* d_params, M
   if (config_.output_activation == OutputActivation::kSigmoid) {
     const Matrix& s = cache.activations.back();
     delta = (delta.array() * s.array() * (T(1) - s.array())).matrix();
+  } else if (config_.output_activation == OutputActivation::kRelu) {
+    delta = (cache.activations.back().array() > T(0)).select(delta, T(0));
   }
   for (size_t i = layers_.size(); i-- > 0;) {
     const Layer& layer = layers_[i];

@@ -1,6 +1,6 @@
 #pragma once
 // A fully connected network on column batches: inputs are (features x batch) matrices, so every layer is one
-// matrix product. Hidden layers use ReLU; the output is linear or sigmoid. Parameters live in one flat vector
+// matrix product. Hidden layers use ReLU; the output is linear, sigmoid or ReLU. Parameters live in one flat vector
 // (per layer: W, out x in, column-major; then b) so that one optimiser updates them all.
 //
 // Templated on the scalar: float for training, double for gradient checks.
@@ -13,7 +13,7 @@
 
 namespace p2n {
 
-enum class OutputActivation { kNone, kSigmoid };
+enum class OutputActivation { kNone, kSigmoid, kRelu };
 
 struct MlpConfig {
   int inputs = 0;

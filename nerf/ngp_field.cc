@@ -18,15 +18,39 @@ MlpConfig ColourConfig(const NgpFieldConfig& config) {
           OutputActivation::kSigmoid};
 }
 
+template <typename T, typename Matrix>
+void ExpDensity(const Matrix& raw, Matrix* density) {
+  density->resize(1, raw.cols());
+  for (Eigen::Index i = 0; i < raw.cols(); ++i) (*density)(0, i) = std::exp(std::min(raw(0, i), NgpField<T>::kMaxLogDensity));
+}
+
 }  // namespace
 
 nlohmann::json NgpFieldConfig::ToJson() const {
   return {{"otype", "NgpField"},
           {"encoding", grid.ToJson()},
+          {"geometry_features", geometry_features},
+          {"width", width},
+          {"density_hidden_layers", density_hidden_layers},
+          {"colour_hidden_layers", colour_hidden_layers},
           {"direction_encoding", {{"otype", "SphericalHarmonics"}, {"degree", 4}}},
           {"density_network", DensityConfig(*this).ToJson()},
           {"colour_network", ColourConfig(*this).ToJson()},
           {"density_activation", "exp(min(x, 15))"}};
+}
+
+NgpFieldConfig NgpFieldConfig::FromJson(const nlohmann::json& json) {
+  NgpFieldConfig config;
+  try {
+    if (json.contains("encoding")) config.grid = HashGridConfig::FromJson(json.at("encoding"));
+    config.geometry_features = json.value("geometry_features", config.geometry_features);
+    config.width = json.value("width", config.width);
+    config.density_hidden_layers = json.value("density_hidden_layers", config.density_hidden_layers);
+    config.colour_hidden_layers = json.value("colour_hidden_layers", config.colour_hidden_layers);
+  } catch (const nlohmann::json::exception& error) {
+    throw std::invalid_argument("NgpField config: " + std::string(error.what()));
+  }
+  return config;
 }
 
 template <typename T>
@@ -37,43 +61,51 @@ NgpField<T>::NgpField(const NgpFieldConfig& config, uint64_t seed)
       colour_mlp_(ColourConfig(config), seed + 2) {}
 
 template <typename T>
-nlohmann::json NgpField<T>::Config() const {
-  return config_.ToJson();
-}
-
-template <typename T>
 void NgpField<T>::Forward(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb,
                           Cache* cache) const {
   const Eigen::Index n = positions.cols();
   cache->positions = positions;
+  cache->mlps.resize(2);
   grid_.Forward(positions, &cache->encoded);
-  density_mlp_.Forward(cache->encoded, &cache->density_out, &cache->density_cache);
-  density->resize(1, n);
-  for (Eigen::Index i = 0; i < n; ++i) (*density)(0, i) = std::exp(std::min(cache->density_out(0, i), kMaxLogDensity));
+  density_mlp_.Forward(cache->encoded, &cache->hidden, &cache->mlps[0]);
+  ExpDensity<T>(cache->hidden, density);
   cache->colour_in.resize(config_.geometry_features + kSphericalHarmonicsCount, n);
-  cache->colour_in.topRows(config_.geometry_features) = cache->density_out.bottomRows(config_.geometry_features);
+  cache->colour_in.topRows(config_.geometry_features) = cache->hidden.bottomRows(config_.geometry_features);
   for (Eigen::Index i = 0; i < n; ++i) {
     SphericalHarmonics(directions(0, i), directions(1, i), directions(2, i),
                        cache->colour_in.col(i).data() + config_.geometry_features);
   }
-  colour_mlp_.Forward(cache->colour_in, rgb, &cache->colour_cache);
+  colour_mlp_.Forward(cache->colour_in, rgb, &cache->mlps[1]);
 }
 
 template <typename T>
-void NgpField<T>::Backward(const Cache& cache, const Matrix& d_density, const Matrix& d_rgb, T* d_density_mlp,
-                           T* d_colour_mlp) {
+void NgpField<T>::Density(const Matrix& positions, Matrix* density) const {
+  Matrix encoded, raw;
+  typename Mlp<T>::Cache cache;
+  grid_.Forward(positions, &encoded);
+  density_mlp_.Forward(encoded, &raw, &cache);
+  ExpDensity<T>(raw, density);
+}
+
+template <typename T>
+void NgpField<T>::Backward(const Cache& cache, const Matrix& d_density, const Matrix& d_rgb, T* d_dense,
+                           Matrix* d_encoded) const {
   Matrix d_colour_in;
-  colour_mlp_.Backward(cache.colour_cache, d_rgb, d_colour_mlp, &d_colour_in);
-  Matrix d_density_out(cache.density_out.rows(), cache.density_out.cols());
-  d_density_out.bottomRows(config_.geometry_features) = d_colour_in.topRows(config_.geometry_features);
-  for (Eigen::Index i = 0; i < cache.density_out.cols(); ++i) {
-    const T raw = cache.density_out(0, i);
+  colour_mlp_.Backward(cache.mlps[1], d_rgb, d_dense + density_mlp_.num_params(), &d_colour_in);
+  Matrix d_hidden(cache.hidden.rows(), cache.hidden.cols());
+  d_hidden.bottomRows(config_.geometry_features) = d_colour_in.topRows(config_.geometry_features);
+  for (Eigen::Index i = 0; i < cache.hidden.cols(); ++i) {
+    const T raw = cache.hidden(0, i);
     // d exp(min(x, max)) / dx = exp(x) below the clamp, 0 above it.
-    d_density_out(0, i) = raw < kMaxLogDensity ? d_density(0, i) * std::exp(raw) : T(0);
+    d_hidden(0, i) = raw < kMaxLogDensity ? d_density(0, i) * std::exp(raw) : T(0);
   }
-  Matrix d_encoded;
-  density_mlp_.Backward(cache.density_cache, d_density_out, d_density_mlp, &d_encoded);
-  grid_.Backward(cache.positions, d_encoded);
+  density_mlp_.Backward(cache.mlps[0], d_hidden, d_dense, d_encoded);
+}
+
+template <typename T>
+std::vector<ParamBlock<T>> NgpField<T>::DenseParams() {
+  return {{density_mlp_.params(), static_cast<size_t>(density_mlp_.num_params())},
+          {colour_mlp_.params(), static_cast<size_t>(colour_mlp_.num_params())}};
 }
 
 template class NgpField<float>;

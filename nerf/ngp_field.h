@@ -5,13 +5,9 @@
 // Density = exp(clamped log-density): the clamp keeps it finite (at most e^kMaxLogDensity) and its gradient
 // bounded.
 
-#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
-#include <memory>
-
-#include "nerf/encoding.h"
-#include "nerf/mlp.h"
+#include "nerf/radiance_field.h"
 
 namespace p2n {
 
@@ -23,34 +19,31 @@ struct NgpFieldConfig {
   int colour_hidden_layers = 2;
 
   nlohmann::json ToJson() const;
+  // The inverse of ToJson(); missing keys keep their defaults, std::invalid_argument on a wrong type.
+  static NgpFieldConfig FromJson(const nlohmann::json& json);
 };
 
 template <typename T>
-class NgpField {
+class NgpField : public RadianceField<T> {
  public:
-  using Matrix = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic>;
+  using typename RadianceField<T>::Matrix;
+  using typename RadianceField<T>::Cache;
   static constexpr T kMaxLogDensity = T(15);  // density at most ~3.3e6 per unit length
-
-  // Activations of one Forward(), kept for Backward().
-  struct Cache {
-    Matrix positions, encoded, density_out, colour_in;
-    typename Mlp<T>::Cache density_cache, colour_cache;
-  };
 
   NgpField(const NgpFieldConfig& config, uint64_t seed);
 
-  // positions and directions: 3 x n (positions in [0, 1]^3, directions of unit length). Writes density (1 x n)
-  // and rgb (3 x n, in (0, 1)).
-  void Forward(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb, Cache* cache) const;
-  // Given dL/d(density) and dL/d(rgb): adds the MLPs' gradients into `d_density_mlp` and `d_colour_mlp` and
-  // accumulates the grid's (after grid().ZeroGrad() at the start of a step).
-  void Backward(const Cache& cache, const Matrix& d_density, const Matrix& d_rgb, T* d_density_mlp,
-                T* d_colour_mlp);
+  nlohmann::json Config() const override { return config_.ToJson(); }
+  void Forward(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb,
+               Cache* cache) const override;
+  void Density(const Matrix& positions, Matrix* density) const override;
+  void Backward(const Cache& cache, const Matrix& d_density, const Matrix& d_rgb, T* d_dense,
+                Matrix* d_encoded) const override;
+  std::vector<ParamBlock<T>> DenseParams() override;
+  Encoding<T>* TrainableEncoding() override { return &grid_; }
 
   HashGridEncoding<T>& grid() { return grid_; }
   Mlp<T>& density_mlp() { return density_mlp_; }
   Mlp<T>& colour_mlp() { return colour_mlp_; }
-  nlohmann::json Config() const;
 
  private:
   NgpFieldConfig config_;

@@ -7,40 +7,77 @@
 #include <random>
 #include <stdexcept>
 
+#include "nerf/denormals.h"
+
 namespace p2n {
 
 OccupancyGrid::OccupancyGrid(int resolution)
     : resolution_(resolution),
-      densities_(static_cast<size_t>(resolution) * resolution * resolution, 0.0f),
-      bits_((densities_.size() + 7) / 8, 0) {
+      densities_(static_cast<size_t>(resolution) * resolution * resolution, -1.0f),
+      bits_((densities_.size() + 7) / 8, 0xff) {
   if (resolution < 1 || resolution > 1024) throw std::invalid_argument("occupancy grid resolution must be 1..1024");
+}
+
+OccupancyGrid::OccupancyGrid(int resolution, std::vector<float> densities, std::vector<uint8_t> bits)
+    : OccupancyGrid(resolution) {
+  if (densities.size() != densities_.size() || bits.size() != bits_.size()) {
+    throw std::invalid_argument("occupancy grid: the saved values do not match the resolution");
+  }
+  densities_ = std::move(densities);
+  bits_ = std::move(bits);
 }
 
 void OccupancyGrid::MarkAllOccupied() { std::fill(bits_.begin(), bits_.end(), 0xff); }
 
-void OccupancyGrid::Update(const DensityFunction& density, float threshold, float decay, uint64_t seed) {
-  const int r = resolution_;
-  // One slab of z per task: a random point in each cell, evaluated in one batch.
-  tbb::parallel_for(0, r, [&](int z) {
-    std::mt19937_64 random(seed * 1000003 + z);
+void OccupancyGrid::Update(const DensityFunction& density, float threshold, float decay, uint64_t seed,
+                           size_t cells) {
+  const size_t total = densities_.size();
+  if (cells == 0 || cells > total) cells = total;
+  for (float& value : densities_) {
+    if (value > 0) value *= decay;
+  }
+  // Cell k of this round is (cursor + k) * stride mod total: an odd stride visits every cell of a power-of-two
+  // grid once per `total` cells, scattered over the volume.
+  const size_t stride = (total % 2 == 0) ? 2654435761u % total | 1 : 1;
+  constexpr size_t kBatch = 4096;
+  tbb::parallel_for(size_t{0}, (cells + kBatch - 1) / kBatch, [&](size_t batch) {
+    FlushDenormalsOnThisThread();
+    std::mt19937_64 random(seed * 1000003 + batch);
     std::uniform_real_distribution<float> jitter(0.0f, 1.0f);
-    Eigen::Matrix3Xf points(3, r * r);
-    for (int y = 0; y < r; ++y) {
-      for (int x = 0; x < r; ++x) {
-        points.col(y * r + x) = Eigen::Vector3f((x + jitter(random)) / r, (y + jitter(random)) / r, (z + jitter(random)) / r);
-      }
+    const size_t begin = batch * kBatch, end = std::min(cells, begin + kBatch);
+    std::vector<size_t> indices(end - begin);
+    Eigen::Matrix3Xf points(3, end - begin);
+    const size_t r = static_cast<size_t>(resolution_);
+    for (size_t k = begin; k < end; ++k) {
+      const size_t cell = ((cursor_ + k) % total) * stride % total;
+      indices[k - begin] = cell;
+      points.col(k - begin) = Eigen::Vector3f((cell % r + jitter(random)) / r, (cell / r % r + jitter(random)) / r,
+                                              (cell / (r * r) + jitter(random)) / r);
     }
     const Eigen::VectorXf values = density(points);
-    for (int i = 0; i < r * r; ++i) {
-      const size_t cell = static_cast<size_t>(z) * r * r + i;
-      const float value = std::isfinite(values[i]) ? values[i] : 0.0f;
-      densities_[cell] = std::max(decay * densities_[cell], value);
+    for (size_t k = 0; k < indices.size(); ++k) {
+      const float value = std::isfinite(values[k]) ? std::max(values[k], 0.0f) : 0.0f;
+      densities_[indices[k]] = std::max(densities_[indices[k]], value);
     }
   });
+  cursor_ = (cursor_ + cells) % total;
+  threshold = std::min(threshold, static_cast<float>(MeanDensity()));
   std::fill(bits_.begin(), bits_.end(), 0);
-  for (size_t cell = 0; cell < densities_.size(); ++cell) {
-    if (densities_[cell] > threshold) bits_[cell / 8] |= static_cast<uint8_t>(1u << (cell % 8));
+  for (size_t cell = 0; cell < total; ++cell) {
+    if (densities_[cell] > threshold || densities_[cell] < 0) bits_[cell / 8] |= static_cast<uint8_t>(1u << (cell % 8));
   }
+}
+
+double OccupancyGrid::MeanDensity() const {
+  double sum = 0;
+  size_t known = 0;
+  for (const float value : densities_) {
+    if (value >= 0) {
+      sum += value;
+      ++known;
+    }
+  }
+  return known == 0 ? 0.0 : sum / known;
 }
 
 bool OccupancyGrid::Occupied(const Eigen::Vector3d& point) const {

@@ -21,15 +21,21 @@ struct MarchSample {
 class OccupancyGrid {
  public:
   explicit OccupancyGrid(int resolution = 128);
+  // A grid saved with densities() and bits(); std::invalid_argument when the sizes do not match.
+  OccupancyGrid(int resolution, std::vector<float> densities, std::vector<uint8_t> bits);
 
   int resolution() const { return resolution_; }
   // Densities at points (3 x n, in [0, 1]^3) -> n values.
   using DensityFunction = std::function<Eigen::VectorXf(const Eigen::Matrix3Xf& points)>;
-  // Evaluates `density` at one random point in every cell, keeps max(decay * old, new), and sets the bits
-  // where that exceeds `threshold`.
-  void Update(const DensityFunction& density, float threshold, float decay, uint64_t seed);
+  // Decays every cell's value by `decay`; evaluates `density` at one random point in each of `cells` cells (0:
+  // all), visited round-robin in a fixed scattered order, and keeps max(decayed, new); then sets the bits where
+  // the value exceeds `threshold`, or the mean value when that is lower (a young field's densities are all
+  // small: the cells above the mean are its best guess). A cell never evaluated counts as occupied.
+  void Update(const DensityFunction& density, float threshold, float decay, uint64_t seed, size_t cells = 0);
   // Marks every cell occupied (the start of training: nothing is known yet).
   void MarkAllOccupied();
+  // The mean value of the cells evaluated so far (0 when none).
+  double MeanDensity() const;
 
   bool Occupied(const Eigen::Vector3d& point) const;
   double OccupiedFraction() const;
@@ -47,7 +53,8 @@ class OccupancyGrid {
   }
 
   int resolution_;
-  std::vector<float> densities_;
+  size_t cursor_ = 0;              // where the next partial update starts in the scattered order
+  std::vector<float> densities_;   // negative: never evaluated
   std::vector<uint8_t> bits_;  // one bit per cell
 };
 

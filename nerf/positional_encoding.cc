@@ -21,7 +21,7 @@ template <typename T>
 void PositionalEncoding<T>::Forward(const Matrix& input, Matrix* output) const {
   const Eigen::Index n = input.cols();
   output->resize(output_dims(), n);
-  const Matrix x = input.cwiseMax(T(0)).cwiseMin(T(1));
+  const Matrix& x = input;
   output->topRows(dims_) = x;
   for (int k = 0; k < levels_; ++k) {
     const T frequency = static_cast<T>(std::ldexp(M_PI, k));  // 2^k pi

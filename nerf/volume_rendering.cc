@@ -18,24 +18,31 @@ T OpticalDepth(T sigma, T delta) {
 }  // namespace
 
 template <typename T>
-CompositeResult<T> Composite(const RaySegments<T>& ray, const T* background, T min_transmittance) {
-  CompositeResult<T> result;
-  T log_transmittance = 0;  // -sum sigma delta so far
-  for (size_t i = 0; i < ray.count; ++i) {
-    const T transmittance = std::exp(log_transmittance);
-    if (transmittance < min_transmittance) break;
-    const T s = OpticalDepth(ray.sigma[i], ray.delta[i]);
-    const T alpha = -std::expm1(-s);
-    const T weight = transmittance * alpha;
-    for (int c = 0; c < 3; ++c) result.rgb[c] += weight * ray.rgb[3 * i + c];
-    result.depth += weight * ray.t[i];
-    log_transmittance -= s;
-    result.used = i + 1;
-  }
-  result.transmittance = std::exp(log_transmittance);
-  result.opacity = -std::expm1(log_transmittance);  // 1 - T, accurate when T is near 1
+void CompositeAccumulator<T>::Add(T sigma, const T* rgb, T t, T delta) {
+  const T s = OpticalDepth(sigma, delta);
+  const T weight = std::exp(log_transmittance_) * -std::expm1(-s);
+  for (int c = 0; c < 3; ++c) result_.rgb[c] += weight * rgb[c];
+  result_.depth += weight * t;
+  log_transmittance_ -= s;
+  ++result_.used;
+}
+
+template <typename T>
+CompositeResult<T> CompositeAccumulator<T>::Finish(const T* background) const {
+  CompositeResult<T> result = result_;
+  result.transmittance = std::exp(log_transmittance_);
+  result.opacity = -std::expm1(log_transmittance_);  // 1 - T, accurate when T is near 1
   for (int c = 0; c < 3; ++c) result.rgb[c] += result.transmittance * background[c];
   return result;
+}
+
+template <typename T>
+CompositeResult<T> Composite(const RaySegments<T>& ray, const T* background, T min_transmittance) {
+  CompositeAccumulator<T> accumulator;
+  for (size_t i = 0; i < ray.count && !accumulator.Done(min_transmittance); ++i) {
+    accumulator.Add(ray.sigma[i], ray.rgb + 3 * i, ray.t[i], ray.delta[i]);
+  }
+  return accumulator.Finish(background);
 }
 
 template <typename T>
@@ -69,6 +76,8 @@ void CompositeBackward(const RaySegments<T>& ray, const T* background, const Com
   }
 }
 
+template class CompositeAccumulator<float>;
+template class CompositeAccumulator<double>;
 template CompositeResult<float> Composite(const RaySegments<float>&, const float*, float);
 template CompositeResult<double> Composite(const RaySegments<double>&, const double*, double);
 template void CompositeBackward(const RaySegments<float>&, const float*, const CompositeResult<float>&,

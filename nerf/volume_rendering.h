@@ -9,6 +9,7 @@
 // Gradients are analytic: with w_i = T_i - T_{i+1} and R_k the colour composited behind sample k (background
 // included), dC/d(sigma_k delta_k) = T_{k+1} c_k - R_k; computed in one reverse pass.
 
+#include <cmath>
 #include <cstddef>
 
 namespace p2n {
@@ -31,6 +32,20 @@ struct CompositeResult {
   T transmittance = 1; // after the used samples
 };
 
+// The running form of Composite(), for renderers that evaluate a ray's samples in rounds: Add() the segments
+// in order while !Done(), then Finish() adds the background.
+template <typename T>
+class CompositeAccumulator {
+ public:
+  bool Done(T min_transmittance) const { return std::exp(log_transmittance_) < min_transmittance; }
+  void Add(T sigma, const T* rgb, T t, T delta);
+  CompositeResult<T> Finish(const T* background) const;
+
+ private:
+  CompositeResult<T> result_;
+  T log_transmittance_ = 0;  // -sum sigma delta so far
+};
+
 // Composites the segments over `background` (3 values). Stops once the transmittance falls below
 // `min_transmittance` (0: never).
 template <typename T>
@@ -42,6 +57,8 @@ template <typename T>
 void CompositeBackward(const RaySegments<T>& ray, const T* background, const CompositeResult<T>& forward,
                        const T* d_rgb, T d_opacity, T d_depth, T* d_sigma, T* d_segment_rgb);
 
+extern template class CompositeAccumulator<float>;
+extern template class CompositeAccumulator<double>;
 extern template CompositeResult<float> Composite(const RaySegments<float>&, const float*, float);
 extern template CompositeResult<double> Composite(const RaySegments<double>&, const double*, double);
 extern template void CompositeBackward(const RaySegments<float>&, const float*, const CompositeResult<float>&,

@@ -172,7 +172,8 @@ void Runner::RunOne(const Workspace& workspace, const Config& config, const Stag
   fs::create_directories(staging, error);
   if (error) throw UserError(format("cannot create '{}': {}", staging.string(), error.message()));
 
-  StageContext context{staging, workspace, config, {}, nlohmann::json::object()};
+  StageContext context{staging, workspace, config, {}, nlohmann::json::object(), status.expected_key,
+                       workspace.ResumeDir(stage.folder())};
   for (const std::string& up : stage.upstream()) context.upstream_dirs[up] = workspace.StageDir(Get(up).folder());
   const auto start = std::chrono::steady_clock::now();
   stage.Run(context);
@@ -197,6 +198,7 @@ void Runner::RunOne(const Workspace& workspace, const Config& config, const Stag
   fs::rename(staging, final_dir);
   SyncDirectory(workspace.root());
   RemoveAll(trash);
+  RemoveAll(context.resume_dir);
 }
 
 void Runner::Clean(const Workspace& workspace, std::string_view name) const {
@@ -204,6 +206,7 @@ void Runner::Clean(const Workspace& workspace, std::string_view name) const {
   RemoveAll(workspace.StagingDir(stage.folder()));
   RemoveAll(workspace.StageDir(stage.folder()));
   RemoveAll(workspace.TrashDir(stage.folder()));
+  RemoveAll(workspace.ResumeDir(stage.folder()));
 }
 
 }  // namespace p2n

@@ -23,6 +23,9 @@ struct StageContext {
   const Config& config;
   std::map<std::string, std::filesystem::path> upstream_dirs;  // upstream name -> its complete result folder
   nlohmann::json summary = nlohmann::json::object();           // short facts kept in the manifest
+  std::string key;                                              // the cache key of the result being made
+  // Where the stage may keep state across a kill (checkpoints; tag them with `key`); removed on completion.
+  std::filesystem::path resume_dir;
 };
 
 class Stage {

@@ -60,6 +60,8 @@ Workspace Workspace::Open(const fs::path& root_in, bool create) {
 fs::path Workspace::StagingDir(std::string_view folder) const { return root_ / (std::string(folder) + ".partial"); }
 fs::path Workspace::TrashDir(std::string_view folder) const { return root_ / (std::string(folder) + ".old"); }
 
+fs::path Workspace::ResumeDir(std::string_view folder) const { return root_ / (std::string(folder) + ".resume"); }
+
 void Workspace::SetInput(const fs::path& input) {
   input_ = fs::absolute(input).lexically_normal();
   WriteMarker();

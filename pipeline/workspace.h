@@ -6,6 +6,8 @@
 //   WS/logs/photo2nerf.log the log of every run
 //   WS/<stage>/            a complete stage result, manifest.json written last
 //   WS/<stage>.partial/    a stage being written (or interrupted); never read as a result
+//   WS/<stage>.resume/     what a long stage keeps to resume after a kill (training checkpoints), removed
+//                          once the stage completes
 
 #include <filesystem>
 #include <optional>
@@ -25,6 +27,7 @@ class Workspace {
   std::filesystem::path StageDir(std::string_view folder) const { return root_ / folder; }
   std::filesystem::path StagingDir(std::string_view folder) const;
   std::filesystem::path TrashDir(std::string_view folder) const;
+  std::filesystem::path ResumeDir(std::string_view folder) const;
   std::filesystem::path LogDir() const { return root_ / "logs"; }
   std::filesystem::path ConfigPath() const { return root_ / "config.json"; }
 

@@ -35,10 +35,10 @@ void CheckCamera(const PinholeCamera& camera, const fs::path& file, const std::s
   if (camera.width <= 0 || camera.height <= 0) Bad(file, field, "has no image size");
 }
 
-// A path from a dataset file, resolved inside `root`; refused when it leads outside.
-fs::path InsideDataset(const fs::path& root, const fs::path& file, const std::string& relative,
-                       const std::string& field) {
-  const fs::path resolved = (root / relative).lexically_normal();
+// A path named in `file` relative to `base`, which must resolve inside `root`; refused when it leads outside.
+fs::path InsideDataset(const fs::path& root, const fs::path& relative_to, const fs::path& file,
+                       const std::string& relative, const std::string& field) {
+  const fs::path resolved = (relative_to / relative).lexically_normal();
   const fs::path base = root.lexically_normal();
   const auto [end, ignored] = std::mismatch(base.begin(), base.end(), resolved.begin(), resolved.end());
   if (end != base.end() || fs::path(relative).is_absolute()) {
@@ -81,7 +81,7 @@ void ReadTransforms(const fs::path& root, const fs::path& file, const std::strin
       return nullptr;
     };
     if (!frame.contains("file_path") || !frame["file_path"].is_string()) Bad(file, field + ".file_path", "is missing");
-    fs::path image = InsideDataset(root, file, frame["file_path"].get<std::string>(), field + ".file_path");
+    fs::path image = InsideDataset(root, file.parent_path(), file, frame["file_path"].get<std::string>(), field + ".file_path");
     if (!image.has_extension() && fs::exists(image.string() + ".png")) image += ".png";  // Blender leaves it out
     if (!fs::exists(image)) {
       ++missing;  // instant-ngp's fox lists 17 frames whose images are not shipped
@@ -89,7 +89,9 @@ void ReadTransforms(const fs::path& root, const fs::path& file, const std::strin
     }
     ImportedView view;
     view.source = image;
-    view.view.split = split;
+    view.view.split = frame.contains("split") ? frame["split"].get<std::string>() : split;  // ours has one
+    view.view.near = frame.value("near", -1.0);
+    view.view.far = frame.value("far", -1.0);
     PinholeCamera& camera = view.view.camera;
     camera.world_from_cam = Matrix(frame.value("transform_matrix", nlohmann::json()), file, field + ".transform_matrix");
     const auto [width, height] = value("w") && value("h") ? std::pair<int, int>{value("w")->get<int>(), value("h")->get<int>()}
@@ -187,7 +189,7 @@ void LoadColmapProject(const fs::path& root, ImportedDataset* out) {
   for (const auto& [id, image] : model.images) {
     const ColmapCamera& colmap = model.cameras.at(image.camera_id);
     ImportedView view;
-    view.source = InsideDataset(root, sparse / "images", "images/" + image.name, format("image {}", id));
+    view.source = InsideDataset(root, root, sparse / "images", "images/" + image.name, format("image {}", id));
     if (!fs::exists(view.source)) Bad(sparse, format("image {}", id), format("names '{}', which is not there", view.source.string()));
     PinholeCamera& camera = view.view.camera;
     camera = PinholeFromColmap(colmap, &view.distortion);
@@ -262,6 +264,14 @@ std::string DatasetKind(const fs::path& input) {
     if (LowerExtension(entry.path()) == "npz") return "npz";
   }
   return "";
+}
+
+ImportedDataset LoadTransformsJson(const fs::path& file, const fs::path& root) {
+  ImportedDataset dataset;
+  dataset.kind = "transforms.json";
+  ReadTransformsChecked(root, file, "train", &dataset);
+  if (dataset.views.empty()) throw UserError(format("'{}' has no view whose image exists", file.string()));
+  return dataset;
 }
 
 ImportedDataset LoadDataset(const fs::path& input) {

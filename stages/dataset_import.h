@@ -37,5 +37,8 @@ struct ImportedDataset {
 std::string DatasetKind(const std::filesystem::path& input);
 // Reads the cameras (not the pixels of image files) of a dataset; UserError naming the file and field.
 ImportedDataset LoadDataset(const std::filesystem::path& input);
+// One transforms.json (with its frames' split, near and far when it has them) whose image paths must stay
+// inside `root`: a workspace reads its poses stage's file with root = the workspace.
+ImportedDataset LoadTransformsJson(const std::filesystem::path& file, const std::filesystem::path& root);
 
 }  // namespace p2n

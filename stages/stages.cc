@@ -6,6 +6,7 @@
 #include "stages/ingest_stage.h"
 #include "stages/poses_stage.h"
 #include "stages/sfm_stage.h"
+#include "stages/train_stage.h"
 
 namespace p2n {
 
@@ -20,6 +21,7 @@ OptionRegistry AllOptions() {
   RegisterOptions<SfmOptions>(registry, "sfm");
   RegisterOptions<PosesOptions>(registry, "poses");
   RegisterOptions<ImportOptions>(registry, "import");
+  RegisterOptions<TrainOptions>(registry, "train");
   return registry;
 }
 
@@ -29,17 +31,19 @@ void CheckAllOptions(const Config& config) {
   ReadOptions<SfmOptions>(config, "sfm");
   ReadOptions<PosesOptions>(config, "poses");
   ReadOptions<ImportOptions>(config, "import");
+  ReadOptions<TrainOptions>(config, "train");
 }
 
 Runner MakeRunner(const std::optional<std::filesystem::path>& input) {
   std::vector<std::unique_ptr<Stage>> stages;
   if (input && !DatasetKind(*input).empty()) {
     stages.push_back(std::make_unique<ImportStage>());
-    return Runner(std::move(stages));
+  } else {
+    stages.push_back(std::make_unique<IngestStage>());
+    stages.push_back(std::make_unique<SfmStage>());
+    stages.push_back(std::make_unique<PosesStage>());
   }
-  stages.push_back(std::make_unique<IngestStage>());
-  stages.push_back(std::make_unique<SfmStage>());
-  stages.push_back(std::make_unique<PosesStage>());
+  stages.push_back(std::make_unique<TrainStage>());
   return Runner(std::move(stages));
 }
 

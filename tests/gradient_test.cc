@@ -159,44 +159,36 @@ TEST_CASE("positional encoding: raw input, then sin and cos of 2^k pi x", "[enco
 }  // namespace p2n::testing
 
 #include "nerf/ngp_field.h"
+#include "nerf/vanilla_field.h"
 
 namespace p2n::testing {
 
-TEST_CASE("the ngp field's gradients (grid, density MLP, colour MLP) match finite differences", "[gradients]") {
-  NgpFieldConfig config;
-  config.grid.levels = 3;
-  config.grid.log2_table_size = 8;
-  config.grid.base_resolution = 2;
-  config.grid.finest_resolution = 8;
-  config.geometry_features = 3;
-  config.width = 8;
-  NgpField<double> field(config, 11);
-  // Larger grid values than the 1e-4 initialisation, so that every path carries gradient.
-  for (size_t k = 0; k < field.grid().num_params(); ++k) field.grid().params()[k] = 0.5 * std::sin(1.7 * k);
+namespace {
+
+// Checks every dense parameter (and the trainable encoding's) of `field` against central differences of
+// L = sum w_density * density + sum w_rgb * rgb.
+void CheckFieldGradients(RadianceField<double>& field) {
   const Eigen::MatrixXd positions = Eigen::MatrixXd::Random(3, 5).array() * 0.5 + 0.5;
   Eigen::MatrixXd directions = Eigen::MatrixXd::Random(3, 5);
   directions.colwise().normalize();
   const Eigen::MatrixXd w_density = Eigen::MatrixXd::Random(1, 5), w_rgb = Eigen::MatrixXd::Random(3, 5);
   const auto loss = [&] {
     Eigen::MatrixXd density, rgb;
-    NgpField<double>::Cache cache;
+    RadianceField<double>::Cache cache;
     field.Forward(positions, directions, &density, &rgb, &cache);
     return (density.array() * w_density.array()).sum() + (rgb.array() * w_rgb.array()).sum();
   };
-  Eigen::MatrixXd density, rgb;
-  NgpField<double>::Cache cache;
+  Eigen::MatrixXd density, rgb, density_only, d_encoded;
+  RadianceField<double>::Cache cache;
   field.Forward(positions, directions, &density, &rgb, &cache);
-  CHECK((density.array() > 0).all());
-  std::vector<double> d_density_mlp(field.density_mlp().num_params(), 0.0), d_colour_mlp(field.colour_mlp().num_params(), 0.0);
-  field.grid().ZeroGrad();
-  field.Backward(cache, w_density, w_rgb, d_density_mlp.data(), d_colour_mlp.data());
-  std::vector<double> d_grid(field.grid().num_params(), 0.0);
-  for (const uint32_t entry : field.grid().touched_entries()) {
-    for (int f = 0; f < field.grid().entry_size(); ++f) {
-      d_grid[entry * field.grid().entry_size() + f] = field.grid().grads()[entry * field.grid().entry_size() + f];
-    }
-  }
-  const auto check = [&](double* params, size_t count, const std::vector<double>& analytic) {
+  field.Density(positions, &density_only);
+  CHECK((density.array() >= 0).all());
+  CHECK((density - density_only).norm() < 1e-12);
+  std::vector<double> d_dense(field.num_dense_params(), 0.0);
+  Encoding<double>* grid = field.TrainableEncoding();
+  if (grid != nullptr) grid->ZeroGrad();
+  field.Backward(cache, w_density, w_rgb, d_dense.data(), &d_encoded);
+  const auto check = [&](double* params, size_t count, const double* analytic) {
     const double h = 1e-6;
     double worst = 0, largest = 0;
     for (size_t k = 0; k < count; ++k) {
@@ -212,9 +204,62 @@ TEST_CASE("the ngp field's gradients (grid, density MLP, colour MLP) match finit
     CHECK(largest > 1e-6);
     CHECK(worst < 1e-6 * std::max(1.0, largest));
   };
-  check(field.grid().params(), field.grid().num_params(), d_grid);
-  check(field.density_mlp().params(), field.density_mlp().num_params(), d_density_mlp);
-  check(field.colour_mlp().params(), field.colour_mlp().num_params(), d_colour_mlp);
+  size_t offset = 0;
+  for (const ParamBlock<double>& block : field.DenseParams()) {
+    check(block.data, block.size, d_dense.data() + offset);
+    offset += block.size;
+  }
+  if (grid != nullptr) {
+    grid->Backward(cache.positions, d_encoded);
+    std::vector<double> d_grid(grid->num_params(), 0.0);
+    for (const uint32_t entry : grid->touched_entries()) {
+      for (int f = 0; f < grid->entry_size(); ++f) {
+        d_grid[entry * grid->entry_size() + f] = grid->grads()[entry * grid->entry_size() + f];
+      }
+    }
+    check(grid->params(), grid->num_params(), d_grid.data());
+  }
+}
+
+}  // namespace
+
+TEST_CASE("the ngp field's gradients (grid, density MLP, colour MLP) match finite differences", "[gradients]") {
+  NgpFieldConfig config;
+  config.grid.levels = 3;
+  config.grid.log2_table_size = 8;
+  config.grid.base_resolution = 2;
+  config.grid.finest_resolution = 8;
+  config.geometry_features = 3;
+  config.width = 8;
+  NgpField<double> field(config, 11);
+  // Larger grid values than the 1e-4 initialisation, so that every path carries gradient.
+  for (size_t k = 0; k < field.grid().num_params(); ++k) field.grid().params()[k] = 0.5 * std::sin(1.7 * k);
+  CheckFieldGradients(field);
+}
+
+TEST_CASE("the vanilla field's gradients (both halves, skip connection, heads) match finite differences",
+          "[gradients]") {
+  VanillaFieldConfig config;
+  config.position_levels = 2;
+  config.direction_levels = 1;
+  config.width = 8;
+  config.layers = 4;
+  config.colour_width = 4;
+  VanillaField<double> field(config, 3);
+  // Positive density head bias, so that the ReLU density passes gradient.
+  field.DenseParams()[2].data[field.DenseParams()[2].size - 1 - config.width] = 2.0;
+  CheckFieldGradients(field);
+}
+
+TEST_CASE("the vanilla field is the seed's model: its sizes and its config round trip", "[gradients]") {
+  VanillaField<float> field(VanillaFieldConfig{}, 0);
+  // 63 -> 256 x4, (256 + 63) -> 256 x4, 256 -> 1 + 256, (256 + 27) -> 128 -> 3.
+  const size_t expected = (63 * 256 + 256) + 3 * (256 * 256 + 256) + (319 * 256 + 256) + 3 * (256 * 256 + 256) +
+                          (256 * 257 + 257) + (283 * 128 + 128) + (128 * 3 + 3);
+  CHECK(field.num_dense_params() == expected);
+  const auto copy = MakeField<float>(field.Config(), 0);
+  CHECK(copy->Config() == field.Config());
+  CHECK_THROWS_AS(MakeField<float>(nlohmann::json{{"otype", "Unknown"}}, 0), std::invalid_argument);
 }
 
 TEST_CASE("the ngp field's density stays finite for huge raw outputs", "[gradients]") {

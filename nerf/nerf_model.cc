@@ -1,0 +1,120 @@
+#include "nerf/nerf_model.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+
+namespace p2n {
+namespace {
+
+constexpr char kModelMagic[] = "P2NMODEL";
+
+std::runtime_error FileError(const std::filesystem::path& path, const std::string& what) {
+  return std::runtime_error("cannot " + what + " '" + path.string() + "': " + std::strerror(errno));
+}
+
+}  // namespace
+
+void WriteModel(const NerfModel& model, BinaryWriter* writer) {
+  writer->PutBytes(kModelMagic, 8);
+  writer->Put<uint32_t>(kModelFormatVersion);
+  const nlohmann::json header = {{"field", model.field->Config()},
+                                 {"occupancy_resolution", model.occupancy.resolution()},
+                                 {"background", model.background},
+                                 {"march_step", model.march_step},
+                                 {"stratified_samples", model.stratified_samples},
+                                 {"info", model.info}};
+  writer->PutString(header.dump());
+  for (const ParamBlock<float>& block : model.field->DenseParams()) writer->PutArray(block.data, block.size);
+  Encoding<float>* encoding = model.field->TrainableEncoding();
+  if (encoding != nullptr) writer->PutArray(encoding->params(), encoding->num_params());
+  writer->PutVector(model.occupancy.densities());
+  writer->PutVector(model.occupancy.bits());
+}
+
+NerfModel ReadModel(BinaryReader* reader) {
+  reader->ExpectMagic(kModelMagic, "a photo2nerf model (model.bin)");
+  const uint32_t version = reader->Get<uint32_t>();
+  if (version > kModelFormatVersion) {
+    reader->Fail("it has format version " + std::to_string(version) + " and this photo2nerf reads up to " +
+                 std::to_string(kModelFormatVersion) + "; use a newer photo2nerf, or retrain the model");
+  }
+  if (version == 0) reader->Fail("format version 0 does not exist");
+  NerfModel model;
+  try {
+    const nlohmann::json header = nlohmann::json::parse(reader->GetString());
+    model.field = MakeField<float>(header.at("field"), 0);
+    model.background = header.at("background").get<std::array<float, 3>>();
+    model.march_step = header.at("march_step").get<double>();
+    model.stratified_samples = header.value("stratified_samples", 0);
+    if (model.stratified_samples < 0 || model.stratified_samples > 65536) reader->Fail("stratified_samples must be 0..65536");
+    model.info = header.value("info", nlohmann::json::object());
+    const int resolution = header.at("occupancy_resolution").get<int>();
+    if (!(model.march_step > 0 && model.march_step < 2)) reader->Fail("march_step must be in (0, 2)");
+    for (ParamBlock<float>& block : model.field->DenseParams()) {
+      const std::vector<float> values = reader->GetVector<float>(block.size);
+      std::copy(values.begin(), values.end(), block.data);
+    }
+    if (Encoding<float>* encoding = model.field->TrainableEncoding()) {
+      const std::vector<float> values = reader->GetVector<float>(encoding->num_params());
+      std::copy(values.begin(), values.end(), encoding->params());
+    }
+    if (resolution < 1 || resolution > 1024) reader->Fail("occupancy_resolution must be 1..1024");
+    std::vector<float> densities = reader->GetVector<float>(size_t(resolution) * resolution * resolution);
+    std::vector<uint8_t> bits = reader->GetVector<uint8_t>();
+    model.occupancy = OccupancyGrid(resolution, std::move(densities), std::move(bits));
+  } catch (const nlohmann::json::exception& error) {
+    reader->Fail(std::string("its header: ") + error.what());
+  } catch (const std::invalid_argument& error) {
+    reader->Fail(error.what());
+  }
+  return model;
+}
+
+void SaveModel(const NerfModel& model, const std::filesystem::path& path) {
+  BinaryWriter writer;
+  WriteModel(model, &writer);
+  WriteBinaryFileAtomic(path, writer.buffer());
+}
+
+NerfModel LoadModel(const std::filesystem::path& path) {
+  BinaryReader reader(ReadBinaryFile(path), path.string());
+  NerfModel model = ReadModel(&reader);
+  if (!reader.AtEnd()) reader.Fail("there are bytes after the model");
+  return model;
+}
+
+std::vector<char> ReadBinaryFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw FileError(path, "open");
+  return std::vector<char>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+void WriteBinaryFileAtomic(const std::filesystem::path& path, const std::vector<char>& bytes) {
+  const std::filesystem::path temporary = path.string() + ".tmp";
+  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw FileError(temporary, "create");
+  size_t written = 0;
+  while (written < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int saved = errno;
+      ::close(fd);
+      ::unlink(temporary.c_str());
+      errno = saved;
+      throw FileError(temporary, "write");
+    }
+    written += static_cast<size_t>(n);
+  }
+  if (::fsync(fd) != 0 || ::close(fd) != 0) {
+    ::unlink(temporary.c_str());
+    throw FileError(temporary, "flush");
+  }
+  if (std::rename(temporary.c_str(), path.c_str()) != 0) throw FileError(path, "rename into");
+}
+
+}  // namespace p2n

@@ -1,0 +1,67 @@
+#pragma once
+// The interface the trainer and the renderer use for any radiance field: points in the unit cube and view
+// directions in, density and colour out, with gradients. A field's parameters are dense blocks (MLP weights,
+// updated by dense Adam) and at most one trainable encoding (a hash grid, updated sparsely). Fields are made
+// from their JSON config ("otype": "NgpField" or "VanillaField"), which Config() prints in full.
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include <memory>
+#include <vector>
+
+#include "nerf/encoding.h"
+#include "nerf/mlp.h"
+
+namespace p2n {
+
+template <typename T>
+struct ParamBlock {
+  T* data;
+  size_t size;
+};
+
+template <typename T>
+class RadianceField {
+ public:
+  using Matrix = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic>;
+
+  // Activations of one Forward(), kept for Backward().
+  struct Cache {
+    Matrix positions, encoded, hidden, colour_in;
+    std::vector<typename Mlp<T>::Cache> mlps;
+  };
+
+  virtual ~RadianceField() = default;
+  virtual nlohmann::json Config() const = 0;
+
+  // positions and directions: 3 x n (positions in [0, 1]^3, directions of unit length). Writes density (1 x n,
+  // finite and >= 0) and rgb (3 x n, in (0, 1)).
+  virtual void Forward(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb,
+                       Cache* cache) const = 0;
+  // Density alone (for the occupancy grid and meshes).
+  virtual void Density(const Matrix& positions, Matrix* density) const = 0;
+  // Given dL/d(density) and dL/d(rgb): adds dL/d(dense parameters) into `d_dense` (the blocks of DenseParams()
+  // one after another) and writes dL/d(encoding output) into `d_encoded` for the trainable encoding's
+  // Backward(cache.positions, *d_encoded); a field without one leaves it empty.
+  virtual void Backward(const Cache& cache, const Matrix& d_density, const Matrix& d_rgb, T* d_dense,
+                        Matrix* d_encoded) const = 0;
+
+  virtual std::vector<ParamBlock<T>> DenseParams() = 0;
+  size_t num_dense_params() {
+    size_t count = 0;
+    for (const ParamBlock<T>& block : DenseParams()) count += block.size;
+    return count;
+  }
+  // The hash grid, or null.
+  virtual Encoding<T>* TrainableEncoding() { return nullptr; }
+};
+
+// The field a config describes; std::invalid_argument naming the bad field of the config.
+template <typename T>
+std::unique_ptr<RadianceField<T>> MakeField(const nlohmann::json& config, uint64_t seed);
+
+extern template std::unique_ptr<RadianceField<float>> MakeField(const nlohmann::json&, uint64_t);
+extern template std::unique_ptr<RadianceField<double>> MakeField(const nlohmann::json&, uint64_t);
+
+}  // namespace p2n

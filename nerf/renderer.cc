@@ -1,0 +1,129 @@
+#include "nerf/renderer.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+
+#include "nerf/denormals.h"
+#include "nerf/volume_rendering.h"
+
+namespace p2n {
+namespace {
+
+constexpr size_t kChunkRays = 256;
+
+}  // namespace
+
+std::vector<MarchSample> SampleFieldRay(const NerfModel& model, const Ray& field_ray, double near, double far,
+                                        double step, size_t max_samples, std::mt19937_64* jitter) {
+  const auto box = IntersectBox(field_ray, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones());
+  if (!box) return {};
+  const double begin = std::max(box->first, near), end = std::min(box->second, far);
+  if (!(end > begin)) return {};
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const auto offset = [&] { return jitter != nullptr ? unit(*jitter) : 0.5; };
+  if (model.stratified_samples > 0) {
+    const double width = (end - begin) / model.stratified_samples;
+    std::vector<MarchSample> samples(model.stratified_samples);
+    for (int i = 0; i < model.stratified_samples; ++i) samples[i] = {begin + (i + offset()) * width, width};
+    return samples;
+  }
+  return model.occupancy.March(field_ray, begin + offset() * step, end, step, max_samples);
+}
+
+void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std::vector<Eigen::Vector2d>& near_far,
+                const RenderOptions& options, float* rgb, float* depth, float* opacity, RenderStats* stats) {
+  const auto start = std::chrono::steady_clock::now();
+  const double step = model.march_step * options.step_scale;
+  std::atomic<size_t> marched{0}, evaluated{0};
+  tbb::parallel_for(size_t{0}, (rays.size() + kChunkRays - 1) / kChunkRays, [&](size_t chunk) {
+    FlushDenormalsOnThisThread();
+    const size_t first = chunk * kChunkRays, count = std::min(rays.size(), first + kChunkRays) - first;
+    std::vector<std::vector<MarchSample>> samples(count);
+    std::vector<Ray> field_rays(count);
+    std::vector<CompositeAccumulator<float>> accumulators(count);
+    std::vector<size_t> next(count, 0);
+    size_t chunk_marched = 0, chunk_evaluated = 0;
+    for (size_t r = 0; r < count; ++r) {
+      const Eigen::Vector2d& range = near_far[first + r];
+      const bool bounded = range[0] >= 0 && range[1] > range[0];
+      field_rays[r] = FieldRayFromWorld(rays[first + r]);
+      samples[r] = SampleFieldRay(model, field_rays[r], bounded ? range[0] * kFieldFromWorldScale : 0,
+                                  bounded ? range[1] * kFieldFromWorldScale : 1e30, step, options.max_samples, nullptr);
+      chunk_marched += samples[r].size();
+    }
+    Eigen::MatrixXf positions, directions, density, colour;
+    RadianceField<float>::Cache cache;
+    std::vector<std::pair<size_t, size_t>> round;  // (ray, sample)
+    for (size_t width = 8;; width = std::min<size_t>(width * 2, 128)) {
+      round.clear();
+      for (size_t r = 0; r < count; ++r) {
+        if (accumulators[r].Done(options.min_transmittance)) continue;
+        for (size_t k = next[r]; k < std::min(samples[r].size(), next[r] + width); ++k) round.emplace_back(r, k);
+      }
+      if (round.empty()) break;
+      positions.resize(3, round.size());
+      directions.resize(3, round.size());
+      for (size_t i = 0; i < round.size(); ++i) {
+        const Ray& ray = field_rays[round[i].first];
+        positions.col(i) = (ray.origin + samples[round[i].first][round[i].second].t * ray.direction).cast<float>();
+        directions.col(i) = ray.direction.cast<float>();
+      }
+      model.field->Forward(positions, directions, &density, &colour, &cache);
+      for (size_t i = 0; i < round.size(); ++i) {
+        const auto [r, k] = round[i];
+        next[r] = k + 1;
+        if (accumulators[r].Done(options.min_transmittance)) continue;
+        const MarchSample& s = samples[r][k];
+        accumulators[r].Add(density(0, i), colour.col(i).data(), static_cast<float>(s.t / kFieldFromWorldScale),
+                            static_cast<float>(s.delta));
+        ++chunk_evaluated;
+      }
+      bool any = false;
+      for (size_t r = 0; r < count && !any; ++r) any = next[r] < samples[r].size() && !accumulators[r].Done(options.min_transmittance);
+      if (!any) break;
+    }
+    for (size_t r = 0; r < count; ++r) {
+      const CompositeResult<float> result = accumulators[r].Finish(model.background.data());
+      std::copy(result.rgb, result.rgb + 3, rgb + 3 * (first + r));
+      depth[first + r] = result.depth;
+      opacity[first + r] = result.opacity;
+    }
+    marched += chunk_marched;
+    evaluated += chunk_evaluated;
+  });
+  if (stats != nullptr) {
+    stats->rays += rays.size();
+    stats->samples_marched += marched;
+    stats->samples_evaluated += evaluated;
+    stats->seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+}
+
+RenderedView RenderView(const NerfModel& model, const PinholeCamera& camera, double near, double far,
+                        const RenderOptions& options) {
+  const size_t pixels = static_cast<size_t>(camera.width) * camera.height;
+  std::vector<Ray> rays(pixels);
+  std::vector<Eigen::Vector2d> near_far(pixels, Eigen::Vector2d(near, far));
+  for (int y = 0; y < camera.height; ++y) {
+    for (int x = 0; x < camera.width; ++x) rays[size_t(y) * camera.width + x] = CameraRay(camera, x + 0.5, y + 0.5);
+  }
+  RenderedView view;
+  for (FloatImage* image : {&view.rgb, &view.depth, &view.opacity}) {
+    image->width = camera.width;
+    image->height = camera.height;
+    image->channels = image == &view.rgb ? 3 : 1;
+    image->pixels.assign(pixels * image->channels, 0.0f);
+  }
+  RenderRays(model, rays, near_far, options, view.rgb.pixels.data(), view.depth.pixels.data(),
+             view.opacity.pixels.data(), &view.stats);
+  for (size_t i = 0; i < pixels; ++i) {
+    const float o = view.opacity.pixels[i];
+    view.depth.pixels[i] = o > 1e-6f ? view.depth.pixels[i] / o : 0.0f;
+  }
+  return view;
+}
+
+}  // namespace p2n

@@ -1,0 +1,341 @@
+#include "nerf/trainer.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include "nerf/denormals.h"
+#include "nerf/volume_rendering.h"
+
+namespace p2n {
+namespace {
+
+constexpr size_t kChunkRays = 64;
+constexpr char kCheckpointMagic[] = "P2NCKPT1";
+constexpr float kHuberDelta = 0.1f;
+
+// A seed for (run seed, step, stream): streams of one step never share random numbers.
+uint64_t MixSeed(uint64_t seed, uint64_t step, uint64_t stream) {
+  uint64_t x = seed * 0x9E3779B97F4A7C15ull ^ (step + 0x632BE59BD9B4E019ull) * 0xBF58476D1CE4E5B9ull ^
+               (stream + 1) * 0x94D049BB133111EBull;
+  x ^= x >> 31;
+  return x * 0xD6E8FEB86659FD93ull;
+}
+
+// The options that must match for a checkpoint to be resumed.
+nlohmann::json CheckpointIdentity(const TrainerOptions& options) {
+  return {{"field", options.field},
+          {"occupancy_resolution", options.occupancy_resolution},
+          {"march_step", options.march_step},
+          {"stratified_samples", options.stratified_samples},
+          {"seed", options.seed}};
+}
+
+// The loss of one colour channel and its derivative.
+float ChannelLoss(const std::string& loss, float difference, float* derivative) {
+  if (loss == "huber" && std::abs(difference) > kHuberDelta) {
+    *derivative = difference > 0 ? kHuberDelta : -kHuberDelta;
+    return kHuberDelta * (std::abs(difference) - 0.5f * kHuberDelta);
+  }
+  if (loss == "huber") {
+    *derivative = difference;
+    return 0.5f * difference * difference;
+  }
+  *derivative = 2 * difference;
+  return difference * difference;
+}
+
+template <typename Values>
+bool AllFinite(const Values& values) {
+  return std::all_of(values.begin(), values.end(), [](float v) { return std::isfinite(v); });
+}
+
+}  // namespace
+
+Trainer::Trainer(const TrainerOptions& options, const TrainingData& data) : options_(options), data_(data) {
+  if (data.train.empty()) throw std::invalid_argument("there are no training views");
+  for (const TrainView& view : data.train) {
+    if (view.pixels.size() != size_t(view.camera.width) * view.camera.height * view.channels) {
+      throw std::invalid_argument("training view " + view.name + ": the pixels do not match its size");
+    }
+  }
+  model_.field = MakeField<float>(options.field, options.seed);
+  model_.occupancy = OccupancyGrid(options.occupancy_resolution);
+  model_.background = data.background;
+  model_.march_step = options.march_step;
+  model_.stratified_samples = options.stratified_samples;
+  const AdamOptions adam{options.learning_rate, 0.9, 0.99, 1e-15};
+  for (const ParamBlock<float>& block : model_.field->DenseParams()) {
+    dense_adams_.emplace_back(adam, block.size);
+    dense_count_ += block.size;
+  }
+  if (Encoding<float>* grid = model_.field->TrainableEncoding()) {
+    grid_adam_ = std::make_unique<Adam<float>>(adam, grid->num_params(), grid->entry_size());
+  }
+  size_t offset = 0;
+  for (const TrainView& view : data.train) {
+    pixel_offsets_.push_back(offset);
+    offset += size_t(view.camera.width) * view.camera.height;
+  }
+  pixel_offsets_.push_back(offset);
+}
+
+double Trainer::LearningRate(double progress) const {
+  progress = std::clamp(progress, 0.0, 1.0);
+  return options_.learning_rate * std::pow(options_.final_learning_rate / options_.learning_rate, progress);
+}
+
+RayBatch Trainer::SampleBatch(int rays) {
+  RayBatch batch;
+  batch.rays.resize(rays);
+  batch.near_far.resize(rays);
+  batch.target.resize(3, rays);
+  batch.background.resize(3, rays);
+  std::mt19937_64 random(MixSeed(options_.seed, step_, 0));
+  std::uniform_int_distribution<size_t> pick(0, pixel_offsets_.back() - 1);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int r = 0; r < rays; ++r) {
+    const size_t global = pick(random);
+    const size_t v = std::upper_bound(pixel_offsets_.begin(), pixel_offsets_.end(), global) - pixel_offsets_.begin() - 1;
+    const TrainView& view = data_.train[v];
+    const size_t pixel = global - pixel_offsets_[v];
+    const int x = static_cast<int>(pixel % view.camera.width), y = static_cast<int>(pixel / view.camera.width);
+    batch.rays[r] = CameraRay(view.camera, x + unit(random), y + unit(random));
+    batch.near_far[r] = Eigen::Vector2d(view.near, view.far);
+    const uint8_t* value = view.pixels.data() + pixel * view.channels;
+    const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
+    for (int c = 0; c < 3; ++c) {
+      const float background = options_.random_background && view.channels == 4 ? static_cast<float>(unit(random))
+                                                                                : data_.background[c];
+      batch.background(c, r) = background;
+      batch.target(c, r) = alpha * (value[c] / 255.0f) + (1 - alpha) * background;
+    }
+  }
+  return batch;
+}
+
+StepResult Trainer::Step(double progress) {
+  if (options_.stratified_samples == 0 && step_ >= options_.occupancy_warmup && (step_ - options_.occupancy_warmup) % options_.occupancy_interval == 0) {
+    UpdateOccupancy();
+  }
+  const double per_ray = samples_per_ray_ > 0           ? samples_per_ray_
+                         : options_.stratified_samples > 0 ? options_.stratified_samples
+                                                           : 1.0 / options_.march_step;
+  const int rays = static_cast<int>(std::clamp(static_cast<double>(options_.batch_samples) / std::max(per_ray, 1.0),
+                                               double(options_.min_batch_rays), double(options_.max_batch_rays)));
+  return StepOnBatch(SampleBatch(rays), progress);
+}
+
+void Trainer::UpdateOccupancy() {
+  const RadianceField<float>& field = *model_.field;
+  const auto density = [&field](const Eigen::Matrix3Xf& points) {
+    Eigen::MatrixXf values;
+    field.Density(points, &values);
+    return Eigen::VectorXf(values.transpose());
+  };
+  // A cell is occupied when one step through it would be at least 1% opaque (or above the mean, early on).
+  const size_t cells = model_.occupancy.densities().size();
+  model_.occupancy.Update(density, static_cast<float>(0.01 / options_.march_step),
+                          static_cast<float>(options_.occupancy_decay), MixSeed(options_.seed, step_, 1),
+                          step_ == options_.occupancy_warmup ? cells : std::max<size_t>(cells / 16, 1));
+}
+
+StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
+  RadianceField<float>& field = *model_.field;
+  Encoding<float>* grid = field.TrainableEncoding();
+  if (grid != nullptr) grid->ZeroGrad();
+  const size_t rays = batch.rays.size();
+  struct Chunk {
+    std::vector<float> d_dense;
+    Eigen::MatrixXf positions, d_encoded;
+    double loss = 0;
+    size_t samples = 0, used = 0;
+  };
+  std::vector<Chunk> chunks((rays + kChunkRays - 1) / kChunkRays);
+  tbb::parallel_for(size_t{0}, chunks.size(), [&](size_t c) {
+    FlushDenormalsOnThisThread();
+    Chunk& chunk = chunks[c];
+    const size_t first = c * kChunkRays, count = std::min(rays, first + kChunkRays) - first;
+    std::mt19937_64 random(MixSeed(options_.seed, step_, 2 + c));
+    std::vector<Ray> field_rays(count);
+    std::vector<std::vector<MarchSample>> samples(count);
+    std::vector<size_t> offsets(count + 1, 0);
+    for (size_t r = 0; r < count; ++r) {
+      const Eigen::Vector2d& range = batch.near_far[first + r];
+      const bool bounded = range[0] >= 0 && range[1] > range[0];
+      field_rays[r] = FieldRayFromWorld(batch.rays[first + r]);
+      samples[r] = SampleFieldRay(model_, field_rays[r], bounded ? range[0] * kFieldFromWorldScale : 0,
+                                  bounded ? range[1] * kFieldFromWorldScale : 1e30, options_.march_step,
+                                  options_.max_samples_per_ray, &random);
+      offsets[r + 1] = offsets[r] + samples[r].size();
+    }
+    const size_t n = offsets[count];
+    chunk.samples = n;
+    Eigen::MatrixXf positions(3, n), directions(3, n), density, colour;
+    std::vector<float> t(n), delta(n);
+    for (size_t r = 0; r < count; ++r) {
+      for (size_t k = 0; k < samples[r].size(); ++k) {
+        const size_t i = offsets[r] + k;
+        positions.col(i) = (field_rays[r].origin + samples[r][k].t * field_rays[r].direction).cast<float>();
+        directions.col(i) = field_rays[r].direction.cast<float>();
+        t[i] = static_cast<float>(samples[r][k].t);
+        delta[i] = static_cast<float>(samples[r][k].delta);
+      }
+    }
+    RadianceField<float>::Cache cache;
+    if (n > 0) field.Forward(positions, directions, &density, &colour, &cache);
+    Eigen::MatrixXf d_density = Eigen::MatrixXf::Zero(1, n), d_colour = Eigen::MatrixXf::Zero(3, n);
+    const float scale = 1.0f / (3.0f * static_cast<float>(rays));
+    for (size_t r = 0; r < count; ++r) {
+      const size_t o = offsets[r];
+      const RaySegments<float> segments{density.data() + o, colour.data() + 3 * o, t.data() + o, delta.data() + o,
+                                        offsets[r + 1] - o};
+      const float* background = batch.background.col(first + r).data();
+      const CompositeResult<float> result = Composite(segments, background, options_.min_transmittance);
+      float d_rgb[3];
+      for (int ch = 0; ch < 3; ++ch) {
+        chunk.loss += ChannelLoss(options_.loss, result.rgb[ch] - batch.target(ch, first + r), &d_rgb[ch]) / 3.0;
+        d_rgb[ch] *= scale;
+      }
+      chunk.used += result.used;
+      if (segments.count > 0) {
+        CompositeBackward(segments, background, result, d_rgb, 0.0f, 0.0f, d_density.data() + o,
+                          d_colour.data() + 3 * o);
+      }
+    }
+    chunk.d_dense.assign(dense_count_, 0.0f);
+    if (n > 0) {
+      field.Backward(cache, d_density, d_colour, chunk.d_dense.data(), &chunk.d_encoded);
+      chunk.positions = std::move(cache.positions);
+    }
+  });
+
+  StepResult result;
+  result.rays = rays;
+  std::vector<float>& d_dense = chunks.front().d_dense;
+  for (size_t c = 0; c < chunks.size(); ++c) {
+    result.loss += chunks[c].loss;
+    result.samples += chunks[c].samples;
+    result.samples_used += chunks[c].used;
+    if (c > 0) {
+      for (size_t k = 0; k < dense_count_; ++k) d_dense[k] += chunks[c].d_dense[k];
+    }
+  }
+  result.loss /= static_cast<double>(std::max<size_t>(rays, 1));
+  if (grid != nullptr && result.samples > 0) {
+    Eigen::MatrixXf positions(3, result.samples), d_encoded(grid->output_dims(), result.samples);
+    Eigen::Index column = 0;
+    for (const Chunk& chunk : chunks) {
+      if (chunk.samples == 0) continue;
+      positions.middleCols(column, chunk.samples) = chunk.positions;
+      d_encoded.middleCols(column, chunk.samples) = chunk.d_encoded;
+      column += chunk.samples;
+    }
+    grid->Backward(positions, d_encoded);
+  }
+  ++step_;
+  if (!std::isfinite(result.loss)) {
+    result.problem = "the loss is not finite";
+  } else if (!AllFinite(d_dense)) {
+    result.problem = "a network gradient is not finite";
+  } else if (grid != nullptr) {
+    for (const uint32_t entry : grid->touched_entries()) {
+      const float* g = grid->grads() + size_t{entry} * grid->entry_size();
+      if (!std::all_of(g, g + grid->entry_size(), [](float v) { return std::isfinite(v); })) {
+        result.problem = "a hash-grid gradient is not finite";
+        break;
+      }
+    }
+  }
+  if (!result.problem.empty()) {
+    result.skipped = true;
+    ++skipped_;
+    return result;
+  }
+  const double learning_rate = LearningRate(progress);
+  size_t offset = 0;
+  std::vector<ParamBlock<float>> blocks = field.DenseParams();
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    dense_adams_[b].set_learning_rate(learning_rate);
+    dense_adams_[b].Step(blocks[b].data, d_dense.data() + offset);
+    offset += blocks[b].size;
+  }
+  if (grid != nullptr) {
+    grid_adam_->set_learning_rate(learning_rate);
+    grid_adam_->StepSparse(grid->params(), grid->grads(), grid->touched_entries());
+  }
+  const double per_ray = static_cast<double>(result.samples) / std::max<size_t>(rays, 1);
+  samples_per_ray_ = samples_per_ray_ > 0 ? 0.9 * samples_per_ray_ + 0.1 * per_ray : per_ray;
+  return result;
+}
+
+std::vector<double> Trainer::HeldoutPsnr(size_t pixels_per_view, RenderStats* stats) const {
+  std::vector<double> psnrs;
+  RenderOptions render;
+  render.min_transmittance = options_.min_transmittance;
+  for (size_t v = 0; v < data_.heldout.size(); ++v) {
+    const TrainView& view = data_.heldout[v];
+    const size_t total = size_t(view.camera.width) * view.camera.height;
+    std::vector<size_t> pixels;
+    if (pixels_per_view == 0 || pixels_per_view >= total) {
+      pixels.resize(total);
+      for (size_t i = 0; i < total; ++i) pixels[i] = i;
+    } else {
+      std::mt19937_64 random(MixSeed(options_.seed, v, 3));
+      std::uniform_int_distribution<size_t> pick(0, total - 1);
+      for (size_t i = 0; i < pixels_per_view; ++i) pixels.push_back(pick(random));
+    }
+    std::vector<Ray> rays(pixels.size());
+    std::vector<Eigen::Vector2d> near_far(pixels.size(), Eigen::Vector2d(view.near, view.far));
+    for (size_t i = 0; i < pixels.size(); ++i) {
+      rays[i] = CameraRay(view.camera, pixels[i] % view.camera.width + 0.5, pixels[i] / view.camera.width + 0.5);
+    }
+    std::vector<float> rgb(3 * pixels.size()), depth(pixels.size()), opacity(pixels.size());
+    RenderRays(model_, rays, near_far, render, rgb.data(), depth.data(), opacity.data(), stats);
+    double squared = 0;
+    for (size_t i = 0; i < pixels.size(); ++i) {
+      const uint8_t* value = view.pixels.data() + pixels[i] * view.channels;
+      const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
+      for (int c = 0; c < 3; ++c) {
+        const double target = alpha * (value[c] / 255.0f) + (1 - alpha) * model_.background[c];
+        squared += (rgb[3 * i + c] - target) * (rgb[3 * i + c] - target);
+      }
+    }
+    const double mse = squared / (3.0 * pixels.size());
+    psnrs.push_back(-10.0 * std::log10(std::max(mse, 1e-12)));
+  }
+  return psnrs;
+}
+
+void Trainer::SaveCheckpoint(BinaryWriter* writer) const {
+  writer->PutBytes(kCheckpointMagic, 8);
+  writer->PutString(CheckpointIdentity(options_).dump());
+  WriteModel(model_, writer);
+  writer->Put<int32_t>(step_);
+  writer->Put<int32_t>(skipped_);
+  writer->Put<double>(samples_per_ray_);
+  for (const Adam<float>& adam : dense_adams_) adam.Save(writer);
+  if (grid_adam_) grid_adam_->Save(writer);
+}
+
+void Trainer::LoadCheckpoint(BinaryReader* reader) {
+  reader->ExpectMagic(kCheckpointMagic, "a photo2nerf training checkpoint");
+  if (reader->GetString() != CheckpointIdentity(options_).dump()) {
+    reader->Fail("it was written by a training run with other options");
+  }
+  NerfModel model = ReadModel(reader);
+  const int step = reader->Get<int32_t>(), skipped = reader->Get<int32_t>();
+  const double samples_per_ray = reader->Get<double>();
+  for (Adam<float>& adam : dense_adams_) adam.Load(reader);
+  if (grid_adam_) grid_adam_->Load(reader);
+  if (!reader->AtEnd()) reader->Fail("there are bytes after the checkpoint");
+  model_ = std::move(model);
+  step_ = step;
+  skipped_ = skipped;
+  samples_per_ray_ = samples_per_ray;
+}
+
+}  // namespace p2n

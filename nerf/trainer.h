@@ -1,0 +1,114 @@
+#pragma once
+// Trains a radiance field from posed images (DESIGN.md §6): random rays across all training images, marched
+// through the occupancy grid (refreshed from the field every few steps) and packed; chunks of rays run in
+// parallel, each with its own gradient buffer, reduced in a fixed order (a seed gives the same run); Adam on the
+// MLPs and sparse Adam on the hash grid. The number of rays per step adapts so that a step has about
+// `batch_samples` samples. A step whose loss or gradient is not finite is reported and skipped.
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "nerf/adam.h"
+#include "nerf/camera.h"
+#include "nerf/nerf_model.h"
+#include "nerf/renderer.h"
+
+namespace p2n {
+
+// One posed image. Cameras are in the normalised world (transforms.json's frame); pixels are 8-bit RGB or
+// RGBA (straight alpha), row-major.
+struct TrainView {
+  PinholeCamera camera;
+  double near = -1, far = -1;  // world units; negative: the whole box
+  int channels = 3;
+  std::vector<uint8_t> pixels;
+  std::string name;
+};
+
+struct TrainingData {
+  std::vector<TrainView> train, heldout;
+  std::array<float, 3> background{1, 1, 1};  // the known background (images without alpha were composited on it)
+};
+
+struct TrainerOptions {
+  nlohmann::json field;                 // the field's config (MakeField)
+  int occupancy_resolution = 128;       // cells per axis
+  int occupancy_interval = 16;          // steps between occupancy updates
+  int occupancy_warmup = 64;            // steps before the first update (the field knows nothing before)
+  double occupancy_decay = 0.95;
+  double march_step = 1.7320508 / 256;  // field units: 256 samples across the cube's diagonal
+  size_t max_samples_per_ray = 1024;
+  int stratified_samples = 0;           // > 0: that many stratified samples per ray, no occupancy grid (vanilla)
+  size_t batch_samples = size_t{1} << 16;  // samples per step (the rays per step follow)
+  int min_batch_rays = 256, max_batch_rays = 16384;
+  double learning_rate = 1e-2;
+  double final_learning_rate = 1e-3;    // reached at the end (exponential decay)
+  std::string loss = "mse";             // "mse" or "huber" (delta 0.1)
+  float min_transmittance = 1e-4f;
+  bool random_background = false;       // RGBA images: a random background per ray (learns transparency)
+  uint64_t seed = 0;
+};
+
+// A batch of world rays with their targets (RGB) and backgrounds.
+struct RayBatch {
+  std::vector<Ray> rays;
+  std::vector<Eigen::Vector2d> near_far;
+  Eigen::Matrix3Xf target, background;
+};
+
+struct StepResult {
+  double loss = 0;          // of the batch
+  size_t rays = 0;
+  size_t samples = 0;       // marched and evaluated
+  size_t samples_used = 0;  // before early termination (the ones with gradients)
+  bool skipped = false;     // a non-finite loss or gradient: nothing was updated
+  std::string problem;      // why it was skipped
+};
+
+class Trainer {
+ public:
+  // `data` must outlive the trainer.
+  Trainer(const TrainerOptions& options, const TrainingData& data);
+
+  // One step at `progress` in [0, 1] of the run (for the learning-rate schedule).
+  StepResult Step(double progress);
+  // The step on a given batch (Step() samples one from the training views).
+  StepResult StepOnBatch(const RayBatch& batch, double progress);
+  RayBatch SampleBatch(int rays);
+
+  // PSNR of each held-out view, from `pixels_per_view` fixed random pixels of it (0: every pixel).
+  std::vector<double> HeldoutPsnr(size_t pixels_per_view, RenderStats* stats = nullptr) const;
+
+  const NerfModel& model() const { return model_; }
+  NerfModel& model() { return model_; }
+  int step() const { return step_; }
+  int skipped_steps() const { return skipped_; }
+
+  // The whole training state (model, optimiser moments, step, batch size); `Load` refuses a checkpoint of
+  // another configuration.
+  void SaveCheckpoint(BinaryWriter* writer) const;
+  void LoadCheckpoint(BinaryReader* reader);
+
+ private:
+  void UpdateOccupancy();
+  double LearningRate(double progress) const;
+
+  TrainerOptions options_;
+  const TrainingData& data_;
+  NerfModel model_;
+  std::vector<Adam<float>> dense_adams_;
+  std::unique_ptr<Adam<float>> grid_adam_;
+  size_t dense_count_ = 0;
+  int step_ = 0;
+  int skipped_ = 0;
+  double samples_per_ray_ = 0;  // running mean, for the batch size
+  std::vector<size_t> pixel_offsets_;  // first global pixel index of each training view
+};
+
+}  // namespace p2n

@@ -1,0 +1,332 @@
+#include "stages/train_stage.h"
+
+#include <OpenImageIO/imagebufalgo.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <numeric>
+#include <sstream>
+
+#include "nerf/image_io.h"
+#include "nerf/ngp_field.h"
+#include "nerf/plot.h"
+#include "nerf/vanilla_field.h"
+#include "pipeline/cancel.h"
+#include "pipeline/errors.h"
+#include "pipeline/file_util.h"
+#include "pipeline/format.h"
+#include "pipeline/log.h"
+#include "pipeline/progress.h"
+#include "stages/dataset_import.h"
+
+namespace p2n {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr int kMaxConsecutiveSkips = 50;
+
+struct Preset {
+  double time_budget;
+  int march_samples, batch_samples, log2_table_size, finest_resolution, occupancy_resolution;
+};
+
+Preset PresetFor(const std::string& name) {
+  if (name == "fast") return {60, 128, 1 << 15, 17, 1024, 64};
+  if (name == "quality") return {900, 512, 1 << 17, 19, 4096, 128};
+  return {300, 256, 1 << 16, 19, 2048, 128};
+}
+
+// The image as 8-bit RGB or RGBA (grey is expanded), row-major; UserError naming the file.
+TrainView LoadView(const ImportedView& imported) {
+  TrainView view;
+  view.camera = imported.view.camera;
+  view.near = imported.view.near;
+  view.far = imported.view.far;
+  view.name = imported.source.filename().string();
+  const ReadImageResult read = ReadImage(imported.source);
+  if (!read.ok()) throw UserError(format("cannot read '{}': {}", imported.source.string(), read.error));
+  OIIO::ImageBuf image = read.image;
+  const int channels = image.spec().nchannels;
+  if (channels == 1 || channels == 2) {
+    const int order[] = {0, 0, 0, 1};
+    image = OIIO::ImageBufAlgo::channels(image, channels + 2, OIIO::cspan<int>(order, channels + 2));
+  } else if (channels > 4) {
+    image = OIIO::ImageBufAlgo::channels(image, 4, {});
+  }
+  const OIIO::ImageSpec& spec = image.spec();
+  if (spec.width != view.camera.width || spec.height != view.camera.height) {
+    throw UserError(format("'{}' is {}x{} but transforms.json says {}x{}; rerun the poses stage",
+                           imported.source.string(), spec.width, spec.height, view.camera.width, view.camera.height));
+  }
+  view.channels = spec.nchannels;
+  view.pixels.resize(size_t(spec.width) * spec.height * spec.nchannels);
+  if (!image.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::UINT8, view.pixels.data())) {
+    throw UserError(format("cannot convert '{}': {}", imported.source.string(), image.geterror()));
+  }
+  return view;
+}
+
+// Training views ("train" split) and held-out views (the "test" split when it has images, else "val").
+TrainingData LoadTrainingData(const fs::path& transforms, const fs::path& workspace_root, std::string* heldout_split) {
+  const ImportedDataset dataset = LoadTransformsJson(transforms, workspace_root);
+  const nlohmann::json json = ReadJsonFile(transforms);
+  TrainingData data;
+  if (json.contains("background") && json["background"].is_array() && json["background"].size() == 3) {
+    for (int c = 0; c < 3; ++c) data.background[c] = json["background"][c].get<float>();
+  }
+  const bool has_test = std::any_of(dataset.views.begin(), dataset.views.end(),
+                                    [](const ImportedView& v) { return v.view.split == "test"; });
+  *heldout_split = has_test ? "test" : "val";
+  std::vector<const ImportedView*> train, heldout;
+  for (const ImportedView& view : dataset.views) {
+    if (view.view.split == "train") train.push_back(&view);
+    if (view.view.split == *heldout_split) heldout.push_back(&view);
+  }
+  if (train.empty()) throw UserError(format("'{}' has no training view (split \"train\")", transforms.string()));
+  data.train.resize(train.size());
+  data.heldout.resize(heldout.size());
+  Progress progress("train: loading images", static_cast<int64_t>(train.size() + heldout.size()), "images");
+  tbb::parallel_for(size_t{0}, train.size() + heldout.size(), [&](size_t i) {
+    if (i < train.size()) {
+      data.train[i] = LoadView(*train[i]);
+    } else {
+      data.heldout[i - train.size()] = LoadView(*heldout[i - train.size()]);
+    }
+    progress.Add();
+  });
+  return data;
+}
+
+double Mean(const std::vector<double>& values) {
+  return values.empty() ? std::nan("") : std::accumulate(values.begin(), values.end(), 0.0) / values.size();
+}
+
+// The run's state besides the trainer's, kept in checkpoints.
+struct RunState {
+  double train_seconds = 0;
+  std::string metrics;  // metrics.csv rows so far
+  double loss_sum = 0;  // since the last row
+  int loss_steps = 0;
+};
+
+void SaveCheckpoint(const fs::path& path, const std::string& key, const RunState& state, const Trainer& trainer) {
+  BinaryWriter writer;
+  writer.PutString(key);
+  writer.Put<double>(state.train_seconds);
+  writer.PutString(state.metrics);
+  writer.Put<double>(state.loss_sum);
+  writer.Put<int32_t>(state.loss_steps);
+  trainer.SaveCheckpoint(&writer);
+  fs::create_directories(path.parent_path());
+  WriteBinaryFileAtomic(path, writer.buffer());
+}
+
+// Resumes from `path` when it is a checkpoint of this very result (same key); false otherwise.
+bool LoadCheckpoint(const fs::path& path, const std::string& key, RunState* state, Trainer* trainer) {
+  if (!fs::exists(path)) return false;
+  try {
+    BinaryReader reader(ReadBinaryFile(path), path.string());
+    if (reader.GetString() != key) {
+      LogInfo(format("train: the checkpoint in {} is of other inputs or options; starting over", path.string()));
+      return false;
+    }
+    RunState loaded;
+    loaded.train_seconds = reader.Get<double>();
+    loaded.metrics = reader.GetString();
+    loaded.loss_sum = reader.Get<double>();
+    loaded.loss_steps = reader.Get<int32_t>();
+    trainer->LoadCheckpoint(&reader);
+    *state = loaded;
+    return true;
+  } catch (const std::runtime_error& error) {
+    LogWarning(format("train: cannot resume ({}); starting over", error.what()));
+    return false;
+  }
+}
+
+bool ModelIsFinite(NerfModel& model) {
+  const auto finite = [](const float* values, size_t count) {
+    return std::all_of(values, values + count, [](float v) { return std::isfinite(v); });
+  };
+  for (const ParamBlock<float>& block : model.field->DenseParams()) {
+    if (!finite(block.data, block.size)) return false;
+  }
+  Encoding<float>* grid = model.field->TrainableEncoding();
+  return grid == nullptr || finite(grid->params(), grid->num_params());
+}
+
+}  // namespace
+
+void TrainOptions::Check() const {
+  CheckOption(time_budget >= 0, "train.time_budget", "must be 0 (the preset's) or positive");
+  CheckOption(steps >= 0, "train.steps", "must be 0 (no limit) or positive");
+  CheckOption(batch_samples >= 0 && batch_samples <= (1 << 24), "train.batch_samples", "must be 0..16777216");
+  CheckOption(march_samples >= 0 && march_samples <= 8192, "train.march_samples", "must be 0..8192");
+  CheckOption(vanilla_samples >= 1 && vanilla_samples <= 1024, "train.vanilla_samples", "must be 1..1024");
+  CheckOption(learning_rate >= 0 && learning_rate < 1, "train.learning_rate", "must be 0 (the field's) or in (0, 1)");
+  CheckOption(eval_interval > 0, "train.eval_interval", "must be positive");
+  CheckOption(eval_pixels >= 0, "train.eval_pixels", "must be 0 (all) or positive");
+  CheckOption(checkpoint_interval >= 0, "train.checkpoint_interval", "must be 0 (none) or positive");
+}
+
+double ResolvedTimeBudget(const TrainOptions& options) {
+  if (options.time_budget > 0) return options.time_budget;
+  return options.steps > 0 ? 0.0 : PresetFor(options.preset).time_budget;
+}
+
+TrainerOptions MakeTrainerOptions(const TrainOptions& options) {
+  const Preset preset = PresetFor(options.preset);
+  TrainerOptions trainer;
+  const bool vanilla = options.field == "vanilla";
+  if (vanilla) {
+    trainer.field = VanillaFieldConfig{}.ToJson();
+    trainer.stratified_samples = options.vanilla_samples;
+  } else {
+    NgpFieldConfig field;
+    field.grid.log2_table_size = preset.log2_table_size;
+    field.grid.finest_resolution = preset.finest_resolution;
+    trainer.field = field.ToJson();
+  }
+  const int march = options.march_samples > 0 ? options.march_samples : preset.march_samples;
+  trainer.march_step = std::sqrt(3.0) / march;
+  trainer.occupancy_resolution = preset.occupancy_resolution;
+  trainer.batch_samples = options.batch_samples > 0 ? options.batch_samples : preset.batch_samples;
+  trainer.learning_rate = options.learning_rate > 0 ? options.learning_rate : vanilla ? 5e-4 : 1e-2;
+  trainer.final_learning_rate = trainer.learning_rate * 0.1;
+  trainer.loss = options.loss;
+  trainer.seed = static_cast<uint64_t>(options.seed);
+  return trainer;
+}
+
+void TrainStage::Run(StageContext& context) const {
+  const TrainOptions options = ReadOptions<TrainOptions>(context.config, "train");
+  const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
+  std::string heldout_split;
+  const TrainingData data = LoadTrainingData(transforms, context.workspace.root(), &heldout_split);
+  TrainerOptions trainer_options = MakeTrainerOptions(options);
+  const bool has_alpha = std::any_of(data.train.begin(), data.train.end(), [](const TrainView& v) { return v.channels == 4; });
+  trainer_options.random_background = options.background == "random" || (options.background == "auto" && has_alpha);
+  Trainer trainer(trainer_options, data);
+  const double budget = ResolvedTimeBudget(options);
+  LogInfo(format("train: {} field, preset {}, {} training and {} held-out ({}) views, {}", options.field, options.preset,
+                 data.train.size(), data.heldout.size(), heldout_split,
+                 budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
+
+  RunState state;
+  const fs::path checkpoint = context.resume_dir / "checkpoint.bin";
+  if (LoadCheckpoint(checkpoint, context.key, &state, &trainer)) {
+    LogInfo(format("train: resumed at step {} ({:.1f} s of training) from {}", trainer.step(), state.train_seconds,
+                   checkpoint.string()));
+  }
+  const auto done = [&] {
+    return (budget > 0 && state.train_seconds >= budget) || (options.steps > 0 && trainer.step() >= options.steps);
+  };
+  const auto progress_of = [&] {
+    const double by_time = budget > 0 ? state.train_seconds / budget : 0;
+    const double by_steps = options.steps > 0 ? double(trainer.step()) / options.steps : 0;
+    return std::clamp(std::max(by_time, by_steps), 0.0, 1.0);
+  };
+  const auto evaluate = [&](size_t pixels) {
+    const std::vector<double> psnrs = trainer.HeldoutPsnr(pixels);
+    return Mean(psnrs);
+  };
+  const auto add_row = [&] {
+    const double psnr = data.heldout.empty() ? std::nan("") : evaluate(options.eval_pixels);
+    const double loss = state.loss_steps > 0 ? state.loss_sum / state.loss_steps : std::nan("");
+    state.metrics += format("{:.3f},{},{:.6g},{:.4f}\n", state.train_seconds, trainer.step(), loss, psnr);
+    state.loss_sum = 0;
+    state.loss_steps = 0;
+    return psnr;
+  };
+
+  Progress progress("train", budget > 0 ? static_cast<int64_t>(budget) : options.steps, budget > 0 ? "s" : "steps");
+  progress.Add(budget > 0 ? static_cast<int64_t>(state.train_seconds) : trainer.step());
+  using Clock = std::chrono::steady_clock;
+  double next_eval = (std::floor(state.train_seconds / options.eval_interval) + 1) * options.eval_interval;
+  auto last_checkpoint = Clock::now();
+  int consecutive_skips = 0;
+  if (state.metrics.empty()) add_row();  // the untrained field, at 0 s
+  while (!done()) {
+    ThrowIfCancelled();
+    const auto start = Clock::now();
+    const StepResult step = trainer.Step(progress_of());
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    const int64_t whole_before = static_cast<int64_t>(state.train_seconds);
+    state.train_seconds += seconds;
+    progress.Add(budget > 0 ? static_cast<int64_t>(state.train_seconds) - whole_before : 1);
+    if (step.skipped) {
+      LogWarning(format("train: step {} skipped: {}", trainer.step(), step.problem));
+      if (++consecutive_skips >= kMaxConsecutiveSkips) {
+        throw InternalError(format("training failed: {} steps in a row were not finite (last: {})", consecutive_skips,
+                                   step.problem));
+      }
+      continue;
+    }
+    consecutive_skips = 0;
+    state.loss_sum += step.loss;
+    ++state.loss_steps;
+    if (state.train_seconds >= next_eval || done()) {
+      add_row();
+      next_eval = (std::floor(state.train_seconds / options.eval_interval) + 1) * options.eval_interval;
+    }
+    if (options.checkpoint_interval > 0 &&
+        std::chrono::duration<double>(Clock::now() - last_checkpoint).count() >= options.checkpoint_interval) {
+      if (ModelIsFinite(trainer.model())) SaveCheckpoint(checkpoint, context.key, state, trainer);
+      last_checkpoint = Clock::now();
+    }
+  }
+
+  if (!ModelIsFinite(trainer.model())) throw InternalError("training ended with non-finite parameters");
+  RenderStats eval_stats;
+  const std::vector<double> psnrs = trainer.HeldoutPsnr(0, &eval_stats);
+  NerfModel& model = trainer.model();
+  model.info = {{"transforms", transforms.string()}, {"steps", trainer.step()}, {"heldout_psnr", Mean(psnrs)}};
+  SaveModel(model, context.output_dir / "model.bin");
+  WriteFileAtomic(context.output_dir / "metrics.csv", "wall_seconds,step,train_loss,heldout_psnr\n" + state.metrics);
+
+  nlohmann::json per_view = nlohmann::json::array();
+  for (size_t v = 0; v < psnrs.size(); ++v) per_view.push_back({{"view", data.heldout[v].name}, {"psnr", psnrs[v]}});
+  const nlohmann::json report = {
+      {"steps", trainer.step()},
+      {"wall_seconds", state.train_seconds},
+      {"heldout_psnr", data.heldout.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(psnrs))},
+      {"heldout_views", data.heldout.size()},
+      {"heldout_split", heldout_split},
+      {"heldout_per_view", per_view},
+      {"skipped_steps", trainer.skipped_steps()},
+      {"training_views", data.train.size()},
+      {"samples_per_ray_rendered", eval_stats.rays > 0 ? double(eval_stats.samples_evaluated) / eval_stats.rays : 0.0},
+      {"render_seconds_per_view", psnrs.empty() ? 0.0 : eval_stats.seconds / psnrs.size()},
+      {"occupied_fraction", model.occupancy.OccupiedFraction()},
+      {"field", model.field->Config()},
+      {"trainer", {{"march_step", trainer_options.march_step},
+                   {"batch_samples", trainer_options.batch_samples},
+                   {"learning_rate", trainer_options.learning_rate},
+                   {"random_background", trainer_options.random_background}}}};
+  WriteJsonAtomic(context.output_dir / "train_report.json", report);
+
+  PlotSeries curve{"held-out PSNR", {}, {}};
+  std::istringstream rows(state.metrics);
+  for (std::string row; std::getline(rows, row);) {
+    double seconds = 0, loss = 0, psnr = 0;
+    int step = 0;
+    if (std::sscanf(row.c_str(), "%lf,%d,%lf,%lf", &seconds, &step, &loss, &psnr) == 4 && std::isfinite(psnr)) {
+      curve.x.push_back(seconds);
+      curve.y.push_back(psnr);
+    }
+  }
+  if (!curve.x.empty()) {
+    WriteLinePlot(context.output_dir / "psnr.png",
+                  {"held-out PSNR against training time", "training time (s)", "PSNR (dB)"}, {curve});
+  }
+  context.summary = {{"steps", trainer.step()},
+                     {"train_seconds", state.train_seconds},
+                     {"heldout_psnr", report["heldout_psnr"]}};
+  LogInfo(format("train: {} steps in {:.1f} s; held-out PSNR {:.2f} dB over {} views ({:.1f} samples per ray)",
+                 trainer.step(), state.train_seconds, Mean(psnrs), psnrs.size(),
+                 report["samples_per_ray_rendered"].get<double>()));
+}
+
+}  // namespace p2n

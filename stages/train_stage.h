@@ -1,0 +1,69 @@
+#pragma once
+// The train stage: trains a radiance field on the poses stage's transforms.json and images (DESIGN.md §6).
+// Writes model.bin (renders without the training data), metrics.csv (wall_seconds, step, train_loss,
+// heldout_psnr at fixed intervals of training time; evaluation time is not counted), train_report.json and a
+// plot of held-out PSNR against time. A killed run resumes from its last checkpoint (WS/30_train.resume/).
+
+#include <string>
+
+#include "nerf/trainer.h"
+#include "pipeline/stage.h"
+
+namespace p2n {
+
+struct TrainOptions {
+  std::string preset = "default";  // fast | default | quality: sizes, sample spacing and time budget together
+  std::string field = "ngp";       // ngp (hash grid) or vanilla (the seed's positional-encoding MLP)
+  double time_budget = 0;          // seconds of training; 0: the preset's (fast 60, default 300, quality 900)
+  int steps = 0;                   // stop after this many steps (0: no step limit)
+  int batch_samples = 0;           // samples per step; 0: the preset's
+  int march_samples = 0;           // samples across the scene cube's diagonal (ngp); 0: the preset's
+  int vanilla_samples = 64;        // stratified samples per ray (vanilla)
+  double learning_rate = 0;        // 0: the field's (ngp 1e-2, vanilla 5e-4)
+  std::string loss = "mse";
+  std::string background = "auto";  // auto: random for images with alpha, else the dataset's colour
+  double eval_interval = 10;       // seconds of training between held-out evaluations
+  int eval_pixels = 4096;          // held-out pixels per view in each evaluation (0: all); the final one uses all
+  double checkpoint_interval = 60;  // seconds between checkpoints (0: none)
+  int seed = 0;
+
+  template <class V>
+  void Visit(V& v) {
+    v("preset", preset, "fast (a preview in about a minute), default, or quality", "", OptionKind::kResult,
+      {"fast", "default", "quality"});
+    v("field", field, "ngp (hash grid + tiny MLPs) or vanilla (the seed's positional-encoding MLP)", "",
+      OptionKind::kResult, {"ngp", "vanilla"});
+    v("time_budget", time_budget, "training time; 0: the preset's (fast 60, default 300, quality 900)", "s");
+    v("steps", steps, "stop after this many steps; 0: no step limit", "steps");
+    v("batch_samples", batch_samples, "samples per training step; 0: the preset's", "samples");
+    v("march_samples", march_samples, "samples across the scene cube's diagonal (ngp); 0: the preset's", "samples");
+    v("vanilla_samples", vanilla_samples, "stratified samples per ray (vanilla)", "samples");
+    v("learning_rate", learning_rate, "Adam learning rate; 0: the field's (ngp 1e-2, vanilla 5e-4)");
+    v("loss", loss, "photometric loss", "", OptionKind::kResult, {"mse", "huber"});
+    v("background", background, "auto: random behind images with alpha, else the dataset's background colour", "",
+      OptionKind::kResult, {"auto", "random", "fixed"});
+    v("eval_interval", eval_interval, "training time between held-out evaluations (metrics.csv rows)", "s");
+    v("eval_pixels", eval_pixels, "held-out pixels per view in each evaluation; 0: all (the final one uses all)",
+      "pixels");
+    v("checkpoint_interval", checkpoint_interval, "time between checkpoints that a killed run resumes from; 0: none",
+      "s", OptionKind::kRuntime);
+    v("seed", seed, "random seed (initialisation, rays, samples)");
+  }
+  void Check() const;
+};
+
+// The trainer's options for these stage options (presets resolved).
+TrainerOptions MakeTrainerOptions(const TrainOptions& options);
+// The preset's time budget unless one is given.
+double ResolvedTimeBudget(const TrainOptions& options);
+
+class TrainStage : public Stage {
+ public:
+  std::string name() const override { return "train"; }
+  std::string folder() const override { return "30_train"; }
+  int format_version() const override { return 1; }
+  std::vector<std::string> upstream() const override { return {"poses"}; }
+  void Run(StageContext& context) const override;
+};
+
+}  // namespace p2n
