@@ -1,5 +1,9 @@
 #include "nerf/adam.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -43,9 +47,29 @@ void Adam<T>::Step(T* params, const T* grads) {
 
 template <typename T>
 void Adam<T>::StepSparse(T* params, const T* grads, const std::vector<uint32_t>& entries) {
-  for (const uint32_t entry : entries) {
-    UpdateRange(params, grads, size_t{entry} * entry_size_, size_t{entry + 1} * entry_size_, ++entry_steps_[entry]);
+  // No entry can be past step `sparse_calls_` (one step per call at most): grow the bias-correction tables
+  // that far first, then update the entries in parallel (each appears once, so no two tasks share one).
+  ++sparse_calls_;
+  while (beta1_powers_.size() <= sparse_calls_) {
+    beta1_powers_.push_back(beta1_powers_.back() * options_.beta1);
+    beta2_powers_.push_back(beta2_powers_.back() * options_.beta2);
   }
+  const T beta1 = static_cast<T>(options_.beta1), beta2 = static_cast<T>(options_.beta2);
+  const T epsilon = static_cast<T>(options_.epsilon);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, entries.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t k = range.begin(); k < range.end(); ++k) {
+      const uint32_t entry = entries[k];
+      const uint32_t step = ++entry_steps_[entry];
+      const T step_size = static_cast<T>(options_.learning_rate / (1 - beta1_powers_[step]));
+      const T inv_sqrt_correction2 = static_cast<T>(1 / std::sqrt(1 - beta2_powers_[step]));
+      for (size_t i = size_t{entry} * entry_size_; i < size_t{entry + 1} * entry_size_; ++i) {
+        const T g = grads[i];
+        first_moment_[i] = beta1 * first_moment_[i] + (1 - beta1) * g;
+        second_moment_[i] = beta2 * second_moment_[i] + (1 - beta2) * g * g;
+        params[i] -= step_size * first_moment_[i] / (std::sqrt(second_moment_[i]) * inv_sqrt_correction2 + epsilon);
+      }
+    }
+  });
 }
 
 template <typename T>
@@ -62,6 +86,8 @@ void Adam<T>::Load(BinaryReader* reader) {
   second_moment_ = reader->GetVector<T>(second_moment_.size());
   entry_steps_ = reader->GetVector<uint32_t>(entry_steps_.size());
   dense_step_ = reader->Get<uint32_t>();
+  sparse_calls_ = 0;
+  for (const uint32_t step : entry_steps_) sparse_calls_ = std::max(sparse_calls_, step);
 }
 
 template class Adam<float>;

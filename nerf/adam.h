@@ -46,6 +46,7 @@ class Adam {
   std::vector<uint32_t> entry_steps_;
   std::vector<double> beta1_powers_{1.0}, beta2_powers_{1.0};  // beta^t, grown on demand
   uint32_t dense_step_ = 0;
+  uint32_t sparse_calls_ = 0;  // StepSparse() calls: a bound on every entry's step
 };
 
 extern template class Adam<float>;

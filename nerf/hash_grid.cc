@@ -86,7 +86,7 @@ uint32_t HashGridEncoding<T>::EntryIndex(const Level& level, const uint32_t* ver
     }
   } else {
     for (int d = 0; d < dims_; ++d) index ^= vertex[d] * kPrimes[d];
-    index %= level.size;
+    index &= level.size - 1;  // hashed levels have a power-of-two size
   }
   return level.offset + index;
 }
@@ -101,6 +101,21 @@ void HashGridEncoding<T>::ForEachCorner(const Level& level, const T* p, Visit vi
     const double floor = std::floor(position);
     base[d] = static_cast<uint32_t>(floor);
     fraction[d] = static_cast<T>(position - floor);
+  }
+  if (dims_ == 3) {
+    // The common case, unrolled: the 8 entries are computed before any is read, so the loads overlap.
+    uint32_t entries[8];
+    T weights[8];
+    for (int corner = 0; corner < 8; ++corner) {
+      const uint32_t x = base[0] + (corner & 1), y = base[1] + ((corner >> 1) & 1), z = base[2] + (corner >> 2);
+      entries[corner] = level.offset + (level.dense ? x + level.vertices * (y + level.vertices * z)
+                                                    : (x ^ y * kPrimes[1] ^ z * kPrimes[2]) & (level.size - 1));
+      weights[corner] = ((corner & 1) ? fraction[0] : T(1) - fraction[0]) *
+                        ((corner & 2) ? fraction[1] : T(1) - fraction[1]) *
+                        ((corner & 4) ? fraction[2] : T(1) - fraction[2]);
+    }
+    for (int corner = 0; corner < 8; ++corner) visit(entries[corner], weights[corner]);
+    return;
   }
   for (int corner = 0; corner < (1 << dims_); ++corner) {
     uint32_t vertex[3];

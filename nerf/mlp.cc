@@ -79,7 +79,9 @@ void Mlp<T>::Backward(const Cache& cache, const Matrix& d_output, T* d_params, M
     Eigen::Map<Matrix> d_weight(d_params + layer.weight_offset, layer.outputs, layer.inputs);
     Eigen::Map<Eigen::Matrix<T, Eigen::Dynamic, 1>> d_bias(d_params + layer.bias_offset, layer.outputs);
     d_weight.noalias() += delta * layer_input.transpose();
-    d_bias += delta.rowwise().sum();
+    // Column by column: a fixed summation order (Eigen's vectorised reductions depend on memory alignment,
+    // which would make training runs differ).
+    for (Eigen::Index j = 0; j < delta.cols(); ++j) d_bias += delta.col(j);
     if (i == 0 && d_input == nullptr) break;
     const Eigen::Map<const Matrix> weight(params_.data() + layer.weight_offset, layer.outputs, layer.inputs);
     Matrix previous = weight.transpose() * delta;

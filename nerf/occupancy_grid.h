@@ -45,6 +45,9 @@ class OccupancyGrid {
   std::vector<MarchSample> March(const Ray& ray, double near, double far, double step, size_t max_samples) const;
 
   const std::vector<float>& densities() const { return densities_; }
+  // Where the next partial update starts (kept in training checkpoints, so that a resumed run is the same).
+  size_t cursor() const { return cursor_; }
+  void set_cursor(size_t cursor) { cursor_ = cursor % densities_.size(); }
   const std::vector<uint8_t>& bits() const { return bits_; }
 
  private:

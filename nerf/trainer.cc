@@ -150,7 +150,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
   const size_t rays = batch.rays.size();
   struct Chunk {
     std::vector<float> d_dense;
-    Eigen::MatrixXf positions, d_encoded;
+    Eigen::MatrixXf positions, d_encoded;  // of the samples before early termination only
     double loss = 0;
     size_t samples = 0, used = 0;
   };
@@ -188,6 +188,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     RadianceField<float>::Cache cache;
     if (n > 0) field.Forward(positions, directions, &density, &colour, &cache);
     Eigen::MatrixXf d_density = Eigen::MatrixXf::Zero(1, n), d_colour = Eigen::MatrixXf::Zero(3, n);
+    std::vector<Eigen::Index> used;  // samples that got a gradient
     const float scale = 1.0f / (3.0f * static_cast<float>(rays));
     for (size_t r = 0; r < count; ++r) {
       const size_t o = offsets[r];
@@ -200,16 +201,22 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
         chunk.loss += ChannelLoss(options_.loss, result.rgb[ch] - batch.target(ch, first + r), &d_rgb[ch]) / 3.0;
         d_rgb[ch] *= scale;
       }
-      chunk.used += result.used;
+      for (size_t k = 0; k < result.used; ++k) used.push_back(static_cast<Eigen::Index>(o + k));
       if (segments.count > 0) {
         CompositeBackward(segments, background, result, d_rgb, 0.0f, 0.0f, d_density.data() + o,
                           d_colour.data() + 3 * o);
       }
     }
     chunk.d_dense.assign(dense_count_, 0.0f);
+    chunk.used = used.size();
     if (n > 0) {
-      field.Backward(cache, d_density, d_colour, chunk.d_dense.data(), &chunk.d_encoded);
-      chunk.positions = std::move(cache.positions);
+      Eigen::MatrixXf d_encoded;
+      field.Backward(cache, d_density, d_colour, chunk.d_dense.data(), &d_encoded);
+      // Samples behind the termination point have no gradient: the hash grid need not visit them.
+      if (d_encoded.size() > 0) {
+        chunk.positions = cache.positions(Eigen::all, used);
+        chunk.d_encoded = d_encoded(Eigen::all, used);
+      }
     }
   });
 
@@ -225,14 +232,14 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     }
   }
   result.loss /= static_cast<double>(std::max<size_t>(rays, 1));
-  if (grid != nullptr && result.samples > 0) {
-    Eigen::MatrixXf positions(3, result.samples), d_encoded(grid->output_dims(), result.samples);
+  if (grid != nullptr && result.samples_used > 0) {
+    Eigen::MatrixXf positions(3, result.samples_used), d_encoded(grid->output_dims(), result.samples_used);
     Eigen::Index column = 0;
     for (const Chunk& chunk : chunks) {
-      if (chunk.samples == 0) continue;
-      positions.middleCols(column, chunk.samples) = chunk.positions;
-      d_encoded.middleCols(column, chunk.samples) = chunk.d_encoded;
-      column += chunk.samples;
+      if (chunk.used == 0) continue;
+      positions.middleCols(column, chunk.used) = chunk.positions;
+      d_encoded.middleCols(column, chunk.used) = chunk.d_encoded;
+      column += chunk.used;
     }
     grid->Backward(positions, d_encoded);
   }
@@ -317,6 +324,7 @@ void Trainer::SaveCheckpoint(BinaryWriter* writer) const {
   writer->Put<int32_t>(step_);
   writer->Put<int32_t>(skipped_);
   writer->Put<double>(samples_per_ray_);
+  writer->Put<uint64_t>(model_.occupancy.cursor());
   for (const Adam<float>& adam : dense_adams_) adam.Save(writer);
   if (grid_adam_) grid_adam_->Save(writer);
 }
@@ -329,6 +337,7 @@ void Trainer::LoadCheckpoint(BinaryReader* reader) {
   NerfModel model = ReadModel(reader);
   const int step = reader->Get<int32_t>(), skipped = reader->Get<int32_t>();
   const double samples_per_ray = reader->Get<double>();
+  model.occupancy.set_cursor(reader->Get<uint64_t>());
   for (Adam<float>& adam : dense_adams_) adam.Load(reader);
   if (grid_adam_) grid_adam_->Load(reader);
   if (!reader->AtEnd()) reader->Fail("there are bytes after the checkpoint");

@@ -40,7 +40,7 @@ struct TrainerOptions {
   nlohmann::json field;                 // the field's config (MakeField)
   int occupancy_resolution = 128;       // cells per axis
   int occupancy_interval = 16;          // steps between occupancy updates
-  int occupancy_warmup = 64;            // steps before the first update (the field knows nothing before)
+  int occupancy_warmup = 16;            // steps before the first update (the field knows nothing before)
   double occupancy_decay = 0.95;
   double march_step = 1.7320508 / 256;  // field units: 256 samples across the cube's diagonal
   size_t max_samples_per_ray = 1024;

@@ -33,9 +33,9 @@ struct Preset {
 };
 
 Preset PresetFor(const std::string& name) {
-  if (name == "fast") return {60, 128, 1 << 15, 17, 1024, 64};
+  if (name == "fast") return {60, 128, 1 << 15, 15, 1024, 64};
   if (name == "quality") return {900, 512, 1 << 17, 19, 4096, 128};
-  return {300, 256, 1 << 16, 19, 2048, 128};
+  return {300, 256, 1 << 16, 17, 2048, 128};
 }
 
 // The image as 8-bit RGB or RGBA (grey is expanded), row-major; UserError naming the file.
@@ -164,6 +164,8 @@ void TrainOptions::Check() const {
   CheckOption(steps >= 0, "train.steps", "must be 0 (no limit) or positive");
   CheckOption(batch_samples >= 0 && batch_samples <= (1 << 24), "train.batch_samples", "must be 0..16777216");
   CheckOption(march_samples >= 0 && march_samples <= 8192, "train.march_samples", "must be 0..8192");
+  CheckOption(hash_table_log2 == 0 || (hash_table_log2 >= 10 && hash_table_log2 <= 24), "train.hash_table_log2",
+              "must be 0 (the preset's) or 10..24");
   CheckOption(vanilla_samples >= 1 && vanilla_samples <= 1024, "train.vanilla_samples", "must be 1..1024");
   CheckOption(learning_rate >= 0 && learning_rate < 1, "train.learning_rate", "must be 0 (the field's) or in (0, 1)");
   CheckOption(eval_interval > 0, "train.eval_interval", "must be positive");
@@ -185,7 +187,7 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options) {
     trainer.stratified_samples = options.vanilla_samples;
   } else {
     NgpFieldConfig field;
-    field.grid.log2_table_size = preset.log2_table_size;
+    field.grid.log2_table_size = options.hash_table_log2 > 0 ? options.hash_table_log2 : preset.log2_table_size;
     field.grid.finest_resolution = preset.finest_resolution;
     trainer.field = field.ToJson();
   }
@@ -247,7 +249,6 @@ void TrainStage::Run(StageContext& context) const {
   double next_eval = (std::floor(state.train_seconds / options.eval_interval) + 1) * options.eval_interval;
   auto last_checkpoint = Clock::now();
   int consecutive_skips = 0;
-  if (state.metrics.empty()) add_row();  // the untrained field, at 0 s
   while (!done()) {
     ThrowIfCancelled();
     const auto start = Clock::now();

@@ -19,6 +19,7 @@ struct TrainOptions {
   int batch_samples = 0;           // samples per step; 0: the preset's
   int march_samples = 0;           // samples across the scene cube's diagonal (ngp); 0: the preset's
   int vanilla_samples = 64;        // stratified samples per ray (vanilla)
+  int hash_table_log2 = 0;         // log2 of the hash-grid entries per level (ngp); 0: the preset's
   double learning_rate = 0;        // 0: the field's (ngp 1e-2, vanilla 5e-4)
   std::string loss = "mse";
   std::string background = "auto";  // auto: random for images with alpha, else the dataset's colour
@@ -38,6 +39,7 @@ struct TrainOptions {
     v("batch_samples", batch_samples, "samples per training step; 0: the preset's", "samples");
     v("march_samples", march_samples, "samples across the scene cube's diagonal (ngp); 0: the preset's", "samples");
     v("vanilla_samples", vanilla_samples, "stratified samples per ray (vanilla)", "samples");
+    v("hash_table_log2", hash_table_log2, "log2 of the hash-grid entries per level (ngp); 0: the preset's");
     v("learning_rate", learning_rate, "Adam learning rate; 0: the field's (ngp 1e-2, vanilla 5e-4)");
     v("loss", loss, "photometric loss", "", OptionKind::kResult, {"mse", "huber"});
     v("background", background, "auto: random behind images with alpha, else the dataset's background colour", "",

@@ -28,7 +28,9 @@ nlohmann::json Import(const fs::path& input, const fs::path& workspace_path) {
   config.Set("run.progress", "none", "test");
   Workspace workspace = Workspace::Open(workspace_path, true);
   workspace.SetInput(input);
-  MakeRunner(input).Run(workspace, config, {});
+  RunRequest request;
+  request.until = "poses";
+  MakeRunner(input).Run(workspace, config, request);
   return ReadJsonFile(workspace_path / "20_poses" / "transforms.json");
 }
 

@@ -1,0 +1,192 @@
+// The trainer and the renderer on a scene with a known answer: a sphere coloured by its normal over a white
+// background, seen from a ring of cameras. Training must learn it (held-out PSNR), resume from a checkpoint to
+// the very same parameters, skip a non-finite step, and save a model that renders the same after loading.
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "nerf/ngp_field.h"
+#include "nerf/trainer.h"
+#include "test_util.h"
+
+namespace p2n::testing {
+namespace {
+
+constexpr int kSize = 40;
+
+PinholeCamera LookingAtOrigin(double angle, double height) {
+  PinholeCamera camera;
+  camera.width = camera.height = kSize;
+  camera.fx = camera.fy = 1.2 * kSize;
+  camera.cx = camera.cy = kSize / 2.0;
+  const Eigen::Vector3d centre(2.5 * std::cos(angle), 2.5 * std::sin(angle), height);
+  const Eigen::Vector3d back = centre.normalized();  // OpenGL cameras look down -z
+  const Eigen::Vector3d right = Eigen::Vector3d::UnitZ().cross(back).normalized();
+  camera.world_from_cam.block<3, 1>(0, 0) = right;
+  camera.world_from_cam.block<3, 1>(0, 1) = back.cross(right);
+  camera.world_from_cam.block<3, 1>(0, 2) = back;
+  camera.world_from_cam.block<3, 1>(0, 3) = centre;
+  return camera;
+}
+
+// The view of a sphere of radius 0.5 at the origin, coloured 0.5 + 0.5 * normal, over white.
+TrainView SphereView(double angle, double height) {
+  TrainView view;
+  view.camera = LookingAtOrigin(angle, height);
+  view.pixels.resize(kSize * kSize * 3);
+  for (int y = 0; y < kSize; ++y) {
+    for (int x = 0; x < kSize; ++x) {
+      const Ray ray = CameraRay(view.camera, x + 0.5, y + 0.5);
+      const double b = ray.origin.dot(ray.direction), c = ray.origin.squaredNorm() - 0.25;
+      Eigen::Vector3d colour = Eigen::Vector3d::Ones();
+      if (b * b - c > 0) {
+        const Eigen::Vector3d normal = (ray.origin + (-b - std::sqrt(b * b - c)) * ray.direction).normalized();
+        colour = 0.5 * (normal + Eigen::Vector3d::Ones());
+      }
+      for (int ch = 0; ch < 3; ++ch) view.pixels[(y * kSize + x) * 3 + ch] = static_cast<uint8_t>(std::lround(255 * colour[ch]));
+    }
+  }
+  return view;
+}
+
+TrainingData SphereScene() {
+  TrainingData data;
+  for (int i = 0; i < 24; ++i) data.train.push_back(SphereView(2 * M_PI * i / 24, i % 2 == 0 ? 0.8 : -0.5));
+  for (int i = 0; i < 3; ++i) data.heldout.push_back(SphereView(2 * M_PI * (i + 0.5) / 3, 0.3));
+  return data;
+}
+
+TrainerOptions SmallOptions() {
+  NgpFieldConfig field;
+  field.grid.levels = 8;
+  field.grid.log2_table_size = 14;
+  field.grid.finest_resolution = 256;
+  TrainerOptions options;
+  options.field = field.ToJson();
+  options.occupancy_resolution = 32;
+  options.march_step = std::sqrt(3.0) / 128;
+  options.batch_samples = 8192;
+  options.seed = 5;
+  return options;
+}
+
+std::vector<float> Parameters(NerfModel& model) {
+  std::vector<float> values;
+  for (const ParamBlock<float>& block : model.field->DenseParams()) values.insert(values.end(), block.data, block.data + block.size);
+  Encoding<float>* grid = model.field->TrainableEncoding();
+  values.insert(values.end(), grid->params(), grid->params() + grid->num_params());
+  return values;
+}
+
+double Mean(const std::vector<double>& values) {
+  double sum = 0;
+  for (const double v : values) sum += v;
+  return sum / values.size();
+}
+
+}  // namespace
+
+TEST_CASE("training learns a sphere: held-out PSNR rises far above the untrained field's", "[trainer]") {
+  const TrainingData data = SphereScene();
+  Trainer trainer(SmallOptions(), data);
+  const double before = Mean(trainer.HeldoutPsnr(0));
+  for (int step = 0; step < 300; ++step) REQUIRE_FALSE(trainer.Step(step / 300.0).skipped);
+  const double after = Mean(trainer.HeldoutPsnr(0));
+  INFO("held-out PSNR before " << before << " dB, after " << after << " dB");
+  CHECK(after > 22.0);
+  CHECK(after > before + 10.0);
+  // The occupancy grid has found the sphere: most of the cube is empty, and renders take few samples.
+  CHECK(trainer.model().occupancy.OccupiedFraction() < 0.5);
+  RenderStats stats;
+  trainer.HeldoutPsnr(0, &stats);
+  CHECK(static_cast<double>(stats.samples_evaluated) / stats.rays < 20.0);
+
+  // Early termination saves samples and changes the image by at most the threshold times a colour difference.
+  RenderOptions full;
+  full.min_transmittance = 0;
+  const RenderedView all = RenderView(trainer.model(), data.heldout[1].camera, -1, -1, full);
+  const RenderedView early = RenderView(trainer.model(), data.heldout[1].camera, -1, -1, {});
+  CHECK(early.stats.samples_evaluated < all.stats.samples_evaluated);
+  double worst = 0;
+  for (size_t i = 0; i < all.rgb.pixels.size(); ++i) worst = std::max(worst, double(std::abs(all.rgb.pixels[i] - early.rgb.pixels[i])));
+  CHECK(worst <= 2e-4);
+  // One sample per ray and thousands per ray both stay finite.
+  RenderOptions coarse, fine;
+  coarse.step_scale = 100;
+  fine.step_scale = 0.01;
+  for (const RenderOptions& options : {coarse, fine}) {
+    const RenderedView view = RenderView(trainer.model(), data.heldout[1].camera, -1, -1, options);
+    for (const float v : view.rgb.pixels) REQUIRE(std::isfinite(v));
+  }
+}
+
+TEST_CASE("a run resumed from a checkpoint reaches exactly the parameters of an uninterrupted one", "[trainer]") {
+  const TrainingData data = SphereScene();
+  Trainer straight(SmallOptions(), data);
+  for (int step = 0; step < 40; ++step) straight.Step(step / 40.0);
+
+  BinaryWriter writer;
+  {
+    Trainer first_half(SmallOptions(), data);
+    for (int step = 0; step < 20; ++step) first_half.Step(step / 40.0);
+    first_half.SaveCheckpoint(&writer);
+  }
+  Trainer resumed(SmallOptions(), data);
+  BinaryReader reader(writer.buffer(), "checkpoint");
+  resumed.LoadCheckpoint(&reader);
+  CHECK(resumed.step() == 20);
+  for (int step = 20; step < 40; ++step) resumed.Step(step / 40.0);
+  CHECK((Parameters(resumed.model()) == Parameters(straight.model())));
+
+  // A checkpoint of other options is refused.
+  TrainerOptions other = SmallOptions();
+  other.seed = 6;
+  Trainer stranger(other, data);
+  BinaryReader again(writer.buffer(), "checkpoint");
+  CHECK_THROWS_WITH(stranger.LoadCheckpoint(&again), Catch::Contains("other options"));
+}
+
+TEST_CASE("a step with a non-finite input is detected, reported and skipped; training goes on", "[trainer]") {
+  const TrainingData data = SphereScene();
+  Trainer trainer(SmallOptions(), data);
+  for (int step = 0; step < 5; ++step) trainer.Step(0);
+  const std::vector<float> before = Parameters(trainer.model());
+  RayBatch batch = trainer.SampleBatch(64);
+  batch.target(1, 10) = std::nanf("");
+  const StepResult bad = trainer.StepOnBatch(batch, 0);
+  CHECK(bad.skipped);
+  CHECK_THAT(bad.problem, Catch::Contains("not finite"));
+  CHECK(trainer.skipped_steps() == 1);
+  CHECK((Parameters(trainer.model()) == before));
+  batch.target(1, 10) = 0.5f;
+  CHECK_FALSE(trainer.StepOnBatch(batch, 0).skipped);
+  CHECK((Parameters(trainer.model()) != before));
+}
+
+TEST_CASE("model.bin renders the same after loading; newer and damaged files are refused", "[trainer]") {
+  const TrainingData data = SphereScene();
+  Trainer trainer(SmallOptions(), data);
+  for (int step = 0; step < 60; ++step) trainer.Step(step / 60.0);
+  TempDir dir;
+  SaveModel(trainer.model(), dir / "model.bin");
+  const NerfModel loaded = LoadModel(dir / "model.bin");
+  const PinholeCamera camera = data.heldout[0].camera;
+  const RenderedView original = RenderView(trainer.model(), camera, -1, -1, {});
+  const RenderedView copy = RenderView(loaded, camera, -1, -1, {});
+  CHECK((original.rgb.pixels == copy.rgb.pixels));
+  CHECK((original.depth.pixels == copy.depth.pixels));
+
+  std::vector<char> bytes = ReadBinaryFile(dir / "model.bin");
+  bytes[8] = 2;  // format version 2
+  WriteBinaryFileAtomic(dir / "newer.bin", bytes);
+  CHECK_THROWS_WITH(LoadModel(dir / "newer.bin"), Catch::Contains("format version 2") && Catch::Contains("newer.bin"));
+  bytes[8] = 1;
+  bytes.resize(bytes.size() / 2);
+  WriteBinaryFileAtomic(dir / "short.bin", bytes);
+  CHECK_THROWS_WITH(LoadModel(dir / "short.bin"), Catch::Contains("damaged"));
+  WriteBinaryFileAtomic(dir / "other.bin", {'h', 'e', 'l', 'l', 'o'});
+  CHECK_THROWS_WITH(LoadModel(dir / "other.bin"), Catch::Contains("not a photo2nerf model"));
+}
+
+}  // namespace p2n::testing
