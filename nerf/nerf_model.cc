@@ -18,12 +18,20 @@ std::runtime_error FileError(const std::filesystem::path& path, const std::strin
 
 }  // namespace
 
+Eigen::Vector3d FieldPoint(const NerfModel& model, const Eigen::Vector3d& world) {
+  if (!model.contracted) return 0.5 * (world + Eigen::Vector3d::Ones());
+  const double norm = world.cwiseAbs().maxCoeff();
+  const Eigen::Vector3d contracted = norm <= 1 ? world : ((2 - 1 / norm) / norm) * world;
+  return 0.25 * (contracted + Eigen::Vector3d::Constant(2));
+}
+
 void WriteModel(const NerfModel& model, BinaryWriter* writer) {
   writer->PutBytes(kModelMagic, 8);
   writer->Put<uint32_t>(kModelFormatVersion);
   const nlohmann::json header = {{"field", model.field->Config()},
                                  {"occupancy_resolution", model.occupancy.resolution()},
                                  {"background", model.background},
+                                 {"contracted", model.contracted},
                                  {"march_step", model.march_step},
                                  {"stratified_samples", model.stratified_samples},
                                  {"info", model.info}};
@@ -49,11 +57,12 @@ NerfModel ReadModel(BinaryReader* reader) {
     model.field = MakeField<float>(header.at("field"), 0);
     model.background = header.at("background").get<std::array<float, 3>>();
     model.march_step = header.at("march_step").get<double>();
+    model.contracted = header.value("contracted", false);
     model.stratified_samples = header.value("stratified_samples", 0);
     if (model.stratified_samples < 0 || model.stratified_samples > 65536) reader->Fail("stratified_samples must be 0..65536");
     model.info = header.value("info", nlohmann::json::object());
     const int resolution = header.at("occupancy_resolution").get<int>();
-    if (!(model.march_step > 0 && model.march_step < 2)) reader->Fail("march_step must be in (0, 2)");
+    if (!(model.march_step > 0 && model.march_step < 4)) reader->Fail("march_step must be in (0, 4)");
     for (ParamBlock<float>& block : model.field->DenseParams()) {
       const std::vector<float> values = reader->GetVector<float>(block.size);
       std::copy(values.begin(), values.end(), block.data);

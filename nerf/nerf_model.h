@@ -1,8 +1,13 @@
 #pragma once
 // A trained radiance field that renders without its training data: the field, its occupancy grid, the
 // background it was trained against, and the sample spacing; stored in model.bin (magic, format version, a
-// JSON header with the configs, then the parameters). The field lives in the unit cube: the normalised scene's
-// box [-1, 1]^3 (transforms.json's frame) maps to [0, 1]^3, so field lengths are half of world lengths.
+// JSON header with the configs, then the parameters).
+//
+// Rays, distances, densities and the sample spacing are in world units (transforms.json's normalised frame);
+// the field sees points of its unit cube. A bounded scene maps the box [-1, 1]^3 linearly onto it. An
+// unbounded one is first contracted (nerfacto's L-infinity form): points inside [-1, 1]^3 stay, a point x
+// outside goes to (2 - 1/|x|) x/|x| (|.| the max norm), so all of space fits in [-2, 2]^3, which maps onto the
+// unit cube.
 
 #include <array>
 #include <filesystem>
@@ -18,21 +23,19 @@
 namespace p2n {
 
 inline constexpr uint32_t kModelFormatVersion = 1;
-inline constexpr double kFieldFromWorldScale = 0.5;
-
-// The ray in field coordinates (same direction; distances scale by kFieldFromWorldScale).
-inline Ray FieldRayFromWorld(const Ray& world) {
-  return {(world.origin + Eigen::Vector3d::Ones()) * kFieldFromWorldScale, world.direction};
-}
 
 struct NerfModel {
   std::unique_ptr<RadianceField<float>> field;
   OccupancyGrid occupancy{128};
   std::array<float, 3> background{1, 1, 1};  // behind the scene when rendering (the training background)
-  double march_step = 0;                      // sample spacing in field units along a ray
+  bool contracted = false;                    // an unbounded scene (see above)
+  double march_step = 0;                      // sample spacing along a ray (unbounded: near the centre)
   int stratified_samples = 0;                 // > 0: samples per ray in equal bins instead (no occupancy grid)
   nlohmann::json info = nlohmann::json::object();  // kept with the model: normalisation, training summary
 };
+
+// Where a world point lies in the field's unit cube.
+Eigen::Vector3d FieldPoint(const NerfModel& model, const Eigen::Vector3d& world);
 
 void WriteModel(const NerfModel& model, BinaryWriter* writer);
 // Reads what WriteModel wrote; std::runtime_error naming the source when it is damaged, of a newer format, or

@@ -20,8 +20,8 @@ std::optional<std::pair<double, double>> IntersectBox(const Ray& ray, const Eige
   for (int axis = 0; axis < 3; ++axis) {
     const double o = ray.origin[axis], d = ray.direction[axis];
     if (d == 0) {
-      // Parallel to this pair of faces: inside the slab or never.
-      if (o < low[axis] || o > high[axis]) return std::nullopt;
+      // Parallel to this pair of faces: strictly inside the slab, or never (a ray in a face only touches).
+      if (!(o > low[axis] && o < high[axis])) return std::nullopt;
       continue;
     }
     // 1/d is +-inf only for d == 0, handled above; tiny d gives huge but ordered distances.

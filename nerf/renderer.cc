@@ -13,24 +13,50 @@ namespace p2n {
 namespace {
 
 constexpr size_t kChunkRays = 256;
+constexpr double kUnboundedFar = 1e3;  // world units: the contracted distance there is within 0.1% of the limit
 
 }  // namespace
 
-std::vector<MarchSample> SampleFieldRay(const NerfModel& model, const Ray& field_ray, double near, double far,
-                                        double step, size_t max_samples, std::mt19937_64* jitter) {
-  const auto box = IntersectBox(field_ray, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones());
-  if (!box) return {};
-  const double begin = std::max(box->first, near), end = std::min(box->second, far);
-  if (!(end > begin)) return {};
+std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, double near, double far, double step,
+                                   size_t max_samples, std::mt19937_64* jitter) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const auto offset = [&] { return jitter != nullptr ? unit(*jitter) : 0.5; };
-  if (model.stratified_samples > 0) {
-    const double width = (end - begin) / model.stratified_samples;
-    std::vector<MarchSample> samples(model.stratified_samples);
-    for (int i = 0; i < model.stratified_samples; ++i) samples[i] = {begin + (i + offset()) * width, width};
+  const double offset = jitter != nullptr ? unit(*jitter) : 0.5;
+  const bool limited = near >= 0 && far >= 0;
+  std::vector<MarchSample> samples;
+  if (limited && !(far > near)) return samples;  // an empty segment
+  if (model.contracted) {
+    double t = limited ? near : 0.0;
+    const double end = limited ? far : kUnboundedFar;
+    const auto step_at = [&](double distance) { return std::max(step, 0.5 * step * distance); };
+    t += offset * step_at(t);
+    while (t < end && samples.size() < max_samples) {
+      const double dt = std::min(step_at(t), end - t);
+      const double middle = t + 0.5 * dt;
+      if (model.occupancy.Occupied(FieldPoint(model, ray.origin + middle * ray.direction))) samples.push_back({middle, dt});
+      t += dt;
+    }
     return samples;
   }
-  return model.occupancy.March(field_ray, begin + offset() * step, end, step, max_samples);
+  // Bounded: march in the field's cube, where distances are half the world's.
+  const Ray field_ray{FieldPoint(model, ray.origin), ray.direction};
+  const auto box = IntersectBox(field_ray, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones());
+  if (!box) return samples;
+  const double begin = std::max(box->first, limited ? 0.5 * near : 0.0);
+  const double end = std::min(box->second, limited ? 0.5 * far : box->second);
+  if (!(end > begin)) return samples;
+  if (model.stratified_samples > 0) {
+    const double width = (end - begin) / model.stratified_samples;
+    for (int i = 0; i < model.stratified_samples; ++i) {
+      samples.push_back({begin + (i + (jitter != nullptr ? unit(*jitter) : 0.5)) * width, width});
+    }
+  } else {
+    samples = model.occupancy.March(field_ray, begin + offset * 0.5 * step, end, 0.5 * step, max_samples);
+  }
+  for (MarchSample& sample : samples) {
+    sample.t *= 2;
+    sample.delta *= 2;
+  }
+  return samples;
 }
 
 void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std::vector<Eigen::Vector2d>& near_far,
@@ -42,16 +68,12 @@ void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std:
     FlushDenormalsOnThisThread();
     const size_t first = chunk * kChunkRays, count = std::min(rays.size(), first + kChunkRays) - first;
     std::vector<std::vector<MarchSample>> samples(count);
-    std::vector<Ray> field_rays(count);
     std::vector<CompositeAccumulator<float>> accumulators(count);
     std::vector<size_t> next(count, 0);
     size_t chunk_marched = 0, chunk_evaluated = 0;
     for (size_t r = 0; r < count; ++r) {
       const Eigen::Vector2d& range = near_far[first + r];
-      const bool bounded = range[0] >= 0 && range[1] > range[0];
-      field_rays[r] = FieldRayFromWorld(rays[first + r]);
-      samples[r] = SampleFieldRay(model, field_rays[r], bounded ? range[0] * kFieldFromWorldScale : 0,
-                                  bounded ? range[1] * kFieldFromWorldScale : 1e30, step, options.max_samples, nullptr);
+      samples[r] = SampleRay(model, rays[first + r], range[0], range[1], step, options.max_samples, nullptr);
       chunk_marched += samples[r].size();
     }
     Eigen::MatrixXf positions, directions, density, colour;
@@ -67,8 +89,8 @@ void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std:
       positions.resize(3, round.size());
       directions.resize(3, round.size());
       for (size_t i = 0; i < round.size(); ++i) {
-        const Ray& ray = field_rays[round[i].first];
-        positions.col(i) = (ray.origin + samples[round[i].first][round[i].second].t * ray.direction).cast<float>();
+        const Ray& ray = rays[first + round[i].first];
+        positions.col(i) = FieldPoint(model, ray.origin + samples[round[i].first][round[i].second].t * ray.direction).cast<float>();
         directions.col(i) = ray.direction.cast<float>();
       }
       model.field->Forward(positions, directions, &density, &colour, &cache);
@@ -77,8 +99,7 @@ void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std:
         next[r] = k + 1;
         if (accumulators[r].Done(options.min_transmittance)) continue;
         const MarchSample& s = samples[r][k];
-        accumulators[r].Add(density(0, i), colour.col(i).data(), static_cast<float>(s.t / kFieldFromWorldScale),
-                            static_cast<float>(s.delta));
+        accumulators[r].Add(density(0, i), colour.col(i).data(), static_cast<float>(s.t), static_cast<float>(s.delta));
         ++chunk_evaluated;
       }
       bool any = false;

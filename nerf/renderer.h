@@ -27,14 +27,16 @@ struct RenderStats {
   double seconds = 0;
 };
 
-// Samples of `field_ray` within [near, far] (field units) inside the unit cube: stratified (the model's
-// stratified_samples bins), or every `step` through occupied cells. With `jitter`, sample positions are random
-// within their bin or step (training); without, they are in the middle.
-std::vector<MarchSample> SampleFieldRay(const NerfModel& model, const Ray& field_ray, double near, double far,
-                                        double step, size_t max_samples, std::mt19937_64* jitter);
+// Samples of the world `ray` within [near, far] (none when far <= near; negative: the whole scene), distances in world
+// units: stratified (the model's stratified_samples bins over the scene box), or every `step` through occupied
+// cells; in an unbounded scene the step grows with the distance beyond the unit box (step * t / 2), so that
+// contracted space is sampled about evenly. With `jitter`, samples are shifted by a random fraction of a step
+// (training); without, they sit in the middle of their segments.
+std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, double near, double far, double step,
+                                   size_t max_samples, std::mt19937_64* jitter);
 
-// Renders world rays (unit directions) between their near and far distances (world units; near < 0 or
-// far <= near: the whole box). Writes rgb (3 per ray), depth (world units, weighted by opacity) and opacity.
+// Renders world rays (unit directions) between their near and far distances (world units; negative: the whole
+// scene). Writes rgb (3 per ray), depth (world units, weighted by opacity) and opacity.
 void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std::vector<Eigen::Vector2d>& near_far,
                 const RenderOptions& options, float* rgb, float* depth, float* opacity, RenderStats* stats);
 

@@ -30,6 +30,7 @@ nlohmann::json CheckpointIdentity(const TrainerOptions& options) {
   return {{"field", options.field},
           {"occupancy_resolution", options.occupancy_resolution},
           {"march_step", options.march_step},
+          {"contracted", options.contracted},
           {"stratified_samples", options.stratified_samples},
           {"seed", options.seed}};
 }
@@ -66,6 +67,7 @@ Trainer::Trainer(const TrainerOptions& options, const TrainingData& data) : opti
   model_.occupancy = OccupancyGrid(options.occupancy_resolution);
   model_.background = data.background;
   model_.march_step = options.march_step;
+  model_.contracted = options.contracted;
   model_.stratified_samples = options.stratified_samples;
   const AdamOptions adam{options.learning_rate, 0.9, 0.99, 1e-15};
   for (const ParamBlock<float>& block : model_.field->DenseParams()) {
@@ -123,7 +125,7 @@ StepResult Trainer::Step(double progress) {
   }
   const double per_ray = samples_per_ray_ > 0           ? samples_per_ray_
                          : options_.stratified_samples > 0 ? options_.stratified_samples
-                                                           : 1.0 / options_.march_step;
+                                                           : 2.0 / options_.march_step;
   const int rays = static_cast<int>(std::clamp(static_cast<double>(options_.batch_samples) / std::max(per_ray, 1.0),
                                                double(options_.min_batch_rays), double(options_.max_batch_rays)));
   return StepOnBatch(SampleBatch(rays), progress);
@@ -160,16 +162,12 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     Chunk& chunk = chunks[c];
     const size_t first = c * kChunkRays, count = std::min(rays, first + kChunkRays) - first;
     std::mt19937_64 random(MixSeed(options_.seed, step_, 2 + c));
-    std::vector<Ray> field_rays(count);
     std::vector<std::vector<MarchSample>> samples(count);
     std::vector<size_t> offsets(count + 1, 0);
     for (size_t r = 0; r < count; ++r) {
       const Eigen::Vector2d& range = batch.near_far[first + r];
-      const bool bounded = range[0] >= 0 && range[1] > range[0];
-      field_rays[r] = FieldRayFromWorld(batch.rays[first + r]);
-      samples[r] = SampleFieldRay(model_, field_rays[r], bounded ? range[0] * kFieldFromWorldScale : 0,
-                                  bounded ? range[1] * kFieldFromWorldScale : 1e30, options_.march_step,
-                                  options_.max_samples_per_ray, &random);
+      samples[r] = SampleRay(model_, batch.rays[first + r], range[0], range[1], options_.march_step,
+                             options_.max_samples_per_ray, &random);
       offsets[r + 1] = offsets[r] + samples[r].size();
     }
     const size_t n = offsets[count];
@@ -179,8 +177,9 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     for (size_t r = 0; r < count; ++r) {
       for (size_t k = 0; k < samples[r].size(); ++k) {
         const size_t i = offsets[r] + k;
-        positions.col(i) = (field_rays[r].origin + samples[r][k].t * field_rays[r].direction).cast<float>();
-        directions.col(i) = field_rays[r].direction.cast<float>();
+        const Ray& ray = batch.rays[first + r];
+        positions.col(i) = FieldPoint(model_, ray.origin + samples[r][k].t * ray.direction).cast<float>();
+        directions.col(i) = ray.direction.cast<float>();
         t[i] = static_cast<float>(samples[r][k].t);
         delta[i] = static_cast<float>(samples[r][k].delta);
       }

@@ -42,7 +42,8 @@ struct TrainerOptions {
   int occupancy_interval = 16;          // steps between occupancy updates
   int occupancy_warmup = 16;            // steps before the first update (the field knows nothing before)
   double occupancy_decay = 0.95;
-  double march_step = 1.7320508 / 256;  // field units: 256 samples across the cube's diagonal
+  double march_step = 3.4641016 / 256;  // world units: 256 samples across the scene box's diagonal
+  bool contracted = false;              // an unbounded scene (nerf_model.h)
   size_t max_samples_per_ray = 1024;
   int stratified_samples = 0;           // > 0: that many stratified samples per ray, no occupancy grid (vanilla)
   size_t batch_samples = size_t{1} << 16;  // samples per step (the rays per step follow)

@@ -9,7 +9,7 @@ cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release > /dev/null
 cmake --build build -j"$(nproc)" --target photo2nerf make_synthetic_scene compare_cameras
 # Rendered every time (1 s): the rendering is deterministic, so unchanged photos leave every stage fresh.
 build/examples/make_synthetic_scene demo_photos 24
-build/cli/photo2nerf run demo_photos -w demo_workspace "$@"
+build/cli/photo2nerf run demo_photos -w demo_workspace --train.preset fast "$@"
 build/cli/photo2nerf status -w demo_workspace
 echo "recovered cameras against the truth (after a similarity alignment):"
 build/bench/compare_cameras demo_workspace/20_poses/transforms.json demo_photos/ground_truth_cameras.json

@@ -68,37 +68,6 @@ TrainView LoadView(const ImportedView& imported) {
   return view;
 }
 
-// Training views ("train" split) and held-out views (the "test" split when it has images, else "val").
-TrainingData LoadTrainingData(const fs::path& transforms, const fs::path& workspace_root, std::string* heldout_split) {
-  const ImportedDataset dataset = LoadTransformsJson(transforms, workspace_root);
-  const nlohmann::json json = ReadJsonFile(transforms);
-  TrainingData data;
-  if (json.contains("background") && json["background"].is_array() && json["background"].size() == 3) {
-    for (int c = 0; c < 3; ++c) data.background[c] = json["background"][c].get<float>();
-  }
-  const bool has_test = std::any_of(dataset.views.begin(), dataset.views.end(),
-                                    [](const ImportedView& v) { return v.view.split == "test"; });
-  *heldout_split = has_test ? "test" : "val";
-  std::vector<const ImportedView*> train, heldout;
-  for (const ImportedView& view : dataset.views) {
-    if (view.view.split == "train") train.push_back(&view);
-    if (view.view.split == *heldout_split) heldout.push_back(&view);
-  }
-  if (train.empty()) throw UserError(format("'{}' has no training view (split \"train\")", transforms.string()));
-  data.train.resize(train.size());
-  data.heldout.resize(heldout.size());
-  Progress progress("train: loading images", static_cast<int64_t>(train.size() + heldout.size()), "images");
-  tbb::parallel_for(size_t{0}, train.size() + heldout.size(), [&](size_t i) {
-    if (i < train.size()) {
-      data.train[i] = LoadView(*train[i]);
-    } else {
-      data.heldout[i - train.size()] = LoadView(*heldout[i - train.size()]);
-    }
-    progress.Add();
-  });
-  return data;
-}
-
 double Mean(const std::vector<double>& values) {
   return values.empty() ? std::nan("") : std::accumulate(values.begin(), values.end(), 0.0) / values.size();
 }
@@ -159,6 +128,43 @@ bool ModelIsFinite(NerfModel& model) {
 
 }  // namespace
 
+TrainingData LoadTrainingData(const fs::path& transforms, const fs::path& workspace_root, std::string* heldout_split) {
+  const ImportedDataset dataset = LoadTransformsJson(transforms, workspace_root);
+  const nlohmann::json json = ReadJsonFile(transforms);
+  TrainingData data;
+  if (json.contains("background") && json["background"].is_array() && json["background"].size() == 3) {
+    for (int c = 0; c < 3; ++c) data.background[c] = json["background"][c].get<float>();
+  }
+  const bool has_test = std::any_of(dataset.views.begin(), dataset.views.end(),
+                                    [](const ImportedView& v) { return v.view.split == "test"; });
+  *heldout_split = has_test ? "test" : "val";
+  std::vector<const ImportedView*> train, heldout;
+  for (const ImportedView& view : dataset.views) {
+    if (view.view.split == "train") train.push_back(&view);
+    if (view.view.split == *heldout_split) heldout.push_back(&view);
+  }
+  if (train.empty()) throw UserError(format("'{}' has no training view (split \"train\")", transforms.string()));
+  data.train.resize(train.size());
+  data.heldout.resize(heldout.size());
+  Progress progress("train: loading images", static_cast<int64_t>(train.size() + heldout.size()), "images");
+  tbb::parallel_for(size_t{0}, train.size() + heldout.size(), [&](size_t i) {
+    if (i < train.size()) {
+      data.train[i] = LoadView(*train[i]);
+    } else {
+      data.heldout[i - train.size()] = LoadView(*heldout[i - train.size()]);
+    }
+    progress.Add();
+  });
+  return data;
+}
+
+bool SceneIsUnbounded(const TrainOptions& options, const fs::path& transforms) {
+  if (options.scene != "auto") return options.scene == "unbounded";
+  const nlohmann::json json = ReadJsonFile(transforms);
+  const std::string kind = json.contains("dataset") && json["dataset"].is_object() ? json["dataset"].value("kind", "") : "";
+  return kind != "blender" && kind != "npz";
+}
+
 void TrainOptions::Check() const {
   CheckOption(time_budget >= 0, "train.time_budget", "must be 0 (the preset's) or positive");
   CheckOption(steps >= 0, "train.steps", "must be 0 (no limit) or positive");
@@ -170,6 +176,7 @@ void TrainOptions::Check() const {
   CheckOption(learning_rate >= 0 && learning_rate < 1, "train.learning_rate", "must be 0 (the field's) or in (0, 1)");
   CheckOption(eval_interval > 0, "train.eval_interval", "must be positive");
   CheckOption(eval_pixels >= 0, "train.eval_pixels", "must be 0 (all) or positive");
+  CheckOption(final_eval_pixels >= 0, "train.final_eval_pixels", "must be 0 (all) or positive");
   CheckOption(checkpoint_interval >= 0, "train.checkpoint_interval", "must be 0 (none) or positive");
 }
 
@@ -192,7 +199,7 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options) {
     trainer.field = field.ToJson();
   }
   const int march = options.march_samples > 0 ? options.march_samples : preset.march_samples;
-  trainer.march_step = std::sqrt(3.0) / march;
+  trainer.march_step = 2 * std::sqrt(3.0) / march;  // the scene box [-1, 1]^3's diagonal
   trainer.occupancy_resolution = preset.occupancy_resolution;
   trainer.batch_samples = options.batch_samples > 0 ? options.batch_samples : preset.batch_samples;
   trainer.learning_rate = options.learning_rate > 0 ? options.learning_rate : vanilla ? 5e-4 : 1e-2;
@@ -208,17 +215,20 @@ void TrainStage::Run(StageContext& context) const {
   std::string heldout_split;
   const TrainingData data = LoadTrainingData(transforms, context.workspace.root(), &heldout_split);
   TrainerOptions trainer_options = MakeTrainerOptions(options);
+  trainer_options.contracted = SceneIsUnbounded(options, transforms);
   const bool has_alpha = std::any_of(data.train.begin(), data.train.end(), [](const TrainView& v) { return v.channels == 4; });
   trainer_options.random_background = options.background == "random" || (options.background == "auto" && has_alpha);
   Trainer trainer(trainer_options, data);
   const double budget = ResolvedTimeBudget(options);
-  LogInfo(format("train: {} field, preset {}, {} training and {} held-out ({}) views, {}", options.field, options.preset,
-                 data.train.size(), data.heldout.size(), heldout_split,
+  LogInfo(format("train: {} field, {} scene, preset {}, {} training and {} held-out ({}) views, {}", options.field,
+                 trainer_options.contracted ? "unbounded" : "bounded", options.preset, data.train.size(), data.heldout.size(), heldout_split,
                  budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
 
   RunState state;
   const fs::path checkpoint = context.resume_dir / "checkpoint.bin";
+  int resumed_from = 0;
   if (LoadCheckpoint(checkpoint, context.key, &state, &trainer)) {
+    resumed_from = trainer.step();
     LogInfo(format("train: resumed at step {} ({:.1f} s of training) from {}", trainer.step(), state.train_seconds,
                    checkpoint.string()));
   }
@@ -281,7 +291,7 @@ void TrainStage::Run(StageContext& context) const {
 
   if (!ModelIsFinite(trainer.model())) throw InternalError("training ended with non-finite parameters");
   RenderStats eval_stats;
-  const std::vector<double> psnrs = trainer.HeldoutPsnr(0, &eval_stats);
+  const std::vector<double> psnrs = trainer.HeldoutPsnr(options.final_eval_pixels, &eval_stats);
   NerfModel& model = trainer.model();
   model.info = {{"transforms", transforms.string()}, {"steps", trainer.step()}, {"heldout_psnr", Mean(psnrs)}};
   SaveModel(model, context.output_dir / "model.bin");
@@ -295,8 +305,10 @@ void TrainStage::Run(StageContext& context) const {
       {"heldout_psnr", data.heldout.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(psnrs))},
       {"heldout_views", data.heldout.size()},
       {"heldout_split", heldout_split},
+      {"heldout_pixels_per_view", options.final_eval_pixels == 0 ? nlohmann::json("all") : nlohmann::json(options.final_eval_pixels)},
       {"heldout_per_view", per_view},
       {"skipped_steps", trainer.skipped_steps()},
+      {"resumed_from_step", resumed_from},
       {"training_views", data.train.size()},
       {"samples_per_ray_rendered", eval_stats.rays > 0 ? double(eval_stats.samples_evaluated) / eval_stats.rays : 0.0},
       {"render_seconds_per_view", psnrs.empty() ? 0.0 : eval_stats.seconds / psnrs.size()},
@@ -304,6 +316,7 @@ void TrainStage::Run(StageContext& context) const {
       {"field", model.field->Config()},
       {"trainer", {{"march_step", trainer_options.march_step},
                    {"batch_samples", trainer_options.batch_samples},
+                   {"contracted", trainer_options.contracted},
                    {"learning_rate", trainer_options.learning_rate},
                    {"random_background", trainer_options.random_background}}}};
   WriteJsonAtomic(context.output_dir / "train_report.json", report);

@@ -4,6 +4,7 @@
 // heldout_psnr at fixed intervals of training time; evaluation time is not counted), train_report.json and a
 // plot of held-out PSNR against time. A killed run resumes from its last checkpoint (WS/30_train.resume/).
 
+#include <filesystem>
 #include <string>
 
 #include "nerf/trainer.h"
@@ -14,6 +15,7 @@ namespace p2n {
 struct TrainOptions {
   std::string preset = "default";  // fast | default | quality: sizes, sample spacing and time budget together
   std::string field = "ngp";       // ngp (hash grid) or vanilla (the seed's positional-encoding MLP)
+  std::string scene = "auto";      // bounded (an object in the unit box), unbounded (contracted), or auto
   double time_budget = 0;          // seconds of training; 0: the preset's (fast 60, default 300, quality 900)
   int steps = 0;                   // stop after this many steps (0: no step limit)
   int batch_samples = 0;           // samples per step; 0: the preset's
@@ -24,7 +26,8 @@ struct TrainOptions {
   std::string loss = "mse";
   std::string background = "auto";  // auto: random for images with alpha, else the dataset's colour
   double eval_interval = 10;       // seconds of training between held-out evaluations
-  int eval_pixels = 4096;          // held-out pixels per view in each evaluation (0: all); the final one uses all
+  int eval_pixels = 4096;          // held-out pixels per view in each evaluation during training (0: all)
+  int final_eval_pixels = 0;       // held-out pixels per view in the final evaluation (0: all)
   double checkpoint_interval = 60;  // seconds between checkpoints (0: none)
   int seed = 0;
 
@@ -34,6 +37,10 @@ struct TrainOptions {
       {"fast", "default", "quality"});
     v("field", field, "ngp (hash grid + tiny MLPs) or vanilla (the seed's positional-encoding MLP)", "",
       OptionKind::kResult, {"ngp", "vanilla"});
+    v("scene", scene,
+      "bounded (an object inside the unit box), unbounded (space beyond it contracted), or auto: bounded for "
+      "Blender and .npz datasets, unbounded for photos",
+      "", OptionKind::kResult, {"auto", "bounded", "unbounded"});
     v("time_budget", time_budget, "training time; 0: the preset's (fast 60, default 300, quality 900)", "s");
     v("steps", steps, "stop after this many steps; 0: no step limit", "steps");
     v("batch_samples", batch_samples, "samples per training step; 0: the preset's", "samples");
@@ -45,14 +52,21 @@ struct TrainOptions {
     v("background", background, "auto: random behind images with alpha, else the dataset's background colour", "",
       OptionKind::kResult, {"auto", "random", "fixed"});
     v("eval_interval", eval_interval, "training time between held-out evaluations (metrics.csv rows)", "s");
-    v("eval_pixels", eval_pixels, "held-out pixels per view in each evaluation; 0: all (the final one uses all)",
-      "pixels");
+    v("eval_pixels", eval_pixels, "held-out pixels per view in each evaluation during training; 0: all", "pixels");
+    v("final_eval_pixels", final_eval_pixels, "held-out pixels per view in the final evaluation; 0: all", "pixels");
     v("checkpoint_interval", checkpoint_interval, "time between checkpoints that a killed run resumes from; 0: none",
       "s", OptionKind::kRuntime);
     v("seed", seed, "random seed (initialisation, rays, samples)");
   }
   void Check() const;
 };
+
+// The training views ("train" split) and held-out views (the "test" split when it has images, else "val") of a
+// transforms.json whose images lie inside `root`, decoded to 8 bits; UserError naming a bad file.
+TrainingData LoadTrainingData(const std::filesystem::path& transforms, const std::filesystem::path& root,
+                              std::string* heldout_split);
+// Whether train.scene (auto: by the dataset kind recorded in transforms.json) makes the scene unbounded.
+bool SceneIsUnbounded(const TrainOptions& options, const std::filesystem::path& transforms);
 
 // The trainer's options for these stage options (presets resolved).
 TrainerOptions MakeTrainerOptions(const TrainOptions& options);

@@ -41,7 +41,8 @@ TEST_CASE("ray-box intersection: hits, misses, axis-parallel, behind, grazing an
   CHECK_FALSE(hit({-3, 2, 0}, {1, 0, 0}));       // parallel, outside the slab
   CHECK_FALSE(hit({3, 0, 0}, {1, 0, 0}));        // the box is behind
   CHECK_FALSE(hit({-3, 0, 0}, {1, 1.5, 0}));     // passes beside it
-  CHECK(hit({-3, 1, 1}, {1, 0, 0}));             // along an edge: inside the closed box
+  CHECK_FALSE(hit({-3, 1, 1}, {1, 0, 0}));       // along an edge: it only touches the box
+  CHECK_FALSE(hit({-3, 1, 0}, {1, 0, 0}));       // in a face: the same
   auto diagonal = hit({-2, -2, -2}, {1, 1, 1});
   REQUIRE(diagonal);
   CHECK(diagonal->second - diagonal->first == Approx(2 * std::sqrt(3.0)));

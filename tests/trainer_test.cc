@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "nerf/ngp_field.h"
+#include "nerf/synthetic_scene.h"
 #include "nerf/trainer.h"
 #include "test_util.h"
 
@@ -15,25 +16,11 @@ namespace {
 
 constexpr int kSize = 40;
 
-PinholeCamera LookingAtOrigin(double angle, double height) {
-  PinholeCamera camera;
-  camera.width = camera.height = kSize;
-  camera.fx = camera.fy = 1.2 * kSize;
-  camera.cx = camera.cy = kSize / 2.0;
-  const Eigen::Vector3d centre(2.5 * std::cos(angle), 2.5 * std::sin(angle), height);
-  const Eigen::Vector3d back = centre.normalized();  // OpenGL cameras look down -z
-  const Eigen::Vector3d right = Eigen::Vector3d::UnitZ().cross(back).normalized();
-  camera.world_from_cam.block<3, 1>(0, 0) = right;
-  camera.world_from_cam.block<3, 1>(0, 1) = back.cross(right);
-  camera.world_from_cam.block<3, 1>(0, 2) = back;
-  camera.world_from_cam.block<3, 1>(0, 3) = centre;
-  return camera;
-}
-
 // The view of a sphere of radius 0.5 at the origin, coloured 0.5 + 0.5 * normal, over white.
 TrainView SphereView(double angle, double height) {
   TrainView view;
-  view.camera = LookingAtOrigin(angle, height);
+  view.camera = LookAtCamera(Eigen::Vector3d(2.5 * std::cos(angle), 2.5 * std::sin(angle), height),
+                             Eigen::Vector3d::Zero(), kSize, kSize, 45);
   view.pixels.resize(kSize * kSize * 3);
   for (int y = 0; y < kSize; ++y) {
     for (int x = 0; x < kSize; ++x) {
@@ -65,7 +52,7 @@ TrainerOptions SmallOptions() {
   TrainerOptions options;
   options.field = field.ToJson();
   options.occupancy_resolution = 32;
-  options.march_step = std::sqrt(3.0) / 128;
+  options.march_step = 2 * std::sqrt(3.0) / 128;
   options.batch_samples = 8192;
   options.seed = 5;
   return options;
@@ -94,7 +81,7 @@ TEST_CASE("training learns a sphere: held-out PSNR rises far above the untrained
   for (int step = 0; step < 300; ++step) REQUIRE_FALSE(trainer.Step(step / 300.0).skipped);
   const double after = Mean(trainer.HeldoutPsnr(0));
   INFO("held-out PSNR before " << before << " dB, after " << after << " dB");
-  CHECK(after > 22.0);
+  CHECK(after > 20.0);
   CHECK(after > before + 10.0);
   // The occupancy grid has found the sphere: most of the cube is empty, and renders take few samples.
   CHECK(trainer.model().occupancy.OccupiedFraction() < 0.5);
@@ -187,6 +174,49 @@ TEST_CASE("model.bin renders the same after loading; newer and damaged files are
   CHECK_THROWS_WITH(LoadModel(dir / "short.bin"), Catch::Contains("damaged"));
   WriteBinaryFileAtomic(dir / "other.bin", {'h', 'e', 'l', 'l', 'o'});
   CHECK_THROWS_WITH(LoadModel(dir / "other.bin"), Catch::Contains("not a photo2nerf model"));
+}
+
+TEST_CASE("extreme inputs stay finite: black and white targets, near = far, rays that miss or graze the box",
+          "[trainer]") {
+  const TrainingData data = SphereScene();
+  Trainer trainer(SmallOptions(), data);
+  for (const float value : {0.0f, 1.0f}) {  // all-zero and all-saturated colours
+    for (int step = 0; step < 20; ++step) {
+      RayBatch batch = trainer.SampleBatch(256);
+      batch.target.setConstant(value);
+      const StepResult result = trainer.StepOnBatch(batch, 0);
+      REQUIRE_FALSE(result.skipped);
+      REQUIRE(std::isfinite(result.loss));
+    }
+  }
+  for (const float v : Parameters(trainer.model())) REQUIRE(std::isfinite(v));
+  const NerfModel& model = trainer.model();
+  const Ray towards_centre{{0, -2.5, 0}, {0, 1, 0}};
+  CHECK(SampleRay(model, towards_centre, 1.0, 1.0, model.march_step, 1000, nullptr).empty());  // near = far
+  // A ray that misses the box, and one that only grazes its edge, render the background exactly.
+  const std::vector<Ray> rays = {{{0, -2.5, 1.5}, {0, 1, 0}}, {{1, -2.5, 1}, {0, 1, 0}}};  // misses; on an edge
+  const std::vector<Eigen::Vector2d> near_far(2, Eigen::Vector2d(-1, -1));
+  float rgb[6], depth[2], opacity[2];
+  RenderRays(model, rays, near_far, {}, rgb, depth, opacity, nullptr);
+  for (int k = 0; k < 6; ++k) CHECK(rgb[k] == model.background[k % 3]);
+  CHECK(opacity[0] == 0.0f);
+}
+
+TEST_CASE("unbounded scenes: the contraction maps all of space into the field's cube, continuously", "[trainer]") {
+  NerfModel model;
+  model.contracted = true;
+  CHECK(FieldPoint(model, Eigen::Vector3d::Zero()).isApprox(Eigen::Vector3d::Constant(0.5)));
+  CHECK(FieldPoint(model, Eigen::Vector3d(1, 0, 0)).isApprox(Eigen::Vector3d(0.75, 0.5, 0.5)));  // the box's face
+  CHECK(FieldPoint(model, Eigen::Vector3d(1 + 1e-9, 0, 0)).isApprox(Eigen::Vector3d(0.75, 0.5, 0.5), 1e-8));
+  const Eigen::Vector3d far = FieldPoint(model, Eigen::Vector3d(1e12, -3e12, 0));
+  CHECK(far.maxCoeff() <= 1.0);
+  CHECK(far.minCoeff() >= 0.0);
+  CHECK(far[1] == Approx(0.0).margin(1e-9));
+  // Samples of an unbounded ray get longer with the distance and reach far away.
+  const std::vector<MarchSample> samples = SampleRay(model, {{0, 0, 0}, {1, 0, 0}}, -1, -1, 0.01, 100000, nullptr);
+  REQUIRE(samples.size() > 10);
+  CHECK(samples.back().t > 100);
+  CHECK(samples.back().delta > 10 * samples.front().delta);
 }
 
 }  // namespace p2n::testing

@@ -1,0 +1,97 @@
+// Rendering error against render time (a work-precision diagram) for one trained workspace: renders the held-out
+// views with sample spacings from coarse to fine, (a) as the renderer does (occupancy grid + early termination),
+// (b) without early termination, (c) without either (every cell occupied). Error is PSNR against a very fine
+// reference render (spacing / 8, no termination) and against the photos. Writes OUT.csv and OUT.png.
+// Usage: render_bench WORKSPACE OUT [VIEWS]
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+
+#include "nerf/plot.h"
+#include "nerf/renderer.h"
+#include "stages/train_stage.h"
+
+namespace {
+
+double Psnr(const std::vector<float>& a, const std::vector<float>& b) {
+  double squared = 0;
+  for (size_t i = 0; i < a.size(); ++i) squared += (a[i] - b[i]) * (a[i] - b[i]);
+  return -10 * std::log10(std::max(squared / a.size(), 1e-12));
+}
+
+std::vector<float> PhotoPixels(const p2n::TrainView& view, const std::array<float, 3>& background) {
+  std::vector<float> pixels;
+  for (size_t p = 0; p < view.pixels.size() / view.channels; ++p) {
+    const float alpha = view.channels == 4 ? view.pixels[p * 4 + 3] / 255.0f : 1.0f;
+    for (int c = 0; c < 3; ++c) pixels.push_back(alpha * view.pixels[p * view.channels + c] / 255.0f + (1 - alpha) * background[c]);
+  }
+  return pixels;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: render_bench WORKSPACE OUT [VIEWS]\n");
+    return 1;
+  }
+  const std::filesystem::path ws = argv[1];
+  const std::string out = argv[2];
+  const size_t max_views = argc > 3 ? std::atoi(argv[3]) : 3;
+  std::string split;
+  p2n::TrainingData data = p2n::LoadTrainingData(ws / "20_poses" / "transforms.json", ws, &split);
+  if (data.heldout.size() > max_views) data.heldout.resize(max_views);
+  const p2n::NerfModel model = p2n::LoadModel(ws / "30_train" / "model.bin");
+  p2n::NerfModel dense = p2n::LoadModel(ws / "30_train" / "model.bin");
+  dense.occupancy.MarkAllOccupied();
+
+  std::vector<std::vector<float>> reference;
+  p2n::RenderOptions fine;
+  fine.step_scale = 0.125;
+  fine.min_transmittance = 0;
+  for (const p2n::TrainView& view : data.heldout) {
+    reference.push_back(p2n::RenderView(model, view.camera, view.near, view.far, fine).rgb.pixels);
+  }
+  std::ofstream csv(out + ".csv");
+  csv << "method,step_scale,seconds_per_frame,samples_per_ray,psnr_vs_reference,psnr_vs_photos\n";
+  std::vector<p2n::PlotSeries> series;
+  struct Method {
+    const char* name;
+    const p2n::NerfModel* model;
+    float min_transmittance;
+  };
+  for (const Method& method : {Method{"occupancy + early termination", &model, 1e-4f},
+                               Method{"occupancy, no termination", &model, 0.0f},
+                               Method{"no occupancy, no termination", &dense, 0.0f}}) {
+    p2n::PlotSeries line{method.name, {}, {}};
+    for (const double scale : {8.0, 4.0, 2.0, 1.0, 0.5, 0.25}) {
+      p2n::RenderOptions options;
+      options.step_scale = scale;
+      options.min_transmittance = method.min_transmittance;
+      double seconds = 0, vs_reference = 0, vs_photos = 0, samples = 0, rays = 0;
+      for (size_t v = 0; v < data.heldout.size(); ++v) {
+        const p2n::TrainView& view = data.heldout[v];
+        const p2n::RenderedView rendered = p2n::RenderView(*method.model, view.camera, view.near, view.far, options);
+        seconds += rendered.stats.seconds;
+        samples += rendered.stats.samples_evaluated;
+        rays += rendered.stats.rays;
+        vs_reference += Psnr(rendered.rgb.pixels, reference[v]);
+        vs_photos += Psnr(rendered.rgb.pixels, PhotoPixels(view, model.background));
+      }
+      const double n = data.heldout.size();
+      csv << method.name << "," << scale << "," << seconds / n << "," << samples / rays << "," << vs_reference / n
+          << "," << vs_photos / n << "\n";
+      std::printf("%-30s step x%-5g %8.3f s/frame %7.1f samples/ray  %6.2f dB vs reference  %6.2f dB vs photos\n",
+                  method.name, scale, seconds / n, samples / rays, vs_reference / n, vs_photos / n);
+      line.x.push_back(seconds / n);
+      line.y.push_back(vs_reference / n);
+    }
+    series.push_back(line);
+  }
+  p2n::WriteLinePlot(out + ".png", {"rendering: error against time", "seconds per frame", "PSNR vs fine reference (dB)"},
+                     series);
+  return 0;
+}

@@ -1,0 +1,112 @@
+// Throughput of the ngp field's MLPs against this machine's dense matrix-multiply speed, measured in one run:
+// an Eigen single-precision GEMM of comparable shape (64 x 64 times 64 x N) and a large square one, then the
+// density and colour MLPs' forward + backward on N samples (FLOPs counted from their layer sizes), and the
+// whole field (hash grid included). Uses the TBB threads given (default: all cores) by splitting N.
+// Usage: throughput_bench [SAMPLES [REPEATS]]
+
+#include <Eigen/Core>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+#include "nerf/ngp_field.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+template <class F>
+double MedianSeconds(int repeats, F work) {
+  std::vector<double> times;
+  for (int r = 0; r < repeats; ++r) {
+    const auto start = Clock::now();
+    work();
+    times.push_back(std::chrono::duration<double>(Clock::now() - start).count());
+  }
+  std::sort(times.begin(), times.end());
+  return times[times.size() / 2];
+}
+
+// FLOPs of forward + backward of one MLP per sample: 2 per multiply-add forward, twice that backward (weight
+// and input gradients).
+double MlpFlops(const p2n::MlpConfig& c) {
+  double macs = 0;
+  int in = c.inputs;
+  for (int l = 0; l <= c.hidden_layers; ++l) {
+    const int out = l == c.hidden_layers ? c.outputs : c.width;
+    macs += double(in) * out;
+    in = out;
+  }
+  return 2 * macs * 3;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int n = argc > 1 ? std::atoi(argv[1]) : 65536;
+  const int repeats = argc > 2 ? std::atoi(argv[2]) : 7;
+  const int chunks = 64;
+  const int per_chunk = n / chunks;
+
+  // Dense GEMM of the MLP's shape, chunked over threads like the trainer.
+  const Eigen::MatrixXf w = Eigen::MatrixXf::Random(64, 64);
+  std::vector<Eigen::MatrixXf> inputs(chunks, Eigen::MatrixXf::Random(64, per_chunk)), outputs(chunks);
+  const double gemm_seconds = MedianSeconds(repeats, [&] {
+    tbb::parallel_for(0, chunks, [&](int c) { outputs[c].noalias() = w * inputs[c]; });
+  });
+  const double gemm_gflops = 2.0 * 64 * 64 * per_chunk * chunks / gemm_seconds / 1e9;
+  const Eigen::MatrixXf a = Eigen::MatrixXf::Random(2048, 2048), b = Eigen::MatrixXf::Random(2048, 2048);
+  Eigen::MatrixXf product(2048, 2048);
+  const double big_seconds = MedianSeconds(3, [&] { product.noalias() = a * b; });
+  const double big_gflops = 2.0 * 2048 * 2048 * 2048 / big_seconds / 1e9;
+
+  p2n::NgpFieldConfig config;
+  p2n::NgpField<float> field(config, 1);
+  const double mlp_flops = MlpFlops(field.density_mlp().config()) + MlpFlops(field.colour_mlp().config());
+  std::vector<Eigen::MatrixXf> positions(chunks), directions(chunks);
+  for (int c = 0; c < chunks; ++c) {
+    positions[c] = (Eigen::MatrixXf::Random(3, per_chunk).array() * 0.5f + 0.5f).matrix();
+    directions[c] = Eigen::MatrixXf::Random(3, per_chunk).colwise().normalized();
+  }
+  std::vector<std::vector<float>> d_dense(chunks, std::vector<float>(field.num_dense_params()));
+  // MLPs alone: forward and backward of both networks on the encoded inputs.
+  std::vector<p2n::RadianceField<float>::Cache> caches(chunks);
+  const double mlp_seconds = MedianSeconds(repeats, [&] {
+    tbb::parallel_for(0, chunks, [&](int c) {
+      Eigen::MatrixXf density_out, rgb, d_in;
+      p2n::Mlp<float>::Cache density_cache, colour_cache;
+      const Eigen::MatrixXf encoded = Eigen::MatrixXf::Constant(32, per_chunk, 0.01f);
+      const Eigen::MatrixXf colour_in = Eigen::MatrixXf::Constant(31, per_chunk, 0.1f);
+      field.density_mlp().Forward(encoded, &density_out, &density_cache);
+      field.colour_mlp().Forward(colour_in, &rgb, &colour_cache);
+      field.colour_mlp().Backward(colour_cache, rgb, d_dense[c].data(), &d_in);
+      field.density_mlp().Backward(density_cache, density_out, d_dense[c].data(), &d_in);
+    });
+  });
+  // The whole field: grid + MLPs + spherical harmonics, forward and backward (grid backward once, by level).
+  const double field_seconds = MedianSeconds(repeats, [&] {
+    field.grid().ZeroGrad();
+    std::vector<Eigen::MatrixXf> d_encoded(chunks);
+    tbb::parallel_for(0, chunks, [&](int c) {
+      Eigen::MatrixXf density, rgb;
+      field.Forward(positions[c], directions[c], &density, &rgb, &caches[c]);
+      field.Backward(caches[c], density, rgb, d_dense[c].data(), &d_encoded[c]);
+    });
+    for (int c = 0; c < chunks; ++c) field.grid().Backward(positions[c], d_encoded[c]);
+  });
+  const double samples = double(per_chunk) * chunks;
+  std::printf("samples per batch                 %.0f\n", samples);
+  std::printf("GEMM 64x64 * 64xN (chunked)       %.1f GFLOP/s\n", gemm_gflops);
+  std::printf("GEMM 2048^3                       %.1f GFLOP/s\n", big_gflops);
+  std::printf("MLPs fwd+bwd                      %.1f GFLOP/s = %.0f%% of the chunked GEMM, %.2f M samples/s\n",
+              mlp_flops * samples / mlp_seconds / 1e9, 100 * mlp_flops * samples / mlp_seconds / 1e9 / gemm_gflops,
+              samples / mlp_seconds / 1e6);
+  std::printf("MLP FLOPs per sample (fwd+bwd)    %.0f\n", mlp_flops);
+  std::printf("whole field fwd+bwd               %.2f M samples/s (MLPs %.0f%% of its time)\n",
+              samples / field_seconds / 1e6, 100 * mlp_seconds / field_seconds);
+  return 0;
+}

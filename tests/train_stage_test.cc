@@ -1,0 +1,110 @@
+// The train stage in the pipeline: its outputs, its cache, and resuming a cancelled run from its checkpoint.
+
+#include <catch2/catch.hpp>
+
+#include <thread>
+
+#include "nerf/nerf_model.h"
+#include "nerf/synthetic_scene.h"
+#include "pipeline/cancel.h"
+#include "pipeline/errors.h"
+#include "pipeline/file_util.h"
+#include "stages/stages.h"
+#include "test_util.h"
+
+namespace p2n::testing {
+namespace fs = std::filesystem;
+namespace {
+
+// A dataset with cameras (the synthetic scene's true ones as transforms.json), 12 views of 64 x 48.
+fs::path SmallDataset(const TempDir& dir) {
+  SyntheticSceneOptions scene;
+  scene.num_views = 12;
+  scene.width = 64;
+  scene.height = 48;
+  WriteSyntheticScene(scene, dir / "data");
+  fs::rename(dir / "data" / "ground_truth_cameras.json", dir / "data" / "transforms.json");
+  return dir / "data";
+}
+
+Config TrainConfig(int steps) {
+  static const OptionRegistry registry = AllOptions();
+  Config config(registry);
+  config.Set("run.progress", "none", "test");
+  config.Set("train.preset", "fast", "test");
+  config.Set("train.steps", steps, "test");
+  config.Set("train.eval_interval", 1.0, "test");
+  return config;
+}
+
+}  // namespace
+
+TEST_CASE("train stage: model.bin, metrics.csv and train_report.json; fresh on a rerun, stale on a new seed",
+          "[train]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir);
+  Workspace workspace = Workspace::Open(dir / "ws", true);
+  workspace.SetInput(data);
+  const Runner runner = MakeRunner(data);
+  Config config = TrainConfig(40);
+  runner.Run(workspace, config, {});
+
+  const fs::path out = dir / "ws" / "30_train";
+  const nlohmann::json report = ReadJsonFile(out / "train_report.json");
+  CHECK(report["steps"] == 40);
+  CHECK(report["wall_seconds"].get<double>() > 0);
+  CHECK(report["heldout_views"].get<int>() == 2);  // every 8th of 12
+  CHECK(std::isfinite(report["heldout_psnr"].get<double>()));
+  CHECK(report["heldout_per_view"].size() == 2);
+  const std::string metrics = ReadText(out / "metrics.csv");
+  CHECK(metrics.rfind("wall_seconds,step,train_loss,heldout_psnr\n", 0) == 0);
+  CHECK(std::count(metrics.begin(), metrics.end(), '\n') >= 2);  // the header and at least the final row
+  const NerfModel model = LoadModel(out / "model.bin");
+  CHECK(model.info["steps"] == 40);
+  CHECK(fs::exists(out / "psnr.png"));
+  CHECK_FALSE(fs::exists(dir / "ws" / "30_train.resume"));
+
+  for (const StageStatus& status : runner.Status(workspace, config)) CHECK(status.state == StageState::kFresh);
+  config.Set("train.seed", 3, "test");
+  const std::vector<StageStatus> after = runner.Status(workspace, config);
+  CHECK(after.back().state == StageState::kStale);
+  CHECK_THAT(after.back().reasons.front(), Catch::Contains("train.seed"));
+}
+
+TEST_CASE("train stage: a cancelled run resumes from its checkpoint and finishes the same number of steps",
+          "[train]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir);
+  Workspace workspace = Workspace::Open(dir / "ws", true);
+  workspace.SetInput(data);
+  const Runner runner = MakeRunner(data);
+  Config config = TrainConfig(150);
+  config.Set("train.checkpoint_interval", 0.05, "test");
+  const fs::path checkpoint = dir / "ws" / "30_train.resume" / "checkpoint.bin";
+  // Cancel (as Ctrl-C does) once a checkpoint exists.
+  std::thread canceller([&] {
+    while (!fs::exists(checkpoint)) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    RequestCancel();
+  });
+  CHECK_THROWS_AS(runner.Run(workspace, config, {}), Cancelled);
+  canceller.join();
+  ResetCancel();
+  REQUIRE(fs::exists(checkpoint));
+  CHECK_FALSE(fs::exists(dir / "ws" / "30_train"));
+
+  runner.Run(workspace, config, {});
+  const nlohmann::json report = ReadJsonFile(dir / "ws" / "30_train" / "train_report.json");
+  CHECK(report["steps"] == 150);
+  CHECK(report["resumed_from_step"].get<int>() > 0);
+  CHECK(report["resumed_from_step"].get<int>() < 150);
+  CHECK_FALSE(fs::exists(checkpoint));  // removed once the stage is complete
+
+  // A checkpoint of other options is not resumed from: it would be another result.
+  fs::create_directories(checkpoint.parent_path());
+  WriteText(checkpoint, "not a checkpoint");
+  config.Set("train.seed", 9, "test");
+  runner.Run(workspace, config, {});
+  CHECK(ReadJsonFile(dir / "ws" / "30_train" / "train_report.json")["resumed_from_step"] == 0);
+}
+
+}  // namespace p2n::testing
