@@ -27,7 +27,7 @@ struct TrainOptions {
   std::string background = "auto";  // auto: random for images with alpha, else the dataset's colour
   double eval_interval = 10;       // seconds of training between held-out evaluations
   int eval_pixels = 4096;          // held-out pixels per view in each evaluation during training (0: all)
-  int final_eval_pixels = 0;       // held-out pixels per view in the final evaluation (0: all)
+  int final_eval_pixels = 65536;   // held-out pixels per view in the final evaluation (0: all)
   double checkpoint_interval = 60;  // seconds between checkpoints (0: none)
   int seed = 0;
 
