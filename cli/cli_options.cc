@@ -40,6 +40,7 @@ void AddOptionFlags(CLI::App& app, const OptionRegistry& registry, std::map<std:
     app.add_option_function<std::string>(
            "--" + spec.key, [option_text, key = spec.key](const std::string& text) { (*option_text)[key] = text; },
            help)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast)  // the last value given wins
         ->type_name(type)
         ->default_str(default_text)
         ->group(spec.kind == OptionKind::kResult ? "Options that change results (remembered by the workspace)"

@@ -38,8 +38,10 @@ HashGridConfig HashGridConfig::FromJson(const nlohmann::json& json) {
 template <typename T>
 HashGridEncoding<T>::HashGridEncoding(int dims, const HashGridConfig& config, uint64_t seed)
     : dims_(dims), config_(config) {
-  if (dims < 1 || dims > 3 || config.levels < 1 || config.features_per_level < 1 || config.log2_table_size < 4 ||
-      config.log2_table_size > 26 || config.base_resolution < 1 || config.finest_resolution < config.base_resolution) {
+  if (dims < 1 || dims > 3 || config.levels < 1 || config.levels > 64 || config.features_per_level < 1 ||
+      config.features_per_level > 8 || config.log2_table_size < 4 || config.log2_table_size > 24 ||
+      config.base_resolution < 1 || config.finest_resolution < config.base_resolution ||
+      config.finest_resolution > (1 << 20)) {
     throw std::invalid_argument("hash grid: invalid config " + config.ToJson().dump());
   }
   const double growth = config.levels > 1 ? std::exp((std::log(config.finest_resolution) -
@@ -59,6 +61,7 @@ HashGridEncoding<T>::HashGridEncoding(int dims, const HashGridConfig& config, ui
     levels_.push_back(level);
   }
   const size_t values = offset * config.features_per_level;
+  if (values > (size_t{1} << 27)) throw std::invalid_argument("hash grid: more than 2^27 parameters " + config.ToJson().dump());
   params_.resize(values);
   std::mt19937_64 random(seed);
   std::uniform_real_distribution<double> uniform(-1e-4, 1e-4);

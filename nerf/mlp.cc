@@ -20,8 +20,10 @@ nlohmann::json MlpConfig::ToJson() const {
 
 template <typename T>
 Mlp<T>::Mlp(const MlpConfig& config, uint64_t seed) : config_(config) {
-  if (config.inputs <= 0 || config.outputs <= 0 || config.width <= 0 || config.hidden_layers < 0) {
-    throw std::invalid_argument("MLP sizes must be positive: " + config.ToJson().dump());
+  if (config.inputs <= 0 || config.outputs <= 0 || config.width <= 0 || config.hidden_layers < 0 ||
+      config.inputs > 65536 || config.outputs > 65536 || config.width > 4096 || config.hidden_layers > 64) {
+    throw std::invalid_argument("MLP sizes must be positive and at most 65536 inputs and outputs, 4096 wide, 64 "
+                                "hidden layers: " + config.ToJson().dump());
   }
   size_t offset = 0;
   int inputs = config.inputs;
@@ -31,6 +33,7 @@ Mlp<T>::Mlp(const MlpConfig& config, uint64_t seed) : config_(config) {
     offset += static_cast<size_t>(inputs) * outputs + outputs;
     inputs = outputs;
   }
+  if (offset > (size_t{1} << 27)) throw std::invalid_argument("MLP: more than 2^27 parameters " + config.ToJson().dump());
   params_.assign(offset, T(0));
   std::mt19937_64 random(seed);
   for (const Layer& layer : layers_) {

@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 
 namespace p2n {
@@ -116,6 +118,24 @@ void WriteImageStrip(const std::filesystem::path& path, const std::vector<Captio
   cv::Mat strip;
   cv::hconcat(tiles, strip);
   if (!cv::imwrite(path.string(), strip)) throw std::runtime_error("cannot write '" + path.string() + "'");
+}
+
+PlotSeries CsvSeries(const std::string& name, const std::string& csv, int x_column, int y_column) {
+  PlotSeries series{name, {}, {}};
+  std::istringstream rows(csv);
+  std::string row;
+  std::getline(rows, row);  // the header
+  while (std::getline(rows, row)) {
+    std::vector<double> values;
+    std::istringstream cells(row);
+    for (std::string cell; std::getline(cells, cell, ',');) values.push_back(std::strtod(cell.c_str(), nullptr));
+    const int needed = std::max(x_column, y_column);
+    if (static_cast<int>(values.size()) > needed && std::isfinite(values[x_column]) && std::isfinite(values[y_column])) {
+      series.x.push_back(values[x_column]);
+      series.y.push_back(values[y_column]);
+    }
+  }
+  return series;
 }
 
 }  // namespace p2n

@@ -18,6 +18,10 @@ struct PlotLabels {
   std::string title, x_axis, y_axis;
 };
 
+// The series of columns `x_column` and `y_column` (0-based) of CSV text with a header line; rows whose values
+// are not finite numbers are left out.
+PlotSeries CsvSeries(const std::string& name, const std::string& csv, int x_column, int y_column);
+
 // Draws the series (finite points only) with axes, ticks and a legend; throws std::runtime_error naming the
 // file when it cannot be written.
 void WriteLinePlot(const std::filesystem::path& path, const PlotLabels& labels, const std::vector<PlotSeries>& series);

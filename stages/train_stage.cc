@@ -7,7 +7,6 @@
 #include <cmath>
 #include <fstream>
 #include <numeric>
-#include <sstream>
 
 #include "nerf/image_io.h"
 #include "nerf/ngp_field.h"
@@ -113,6 +112,35 @@ bool LoadCheckpoint(const fs::path& path, const std::string& key, RunState* stat
     LogWarning(format("train: cannot resume ({}); starting over", error.what()));
     return false;
   }
+}
+
+nlohmann::json TrainReport(Trainer& trainer, const TrainerOptions& trainer_options, const TrainOptions& options,
+                           const TrainingData& data, const std::string& heldout_split,
+                           const std::vector<double>& psnrs, const RenderStats& eval_stats, double train_seconds,
+                           int resumed_from) {
+  nlohmann::json per_view = nlohmann::json::array();
+  for (size_t v = 0; v < psnrs.size(); ++v) per_view.push_back({{"view", data.heldout[v].name}, {"psnr", psnrs[v]}});
+  NerfModel& model = trainer.model();
+  return {{"steps", trainer.step()},
+          {"wall_seconds", train_seconds},
+          {"heldout_psnr", psnrs.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(psnrs))},
+          {"heldout_views", data.heldout.size()},
+          {"heldout_split", heldout_split},
+          {"heldout_pixels_per_view",
+           options.final_eval_pixels == 0 ? nlohmann::json("all") : nlohmann::json(options.final_eval_pixels)},
+          {"heldout_per_view", per_view},
+          {"skipped_steps", trainer.skipped_steps()},
+          {"resumed_from_step", resumed_from},
+          {"training_views", data.train.size()},
+          {"samples_per_ray_rendered", eval_stats.rays > 0 ? double(eval_stats.samples_evaluated) / eval_stats.rays : 0.0},
+          {"render_seconds_per_view", psnrs.empty() ? 0.0 : eval_stats.seconds / psnrs.size()},
+          {"occupied_fraction", model.occupancy.OccupiedFraction()},
+          {"field", model.field->Config()},
+          {"trainer", {{"march_step", trainer_options.march_step},
+                       {"batch_samples", trainer_options.batch_samples},
+                       {"contracted", trainer_options.contracted},
+                       {"learning_rate", trainer_options.learning_rate},
+                       {"random_background", trainer_options.random_background}}}};
 }
 
 bool ModelIsFinite(NerfModel& model) {
@@ -240,17 +268,12 @@ void TrainStage::Run(StageContext& context) const {
     const double by_steps = options.steps > 0 ? double(trainer.step()) / options.steps : 0;
     return std::clamp(std::max(by_time, by_steps), 0.0, 1.0);
   };
-  const auto evaluate = [&](size_t pixels) {
-    const std::vector<double> psnrs = trainer.HeldoutPsnr(pixels);
-    return Mean(psnrs);
-  };
   const auto add_row = [&] {
-    const double psnr = data.heldout.empty() ? std::nan("") : evaluate(options.eval_pixels);
+    const double psnr = data.heldout.empty() ? std::nan("") : Mean(trainer.HeldoutPsnr(options.eval_pixels));
     const double loss = state.loss_steps > 0 ? state.loss_sum / state.loss_steps : std::nan("");
     state.metrics += format("{:.3f},{},{:.6g},{:.4f}\n", state.train_seconds, trainer.step(), loss, psnr);
     state.loss_sum = 0;
     state.loss_steps = 0;
-    return psnr;
   };
 
   Progress progress("train", budget > 0 ? static_cast<int64_t>(budget) : options.steps, budget > 0 ? "s" : "steps");
@@ -295,42 +318,13 @@ void TrainStage::Run(StageContext& context) const {
   NerfModel& model = trainer.model();
   model.info = {{"transforms", transforms.string()}, {"steps", trainer.step()}, {"heldout_psnr", Mean(psnrs)}};
   SaveModel(model, context.output_dir / "model.bin");
-  WriteFileAtomic(context.output_dir / "metrics.csv", "wall_seconds,step,train_loss,heldout_psnr\n" + state.metrics);
 
-  nlohmann::json per_view = nlohmann::json::array();
-  for (size_t v = 0; v < psnrs.size(); ++v) per_view.push_back({{"view", data.heldout[v].name}, {"psnr", psnrs[v]}});
-  const nlohmann::json report = {
-      {"steps", trainer.step()},
-      {"wall_seconds", state.train_seconds},
-      {"heldout_psnr", data.heldout.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(psnrs))},
-      {"heldout_views", data.heldout.size()},
-      {"heldout_split", heldout_split},
-      {"heldout_pixels_per_view", options.final_eval_pixels == 0 ? nlohmann::json("all") : nlohmann::json(options.final_eval_pixels)},
-      {"heldout_per_view", per_view},
-      {"skipped_steps", trainer.skipped_steps()},
-      {"resumed_from_step", resumed_from},
-      {"training_views", data.train.size()},
-      {"samples_per_ray_rendered", eval_stats.rays > 0 ? double(eval_stats.samples_evaluated) / eval_stats.rays : 0.0},
-      {"render_seconds_per_view", psnrs.empty() ? 0.0 : eval_stats.seconds / psnrs.size()},
-      {"occupied_fraction", model.occupancy.OccupiedFraction()},
-      {"field", model.field->Config()},
-      {"trainer", {{"march_step", trainer_options.march_step},
-                   {"batch_samples", trainer_options.batch_samples},
-                   {"contracted", trainer_options.contracted},
-                   {"learning_rate", trainer_options.learning_rate},
-                   {"random_background", trainer_options.random_background}}}};
+  const nlohmann::json report = TrainReport(trainer, trainer_options, options, data, heldout_split, psnrs, eval_stats,
+                                            state.train_seconds, resumed_from);
   WriteJsonAtomic(context.output_dir / "train_report.json", report);
-
-  PlotSeries curve{"held-out PSNR", {}, {}};
-  std::istringstream rows(state.metrics);
-  for (std::string row; std::getline(rows, row);) {
-    double seconds = 0, loss = 0, psnr = 0;
-    int step = 0;
-    if (std::sscanf(row.c_str(), "%lf,%d,%lf,%lf", &seconds, &step, &loss, &psnr) == 4 && std::isfinite(psnr)) {
-      curve.x.push_back(seconds);
-      curve.y.push_back(psnr);
-    }
-  }
+  const std::string metrics = "wall_seconds,step,train_loss,heldout_psnr\n" + state.metrics;
+  WriteFileAtomic(context.output_dir / "metrics.csv", metrics);
+  const PlotSeries curve = CsvSeries("held-out PSNR", metrics, 0, 3);
   if (!curve.x.empty()) {
     WriteLinePlot(context.output_dir / "psnr.png",
                   {"held-out PSNR against training time", "training time (s)", "PSNR (dB)"}, {curve});

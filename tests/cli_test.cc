@@ -65,6 +65,9 @@ TEST_CASE("cli: a run, a fresh rerun, status and clean", "[cli]") {
   CHECK_THAT(Photo2Nerf({"status", "-w", ws}).output, Catch::Contains("fresh"));
   Result status = Photo2Nerf({"status", "-w", ws, "--ingest.max_image_size", "20"});
   CHECK_THAT(status.output, Catch::Contains("stale") && Catch::Contains("option ingest.max_image_size changed (16 -> 20)"));
+  // An option given twice: the last value wins (as with most tools).
+  Result twice = Photo2Nerf({"status", "-w", ws, "--ingest.max_image_size", "30", "--ingest.max_image_size", "20"});
+  CHECK_THAT(twice.output, Catch::Contains("(16 -> 20)"));
   CHECK(Photo2Nerf({"clean", "-w", ws}).code == 0);
   CHECK_THAT(Photo2Nerf({"status", "-w", ws}).output, Catch::Contains("missing"));
   CHECK(fs::exists(dir / "photos" / "photo 0.png"));

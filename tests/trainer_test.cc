@@ -174,6 +174,11 @@ TEST_CASE("model.bin renders the same after loading; newer and damaged files are
   CHECK_THROWS_WITH(LoadModel(dir / "short.bin"), Catch::Contains("damaged"));
   WriteBinaryFileAtomic(dir / "other.bin", {'h', 'e', 'l', 'l', 'o'});
   CHECK_THROWS_WITH(LoadModel(dir / "other.bin"), Catch::Contains("not a photo2nerf model"));
+  // The fuzzer's seeds are valid models (of both fields).
+  for (const char* seed : {"tiny_ngp.bin", "tiny_vanilla.bin"}) {
+    const NerfModel tiny = LoadModel(std::filesystem::path(P2N_SOURCE_DIR) / "tests" / "fuzz" / "corpus" / "model" / seed);
+    CHECK(tiny.occupancy.resolution() == 2);
+  }
 }
 
 TEST_CASE("extreme inputs stay finite: black and white targets, near = far, rays that miss or graze the box",
