@@ -102,9 +102,6 @@ void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std:
         accumulators[r].Add(density(0, i), colour.col(i).data(), static_cast<float>(s.t), static_cast<float>(s.delta));
         ++chunk_evaluated;
       }
-      bool any = false;
-      for (size_t r = 0; r < count && !any; ++r) any = next[r] < samples[r].size() && !accumulators[r].Done(options.min_transmittance);
-      if (!any) break;
     }
     for (size_t r = 0; r < count; ++r) {
       const CompositeResult<float> result = accumulators[r].Finish(model.background.data());
