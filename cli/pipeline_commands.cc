@@ -121,7 +121,9 @@ int RunStatus(int argc, char** argv) {
     std::string detail;
     if (status.state == StageState::kFresh) {
       detail = format("key {}, {:.2f} s", status.expected_key.substr(0, 12), status.manifest->wall_seconds);
-      for (const auto& [name, value] : status.manifest->summary.items()) detail += format(", {} {}", value.dump(), name);
+      for (const auto& [name, value] : status.manifest->summary.items()) {
+        detail += format(", {} {}", value.is_number_float() ? format("{:.4g}", value.get<double>()) : value.dump(), name);
+      }
     }
     std::cout << format("{:<10} {:<11} {}\n", status.stage->name(), StageStateName(status.state), detail);
     for (size_t i = 0; i < status.reasons.size() && i < kMaxReasonsShown; ++i) {

@@ -329,10 +329,9 @@ void TrainStage::Run(StageContext& context) const {
     WriteLinePlot(context.output_dir / "psnr.png",
                   {"held-out PSNR against training time", "training time (s)", "PSNR (dB)"}, {curve});
   }
-  const auto rounded = [](double value, double unit) { return std::round(value / unit) * unit; };
   context.summary = {{"steps", trainer.step()},
-                     {"train_seconds", rounded(state.train_seconds, 0.1)},
-                     {"heldout_psnr", psnrs.empty() ? nlohmann::json(nullptr) : nlohmann::json(rounded(Mean(psnrs), 0.01))}};
+                     {"train_seconds", state.train_seconds},
+                     {"heldout_psnr", report["heldout_psnr"]}};
   LogInfo(format("train: {} steps in {:.1f} s; held-out PSNR {:.2f} dB over {} views ({:.1f} samples per ray)",
                  trainer.step(), state.train_seconds, Mean(psnrs), psnrs.size(),
                  report["samples_per_ray_rendered"].get<double>()));
