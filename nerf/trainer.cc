@@ -36,12 +36,12 @@ nlohmann::json CheckpointIdentity(const TrainerOptions& options) {
 }
 
 // The loss of one colour channel and its derivative.
-float ChannelLoss(const std::string& loss, float difference, float* derivative) {
-  if (loss == "huber" && std::abs(difference) > kHuberDelta) {
+float ChannelLoss(bool huber, float difference, float* derivative) {
+  if (huber && std::abs(difference) > kHuberDelta) {
     *derivative = difference > 0 ? kHuberDelta : -kHuberDelta;
     return kHuberDelta * (std::abs(difference) - 0.5f * kHuberDelta);
   }
-  if (loss == "huber") {
+  if (huber) {
     *derivative = difference;
     return 0.5f * difference * difference;
   }
@@ -189,6 +189,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     Eigen::MatrixXf d_density = Eigen::MatrixXf::Zero(1, n), d_colour = Eigen::MatrixXf::Zero(3, n);
     std::vector<Eigen::Index> used;  // samples that got a gradient
     const float scale = 1.0f / (3.0f * static_cast<float>(rays));
+    const bool huber = options_.loss == "huber";
     for (size_t r = 0; r < count; ++r) {
       const size_t o = offsets[r];
       const RaySegments<float> segments{density.data() + o, colour.data() + 3 * o, t.data() + o, delta.data() + o,
@@ -197,7 +198,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
       const CompositeResult<float> result = Composite(segments, background, options_.min_transmittance);
       float d_rgb[3];
       for (int ch = 0; ch < 3; ++ch) {
-        chunk.loss += ChannelLoss(options_.loss, result.rgb[ch] - batch.target(ch, first + r), &d_rgb[ch]) / 3.0;
+        chunk.loss += ChannelLoss(huber, result.rgb[ch] - batch.target(ch, first + r), &d_rgb[ch]) / 3.0;
         d_rgb[ch] *= scale;
       }
       for (size_t k = 0; k < result.used; ++k) used.push_back(static_cast<Eigen::Index>(o + k));

@@ -37,15 +37,23 @@ Config TrainConfig(int steps) {
   return config;
 }
 
+// A workspace made from SmallDataset(), with its runner (import, then train).
+struct TrainWorkspace {
+  TempDir dir;
+  fs::path data = SmallDataset(dir);
+  Workspace workspace = Workspace::Open(dir / "ws", true);
+  Runner runner = MakeRunner(data);
+  TrainWorkspace() { workspace.SetInput(data); }
+};
+
 }  // namespace
 
 TEST_CASE("train stage: model.bin, metrics.csv and train_report.json; fresh on a rerun, stale on a new seed",
           "[train]") {
-  TempDir dir;
-  const fs::path data = SmallDataset(dir);
-  Workspace workspace = Workspace::Open(dir / "ws", true);
-  workspace.SetInput(data);
-  const Runner runner = MakeRunner(data);
+  TrainWorkspace setup;
+  const TempDir& dir = setup.dir;
+  Workspace& workspace = setup.workspace;
+  const Runner& runner = setup.runner;
   Config config = TrainConfig(40);
   runner.Run(workspace, config, {});
 
@@ -73,11 +81,10 @@ TEST_CASE("train stage: model.bin, metrics.csv and train_report.json; fresh on a
 
 TEST_CASE("train stage: a cancelled run resumes from its checkpoint and finishes the same number of steps",
           "[train]") {
-  TempDir dir;
-  const fs::path data = SmallDataset(dir);
-  Workspace workspace = Workspace::Open(dir / "ws", true);
-  workspace.SetInput(data);
-  const Runner runner = MakeRunner(data);
+  TrainWorkspace setup;
+  const TempDir& dir = setup.dir;
+  Workspace& workspace = setup.workspace;
+  const Runner& runner = setup.runner;
   Config config = TrainConfig(150);
   config.Set("train.checkpoint_interval", 0.05, "test");
   const fs::path checkpoint = dir / "ws" / "30_train.resume" / "checkpoint.bin";
