@@ -22,6 +22,20 @@ void OpenCvCamFromWorld(const Eigen::Matrix4d& world_from_gl_cam, Eigen::Quatern
   *cam_from_world_translation = -cv_from_world * world_from_gl_cam.topRightCorner<3, 1>();
 }
 
+Eigen::Matrix4d LookAtPose(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
+  const Eigen::Vector3d forward = (target - position).normalized();
+  Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ());
+  if (right.norm() < 1e-9) right = forward.cross(Eigen::Vector3d::UnitY());
+  right.normalize();
+  const Eigen::Vector3d up = right.cross(forward);
+  Eigen::Matrix4d world_from_cam = Eigen::Matrix4d::Identity();
+  world_from_cam.block<3, 1>(0, 0) = right;
+  world_from_cam.block<3, 1>(0, 1) = up;
+  world_from_cam.block<3, 1>(0, 2) = -forward;  // OpenGL cameras look down -z
+  world_from_cam.block<3, 1>(0, 3) = position;
+  return world_from_cam;
+}
+
 Eigen::Vector2d Project(const PinholeCamera& camera, const Eigen::Vector3d& point_in_world, double* depth) {
   const Eigen::Matrix3d rotation = camera.world_from_cam.topLeftCorner<3, 3>();
   const Eigen::Vector3d in_gl = rotation.transpose() * (point_in_world - camera.world_from_cam.topRightCorner<3, 1>());

@@ -28,6 +28,10 @@ Eigen::Matrix4d WorldFromOpenGlCamera(const Eigen::Quaterniond& cam_from_world_r
 void OpenCvCamFromWorld(const Eigen::Matrix4d& world_from_gl_cam, Eigen::Quaterniond* cam_from_world_rotation,
                         Eigen::Vector3d* cam_from_world_translation);
 
+// world_from_cam (OpenGL axes) of a camera at `position` looking at `target`, level (its x axis horizontal) with
+// world +z as up; looking straight up or down, world +y is up in the image instead.
+Eigen::Matrix4d LookAtPose(const Eigen::Vector3d& position, const Eigen::Vector3d& target);
+
 // The pixel where `point_in_world` appears; its depth along the viewing direction in `depth` (negative:
 // behind the camera).
 Eigen::Vector2d Project(const PinholeCamera& camera, const Eigen::Vector3d& point_in_world, double* depth = nullptr);

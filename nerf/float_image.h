@@ -13,7 +13,17 @@ struct FloatImage {
 
 // Writes an 8-bit (or 16-bit when `sixteen_bits`) PNG; throws std::runtime_error naming the file.
 void SaveFloatImage(const FloatImage& image, const std::filesystem::path& path, bool sixteen_bits = false);
+// Writes 32-bit float linear values (OpenEXR, or any float format OpenImageIO writes by the extension).
+void SaveFloatImageExr(const FloatImage& image, const std::filesystem::path& path);
+
 // Peak signal-to-noise ratio for a peak of 1, in dB; std::invalid_argument when the sizes differ.
 double Psnr(const FloatImage& a, const FloatImage& b);
+// Structural similarity (Wang et al. 2004: 11x11 Gaussian window, sigma 1.5, K1 0.01, K2 0.03, peak 1) of
+// the luminance-free per-channel form, averaged over pixels and channels; std::invalid_argument when the sizes
+// differ.
+double Ssim(const FloatImage& a, const FloatImage& b);
+// The per-pixel error |a - b| averaged over channels, mapped by the inferno colour map from 0 (black) to
+// `max_error` (yellow) and beyond: an RGB image of the same size.
+FloatImage ErrorHeatMap(const FloatImage& a, const FloatImage& b, float max_error);
 
 }  // namespace p2n

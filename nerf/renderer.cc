@@ -13,6 +13,7 @@ namespace p2n {
 namespace {
 
 constexpr size_t kChunkRays = 256;
+constexpr int kTileSide = 16;  // kTileSide^2 = kChunkRays: a chunk is one tile
 constexpr double kUnboundedFar = 1e3;  // world units: the contracted distance there is within 0.1% of the limit
 
 }  // namespace
@@ -111,6 +112,7 @@ void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std:
     }
     marched += chunk_marched;
     evaluated += chunk_evaluated;
+    if (options.on_rays_done) options.on_rays_done(count);
   });
   if (stats != nullptr) {
     stats->rays += rays.size();
@@ -123,11 +125,23 @@ void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std:
 RenderedView RenderView(const NerfModel& model, const PinholeCamera& camera, double near, double far,
                         const RenderOptions& options) {
   const size_t pixels = static_cast<size_t>(camera.width) * camera.height;
-  std::vector<Ray> rays(pixels);
-  std::vector<Eigen::Vector2d> near_far(pixels, Eigen::Vector2d(near, far));
-  for (int y = 0; y < camera.height; ++y) {
-    for (int x = 0; x < camera.width; ++x) rays[size_t(y) * camera.width + x] = CameraRay(camera, x + 0.5, y + 0.5);
+  // Rays in tile order; order[i] is the pixel of ray i.
+  std::vector<Ray> rays;
+  std::vector<size_t> order;
+  rays.reserve(pixels);
+  order.reserve(pixels);
+  for (int tile_y = 0; tile_y < camera.height; tile_y += kTileSide) {
+    for (int tile_x = 0; tile_x < camera.width; tile_x += kTileSide) {
+      for (int y = tile_y; y < std::min(camera.height, tile_y + kTileSide); ++y) {
+        for (int x = tile_x; x < std::min(camera.width, tile_x + kTileSide); ++x) {
+          rays.push_back(CameraRay(camera, x + 0.5, y + 0.5));
+          order.push_back(size_t(y) * camera.width + x);
+        }
+      }
+    }
   }
+  const std::vector<Eigen::Vector2d> near_far(pixels, Eigen::Vector2d(near, far));
+  std::vector<float> rgb(3 * pixels), depth(pixels), opacity(pixels);
   RenderedView view;
   for (FloatImage* image : {&view.rgb, &view.depth, &view.opacity}) {
     image->width = camera.width;
@@ -135,11 +149,12 @@ RenderedView RenderView(const NerfModel& model, const PinholeCamera& camera, dou
     image->channels = image == &view.rgb ? 3 : 1;
     image->pixels.assign(pixels * image->channels, 0.0f);
   }
-  RenderRays(model, rays, near_far, options, view.rgb.pixels.data(), view.depth.pixels.data(),
-             view.opacity.pixels.data(), &view.stats);
+  RenderRays(model, rays, near_far, options, rgb.data(), depth.data(), opacity.data(), &view.stats);
   for (size_t i = 0; i < pixels; ++i) {
-    const float o = view.opacity.pixels[i];
-    view.depth.pixels[i] = o > 1e-6f ? view.depth.pixels[i] / o : 0.0f;
+    const size_t p = order[i];
+    std::copy(&rgb[3 * i], &rgb[3 * i + 3], &view.rgb.pixels[3 * p]);
+    view.opacity.pixels[p] = opacity[i];
+    view.depth.pixels[p] = opacity[i] > 1e-6f ? depth[i] / opacity[i] : 0.0f;
   }
   return view;
 }

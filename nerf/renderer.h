@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 
+#include <functional>
 #include <random>
 #include <vector>
 
@@ -18,6 +19,8 @@ struct RenderOptions {
   double step_scale = 1;          // sample spacing = the model's march step x this
   float min_transmittance = 1e-4f;  // rays stop below it (0: never)
   size_t max_samples = 4096;      // per ray
+  // Called (from any worker thread) with the number of rays just finished; e.g. to advance a progress bar.
+  std::function<void(size_t)> on_rays_done;
 };
 
 struct RenderStats {
@@ -45,6 +48,8 @@ struct RenderedView {
   RenderStats stats;
 };
 
+// Renders every pixel of `camera` in tiles of 16 x 16 pixels (nearby rays meet the same grid cells and hash
+// entries), the tiles in parallel.
 RenderedView RenderView(const NerfModel& model, const PinholeCamera& camera, double near, double far,
                         const RenderOptions& options);
 

@@ -184,13 +184,7 @@ PinholeCamera LookAtCamera(const Vector3d& position, const Vector3d& target, int
   camera.fx = camera.fy = 0.5 * width / std::tan(0.5 * fov_x_deg * kPi / 180);
   camera.cx = 0.5 * width;
   camera.cy = 0.5 * height;
-  const Vector3d forward = (target - position).normalized();
-  const Vector3d right = forward.cross(Vector3d::UnitZ()).normalized();
-  const Vector3d up = right.cross(forward);
-  camera.world_from_cam.block<3, 1>(0, 0) = right;
-  camera.world_from_cam.block<3, 1>(0, 1) = up;
-  camera.world_from_cam.block<3, 1>(0, 2) = -forward;  // OpenGL cameras look down -z
-  camera.world_from_cam.block<3, 1>(0, 3) = position;
+  camera.world_from_cam = LookAtPose(position, target);
   return camera;
 }
 

@@ -10,6 +10,9 @@ packages=(
   libeigen3-dev libopencv-dev libtbb-dev
   libopenimageio-dev openimageio-tools
   catch2 nlohmann-json3-dev libcli11-dev zlib1g-dev
+  libopenvdb-dev libblosc-dev libboost-dev      # marching cubes (OpenVDB's headers need Boost's)
+  libassimp-dev                            # tests: an independent reader of our PLY and OBJ files
+  chromium fonts-dejavu-core               # tests: the report page opened in a real browser
 )
 
 missing=()

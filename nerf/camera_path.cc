@@ -1,0 +1,83 @@
+#include "nerf/camera_path.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace p2n {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+PinholeCamera WithPose(const PinholeCamera& reference, const Eigen::Matrix4d& world_from_cam) {
+  PinholeCamera camera = reference;
+  camera.world_from_cam = world_from_cam;
+  return camera;
+}
+
+void CheckFrames(const CameraPathOptions& options) {
+  if (options.frames < 1) throw std::invalid_argument("a camera path needs at least one frame");
+}
+
+}  // namespace
+
+std::vector<PinholeCamera> OrbitPath(const PinholeCamera& reference, const CameraPathOptions& options) {
+  CheckFrames(options);
+  if (!(options.radius > 0)) throw std::invalid_argument("an orbit's radius must be positive");
+  std::vector<PinholeCamera> path;
+  const double elevation = options.elevation_deg * kPi / 180;
+  for (int i = 0; i < options.frames; ++i) {
+    const double azimuth = 2 * kPi * i / options.frames;
+    const Eigen::Vector3d position = options.radius * Eigen::Vector3d(std::cos(elevation) * std::cos(azimuth),
+                                                                      std::cos(elevation) * std::sin(azimuth),
+                                                                      std::sin(elevation));
+    path.push_back(WithPose(reference, LookAtPose(position, Eigen::Vector3d::Zero())));
+  }
+  return path;
+}
+
+std::vector<PinholeCamera> SpiralPath(const std::vector<PinholeCamera>& cameras, const PinholeCamera& reference,
+                                      double focus_distance, const CameraPathOptions& options) {
+  CheckFrames(options);
+  if (cameras.empty()) throw std::invalid_argument("a spiral needs the capture's cameras");
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero(), right = Eigen::Vector3d::Zero(), up = Eigen::Vector3d::Zero(),
+                  back = Eigen::Vector3d::Zero();
+  for (const PinholeCamera& camera : cameras) {
+    centre += camera.world_from_cam.block<3, 1>(0, 3);
+    right += camera.world_from_cam.block<3, 1>(0, 0);
+    up += camera.world_from_cam.block<3, 1>(0, 1);
+    back += camera.world_from_cam.block<3, 1>(0, 2);
+  }
+  centre /= cameras.size();
+  back.normalize();
+  right = (right - right.dot(back) * back).normalized();
+  up = back.cross(right);
+  Eigen::Vector3d spread = Eigen::Vector3d::Zero();
+  for (const PinholeCamera& camera : cameras) {
+    const Eigen::Vector3d d = camera.world_from_cam.block<3, 1>(0, 3) - centre;
+    spread += Eigen::Vector3d(d.dot(right), d.dot(up), d.dot(back)).cwiseAbs2();
+  }
+  spread = (spread / cameras.size()).cwiseSqrt() * options.radius;
+  const Eigen::Vector3d focus = centre - focus_distance * back;
+  std::vector<PinholeCamera> path;
+  for (int i = 0; i < options.frames; ++i) {
+    const double angle = 4 * kPi * i / options.frames;
+    const Eigen::Vector3d position = centre + spread.x() * std::cos(angle) * right + spread.y() * std::sin(angle) * up +
+                                     spread.z() * std::sin(0.5 * angle) * back;
+    path.push_back(WithPose(reference, LookAtPose(position, focus)));
+  }
+  return path;
+}
+
+void MeanCameraPlacement(const std::vector<PinholeCamera>& cameras, double* radius, double* elevation_deg) {
+  double distance = 0, elevation = 0;
+  for (const PinholeCamera& camera : cameras) {
+    const Eigen::Vector3d position = camera.world_from_cam.block<3, 1>(0, 3);
+    distance += position.norm();
+    elevation += std::atan2(position.z(), position.head<2>().norm());
+  }
+  const double n = std::max<size_t>(cameras.size(), 1);
+  *radius = distance / n;
+  *elevation_deg = elevation / n * 180 / kPi;
+}
+
+}  // namespace p2n

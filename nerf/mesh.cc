@@ -1,0 +1,154 @@
+#include "nerf/mesh.h"
+
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/VolumeToMesh.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+
+#include "nerf/denormals.h"
+
+namespace p2n {
+namespace {
+
+using Matrix = RadianceField<float>::Matrix;
+
+constexpr size_t kBatch = 4096;
+
+// Densities at world points (3 x n), in parallel batches.
+std::vector<float> Densities(const NerfModel& model, const std::vector<Eigen::Vector3d>& points) {
+  std::vector<float> density(points.size(), 0.0f);
+  tbb::parallel_for(size_t{0}, (points.size() + kBatch - 1) / kBatch, [&](size_t batch) {
+    FlushDenormalsOnThisThread();
+    const size_t first = batch * kBatch, count = std::min(points.size(), first + kBatch) - first;
+    Matrix positions(3, count), out;
+    for (size_t i = 0; i < count; ++i) positions.col(i) = FieldPoint(model, points[first + i]).cast<float>();
+    model.field->Density(positions, &out);
+    for (size_t i = 0; i < count; ++i) density[first + i] = out(0, i);
+  });
+  return density;
+}
+
+}  // namespace
+
+Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options, const std::function<void(size_t)>& on_slices_done) {
+  const int n = options.resolution;
+  if (n < 8 || n > 1024) throw std::invalid_argument("the mesh resolution must be 8..1024");
+  if (!(options.density_threshold > 0)) throw std::invalid_argument("the mesh density threshold must be positive");
+  const double spacing = 2.0 / n;
+  const auto world_of = [&](double i, double j, double k) {
+    return Eigen::Vector3d(-1 + (i + 0.5) * spacing, -1 + (j + 0.5) * spacing, -1 + (k + 0.5) * spacing);
+  };
+
+  // The level set threshold - density (negative inside), sampled slice by slice; empty space is left to the
+  // grid's background value (density 0).
+  openvdb::initialize();
+  openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(options.density_threshold);
+  std::mutex grid_mutex;
+  tbb::parallel_for(0, n, [&](int i) {
+    std::vector<Eigen::Vector3d> points;
+    std::vector<openvdb::Coord> coords;
+    for (int j = 0; j < n; ++j) {
+      for (int k = 0; k < n; ++k) {
+        const Eigen::Vector3d p = world_of(i, j, k);
+        if (!model.occupancy.Occupied(FieldPoint(model, p))) continue;
+        points.push_back(p);
+        coords.emplace_back(i, j, k);
+      }
+    }
+    const std::vector<float> density = Densities(model, points);
+    {
+      std::lock_guard<std::mutex> lock(grid_mutex);
+      openvdb::FloatGrid::Accessor accessor = grid->getAccessor();
+      for (size_t s = 0; s < points.size(); ++s) {
+        if (density[s] > 1e-4f * options.density_threshold) {
+          accessor.setValue(coords[s], options.density_threshold - density[s]);
+        }
+      }
+    }
+    if (on_slices_done) on_slices_done(1);
+  });
+
+  std::vector<openvdb::Vec3s> vertices;
+  std::vector<openvdb::Vec3I> triangles;
+  std::vector<openvdb::Vec4I> quads;
+  openvdb::tools::volumeToMesh(*grid, vertices, triangles, quads, 0.0, 0.0);
+
+  Mesh mesh;
+  mesh.positions.reserve(vertices.size());
+  // Where the surface is cut by the box, the cap interpolates to the empty space beyond the last samples: it is
+  // put on the box's face.
+  for (const openvdb::Vec3s& v : vertices) {
+    mesh.positions.push_back(world_of(v.x(), v.y(), v.z()).cwiseMax(-1.0).cwiseMin(1.0).cast<float>());
+  }
+  // OpenVDB orders a polygon's corners counter-clockwise seen from the side where the level set is positive
+  // (outside).
+  const auto add = [&](uint32_t a, uint32_t b, uint32_t c) {
+    if (a == b || b == c || a == c) return;
+    const Eigen::Vector3f& pa = mesh.positions[a];
+    if ((mesh.positions[b] - pa).cross(mesh.positions[c] - pa).squaredNorm() == 0.0f) return;
+    mesh.triangles.push_back({a, b, c});
+  };
+  for (const openvdb::Vec3I& t : triangles) add(t[0], t[1], t[2]);
+  for (const openvdb::Vec4I& q : quads) {
+    add(q[0], q[1], q[2]);
+    add(q[0], q[2], q[3]);
+  }
+
+  // Normals from the density gradient (central differences over a tenth of a cell), then colours seen from
+  // outside along them.
+  const double h = 0.1 * spacing;
+  std::vector<Eigen::Vector3d> probes;
+  probes.reserve(6 * mesh.positions.size());
+  for (const Eigen::Vector3f& p : mesh.positions) {
+    for (int axis = 0; axis < 3; ++axis) {
+      for (const double sign : {1.0, -1.0}) probes.push_back(p.cast<double>() + sign * h * Eigen::Vector3d::Unit(axis));
+    }
+  }
+  const std::vector<float> probe_density = Densities(model, probes);
+  mesh.normals.resize(mesh.positions.size());
+  mesh.colours.resize(mesh.positions.size());
+  tbb::parallel_for(size_t{0}, (mesh.positions.size() + kBatch - 1) / kBatch, [&](size_t batch) {
+    FlushDenormalsOnThisThread();
+    const size_t first = batch * kBatch, count = std::min(mesh.positions.size(), first + kBatch) - first;
+    Matrix positions(3, count), directions(3, count), density, rgb;
+    RadianceField<float>::Cache cache;
+    for (size_t i = 0; i < count; ++i) {
+      const size_t v = first + i;
+      Eigen::Vector3f gradient;
+      for (int axis = 0; axis < 3; ++axis) gradient[axis] = probe_density[6 * v + 2 * axis] - probe_density[6 * v + 2 * axis + 1];
+      Eigen::Vector3f normal = -gradient;
+      normal = normal.norm() > 0 && normal.allFinite() ? normal.normalized() : Eigen::Vector3f::UnitZ();
+      mesh.normals[v] = normal;
+      positions.col(i) = FieldPoint(model, mesh.positions[v].cast<double>()).cast<float>();
+      directions.col(i) = -normal;
+    }
+    model.field->Forward(positions, directions, &density, &rgb, &cache);
+    for (size_t i = 0; i < count; ++i) {
+      for (int c = 0; c < 3; ++c) {
+        mesh.colours[first + i][c] = static_cast<uint8_t>(std::lround(255 * std::clamp(rgb(c, i), 0.0f, 1.0f)));
+      }
+    }
+  });
+  return mesh;
+}
+
+bool IsWatertight(const Mesh& mesh) {
+  // Each directed edge must appear once, and its reverse once.
+  std::map<std::pair<uint32_t, uint32_t>, int> directed;
+  for (const auto& t : mesh.triangles) {
+    for (int e = 0; e < 3; ++e) {
+      if (++directed[{t[e], t[(e + 1) % 3]}] > 1) return false;
+    }
+  }
+  for (const auto& [edge, count] : directed) {
+    if (directed.find({edge.second, edge.first}) == directed.end()) return false;
+  }
+  return !mesh.triangles.empty();
+}
+
+}  // namespace p2n

@@ -1,0 +1,41 @@
+#pragma once
+// A triangle mesh of a trained scene's surface: marching cubes (OpenVDB's volume-to-mesh, without
+// adaptivity) on the density field sampled over the scene box [-1, 1]^3 of the normalised frame.
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "nerf/nerf_model.h"
+
+namespace p2n {
+
+struct Mesh {
+  std::vector<Eigen::Vector3f> positions;  // world units of the normalised frame
+  std::vector<Eigen::Vector3f> normals;    // unit, pointing out of the surface (down the density gradient)
+  std::vector<std::array<uint8_t, 3>> colours;
+  std::vector<std::array<uint32_t, 3>> triangles;  // counter-clockwise seen from outside
+};
+
+struct MeshOptions {
+  int resolution = 256;           // density samples along each side of the box
+  float density_threshold = 25;  // the surface: where the density (1 / world unit) crosses this
+};
+
+// The surface where the density crosses the threshold. Cells the occupancy grid marks empty are not
+// evaluated (their density counts as 0); where the surface meets the box it is closed by the box's faces, so the
+// mesh is watertight. Vertices are coloured by the field seen along minus their normal (looking at the
+// surface from outside). `on_slices_done`, when given, is called with the number of density slices just
+// sampled (resolution in all). std::invalid_argument for a resolution outside 8..1024 or a threshold that is
+// not positive.
+Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options,
+                 const std::function<void(size_t)>& on_slices_done = {});
+
+// Whether every edge is shared by exactly two triangles with opposite orientations (a closed, consistently
+// oriented surface); the mesh's vertices are compared by index.
+bool IsWatertight(const Mesh& mesh);
+
+}  // namespace p2n

@@ -1,0 +1,98 @@
+// Marching cubes on a field with a known surface: a sphere whose density crosses the threshold exactly at
+// radius 0.6, coloured by the direction it is seen from. The mesh must be closed, lie on the sphere within a
+// fraction of a cell, point its normals and its triangles' winding outwards, and carry the colour seen along
+// minus the normal.
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "nerf/mesh.h"
+
+namespace p2n::testing {
+namespace {
+
+constexpr float kRadius = 0.6f, kThreshold = 25;
+
+// Density threshold + 400 (radius - |x|) (clamped at 0), colour (1 - d) / 2 for view direction d.
+class SphereField : public RadianceField<float> {
+ public:
+  explicit SphereField(float radius) : radius_(radius) {}
+  nlohmann::json Config() const override { return {{"otype", "SphereField"}}; }
+  void Forward(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb, Cache*) const override {
+    Density(positions, density);
+    *rgb = (1.0f - directions.array()) * 0.5f;
+  }
+  void Density(const Matrix& positions, Matrix* density) const override {
+    density->resize(1, positions.cols());
+    for (Eigen::Index i = 0; i < positions.cols(); ++i) {
+      const float r = (2 * positions.col(i).array() - 1).matrix().norm();  // the bounded box's world point
+      (*density)(0, i) = std::max(0.0f, kThreshold + 400 * (radius_ - r));
+    }
+  }
+  void Backward(const Cache&, const Matrix&, const Matrix&, float*, Matrix*) const override {}
+  std::vector<ParamBlock<float>> DenseParams() override { return {}; }
+
+ private:
+  float radius_;
+};
+
+NerfModel SphereModel(float radius = kRadius) {
+  NerfModel model;
+  model.field = std::make_unique<SphereField>(radius);
+  return model;  // the occupancy grid's cells are unknown: all count as occupied
+}
+
+}  // namespace
+
+TEST_CASE("mesh: a sphere's surface is closed, on the sphere, oriented outwards and coloured from outside", "[mesh]") {
+  const NerfModel model = SphereModel();
+  MeshOptions options;
+  options.resolution = 48;
+  options.density_threshold = kThreshold;
+  size_t slices = 0;
+  const Mesh mesh = ExtractMesh(model, options, [&](size_t n) { slices += n; });
+  CHECK(slices == 48);
+  REQUIRE(mesh.triangles.size() > 1000);
+  CHECK(IsWatertight(mesh));
+  const float cell = 2.0f / options.resolution;
+  double signed_volume = 0;
+  for (const auto& t : mesh.triangles) {
+    signed_volume += mesh.positions[t[0]].dot(mesh.positions[t[1]].cross(mesh.positions[t[2]])) / 6.0;
+  }
+  CHECK(signed_volume == Approx(4.0 / 3.0 * M_PI * std::pow(kRadius, 3)).epsilon(0.03));  // > 0: wound outwards
+  for (size_t v = 0; v < mesh.positions.size(); ++v) {
+    const Eigen::Vector3f& p = mesh.positions[v];
+    REQUIRE(p.allFinite());
+    CHECK(std::abs(p.norm() - kRadius) < 0.1f * cell);
+    CHECK(mesh.normals[v].dot(p.normalized()) > 0.99f);
+    // Seen along -normal, the colour is (1 + normal) / 2.
+    for (int c = 0; c < 3; ++c) CHECK(std::abs(mesh.colours[v][c] - 127.5f * (1 + mesh.normals[v][c])) <= 2.0f);
+  }
+}
+
+TEST_CASE("mesh: a surface cut by the box is closed by the box's faces; an empty field gives no mesh", "[mesh]") {
+  NerfModel model = SphereModel(1.2f);  // the faces' centres are inside, the corners outside
+  MeshOptions options;
+  options.resolution = 24;
+  options.density_threshold = kThreshold;
+  const Mesh cut = ExtractMesh(model, options);
+  CHECK(IsWatertight(cut));
+  for (const Eigen::Vector3f& p : cut.positions) CHECK(p.cwiseAbs().maxCoeff() <= 1.0f);
+
+  options.density_threshold = 1e9f;
+  CHECK(ExtractMesh(model, options).triangles.empty());
+  options.resolution = 4;
+  CHECK_THROWS_AS(ExtractMesh(model, options), std::invalid_argument);
+}
+
+TEST_CASE("mesh: cells the occupancy grid marks empty are not evaluated", "[mesh]") {
+  NerfModel model = SphereModel();
+  model.occupancy = OccupancyGrid(16);
+  model.occupancy.Update([](const Eigen::Matrix3Xf& p) { return Eigen::VectorXf::Zero(p.cols()).eval(); }, 1.0f, 0.0f, 0);  // every cell empty
+  MeshOptions options;
+  options.resolution = 32;
+  CHECK(ExtractMesh(model, options).triangles.empty());
+}
+
+}  // namespace p2n::testing
