@@ -1,5 +1,6 @@
 #include "stages/ply.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cstring>
 #include <fstream>
@@ -12,16 +13,40 @@
 namespace p2n {
 namespace {
 
+// The header without its comment lines (which go after the format line).
 constexpr const char* kHeaderFormat =
-    "ply\nformat binary_little_endian 1.0\ncomment written by photo2nerf\nelement vertex {}\n"
+    "ply\nformat binary_little_endian 1.0\nelement vertex {}\n"
     "property float x\nproperty float y\nproperty float z\n"
     "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
 constexpr size_t kRecordSize = 3 * sizeof(float) + 3;
 
+std::string WithoutComments(const std::string& header) {
+  std::string kept;
+  size_t start = 0;
+  while (start < header.size()) {
+    const size_t end = std::min(header.find('\n', start), header.size() - 1) + 1;
+    if (header.compare(start, 8, "comment ") != 0) kept.append(header, start, end - start);
+    start = end;
+  }
+  return kept;
+}
+
 }  // namespace
 
-void WritePly(const std::filesystem::path& path, const std::vector<ColouredPoint>& points) {
+std::string PlyComments(const std::vector<std::string>& comments) {
+  std::string text = "comment written by photo2nerf\n";
+  for (const std::string& comment : comments) {
+    std::string line = comment;
+    std::replace(line.begin(), line.end(), '\n', ' ');
+    text += "comment " + line + "\n";
+  }
+  return text;
+}
+
+void WritePly(const std::filesystem::path& path, const std::vector<ColouredPoint>& points,
+              const std::vector<std::string>& comments) {
   std::string data = format(kHeaderFormat, points.size());
+  data.insert(data.find("element"), PlyComments(comments));
   const size_t header = data.size();
   data.resize(header + points.size() * kRecordSize);
   char* out = data.data() + header;
@@ -51,7 +76,7 @@ std::vector<ColouredPoint> ReadPly(const std::filesystem::path& path) {
   }
   const std::string expected = format(kHeaderFormat, count);
   const size_t body = end + 11;
-  if (data.compare(0, body, expected) != 0 || (data.size() - body) / kRecordSize < count) {
+  if (WithoutComments(data.substr(0, body)) != expected || (data.size() - body) / kRecordSize < count) {
     throw UserError(format("'{}' is not a PLY point cloud photo2nerf reads (or it is truncated)", path.string()));
   }
   std::vector<ColouredPoint> points(count);

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace p2n {
@@ -15,9 +16,14 @@ struct ColouredPoint {
   std::array<uint8_t, 3> rgb;
 };
 
-// Throws UserError naming the file when it cannot be written.
-void WritePly(const std::filesystem::path& path, const std::vector<ColouredPoint>& points);
-// Reads what WritePly writes (vertex x, y, z float; red, green, blue uchar); UserError naming the file otherwise.
+// Throws UserError naming the file when it cannot be written. `comments` go into the header (one line each).
+void WritePly(const std::filesystem::path& path, const std::vector<ColouredPoint>& points,
+              const std::vector<std::string>& comments = {});
+// Reads what WritePly writes (vertex x, y, z float; red, green, blue uchar; any comments); UserError naming the
+// file otherwise.
 std::vector<ColouredPoint> ReadPly(const std::filesystem::path& path);
+
+// PLY header comment lines: "written by photo2nerf", then `comments` (newlines become spaces).
+std::string PlyComments(const std::vector<std::string>& comments);
 
 }  // namespace p2n

@@ -2,9 +2,11 @@
 
 #include "pipeline/format.h"
 #include "stages/dataset_import.h"
+#include "stages/export_stage.h"
 #include "stages/import_stage.h"
 #include "stages/ingest_stage.h"
 #include "stages/poses_stage.h"
+#include "stages/render_stage.h"
 #include "stages/sfm_stage.h"
 #include "stages/train_stage.h"
 
@@ -22,6 +24,8 @@ OptionRegistry AllOptions() {
   RegisterOptions<PosesOptions>(registry, "poses");
   RegisterOptions<ImportOptions>(registry, "import");
   RegisterOptions<TrainOptions>(registry, "train");
+  RegisterOptions<RenderStageOptions>(registry, "render");
+  RegisterOptions<ExportOptions>(registry, "export");
   return registry;
 }
 
@@ -32,6 +36,8 @@ void CheckAllOptions(const Config& config) {
   ReadOptions<PosesOptions>(config, "poses");
   ReadOptions<ImportOptions>(config, "import");
   ReadOptions<TrainOptions>(config, "train");
+  ReadOptions<RenderStageOptions>(config, "render");
+  ReadOptions<ExportOptions>(config, "export");
 }
 
 Runner MakeRunner(const std::optional<std::filesystem::path>& input) {
@@ -44,6 +50,8 @@ Runner MakeRunner(const std::optional<std::filesystem::path>& input) {
     stages.push_back(std::make_unique<PosesStage>());
   }
   stages.push_back(std::make_unique<TrainStage>());
+  stages.push_back(std::make_unique<RenderStage>());
+  stages.push_back(std::make_unique<ExportStage>());
   return Runner(std::move(stages));
 }
 

@@ -37,8 +37,9 @@ Preset PresetFor(const std::string& name) {
   return {300, 256, 1 << 16, 17, 2048, 128};
 }
 
-// The image as 8-bit RGB or RGBA (grey is expanded), row-major; UserError naming the file.
-TrainView LoadView(const ImportedView& imported) {
+}  // namespace
+
+TrainView LoadTrainView(const ImportedView& imported) {
   TrainView view;
   view.camera = imported.view.camera;
   view.near = imported.view.near;
@@ -66,6 +67,14 @@ TrainView LoadView(const ImportedView& imported) {
   }
   return view;
 }
+
+std::string HeldoutSplit(const ImportedDataset& dataset) {
+  const bool has_test = std::any_of(dataset.views.begin(), dataset.views.end(),
+                                    [](const ImportedView& v) { return v.view.split == "test"; });
+  return has_test ? "test" : "val";
+}
+
+namespace {
 
 double Mean(const std::vector<double>& values) {
   return values.empty() ? std::nan("") : std::accumulate(values.begin(), values.end(), 0.0) / values.size();
@@ -163,9 +172,7 @@ TrainingData LoadTrainingData(const fs::path& transforms, const fs::path& worksp
   if (json.contains("background") && json["background"].is_array() && json["background"].size() == 3) {
     for (int c = 0; c < 3; ++c) data.background[c] = json["background"][c].get<float>();
   }
-  const bool has_test = std::any_of(dataset.views.begin(), dataset.views.end(),
-                                    [](const ImportedView& v) { return v.view.split == "test"; });
-  *heldout_split = has_test ? "test" : "val";
+  *heldout_split = HeldoutSplit(dataset);
   std::vector<const ImportedView*> train, heldout;
   for (const ImportedView& view : dataset.views) {
     if (view.view.split == "train") train.push_back(&view);
@@ -177,19 +184,25 @@ TrainingData LoadTrainingData(const fs::path& transforms, const fs::path& worksp
   Progress progress("train: loading images", static_cast<int64_t>(train.size() + heldout.size()), "images");
   tbb::parallel_for(size_t{0}, train.size() + heldout.size(), [&](size_t i) {
     if (i < train.size()) {
-      data.train[i] = LoadView(*train[i]);
+      data.train[i] = LoadTrainView(*train[i]);
     } else {
-      data.heldout[i - train.size()] = LoadView(*heldout[i - train.size()]);
+      data.heldout[i - train.size()] = LoadTrainView(*heldout[i - train.size()]);
     }
     progress.Add();
   });
   return data;
 }
 
+std::string SourceDatasetKind(const fs::path& transforms) {
+  const nlohmann::json json = ReadJsonFile(transforms);
+  const bool has = json.contains("dataset") && json["dataset"].is_object() && json["dataset"].contains("kind") &&
+                   json["dataset"]["kind"].is_string();
+  return has ? json["dataset"]["kind"].get<std::string>() : "";
+}
+
 bool SceneIsUnbounded(const TrainOptions& options, const fs::path& transforms) {
   if (options.scene != "auto") return options.scene == "unbounded";
-  const nlohmann::json json = ReadJsonFile(transforms);
-  const std::string kind = json.contains("dataset") && json["dataset"].is_object() ? json["dataset"].value("kind", "") : "";
+  const std::string kind = SourceDatasetKind(transforms);
   return kind != "blender" && kind != "npz";
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "nerf/trainer.h"
+#include "stages/dataset_import.h"
 #include "pipeline/stage.h"
 
 namespace p2n {
@@ -61,10 +62,18 @@ struct TrainOptions {
   void Check() const;
 };
 
+// The view's image decoded to 8-bit RGB or RGBA (grey expanded); UserError naming the file when it cannot be read or
+// its size is not the camera's.
+TrainView LoadTrainView(const ImportedView& imported);
+// The split held out for evaluation: "test" when any view has it, else "val".
+std::string HeldoutSplit(const ImportedDataset& dataset);
+
 // The training views ("train" split) and held-out views (the "test" split when it has images, else "val") of a
 // transforms.json whose images lie inside `root`, decoded to 8 bits; UserError naming a bad file.
 TrainingData LoadTrainingData(const std::filesystem::path& transforms, const std::filesystem::path& root,
                               std::string* heldout_split);
+// The kind of dataset the poses came from as transforms.json records it ("blender", "llff", ...; "" for photos).
+std::string SourceDatasetKind(const std::filesystem::path& transforms);
 // Whether train.scene (auto: by the dataset kind recorded in transforms.json) makes the scene unbounded.
 bool SceneIsUnbounded(const TrainOptions& options, const std::filesystem::path& transforms);
 

@@ -5,57 +5,23 @@
 #include <thread>
 
 #include "nerf/nerf_model.h"
-#include "nerf/synthetic_scene.h"
 #include "pipeline/cancel.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
 #include "stages/stages.h"
-#include "test_util.h"
+#include "stage_fixtures.h"
 
 namespace p2n::testing {
 namespace fs = std::filesystem;
-namespace {
-
-// A dataset with cameras (the synthetic scene's true ones as transforms.json), 12 views of 64 x 48.
-fs::path SmallDataset(const TempDir& dir) {
-  SyntheticSceneOptions scene;
-  scene.num_views = 12;
-  scene.width = 64;
-  scene.height = 48;
-  WriteSyntheticScene(scene, dir / "data");
-  fs::rename(dir / "data" / "ground_truth_cameras.json", dir / "data" / "transforms.json");
-  return dir / "data";
-}
-
-Config TrainConfig(int steps) {
-  static const OptionRegistry registry = AllOptions();
-  Config config(registry);
-  config.Set("run.progress", "none", "test");
-  config.Set("train.preset", "fast", "test");
-  config.Set("train.steps", steps, "test");
-  config.Set("train.eval_interval", 1.0, "test");
-  return config;
-}
-
-// A workspace made from SmallDataset(), with its runner (import, then train).
-struct TrainWorkspace {
-  TempDir dir;
-  fs::path data = SmallDataset(dir);
-  Workspace workspace = Workspace::Open(dir / "ws", true);
-  Runner runner = MakeRunner(data);
-  TrainWorkspace() { workspace.SetInput(data); }
-};
-
-}  // namespace
 
 TEST_CASE("train stage: model.bin, metrics.csv and train_report.json; fresh on a rerun, stale on a new seed",
           "[train]") {
-  TrainWorkspace setup;
+  StageWorkspace setup;
   const TempDir& dir = setup.dir;
   Workspace& workspace = setup.workspace;
   const Runner& runner = setup.runner;
-  Config config = TrainConfig(40);
-  runner.Run(workspace, config, {});
+  Config config = SmallStageConfig(40);
+  runner.Run(workspace, config, Until("train"));
 
   const fs::path out = dir / "ws" / "30_train";
   const nlohmann::json report = ReadJsonFile(out / "train_report.json");
@@ -72,20 +38,21 @@ TEST_CASE("train stage: model.bin, metrics.csv and train_report.json; fresh on a
   CHECK(fs::exists(out / "psnr.png"));
   CHECK_FALSE(fs::exists(dir / "ws" / "30_train.resume"));
 
-  for (const StageStatus& status : runner.Status(workspace, config)) CHECK(status.state == StageState::kFresh);
+  CHECK(setup.Status(config, "poses").state == StageState::kFresh);
+  CHECK(setup.Status(config, "train").state == StageState::kFresh);
   config.Set("train.seed", 3, "test");
-  const std::vector<StageStatus> after = runner.Status(workspace, config);
-  CHECK(after.back().state == StageState::kStale);
-  CHECK_THAT(after.back().reasons.front(), Catch::Contains("train.seed"));
+  const StageStatus after = setup.Status(config, "train");
+  CHECK(after.state == StageState::kStale);
+  CHECK_THAT(after.reasons.front(), Catch::Contains("train.seed"));
 }
 
 TEST_CASE("train stage: a cancelled run resumes from its checkpoint and finishes the same number of steps",
           "[train]") {
-  TrainWorkspace setup;
+  StageWorkspace setup;
   const TempDir& dir = setup.dir;
   Workspace& workspace = setup.workspace;
   const Runner& runner = setup.runner;
-  Config config = TrainConfig(150);
+  Config config = SmallStageConfig(150);
   config.Set("train.checkpoint_interval", 0.05, "test");
   const fs::path checkpoint = dir / "ws" / "30_train.resume" / "checkpoint.bin";
   // Cancel (as Ctrl-C does) once a checkpoint exists.
@@ -93,13 +60,13 @@ TEST_CASE("train stage: a cancelled run resumes from its checkpoint and finishes
     while (!fs::exists(checkpoint)) std::this_thread::sleep_for(std::chrono::milliseconds(5));
     RequestCancel();
   });
-  CHECK_THROWS_AS(runner.Run(workspace, config, {}), Cancelled);
+  CHECK_THROWS_AS(runner.Run(workspace, config, Until("train")), Cancelled);
   canceller.join();
   ResetCancel();
   REQUIRE(fs::exists(checkpoint));
   CHECK_FALSE(fs::exists(dir / "ws" / "30_train"));
 
-  runner.Run(workspace, config, {});
+  runner.Run(workspace, config, Until("train"));
   const nlohmann::json report = ReadJsonFile(dir / "ws" / "30_train" / "train_report.json");
   CHECK(report["steps"] == 150);
   CHECK(report["resumed_from_step"].get<int>() > 0);
@@ -110,7 +77,7 @@ TEST_CASE("train stage: a cancelled run resumes from its checkpoint and finishes
   fs::create_directories(checkpoint.parent_path());
   WriteText(checkpoint, "not a checkpoint");
   config.Set("train.seed", 9, "test");
-  runner.Run(workspace, config, {});
+  runner.Run(workspace, config, Until("train"));
   CHECK(ReadJsonFile(dir / "ws" / "30_train" / "train_report.json")["resumed_from_step"] == 0);
 }
 

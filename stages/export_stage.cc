@@ -1,0 +1,169 @@
+#include "stages/export_stage.h"
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+
+#include "nerf/mesh.h"
+#include "nerf/nerf_model.h"
+#include "nerf/renderer.h"
+#include "pipeline/errors.h"
+#include "pipeline/file_util.h"
+#include "pipeline/format.h"
+#include "pipeline/log.h"
+#include "pipeline/progress.h"
+#include "stages/dataset_import.h"
+#include "stages/mesh_io.h"
+#include "stages/ply.h"
+
+namespace p2n {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr size_t kMaxPoints = 2'000'000;
+
+// The similarity from the normalised frame to the one the files are written in.
+struct OutputFrame {
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // out_from_normalized, scaled
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  std::string description;
+
+  Eigen::Vector3f Point(const Eigen::Vector3f& p) const { return (rotation * p.cast<double>() + translation).cast<float>(); }
+  Eigen::Vector3f Direction(const Eigen::Vector3f& d) const { return (rotation * d.cast<double>()).normalized().cast<float>(); }
+};
+
+// applied_transform (normalised_from_source, 3x4) of transforms.json, inverted when the source frame is asked for.
+OutputFrame MakeOutputFrame(const std::string& frame, const fs::path& transforms) {
+  OutputFrame out;
+  if (frame == "normalized") {
+    out.description = "frame: normalized (the training frame of 20_poses/transforms.json)";
+    return out;
+  }
+  const nlohmann::json json = ReadJsonFile(transforms);
+  Eigen::Matrix4d normalized_from_source = Eigen::Matrix4d::Identity();
+  if (json.contains("applied_transform")) {
+    const nlohmann::json& a = json["applied_transform"];
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 4; ++c) normalized_from_source(r, c) = a.at(r).at(c).get<double>();
+    }
+  }
+  const Eigen::Matrix4d source_from_normalized = normalized_from_source.inverse();
+  if (!source_from_normalized.allFinite()) {
+    throw UserError(format("'{}': applied_transform cannot be inverted; rerun the poses stage", transforms.string()));
+  }
+  out.rotation = source_from_normalized.topLeftCorner<3, 3>();
+  out.translation = source_from_normalized.topRightCorner<3, 1>();
+  out.description = "frame: source (COLMAP's world, or the dataset's: the inverse of applied_transform in 20_poses/transforms.json)";
+  return out;
+}
+
+std::vector<ColouredPoint> DepthPoints(const NerfModel& model, const ImportedDataset& dataset, const ExportOptions& options) {
+  std::vector<const ImportedView*> views;
+  size_t pixels = 0;
+  for (const ImportedView& view : dataset.views) {
+    if (view.view.split != "train") continue;
+    views.push_back(&view);
+    const PinholeCamera& camera = view.view.camera;
+    pixels += size_t(options.points_width) * std::max(1L, std::lround(double(camera.height) * options.points_width / camera.width));
+  }
+  Progress progress("export: point cloud", static_cast<int64_t>(pixels), "pixels");
+  RenderOptions render;
+  render.on_rays_done = [&](size_t n) { progress.Add(static_cast<int64_t>(n)); };
+  std::vector<ColouredPoint> points;
+  const double keep_every = std::max(1.0, double(pixels) / kMaxPoints);
+  double next_keep = 0;
+  size_t counter = 0;
+  for (const ImportedView* view : views) {
+    PinholeCamera camera = view->view.camera;
+    const double s = double(options.points_width) / camera.width;
+    camera.width = options.points_width;
+    camera.height = static_cast<int>(std::max(1L, std::lround(camera.height * s)));
+    camera.fx *= s;
+    camera.fy *= s;
+    camera.cx *= s;
+    camera.cy *= s;
+    const RenderedView rendered = RenderView(model, camera, view->view.near, view->view.far, render);
+    for (int y = 0; y < camera.height; ++y) {
+      for (int x = 0; x < camera.width; ++x) {
+        const size_t i = size_t(y) * camera.width + x;
+        if (rendered.opacity.pixels[i] < options.points_opacity || counter++ < next_keep) continue;
+        next_keep += keep_every;
+        const Ray ray = CameraRay(camera, x + 0.5, y + 0.5);
+        const Eigen::Vector3d p = ray.origin + rendered.depth.pixels[i] * ray.direction;
+        if (!p.allFinite() || (!model.contracted && p.cwiseAbs().maxCoeff() > 1)) continue;
+        ColouredPoint point;
+        point.position = p.cast<float>();
+        for (int c = 0; c < 3; ++c) {
+          point.rgb[c] = static_cast<uint8_t>(std::lround(255 * std::clamp(rendered.rgb.pixels[3 * i + c], 0.0f, 1.0f)));
+        }
+        points.push_back(point);
+      }
+    }
+  }
+  return points;
+}
+
+}  // namespace
+
+void ExportOptions::Check() const {
+  CheckOption(resolution >= 8 && resolution <= 1024, "export.resolution", "must be 8..1024");
+  CheckOption(threshold > 0 && std::isfinite(threshold), "export.threshold", "must be positive");
+  CheckOption(points_width >= 8 && points_width <= 8192, "export.points_width", "must be 8..8192");
+  CheckOption(points_opacity > 0 && points_opacity <= 1, "export.points_opacity", "must be in (0, 1]");
+}
+
+void ExportStage::Run(StageContext& context) const {
+  const ExportOptions options = ReadOptions<ExportOptions>(context.config, "export");
+  const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
+  const NerfModel model = LoadModel(context.upstream_dirs.at("train") / "model.bin");
+  const OutputFrame frame = MakeOutputFrame(options.frame, transforms);
+
+  MeshOptions mesh_options;
+  mesh_options.resolution = options.resolution;
+  mesh_options.density_threshold = static_cast<float>(options.threshold);
+  Mesh mesh;
+  {
+    Progress progress("export: density", options.resolution, "slices");
+    mesh = ExtractMesh(model, mesh_options, [&](size_t n) { progress.Add(static_cast<int64_t>(n)); });
+  }
+  const bool watertight = IsWatertight(mesh);
+  for (Eigen::Vector3f& p : mesh.positions) p = frame.Point(p);
+  for (Eigen::Vector3f& n : mesh.normals) n = frame.Direction(n);
+  if (frame.rotation.determinant() < 0) {
+    for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
+  }
+  const std::vector<std::string> comments = {
+      frame.description,
+      format("marching cubes at {}^3 samples of the box [-1, 1]^3 (normalised), density threshold {}", options.resolution,
+             options.threshold)};
+  WriteMeshPly(context.output_dir / "mesh.ply", mesh, comments);
+  if (options.obj) WriteMeshObj(context.output_dir / "mesh.obj", mesh, comments);
+  if (mesh.triangles.empty()) {
+    LogWarning(format("export: the density never reaches {} inside the scene box: the mesh is empty; lower "
+                      "--export.threshold", options.threshold));
+  }
+
+  nlohmann::json report = {{"mesh", {{"file", "mesh.ply"},
+                                     {"vertices", mesh.positions.size()},
+                                     {"triangles", mesh.triangles.size()},
+                                     {"watertight", watertight},
+                                     {"resolution", options.resolution},
+                                     {"threshold", options.threshold}}},
+                           {"frame", options.frame}};
+  if (options.points) {
+    const ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
+    std::vector<ColouredPoint> points = DepthPoints(model, dataset, options);
+    for (ColouredPoint& point : points) point.position = frame.Point(point.position);
+    WritePly(context.output_dir / "points.ply", points,
+             {frame.description, format("points where the rendered opacity of a training view is at least {}", options.points_opacity)});
+    report["points"] = {{"file", "points.ply"}, {"count", points.size()}};
+  }
+  WriteJsonAtomic(context.output_dir / "export_report.json", report);
+  context.summary = {{"mesh_triangles", mesh.triangles.size()}, {"watertight", watertight}};
+  if (options.points) context.summary["points"] = report["points"]["count"];
+  LogInfo(format("export: mesh of {} vertices and {} triangles ({}watertight){}", mesh.positions.size(),
+                 mesh.triangles.size(), watertight ? "" : "not ",
+                 options.points ? format(", {} points", report["points"]["count"].get<size_t>()) : ""));
+}
+
+}  // namespace p2n

@@ -1,0 +1,45 @@
+#pragma once
+// The export stage: a mesh of the trained scene's surface (marching cubes on the density inside the scene box,
+// coloured from the field) and a coloured point cloud from the rendered depth of the training views, in
+// COLMAP's (or the dataset's) world frame or the normalised one; binary PLY (and OBJ when asked).
+
+#include <string>
+
+#include "pipeline/stage.h"
+
+namespace p2n {
+
+struct ExportOptions {
+  int resolution = 256;       // density samples along each side of the scene box
+  double threshold = 25;      // surface density (1 / normalised unit)
+  std::string frame = "source";  // source: COLMAP's world (or the dataset's); normalized: the training frame
+  bool obj = false;           // also write mesh.obj
+  bool points = true;         // write points.ply
+  int points_width = 200;     // the training views are rendered this wide for the point cloud
+  double points_opacity = 0.95;  // pixels at least this opaque give points
+
+  template <class V>
+  void Visit(V& v) {
+    v("resolution", resolution, "density samples along each side of the scene box (memory and time grow as its cube)",
+      "samples");
+    v("threshold", threshold, "the surface's density, per normalised unit", "1/unit");
+    v("frame", frame, "coordinates of the files: source (COLMAP's world, or the dataset's) or normalized (the "
+      "training frame)", "", OptionKind::kResult, {"source", "normalized"});
+    v("obj", obj, "also write the mesh as mesh.obj");
+    v("points", points, "write points.ply, a coloured point cloud from the rendered depth of the training views");
+    v("points_width", points_width, "width the training views are rendered at for the point cloud", "pixels");
+    v("points_opacity", points_opacity, "pixels at least this opaque give points");
+  }
+  void Check() const;
+};
+
+class ExportStage : public Stage {
+ public:
+  std::string name() const override { return "export"; }
+  std::string folder() const override { return "50_export"; }
+  int format_version() const override { return 1; }
+  std::vector<std::string> upstream() const override { return {"poses", "train"}; }
+  void Run(StageContext& context) const override;
+};
+
+}  // namespace p2n

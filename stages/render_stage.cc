@@ -1,0 +1,359 @@
+#include "stages/render_stage.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "nerf/camera_path.h"
+#include "nerf/nerf_model.h"
+#include "nerf/renderer.h"
+#include "pipeline/errors.h"
+#include "pipeline/file_util.h"
+#include "pipeline/format.h"
+#include "pipeline/hash.h"
+#include "pipeline/log.h"
+#include "pipeline/progress.h"
+#include "stages/dataset_import.h"
+#include "stages/train_stage.h"
+#include "stages/video.h"
+
+namespace p2n {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr float kHeatMapMaxError = 0.2f;  // mean absolute error over RGB shown as the brightest colour
+
+// Image writes fail for the user's reasons (a full disk, permissions): UserError naming the file.
+void Save(const FloatImage& image, const fs::path& path, bool sixteen_bits = false) {
+  try {
+    if (path.extension() == ".exr") {
+      SaveFloatImageExr(image, path);
+    } else {
+      SaveFloatImage(image, path, sixteen_bits);
+    }
+  } catch (const std::runtime_error& error) {
+    throw UserError(format("{}; check the free space and permissions of {}", error.what(), path.parent_path().string()));
+  }
+}
+
+double Mean(const std::vector<double>& values) {
+  return values.empty() ? std::nan("") : std::accumulate(values.begin(), values.end(), 0.0) / values.size();
+}
+
+// The photo as floats, composited on `background` where it has alpha.
+FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& background) {
+  FloatImage image{view.camera.width, view.camera.height, 3, {}};
+  const size_t pixels = size_t(image.width) * image.height;
+  image.pixels.resize(3 * pixels);
+  for (size_t i = 0; i < pixels; ++i) {
+    const uint8_t* value = &view.pixels[i * view.channels];
+    const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
+    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = alpha * (value[c] / 255.0f) + (1 - alpha) * background[c];
+  }
+  return image;
+}
+
+PinholeCamera Scaled(const PinholeCamera& camera, int width) {
+  if (width <= 0 || width == camera.width) return camera;
+  const double s = double(width) / camera.width;
+  PinholeCamera scaled = camera;
+  scaled.width = width;
+  scaled.height = std::max(1, static_cast<int>(std::lround(camera.height * s)));
+  scaled.fx *= s;
+  scaled.fy *= s;
+  scaled.cx *= s;
+  scaled.cy *= s;
+  return scaled;
+}
+
+Eigen::Matrix4d MatrixField(const nlohmann::json& value, const std::string& where) {
+  if (!value.is_array() || value.size() < 3) throw UserError(where + " must be a 4x4 (or 3x4) matrix");
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  for (int r = 0; r < std::min<int>(4, value.size()); ++r) {
+    if (!value[r].is_array() || value[r].size() != 4) throw UserError(format("{} row {} must have 4 numbers", where, r));
+    for (int c = 0; c < 4; ++c) {
+      if (!value[r][c].is_number() || !std::isfinite(value[r][c].get<double>())) {
+        throw UserError(format("{} [{}][{}] must be a finite number", where, r, c));
+      }
+      m(r, c) = value[r][c].get<double>();
+    }
+  }
+  const Eigen::Matrix3d rotation = m.topLeftCorner<3, 3>();
+  if (!(rotation.transpose() * rotation).isApprox(Eigen::Matrix3d::Identity(), 1e-3)) {
+    throw UserError(where + "'s rotation is not orthonormal");
+  }
+  return m;
+}
+
+// Intrinsics from `json` (w, h, fl_x, fl_y, cx, cy, or camera_angle_x) over those of `camera`.
+PinholeCamera WithIntrinsics(const nlohmann::json& json, PinholeCamera camera, const std::string& where) {
+  const auto number = [&](const char* key, double* value) {
+    if (!json.contains(key)) return false;
+    if (!json[key].is_number() || !(json[key].get<double>() > 0) || !std::isfinite(json[key].get<double>())) {
+      throw UserError(format("{}: \"{}\" must be a positive number", where, key));
+    }
+    *value = json[key].get<double>();
+    return true;
+  };
+  double w = camera.width, h = camera.height, angle = 0;
+  const bool resized = number("w", &w) | number("h", &h);
+  if (resized) {
+    camera.cx = 0.5 * w;
+    camera.cy = 0.5 * h;
+  }
+  camera.width = static_cast<int>(w);
+  camera.height = static_cast<int>(h);
+  if (camera.width > 16384 || camera.height > 16384) throw UserError(where + ": images above 16384 pixels a side");
+  if (number("camera_angle_x", &angle)) camera.fx = camera.fy = 0.5 * camera.width / std::tan(0.5 * angle);
+  number("fl_x", &camera.fx);
+  if (!number("fl_y", &camera.fy) && json.contains("fl_x")) camera.fy = camera.fx;
+  number("cx", &camera.cx);
+  number("cy", &camera.cy);
+  return camera;
+}
+
+nlohmann::json RenderHeldout(const NerfModel& model, const ImportedDataset& dataset, const RenderOptions& base,
+                             const fs::path& out) {
+  const std::string split = HeldoutSplit(dataset);
+  std::vector<const ImportedView*> views;
+  size_t pixels = 0;
+  for (const ImportedView& view : dataset.views) {
+    if (view.view.split != split) continue;
+    views.push_back(&view);
+    pixels += size_t(view.view.camera.width) * view.view.camera.height;
+  }
+  nlohmann::json per_view = nlohmann::json::array();
+  std::vector<double> psnrs, ssims;
+  double seconds = 0;
+  size_t samples = 0, rays = 0;
+  if (views.empty()) return {{"split", split}, {"views", per_view}};
+  fs::create_directories(out / "heldout");
+  Progress progress("render: held-out views", static_cast<int64_t>(pixels), "pixels");
+  RenderOptions options = base;
+  options.on_rays_done = [&](size_t n) { progress.Add(static_cast<int64_t>(n)); };
+  for (const ImportedView* view : views) {
+    const TrainView photo_view = LoadTrainView(*view);
+    const FloatImage photo = PhotoOnBackground(photo_view, model.background);
+    const RenderedView rendered = RenderView(model, photo_view.camera, photo_view.near, photo_view.far, options);
+    const std::string stem = view->source.stem().string();
+    Save(rendered.rgb, out / "heldout" / (stem + ".png"));
+    Save(ErrorHeatMap(rendered.rgb, photo, kHeatMapMaxError), out / "heldout" / (stem + "_error.png"));
+    psnrs.push_back(Psnr(rendered.rgb, photo));
+    ssims.push_back(Ssim(rendered.rgb, photo));
+    seconds += rendered.stats.seconds;
+    samples += rendered.stats.samples_evaluated;
+    rays += rendered.stats.rays;
+    per_view.push_back({{"view", view->source.filename().string()},
+                        {"render", "heldout/" + stem + ".png"},
+                        {"error_map", "heldout/" + stem + "_error.png"},
+                        {"photo", view->source.string()},
+                        {"psnr", psnrs.back()},
+                        {"ssim", ssims.back()},
+                        {"seconds", rendered.stats.seconds}});
+  }
+  return {{"split", split},
+          {"views", per_view},
+          {"psnr", Mean(psnrs)},
+          {"ssim", Mean(ssims)},
+          {"seconds_per_view", seconds / views.size()},
+          {"samples_per_ray", double(samples) / std::max<size_t>(rays, 1)},
+          {"heat_map_max_error", kHeatMapMaxError}};
+}
+
+std::vector<PinholeCamera> PathCameras(const RenderStageOptions& options, const std::string& kind,
+                                       const ImportedDataset& dataset, const PinholeCamera& reference) {
+  std::vector<PinholeCamera> cameras;
+  for (const ImportedView& view : dataset.views) cameras.push_back(view.view.camera);
+  if (kind == "file") return ReadCameraPath(options.path_file, reference);
+  CameraPathOptions path;
+  path.frames = options.frames;
+  if (kind == "spiral") {
+    path.radius = options.radius > 0 ? options.radius : 1.0;
+    double focus = 0;  // the distance from the mean camera to the centre, which the normalisation put at the origin
+    for (const PinholeCamera& camera : cameras) focus += camera.world_from_cam.block<3, 1>(0, 3).norm();
+    return SpiralPath(cameras, reference, focus / cameras.size(), path);
+  }
+  double radius = 0, elevation = 0;
+  MeanCameraPlacement(cameras, &radius, &elevation);
+  path.radius = options.radius > 0 ? options.radius : radius;
+  path.elevation_deg = options.elevation == "auto" ? elevation : std::stod(options.elevation);
+  return OrbitPath(reference, path);
+}
+
+// The range along the rays of a path camera that holds the scene: the views' nearest near and farthest far,
+// the far end moved out by how much farther from the centre the camera is than the views on average (unknown
+// ranges: the whole scene).
+Eigen::Vector2d PathRange(const ImportedDataset& dataset, const PinholeCamera& camera) {
+  double near = std::numeric_limits<double>::infinity(), far = 0, distance = 0;
+  for (const ImportedView& view : dataset.views) {
+    if (!(view.view.near >= 0 && view.view.far > view.view.near)) return {-1, -1};
+    near = std::min(near, view.view.near);
+    far = std::max(far, view.view.far);
+    distance += view.view.camera.world_from_cam.block<3, 1>(0, 3).norm() / dataset.views.size();
+  }
+  return {near, far + std::max(0.0, camera.world_from_cam.block<3, 1>(0, 3).norm() - distance)};
+}
+
+nlohmann::json RenderPath(const NerfModel& model, const ImportedDataset& dataset,
+                          const std::vector<PinholeCamera>& cameras, const RenderStageOptions& options,
+                          const RenderOptions& base, const fs::path& out) {
+  fs::create_directories(out / "frames");
+  if (options.depth) {
+    fs::create_directories(out / "depth");
+    fs::create_directories(out / "opacity");
+  }
+  WriteCameraPath(out / "path.json", cameras);
+  // Depth PNGs share one scale (16 bits over 0..depth_max) so that the frames of a video match.
+  double depth_max = 0;
+  for (const PinholeCamera& camera : cameras) depth_max = std::max(depth_max, camera.world_from_cam.block<3, 1>(0, 3).norm());
+  depth_max = (depth_max + std::sqrt(3.0)) * (model.contracted ? 2 : 1);
+
+  size_t pixels = 0;
+  for (const PinholeCamera& camera : cameras) pixels += size_t(camera.width) * camera.height;
+  Progress progress("render: path", static_cast<int64_t>(pixels), "pixels");
+  RenderOptions render = base;
+  render.on_rays_done = [&](size_t n) { progress.Add(static_cast<int64_t>(n)); };
+  std::unique_ptr<VideoWriter> video;
+  if (options.video) video = std::make_unique<VideoWriter>(out / "video.mp4", cameras[0].width, cameras[0].height, options.fps);
+  double seconds = 0;
+  size_t samples = 0, rays = 0;
+  for (size_t f = 0; f < cameras.size(); ++f) {
+    const Eigen::Vector2d range = PathRange(dataset, cameras[f]);
+    const RenderedView frame = RenderView(model, cameras[f], range[0], range[1], render);
+    const std::string name = format("{:04d}", f);
+    Save(frame.rgb, out / "frames" / (name + ".png"));
+    if (options.exr) Save(frame.rgb, out / "frames" / (name + ".exr"));
+    if (options.depth) {
+      FloatImage depth = frame.depth;
+      for (float& d : depth.pixels) d = static_cast<float>(d / depth_max);
+      Save(depth, out / "depth" / (name + ".png"), /*sixteen_bits=*/true);
+      Save(frame.opacity, out / "opacity" / (name + ".png"));
+      if (options.exr) Save(frame.depth, out / "depth" / (name + ".exr"));
+    }
+    if (video && frame.rgb.width == cameras[0].width && frame.rgb.height == cameras[0].height) video->Add(frame.rgb);
+    seconds += frame.stats.seconds;
+    samples += frame.stats.samples_evaluated;
+    rays += frame.stats.rays;
+  }
+  nlohmann::json report = {{"frames", cameras.size()},
+                           {"width", cameras[0].width},
+                           {"height", cameras[0].height},
+                           {"seconds_per_frame", seconds / cameras.size()},
+                           {"frames_per_second", cameras.size() / std::max(seconds, 1e-9)},
+                           {"samples_per_ray", double(samples) / std::max<size_t>(rays, 1)},
+                           {"depth_png_max", depth_max}};
+  if (video) {
+    video->Close();
+    report["video"] = {{"file", "video.mp4"}, {"codec", video->codec()}, {"fps", options.fps}};
+  }
+  return report;
+}
+
+}  // namespace
+
+void RenderStageOptions::Check() const {
+  CheckOption(path != "file" || !path_file.empty(), "render.path_file", "must name a file when render.path is file");
+  CheckOption(frames >= 1 && frames <= 100000, "render.frames", "must be 1..100000");
+  CheckOption(width >= 0 && width <= 16384, "render.width", "must be 0 (the photos') or 1..16384");
+  if (elevation != "auto") {
+    double degrees = 0;
+    try {
+      degrees = std::stod(elevation);
+    } catch (const std::exception&) {
+      CheckOption(false, "render.elevation", format("must be auto or a number of degrees, not '{}'", elevation));
+    }
+    CheckOption(degrees > -90 && degrees < 90, "render.elevation", "must be between -90 and 90 degrees");
+  }
+  CheckOption(radius >= 0 && std::isfinite(radius), "render.radius", "must be 0 (from the cameras) or positive");
+  CheckOption(fps > 0 && fps <= 240, "render.fps", "must be in (0, 240]");
+  CheckOption(step_scale >= 0.01 && step_scale <= 100, "render.step_scale", "must be 0.01..100");
+}
+
+std::vector<PinholeCamera> ReadCameraPath(const fs::path& file, const PinholeCamera& reference) {
+  const nlohmann::json json = ReadJsonFile(file);
+  const std::string where = file.string();
+  if (!json.is_object() || !json.contains("frames") || !json["frames"].is_array() || json["frames"].empty()) {
+    throw UserError(format("'{}' has no \"frames\" (a list of cameras with \"transform_matrix\")", where));
+  }
+  const PinholeCamera shared = WithIntrinsics(json, reference, where);
+  std::vector<PinholeCamera> cameras;
+  for (size_t i = 0; i < json["frames"].size(); ++i) {
+    const nlohmann::json& frame = json["frames"][i];
+    const std::string frame_where = format("{}: frames[{}]", where, i);
+    if (!frame.is_object() || !frame.contains("transform_matrix")) {
+      throw UserError(frame_where + " has no \"transform_matrix\"");
+    }
+    PinholeCamera camera = WithIntrinsics(frame, shared, frame_where);
+    camera.world_from_cam = MatrixField(frame["transform_matrix"], frame_where + ".transform_matrix");
+    cameras.push_back(camera);
+  }
+  return cameras;
+}
+
+void WriteCameraPath(const fs::path& file, const std::vector<PinholeCamera>& cameras) {
+  nlohmann::json frames = nlohmann::json::array();
+  for (const PinholeCamera& camera : cameras) {
+    nlohmann::json matrix = nlohmann::json::array();
+    for (int r = 0; r < 4; ++r) {
+      matrix.push_back({camera.world_from_cam(r, 0), camera.world_from_cam(r, 1), camera.world_from_cam(r, 2),
+                        camera.world_from_cam(r, 3)});
+    }
+    frames.push_back({{"w", camera.width}, {"h", camera.height}, {"fl_x", camera.fx}, {"fl_y", camera.fy},
+                      {"cx", camera.cx}, {"cy", camera.cy}, {"transform_matrix", matrix}});
+  }
+  WriteJsonAtomic(file, {{"frames", frames}});
+}
+
+std::map<std::string, std::string> RenderStage::ExternalInputs(const Workspace&, const Config& config) const {
+  const RenderStageOptions options = ReadOptions<RenderStageOptions>(config, "render");
+  if (options.path != "file") return {};
+  if (!fs::is_regular_file(options.path_file)) {
+    throw UserError(format("render.path_file '{}' is not a file", options.path_file));
+  }
+  return {{"camera path " + options.path_file, Sha1OfFile(options.path_file)}};
+}
+
+void RenderStage::Run(StageContext& context) const {
+  const RenderStageOptions options = ReadOptions<RenderStageOptions>(context.config, "render");
+  const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
+  const NerfModel model = LoadModel(context.upstream_dirs.at("train") / "model.bin");
+  const ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
+  RenderOptions render;
+  render.step_scale = options.step_scale;
+
+  nlohmann::json summary = nlohmann::json::object();
+  if (options.heldout) {
+    const nlohmann::json eval = RenderHeldout(model, dataset, render, context.output_dir);
+    WriteJsonAtomic(context.output_dir / "eval.json", eval);
+    if (eval.contains("psnr")) {
+      summary["heldout_psnr"] = eval["psnr"];
+      summary["heldout_ssim"] = eval["ssim"];
+      LogInfo(format("render: held-out {} views: PSNR {:.2f} dB, SSIM {:.3f}, {:.2f} s per view", eval["views"].size(),
+                     eval["psnr"].get<double>(), eval["ssim"].get<double>(), eval["seconds_per_view"].get<double>()));
+    }
+  }
+  std::string kind = options.path;
+  if (kind == "auto") kind = SourceDatasetKind(transforms) == "llff" ? "spiral" : "orbit";
+  if (kind != "none") {
+    const ImportedView* first = &dataset.views.front();
+    for (const ImportedView& view : dataset.views) {
+      if (view.view.split == "train") {
+        first = &view;
+        break;
+      }
+    }
+    const PinholeCamera reference = Scaled(first->view.camera, options.width);
+    const std::vector<PinholeCamera> cameras = PathCameras(options, kind, dataset, reference);
+    nlohmann::json path = RenderPath(model, dataset, cameras, options, render, context.output_dir);
+    path["kind"] = kind;
+    WriteJsonAtomic(context.output_dir / "render_report.json", {{"path", path}});
+    summary["frames"] = path["frames"];
+    summary["frames_per_second"] = path["frames_per_second"];
+    LogInfo(format("render: {} path, {} frames of {}x{} at {:.2f} frames per second", kind, cameras.size(),
+                   cameras[0].width, cameras[0].height, path["frames_per_second"].get<double>()));
+  }
+  context.summary = summary;
+}
+
+}  // namespace p2n

@@ -1,0 +1,69 @@
+#pragma once
+// The render stage: renders a trained model without its training data. The held-out views are compared with
+// their photos (PSNR and SSIM per view and on average, eval.json, with error heat maps); a camera path (an
+// orbit, a spiral in front of the capture, or cameras from a file) becomes frames, depth and opacity images
+// and an MP4 video. Rendering marches through the model's occupancy grid with early termination, in tiles.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "nerf/camera.h"
+#include "pipeline/stage.h"
+
+namespace p2n {
+
+struct RenderStageOptions {
+  bool heldout = true;              // render and evaluate the held-out views
+  std::string path = "auto";        // orbit | spiral | file | none; auto: spiral for LLFF captures, else orbit
+  std::string path_file;            // cameras of the path (transforms.json layout) when path = file
+  int frames = 60;                  // frames of an orbit or spiral
+  int width = 0;                    // path frames' width in pixels (height by the aspect); 0: the photos'
+  std::string elevation = "auto";   // orbit: degrees above the horizontal; auto: the cameras' mean
+  double radius = 0;                // orbit: distance from the centre (normalised units); spiral: amplitude
+                                    // (times the cameras' spread); 0: the cameras' mean distance, or 1
+  double fps = 24;                  // video frames per second
+  bool video = true;                // write video.mp4 of the path
+  bool depth = true;                // write depth and opacity images of the path
+  bool exr = false;                 // also write linear float EXR images (RGB and depth)
+  double step_scale = 1;            // sample spacing as a multiple of the model's
+
+  template <class V>
+  void Visit(V& v) {
+    v("heldout", heldout, "render the held-out views and compare them with their photos (PSNR, SSIM)");
+    v("path", path, "camera path: orbit, spiral (in front of the capture), file, none; auto: spiral for LLFF "
+      "captures, else orbit", "", OptionKind::kResult, {"auto", "orbit", "spiral", "file", "none"});
+    v("path_file", path_file, "cameras of the path when render.path is file (transforms.json layout, e.g. an "
+      "edited path.json)");
+    v("frames", frames, "frames of an orbit or spiral", "frames");
+    v("width", width, "width of the path frames; 0: the photos' width", "pixels");
+    v("elevation", elevation, "orbit: height above the horizontal; auto: the cameras' mean", "degrees");
+    v("radius", radius, "orbit: distance from the centre (normalised units); spiral: amplitude in the cameras' "
+      "spread; 0: the cameras' mean distance (orbit) or 1 (spiral)");
+    v("fps", fps, "video frames per second", "frames/s");
+    v("video", video, "write video.mp4 of the path (H.264)");
+    v("depth", depth, "write depth and opacity images of the path");
+    v("exr", exr, "also write linear 32-bit float EXR images (RGB and depth)");
+    v("step_scale", step_scale, "sample spacing as a multiple of the model's (below 1: finer and slower)");
+  }
+  void Check() const;
+};
+
+// The cameras of a path file: frames[].transform_matrix (camera-to-world, OpenGL axes), intrinsics (w, h, fl_x,
+// fl_y, cx, cy, or camera_angle_x) at the top level or per frame, else `reference`'s. UserError naming the file
+// and the field.
+std::vector<PinholeCamera> ReadCameraPath(const std::filesystem::path& file, const PinholeCamera& reference);
+// Writes cameras in that layout (what ReadCameraPath reads).
+void WriteCameraPath(const std::filesystem::path& file, const std::vector<PinholeCamera>& cameras);
+
+class RenderStage : public Stage {
+ public:
+  std::string name() const override { return "render"; }
+  std::string folder() const override { return "40_render"; }
+  int format_version() const override { return 1; }
+  std::vector<std::string> upstream() const override { return {"poses", "train"}; }
+  std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
+  void Run(StageContext& context) const override;
+};
+
+}  // namespace p2n

@@ -1,0 +1,163 @@
+// The render and export stages on a small trained scene: held-out PSNR agrees with training's own evaluation,
+// the path's frames, depth and video are there and readable, a path written out renders the same when read
+// back, and the mesh and point cloud open in an independent reader (Assimp) in both coordinate frames.
+
+#include <catch2/catch.hpp>
+
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <opencv2/videoio.hpp>
+
+#include <cmath>
+
+#include "nerf/float_image.h"
+#include "pipeline/file_util.h"
+#include "pipeline/format.h"
+#include "pipeline/hash.h"
+#include "stage_fixtures.h"
+#include "stages/render_stage.h"
+
+namespace p2n::testing {
+namespace fs = std::filesystem;
+namespace {
+
+// The scene's meshes as Assimp reads them (no post-processing that could hide defects).
+const aiScene* ReadWithAssimp(Assimp::Importer& importer, const fs::path& file) {
+  const aiScene* scene = importer.ReadFile(file.string(), 0);
+  INFO(importer.GetErrorString());
+  REQUIRE(scene != nullptr);
+  return scene;
+}
+
+}  // namespace
+
+TEST_CASE("render stage: held-out PSNR and SSIM, path frames, depth, video; a written path renders the same",
+          "[render]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(60);
+  config.Set("train.final_eval_pixels", 0, "test");  // every pixel, as the render stage
+  setup.runner.Run(setup.workspace, config, Until("render"));
+  const fs::path out = setup.dir / "ws" / "40_render";
+
+  const nlohmann::json eval = ReadJsonFile(out / "eval.json");
+  const nlohmann::json train = ReadJsonFile(setup.dir / "ws" / "30_train" / "train_report.json");
+  REQUIRE(eval["views"].size() == 2);
+  // The same model, cameras and pixels as training's final evaluation: the same PSNR (tiles reassembled right).
+  CHECK(eval["psnr"].get<double>() == Approx(train["heldout_psnr"].get<double>()).margin(0.01));
+  CHECK(eval["ssim"].get<double>() > 0.2);
+  CHECK(eval["ssim"].get<double>() <= 1.0);
+  for (const nlohmann::json& view : eval["views"]) {
+    CHECK(fs::exists(out / view["render"].get<std::string>()));
+    CHECK(fs::exists(out / view["error_map"].get<std::string>()));
+  }
+
+  const nlohmann::json report = ReadJsonFile(out / "render_report.json")["path"];
+  CHECK(report["kind"] == "orbit");
+  CHECK(report["frames"] == 6);
+  CHECK(report["frames_per_second"].get<double>() > 0);
+  for (int f = 0; f < 6; ++f) {
+    for (const char* folder : {"frames", "depth", "opacity"}) CHECK(fs::exists(out / folder / format("{:04d}.png", f)));
+  }
+  cv::VideoCapture video((out / "video.mp4").string());
+  REQUIRE(video.isOpened());
+  CHECK(video.get(cv::CAP_PROP_FRAME_COUNT) == 6);
+  CHECK(video.get(cv::CAP_PROP_FRAME_WIDTH) == 64);
+  CHECK(video.get(cv::CAP_PROP_FPS) == Approx(6));
+  cv::Mat frame;
+  CHECK(video.read(frame));
+  CHECK(cv::mean(frame)[0] > 1);  // not black
+
+  // Fresh on a rerun; a render option makes render stale and leaves train fresh.
+  CHECK(setup.Status(config, "render").state == StageState::kFresh);
+  const std::string first_frame = Sha1OfFile(out / "frames" / "0001.png");
+  fs::copy_file(out / "path.json", setup.dir / "path.json");
+  config.Set("render.path", "file", "test");
+  config.Set("render.path_file", (setup.dir / "path.json").string(), "test");
+  CHECK(setup.Status(config, "render").state == StageState::kStale);
+  CHECK(setup.Status(config, "train").state == StageState::kFresh);
+  setup.runner.Run(setup.workspace, config, Until("render"));
+  CHECK(Sha1OfFile(out / "frames" / "0001.png") == first_frame);
+  // Editing the path file makes the result stale.
+  WriteText(setup.dir / "path.json", ReadText(setup.dir / "path.json") + "\n");
+  CHECK(setup.Status(config, "render").state == StageState::kStale);
+}
+
+TEST_CASE("render stage: a camera path file is read back as written; bad ones are refused by name", "[render]") {
+  TempDir dir;
+  PinholeCamera camera;
+  camera.width = 40;
+  camera.height = 30;
+  camera.fx = camera.fy = 35;
+  camera.cx = 20;
+  camera.cy = 15;
+  camera.world_from_cam.block<3, 1>(0, 3) = Eigen::Vector3d(1, 2, 3);
+  WriteCameraPath(dir / "path.json", {camera, camera});
+  const std::vector<PinholeCamera> read = ReadCameraPath(dir / "path.json", PinholeCamera{});
+  REQUIRE(read.size() == 2);
+  CHECK(read[1].width == 40);
+  CHECK(read[1].fx == 35);
+  CHECK(read[1].world_from_cam.isApprox(camera.world_from_cam));
+
+  WriteText(dir / "bad.json", R"({"frames": [{"transform_matrix": [[1, 0, 0, 0], [0, 2, 0, 0], [0, 0, 1, 0]]}]})");
+  CHECK_THROWS_WITH(ReadCameraPath(dir / "bad.json", camera), Catch::Contains("bad.json") && Catch::Contains("orthonormal"));
+  WriteText(dir / "bad.json", R"({"w": -3, "frames": [{"transform_matrix": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]]}]})");
+  CHECK_THROWS_WITH(ReadCameraPath(dir / "bad.json", camera), Catch::Contains("\"w\""));
+  WriteText(dir / "bad.json", R"({"cameras": []})");
+  CHECK_THROWS_WITH(ReadCameraPath(dir / "bad.json", camera), Catch::Contains("frames"));
+}
+
+TEST_CASE("export stage: mesh and point cloud open in Assimp, finite, in the source or the normalised frame",
+          "[export]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(150);
+  config.Set("export.obj", true, "test");
+  config.Set("export.frame", "normalized", "test");
+  config.Set("export.threshold", 5.0, "test");  // a young field's densities are low
+  setup.runner.Run(setup.workspace, config, Until("export"));
+  const fs::path out = setup.dir / "ws" / "50_export";
+  const nlohmann::json report = ReadJsonFile(out / "export_report.json");
+  REQUIRE(report["mesh"]["triangles"].get<size_t>() > 100);
+
+  std::vector<aiVector3D> normalized;
+  for (const char* file : {"mesh.ply", "mesh.obj"}) {
+    Assimp::Importer importer;
+    const aiScene* scene = ReadWithAssimp(importer, out / file);
+    REQUIRE(scene->mNumMeshes == 1);
+    const aiMesh* mesh = scene->mMeshes[0];
+    CHECK(mesh->mNumFaces == report["mesh"]["triangles"].get<size_t>());
+    CHECK(mesh->HasNormals());
+    for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
+      const aiVector3D& p = mesh->mVertices[v];
+      REQUIRE((std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)));
+      CHECK(std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) <= 1.0f + 1e-5f);  // inside the scene box
+    }
+    for (unsigned f = 0; f < mesh->mNumFaces; ++f) REQUIRE(mesh->mFaces[f].mNumIndices == 3);
+    if (normalized.empty()) normalized.assign(mesh->mVertices, mesh->mVertices + mesh->mNumVertices);
+  }
+  {
+    Assimp::Importer importer;
+    const aiScene* scene = ReadWithAssimp(importer, out / "points.ply");
+    CHECK(scene->mMeshes[0]->mNumVertices == report["points"]["count"].get<size_t>());
+    CHECK(scene->mMeshes[0]->HasVertexColors(0));
+  }
+
+  // In the source frame, applying applied_transform gives back the normalised vertices.
+  config.Set("export.frame", "source", "test");
+  setup.runner.Run(setup.workspace, config, Until("export"));
+  const nlohmann::json transforms = ReadJsonFile(setup.dir / "ws" / "20_poses" / "transforms.json");
+  Eigen::Matrix<double, 3, 4> normalized_from_source;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 4; ++c) normalized_from_source(r, c) = transforms["applied_transform"][r][c].get<double>();
+  }
+  Assimp::Importer importer;
+  const aiMesh* mesh = ReadWithAssimp(importer, out / "mesh.ply")->mMeshes[0];
+  REQUIRE(mesh->mNumVertices == normalized.size());
+  for (unsigned v = 0; v < mesh->mNumVertices; v += 97) {
+    const Eigen::Vector3d source(mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z);
+    const Eigen::Vector3d back = normalized_from_source * source.homogeneous();
+    CHECK((back - Eigen::Vector3d(normalized[v].x, normalized[v].y, normalized[v].z)).norm() < 1e-4);
+  }
+}
+
+}  // namespace p2n::testing

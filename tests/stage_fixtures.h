@@ -1,0 +1,33 @@
+#pragma once
+// A small dataset with cameras and a workspace on it, for the tests of the stages after poses.
+
+#include <filesystem>
+
+#include "pipeline/options.h"
+#include "pipeline/runner.h"
+#include "pipeline/workspace.h"
+#include "test_util.h"
+
+namespace p2n::testing {
+
+// The synthetic scene's 12 views of 64 x 48 with their true cameras as transforms.json, in `dir`/data.
+std::filesystem::path SmallDataset(const TempDir& dir);
+
+// Quiet, the fast preset, `steps` training steps, evaluation every second, small render and export settings.
+Config SmallStageConfig(int steps);
+
+// A workspace made from SmallDataset(), with its runner (import, then train, render, export, report).
+struct StageWorkspace {
+  StageWorkspace();
+  TempDir dir;
+  std::filesystem::path data;
+  Workspace workspace;
+  Runner runner;
+  // The status of one stage.
+  StageStatus Status(const Config& config, const std::string& stage) const;
+};
+
+// A request that runs the stages up to `stage`.
+RunRequest Until(const std::string& stage);
+
+}  // namespace p2n::testing
