@@ -8,6 +8,7 @@
 #include "cli/cli_options.h"
 #include "cli/commands.h"
 #include "pipeline/errors.h"
+#include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/runner.h"
@@ -25,6 +26,38 @@ std::string CommandLine(int argc, char** argv) {
   std::string line = "photo2nerf";
   for (int i = 0; i < argc; ++i) line += std::string(" ") + argv[i];
   return line;
+}
+
+// What ran and how long each stage took, then where the results are and how good they are.
+void PrintRunSummary(const Workspace& workspace, const std::vector<StageRun>& runs) {
+  size_t ran = 0;
+  double seconds = 0;
+  for (const StageRun& run : runs) {
+    ran += run.ran;
+    seconds += run.wall_seconds;
+  }
+  LogInfo(format("{} of {} stages ran ({:.1f} s), {} fresh; workspace {}", ran, runs.size(), seconds,
+                 runs.size() - ran, workspace.root().string()));
+  for (const StageRun& run : runs) {
+    LogInfo(format("  {:<8} {}", run.stage, run.ran ? format("ran in {:.1f} s", run.wall_seconds) : "fresh"));
+  }
+  const fs::path eval = workspace.StageDir("40_render") / "eval.json";
+  if (fs::exists(eval)) {
+    const nlohmann::json json = ReadJsonFile(eval);
+    if (json.contains("psnr")) {
+      LogInfo(format("  held-out: PSNR {:.2f} dB, SSIM {:.3f} over {} views", json["psnr"].get<double>(),
+                     json["ssim"].get<double>(), json["views"].size()));
+    }
+  }
+  const std::pair<const char*, const char*> results[] = {{"60_report/report.html", "report"},
+                                                         {"40_render/video.mp4", "video"},
+                                                         {"50_export/mesh.ply", "mesh"},
+                                                         {"50_export/points.ply", "point cloud"},
+                                                         {"30_train/model.bin", "model"}};
+  for (const auto& [file, what] : results) {
+    const fs::path path = workspace.root() / file;
+    if (fs::exists(path)) LogInfo(format("  {:<12} {}", what, path.string()));
+  }
 }
 
 // Shared by `run` and the stage commands: `stage` is empty for `run`.
@@ -83,14 +116,7 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
   LogInfo(format("{} (workspace {})", CommandLine(argc, argv), workspace.root().string()));
 
   const std::vector<StageRun> runs = stages.Run(workspace, config, request);
-  size_t ran = 0;
-  double seconds = 0;
-  for (const StageRun& run : runs) {
-    ran += run.ran;
-    seconds += run.wall_seconds;
-  }
-  LogInfo(format("{} of {} stages ran ({:.2f} s), {} fresh; results in {}", ran, runs.size(), seconds,
-                 runs.size() - ran, workspace.root().string()));
+  PrintRunSummary(workspace, runs);
   return kExitOk;
 }
 

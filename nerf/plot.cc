@@ -29,19 +29,12 @@ double TickStep(double range) {
   return 10 * magnitude;
 }
 
-std::string Number(double value) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%g", std::abs(value) < 1e-12 ? 0.0 : value);
-  return text;
-}
+// Axis ranges rounded out to whole ticks, over the finite points of every series.
+struct Axes {
+  double x_min, x_max, y_min, y_max, x_step, y_step;
+};
 
-void Text(cv::Mat& image, const std::string& text, cv::Point at, double scale = 0.45) {
-  cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, scale, {30, 30, 30}, 1, cv::LINE_AA);
-}
-
-}  // namespace
-
-void WriteLinePlot(const std::filesystem::path& path, const PlotLabels& labels, const std::vector<PlotSeries>& series) {
+Axes FitAxes(const std::vector<PlotSeries>& series) {
   double x_min = std::numeric_limits<double>::infinity(), x_max = -x_min, y_min = x_min, y_max = -x_min;
   for (const PlotSeries& s : series) {
     for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
@@ -55,11 +48,32 @@ void WriteLinePlot(const std::filesystem::path& path, const PlotLabels& labels, 
   if (!std::isfinite(x_min)) x_min = 0, x_max = 1, y_min = 0, y_max = 1;
   if (x_max - x_min < 1e-12) x_max = x_min + 1;
   if (y_max - y_min < 1e-12) y_max = y_min + 1;
-  const double x_step = TickStep(x_max - x_min), y_step = TickStep(y_max - y_min);
-  x_min = std::floor(x_min / x_step) * x_step;
-  x_max = std::ceil(x_max / x_step) * x_step;
-  y_min = std::floor(y_min / y_step) * y_step;
-  y_max = std::ceil(y_max / y_step) * y_step;
+  Axes axes;
+  axes.x_step = TickStep(x_max - x_min);
+  axes.y_step = TickStep(y_max - y_min);
+  axes.x_min = std::floor(x_min / axes.x_step) * axes.x_step;
+  axes.x_max = std::ceil(x_max / axes.x_step) * axes.x_step;
+  axes.y_min = std::floor(y_min / axes.y_step) * axes.y_step;
+  axes.y_max = std::ceil(y_max / axes.y_step) * axes.y_step;
+  return axes;
+}
+
+std::string Number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g", std::abs(value) < 1e-12 ? 0.0 : value);
+  return text;
+}
+
+void Text(cv::Mat& image, const std::string& text, cv::Point at, double scale = 0.45) {
+  cv::putText(image, text, at, cv::FONT_HERSHEY_SIMPLEX, scale, {30, 30, 30}, 1, cv::LINE_AA);
+}
+
+}  // namespace
+
+void WriteLinePlot(const std::filesystem::path& path, const PlotLabels& labels, const std::vector<PlotSeries>& series) {
+  const Axes axes = FitAxes(series);
+  const double x_min = axes.x_min, x_max = axes.x_max, y_min = axes.y_min, y_max = axes.y_max;
+  const double x_step = axes.x_step, y_step = axes.y_step;
 
   cv::Mat image(kHeight, kWidth, CV_8UC3, cv::Scalar(255, 255, 255));
   const int plot_width = kWidth - kLeft - kRight, plot_height = kHeight - kTop - kBottom;
@@ -95,6 +109,52 @@ void WriteLinePlot(const std::filesystem::path& path, const PlotLabels& labels, 
     Text(image, series[k].name, {kWidth - kRight + 45, legend_y});
   }
   if (!cv::imwrite(path.string(), image)) throw std::runtime_error("cannot write the plot '" + path.string() + "'");
+}
+
+std::string SvgLinePlot(const PlotLabels& labels, const std::vector<PlotSeries>& series, int width, int height) {
+  constexpr int kSvgLeft = 60, kSvgRight = 20, kSvgTop = 36, kSvgBottom = 46;
+  static const char* kSvgColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#7f7f7f"};
+  const Axes a = FitAxes(series);
+  const double plot_width = width - kSvgLeft - kSvgRight, plot_height = height - kSvgTop - kSvgBottom;
+  const auto px = [&](double x) { return kSvgLeft + (x - a.x_min) / (a.x_max - a.x_min) * plot_width; };
+  const auto py = [&](double y) { return kSvgTop + plot_height - (y - a.y_min) / (a.y_max - a.y_min) * plot_height; };
+  const auto escape = [](const std::string& text) {
+    std::string out;
+    for (char c : text) out += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : std::string(1, c);
+    return out;
+  };
+  std::ostringstream svg;
+  svg.imbue(std::locale::classic());
+  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << width << " " << height << "\" width=\"" << width
+      << "\" height=\"" << height << "\" font-family=\"sans-serif\" font-size=\"12\">\n";
+  svg << "<text x=\"" << kSvgLeft << "\" y=\"20\" font-size=\"14\" font-weight=\"bold\">" << escape(labels.title) << "</text>\n";
+  for (double x = a.x_min; x <= a.x_max + 1e-9 * a.x_step; x += a.x_step) {
+    svg << "<line x1=\"" << px(x) << "\" y1=\"" << kSvgTop << "\" x2=\"" << px(x) << "\" y2=\"" << kSvgTop + plot_height
+        << "\" stroke=\"#e6e6e6\"/><text x=\"" << px(x) << "\" y=\"" << kSvgTop + plot_height + 16
+        << "\" text-anchor=\"middle\">" << Number(x) << "</text>\n";
+  }
+  for (double y = a.y_min; y <= a.y_max + 1e-9 * a.y_step; y += a.y_step) {
+    svg << "<line x1=\"" << kSvgLeft << "\" y1=\"" << py(y) << "\" x2=\"" << kSvgLeft + plot_width << "\" y2=\"" << py(y)
+        << "\" stroke=\"#e6e6e6\"/><text x=\"" << kSvgLeft - 6 << "\" y=\"" << py(y) + 4 << "\" text-anchor=\"end\">"
+        << Number(y) << "</text>\n";
+  }
+  svg << "<rect x=\"" << kSvgLeft << "\" y=\"" << kSvgTop << "\" width=\"" << plot_width << "\" height=\"" << plot_height
+      << "\" fill=\"none\" stroke=\"#444\"/>\n";
+  svg << "<text x=\"" << kSvgLeft + plot_width / 2 << "\" y=\"" << height - 8 << "\" text-anchor=\"middle\">"
+      << escape(labels.x_axis) << "</text>\n";
+  svg << "<text transform=\"translate(14," << kSvgTop + plot_height / 2 << ") rotate(-90)\" text-anchor=\"middle\">"
+      << escape(labels.y_axis) << "</text>\n";
+  for (size_t k = 0; k < series.size(); ++k) {
+    const char* colour = kSvgColours[k % std::size(kSvgColours)];
+    svg << "<polyline fill=\"none\" stroke=\"" << colour << "\" stroke-width=\"2\" points=\"";
+    for (size_t i = 0; i < series[k].x.size() && i < series[k].y.size(); ++i) {
+      if (std::isfinite(series[k].x[i]) && std::isfinite(series[k].y[i])) svg << px(series[k].x[i]) << "," << py(series[k].y[i]) << " ";
+    }
+    svg << "\"/>\n<text x=\"" << kSvgLeft + plot_width - 8 << "\" y=\"" << kSvgTop + 18 + 16 * k << "\" text-anchor=\"end\" fill=\""
+        << colour << "\">" << escape(series[k].name) << "</text>\n";
+  }
+  svg << "</svg>\n";
+  return svg.str();
 }
 
 void WriteImageStrip(const std::filesystem::path& path, const std::vector<CaptionedImage>& images) {

@@ -1,5 +1,5 @@
 #pragma once
-// Line plots written as PNG (OpenCV drawing): for error-against-time curves.
+// Line plots written as PNG (OpenCV drawing) or SVG: for error-against-time curves.
 
 #include <filesystem>
 #include <string>
@@ -25,6 +25,10 @@ PlotSeries CsvSeries(const std::string& name, const std::string& csv, int x_colu
 // Draws the series (finite points only) with axes, ticks and a legend; throws std::runtime_error naming the
 // file when it cannot be written.
 void WriteLinePlot(const std::filesystem::path& path, const PlotLabels& labels, const std::vector<PlotSeries>& series);
+
+// The same plot as an SVG element (for HTML pages): axes with ticks, a title, axis labels, a legend.
+std::string SvgLinePlot(const PlotLabels& labels, const std::vector<PlotSeries>& series, int width = 640,
+                        int height = 360);
 
 struct CaptionedImage {
   std::string caption;

@@ -39,12 +39,26 @@ ProgressStyle ParseProgressStyle(std::string_view text) {
 
 void SetProgressStyle(ProgressStyle style) { g_style = style; }
 
+namespace {
+std::mutex g_prefix_mutex;
+std::string g_prefix;
+std::string CurrentPrefix() {
+  std::lock_guard lock(g_prefix_mutex);
+  return g_prefix;
+}
+}  // namespace
+
+void SetProgressPrefix(std::string prefix) {
+  std::lock_guard lock(g_prefix_mutex);
+  g_prefix = std::move(prefix);
+}
+
 void ClearProgressLine() {
   if (g_bar_visible.exchange(false)) std::fputs("\r\033[2K", stderr);
 }
 
 Progress::Progress(std::string label, int64_t total, std::string unit)
-    : label_(std::move(label)),
+    : label_(CurrentPrefix() + label),
       total_(total),
       unit_(std::move(unit)),
       style_(Resolve(g_style)),

@@ -15,6 +15,8 @@ enum class ProgressStyle { kAuto, kBar, kPlain, kNone };
 
 ProgressStyle ParseProgressStyle(std::string_view text);  // auto|bar|plain|none; UserError otherwise
 void SetProgressStyle(ProgressStyle style);
+// Put before every label from now on: the runner's "[4/7] " says where a stage is in the whole run.
+void SetProgressPrefix(std::string prefix);
 // Erases a live bar so that a log line can be printed; the next update redraws it.
 void ClearProgressLine();
 

@@ -8,6 +8,7 @@
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/log.h"
+#include "pipeline/progress.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -18,6 +19,12 @@ void RemoveAll(const fs::path& path) {
   fs::remove_all(path, error);
   if (error) throw UserError(format("cannot remove '{}': {}", path.string(), error.message()));
 }
+
+// Progress labels carry the stage's position in the run while it runs.
+struct ProgressPrefixScope {
+  explicit ProgressPrefixScope(const std::string& prefix) { SetProgressPrefix(prefix); }
+  ~ProgressPrefixScope() { SetProgressPrefix(""); }
+};
 
 }  // namespace
 
@@ -152,9 +159,14 @@ std::vector<StageRun> Runner::Run(const Workspace& workspace, const Config& conf
     const std::string why = forced[i] ? "forced"
                             : status.reasons.empty() ? StageStateName(status.state)
                                                      : status.reasons.front();
-    LogInfo(format("{}: running ({})", name, why));
+    const std::string position = format("[{}/{}] ", i + 1, stages_.size());
+    LogInfo(format("{}{}: running ({})", position, name, why));
+
     const auto start = std::chrono::steady_clock::now();
-    RunOne(workspace, config, status);
+    {
+      const ProgressPrefixScope prefix(position);
+      RunOne(workspace, config, status);
+    }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     LogInfo(format("{}: done in {:.2f} s", name, seconds));
     runs.push_back({name, true, seconds});

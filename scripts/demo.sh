@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The demo: installs what is needed, builds, renders the built-in synthetic scene into demo_photos/ and runs
-# photo2nerf on it into demo_workspace/ (as far as the pipeline goes today), shows the stages' status and how
-# close the recovered cameras are to the true ones.
+# photo2nerf on it into demo_workspace/ (photos to report: demo_workspace/60_report/report.html), shows the
+# stages' status and how close the recovered cameras are to the true ones.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh

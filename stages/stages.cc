@@ -7,6 +7,7 @@
 #include "stages/ingest_stage.h"
 #include "stages/poses_stage.h"
 #include "stages/render_stage.h"
+#include "stages/report_stage.h"
 #include "stages/sfm_stage.h"
 #include "stages/train_stage.h"
 
@@ -26,6 +27,7 @@ OptionRegistry AllOptions() {
   RegisterOptions<TrainOptions>(registry, "train");
   RegisterOptions<RenderStageOptions>(registry, "render");
   RegisterOptions<ExportOptions>(registry, "export");
+  RegisterOptions<ReportOptions>(registry, "report");
   return registry;
 }
 
@@ -38,6 +40,7 @@ void CheckAllOptions(const Config& config) {
   ReadOptions<TrainOptions>(config, "train");
   ReadOptions<RenderStageOptions>(config, "render");
   ReadOptions<ExportOptions>(config, "export");
+  ReadOptions<ReportOptions>(config, "report");
 }
 
 Runner MakeRunner(const std::optional<std::filesystem::path>& input) {
@@ -52,6 +55,7 @@ Runner MakeRunner(const std::optional<std::filesystem::path>& input) {
   stages.push_back(std::make_unique<TrainStage>());
   stages.push_back(std::make_unique<RenderStage>());
   stages.push_back(std::make_unique<ExportStage>());
+  stages.push_back(std::make_unique<ReportStage>());
   return Runner(std::move(stages));
 }
 

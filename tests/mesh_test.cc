@@ -71,7 +71,7 @@ TEST_CASE("mesh: a sphere's surface is closed, on the sphere, oriented outwards 
   }
 }
 
-TEST_CASE("mesh: a surface cut by the box is closed by the box's faces; an empty field gives no mesh", "[mesh]") {
+TEST_CASE("mesh: a surface cut by the box is closed by the box's faces, an empty field gives no mesh", "[mesh]") {
   NerfModel model = SphereModel(1.2f);  // the faces' centres are inside, the corners outside
   MeshOptions options;
   options.resolution = 24;

@@ -16,7 +16,7 @@ Eigen::VectorXf Ball(const Eigen::Matrix3Xf& points) {
 
 }  // namespace
 
-TEST_CASE("occupancy grid: empty space takes no samples; a full grid samples the whole segment", "[occupancy]") {
+TEST_CASE("occupancy grid: empty space takes no samples, a full grid samples the whole segment", "[occupancy]") {
   OccupancyGrid grid(32);
   const Ray ray{{-0.5, 0.3, 0.6}, Eigen::Vector3d(1, 0.1, -0.05).normalized()};
   CHECK(grid.OccupiedFraction() == 1.0);  // nothing is known yet

@@ -68,7 +68,7 @@ TEST_CASE("bad option values and unknown keys are user errors that name the key"
                     Catch::Equals("option train.steps must be positive, not 0"));
 }
 
-TEST_CASE("config files: nested or dotted keys; unknown keys rejected with their name and file", "[options]") {
+TEST_CASE("config files: nested or dotted keys, unknown keys rejected with their name and file", "[options]") {
   const OptionRegistry registry = Registry();
   TempDir dir;
   Config config(registry);

@@ -10,7 +10,7 @@
 
 namespace p2n::testing {
 
-TEST_CASE("a camera ray projects back to its pixel; the principal point looks down the optical axis", "[rays]") {
+TEST_CASE("a camera ray projects back to its pixel, the principal point looks down the optical axis", "[rays]") {
   const PinholeCamera camera = LookAtCamera({3, -2, 1.5}, {0, 0, 0.4}, 320, 240, 60);
   for (const auto& [u, v] : {std::pair{0.5, 0.5}, std::pair{319.5, 0.5}, std::pair{160.0, 120.0}, std::pair{17.25, 203.75}}) {
     const Ray ray = CameraRay(camera, u, v);

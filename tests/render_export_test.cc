@@ -32,7 +32,7 @@ const aiScene* ReadWithAssimp(Assimp::Importer& importer, const fs::path& file) 
 
 }  // namespace
 
-TEST_CASE("render stage: held-out PSNR and SSIM, path frames, depth, video; a written path renders the same",
+TEST_CASE("render stage: held-out PSNR and SSIM, path frames, depth, video, a written path renders the same",
           "[render]") {
   StageWorkspace setup;
   Config config = SmallStageConfig(60);
@@ -83,7 +83,7 @@ TEST_CASE("render stage: held-out PSNR and SSIM, path frames, depth, video; a wr
   CHECK(setup.Status(config, "render").state == StageState::kStale);
 }
 
-TEST_CASE("render stage: a camera path file is read back as written; bad ones are refused by name", "[render]") {
+TEST_CASE("render stage: a camera path file is read back as written, bad ones are refused by name", "[render]") {
   TempDir dir;
   PinholeCamera camera;
   camera.width = 40;

@@ -144,7 +144,7 @@ TEST_CASE("a stage that throws is redone next time and never reported fresh", "[
   CHECK_FALSE(fs::exists(f.workspace.StagingDir("b")));
 }
 
-TEST_CASE("a process killed with SIGKILL mid-stage leaves the stage incomplete; the next run redoes it",
+TEST_CASE("a process killed with SIGKILL mid-stage leaves the stage incomplete, the next run redoes it",
           "[runner][kill]") {
   Fixture f;
   f.Run();  // a complete earlier result of every stage, with b.value = 1

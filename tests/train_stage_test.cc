@@ -14,7 +14,7 @@
 namespace p2n::testing {
 namespace fs = std::filesystem;
 
-TEST_CASE("train stage: model.bin, metrics.csv and train_report.json; fresh on a rerun, stale on a new seed",
+TEST_CASE("train stage: model.bin, metrics.csv and train_report.json, fresh on a rerun, stale on a new seed",
           "[train]") {
   StageWorkspace setup;
   const TempDir& dir = setup.dir;

@@ -134,7 +134,7 @@ TEST_CASE("a run resumed from a checkpoint reaches exactly the parameters of an 
   CHECK_THROWS_WITH(stranger.LoadCheckpoint(&again), Catch::Contains("other options"));
 }
 
-TEST_CASE("a step with a non-finite input is detected, reported and skipped; training goes on", "[trainer]") {
+TEST_CASE("a step with a non-finite input is detected, reported and skipped, training goes on", "[trainer]") {
   const TrainingData data = SphereScene();
   Trainer trainer(SmallOptions(), data);
   for (int step = 0; step < 5; ++step) trainer.Step(0);
@@ -151,7 +151,7 @@ TEST_CASE("a step with a non-finite input is detected, reported and skipped; tra
   CHECK((Parameters(trainer.model()) != before));
 }
 
-TEST_CASE("model.bin renders the same after loading; newer and damaged files are refused", "[trainer]") {
+TEST_CASE("model.bin renders the same after loading, newer and damaged files are refused", "[trainer]") {
   const TrainingData data = SphereScene();
   Trainer trainer(SmallOptions(), data);
   for (int step = 0; step < 60; ++step) trainer.Step(step / 60.0);

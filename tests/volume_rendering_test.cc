@@ -84,7 +84,7 @@ TEST_CASE("densities 0..1e8 and step sizes 1e-9..1e3 give finite results in [0, 
   CHECK(Composite(ray.segments(), kWhite, 0.0).rgb[1] == 1.0);
 }
 
-TEST_CASE("a thin stiff slab (sigma 1e6) composites exactly at every step size; explicit Euler does not",
+TEST_CASE("a thin stiff slab (sigma 1e6) composites exactly at every step size, explicit Euler does not",
           "[render]") {
   // The slab: density 1e6 over [0.5 - 0.5e-6, 0.5 + 0.5e-6) (optical depth 1), colour (1, 0, 0); black behind.
   const double slab_sigma = 1e6, slab_begin = 0.5 - 0.5e-6, slab_end = 0.5 + 0.5e-6;

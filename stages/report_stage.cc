@@ -1,0 +1,199 @@
+#include "stages/report_stage.h"
+
+#include <cmath>
+
+#include "nerf/plot.h"
+#include "photo2nerf/version.h"
+#include "pipeline/file_util.h"
+#include "pipeline/format.h"
+#include "pipeline/log.h"
+#include "stages/dataset_import.h"
+#include "stages/report_html.h"
+#include "stages/stages.h"
+#include "stages/train_stage.h"
+
+namespace p2n {
+namespace fs = std::filesystem;
+namespace {
+
+nlohmann::json ReadIfExists(const fs::path& file) {
+  return fs::exists(file) ? ReadJsonFile(file) : nlohmann::json::object();
+}
+
+// A JSON value as text: floats with `digits` significant digits.
+std::string Number(const nlohmann::json& value, int digits = 4) {
+  if (value.is_number_float()) return format("{:.{}g}", value.get<double>(), digits);
+  if (value.is_string()) return value.get<std::string>();
+  return value.is_null() ? "-" : value.dump();
+}
+
+std::string Card(const std::string& value, const std::string& label) {
+  return format("<div class=\"card\"><div class=\"value\">{}</div><div class=\"label\">{}</div></div>\n",
+                HtmlEscape(value), HtmlEscape(label));
+}
+
+std::string TrainingSection(const fs::path& train_dir) {
+  const std::string metrics = ReadTextFile(train_dir / "metrics.csv");
+  std::string html = "<h2>Training: error against run time</h2>\n<div class=\"plots\">\n";
+  html += SvgLinePlot({"held-out PSNR against training time", "training time (s)", "PSNR (dB)"},
+                      {CsvSeries("held-out PSNR (dB)", metrics, 0, 3)});
+  html += SvgLinePlot({"training loss against training time", "training time (s)", "loss"},
+                      {CsvSeries("training loss", metrics, 0, 2)});
+  const nlohmann::json report = ReadIfExists(train_dir / "train_report.json");
+  html += "</div>\n";
+  if (!report.empty()) {
+    html += format("<p>{} steps in {:.1f} s of training; final held-out PSNR {} dB over {} {} views ({} pixels each); "
+                   "{} samples per ray when rendering; {:.1f}% of the occupancy grid occupied.</p>\n",
+                   report["steps"].get<int>(), report["wall_seconds"].get<double>(), Number(report["heldout_psnr"]),
+                   report["heldout_views"].get<int>(), HtmlEscape(report.value("heldout_split", "")),
+                   Number(report["heldout_pixels_per_view"]), Number(report["samples_per_ray_rendered"], 3),
+                   100 * report.value("occupied_fraction", 0.0));
+  }
+  return html;
+}
+
+std::string StagesSection(const StageContext& context) {
+  std::string html = "<h2>Stages</h2>\n<table>\n<tr><th>stage</th><th>state</th><th>wall time</th><th>finished (UTC)"
+                     "</th><th>key</th><th>summary</th><th>options set (the others at their defaults)</th></tr>\n";
+  const Runner runner = MakeRunner(context.workspace.input());
+  for (const StageStatus& status : runner.Status(context.workspace, context.config)) {
+    const std::string name = status.stage->name();
+    if (name == "report") continue;
+    std::string summary, options;
+    if (status.manifest) {
+      for (const auto& [key, value] : status.manifest->summary.items()) summary += key + " " + Number(value) + "; ";
+      for (const auto& [key, value] : status.manifest->inputs.options.items()) {
+        const OptionSpec* spec = context.config.registry().Find(key);
+        if (spec == nullptr || spec->default_value != value) options += key + " = " + Number(value) + "; ";
+      }
+      if (options.empty()) options = "(defaults)";
+    }
+    html += format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td></tr>\n",
+                   name, StageStateName(status.state),
+                   status.manifest ? format("{:.1f} s", status.manifest->wall_seconds) : "-",
+                   status.manifest ? status.manifest->finished_utc : "-", status.expected_key.substr(0, 12),
+                   HtmlEscape(summary), HtmlEscape(options));
+  }
+  return html + "</table>\n";
+}
+
+std::string CamerasSection(const StageContext& context, const ImportedDataset& dataset, const std::string& heldout_split) {
+  std::string html = "<h2>Cameras</h2>\n";
+  const nlohmann::json sfm = ReadIfExists(context.workspace.StageDir("10_sfm") / "sfm_report.json");
+  if (!sfm.empty() && SourceDatasetKind(context.upstream_dirs.at("poses") / "transforms.json").empty()) {
+    html += format("<p>COLMAP {}: {} of {} images registered ({}), mean reprojection error {} px, {} sparse points, "
+                   "mean track length {}, {} matching.</p>\n",
+                   HtmlEscape(sfm.value("colmap_version", "")), Number(sfm["registered"]), Number(sfm["images_given"]),
+                   format("{:.0f}%", sfm.value("registered_percent", 0.0)), Number(sfm["mean_reprojection_error_px"], 3),
+                   Number(sfm["points"]), Number(sfm["mean_track_length"], 3), HtmlEscape(sfm.value("matcher", "")));
+    if (sfm.contains("steps")) {
+      html += "<table><tr><th>COLMAP step</th><th>wall time</th></tr>\n";
+      for (const nlohmann::json& step : sfm["steps"]) {
+        html += format("<tr><td>{}</td><td>{:.1f} s</td></tr>\n", HtmlEscape(step.value("step", "")), step.value("wall_seconds", 0.0));
+      }
+      html += "</table>\n";
+    }
+  } else {
+    html += format("<p>Cameras imported from a {} dataset (no structure from motion needed).</p>\n",
+                   HtmlEscape(SourceDatasetKind(context.upstream_dirs.at("poses") / "transforms.json")));
+  }
+  std::vector<ViewerCamera> cameras;
+  for (const ImportedView& view : dataset.views) cameras.push_back({view.view.camera, view.view.split == heldout_split});
+  std::vector<ColouredPoint> points;
+  const fs::path sparse = context.upstream_dirs.at("poses") / "sparse_points.ply";
+  if (fs::exists(sparse)) points = ReadPly(sparse);
+  html += format("<p>{} cameras in the normalised frame{}.</p>\n", cameras.size(),
+                 points.empty() ? "" : format(" with {} sparse points", points.size()));
+  return html + SceneViewerHtml(cameras, points);
+}
+
+std::string HeldoutSection(const fs::path& render_dir, const nlohmann::json& eval, const std::array<float, 3>& background,
+                           int image_width) {
+  if (!eval.contains("views") || eval["views"].empty()) return "<h2>Held-out views</h2>\n<p>No views were held out.</p>\n";
+  std::string html = format("<h2>Held-out views</h2>\n<p>{} views of the {} split, never trained on: PSNR {} dB, SSIM {} "
+                            "on average. Error maps: mean absolute RGB error, black 0 to yellow {} and above.</p>\n",
+                            eval["views"].size(), HtmlEscape(eval.value("split", "")), Number(eval["psnr"], 4),
+                            Number(eval["ssim"], 3), Number(eval["heat_map_max_error"], 2));
+  const int width = image_width;
+  for (const nlohmann::json& view : eval["views"]) {
+    const auto figure = [&](const std::string& uri, const std::string& caption) {
+      return format("<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>", uri, HtmlEscape(caption),
+                    HtmlEscape(caption));
+    };
+    const std::string name = view.value("view", "");
+    html += "<div class=\"triple\">" +
+            figure(ImageDataUri(view.value("photo", ""), width, background), "photo " + name) +
+            figure(ImageDataUri(render_dir / view.value("render", ""), width), format("render: {:.2f} dB, SSIM {:.3f}", view["psnr"].get<double>(), view["ssim"].get<double>())) +
+            figure(ImageDataUri(render_dir / view.value("error_map", ""), width), "error map") + "</div>\n";
+  }
+  return html;
+}
+
+}  // namespace
+
+void ReportOptions::Check() const {
+  CheckOption(image_width >= 32 && image_width <= 4096, "report.image_width", "must be 32..4096");
+}
+
+void ReportStage::Run(StageContext& context) const {
+  const ReportOptions options = ReadOptions<ReportOptions>(context.config, "report");
+  const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
+  const fs::path render_dir = context.upstream_dirs.at("render"), export_dir = context.upstream_dirs.at("export");
+  const ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
+  const std::string heldout_split = HeldoutSplit(dataset);
+  const nlohmann::json train = ReadIfExists(context.upstream_dirs.at("train") / "train_report.json");
+  const nlohmann::json eval = ReadIfExists(render_dir / "eval.json");
+  const nlohmann::json render = ReadIfExists(render_dir / "render_report.json");
+  const nlohmann::json exported = ReadIfExists(export_dir / "export_report.json");
+  std::array<float, 3> background{1, 1, 1};
+  const nlohmann::json transforms_json = ReadJsonFile(transforms);
+  if (transforms_json.contains("background") && transforms_json["background"].size() == 3) {
+    for (int c = 0; c < 3; ++c) background[c] = transforms_json["background"][c].get<float>();
+  }
+
+  std::string body = "<h1>photo2nerf report</h1>\n";
+  body += format("<p class=\"muted\">Workspace <code>{}</code>; input <code>{}</code>; photo2nerf {}; made {} UTC.</p>\n",
+                 HtmlEscape(context.workspace.root().string()),
+                 HtmlEscape(context.workspace.input() ? context.workspace.input()->string() : "-"), kVersion, UtcTimestamp());
+  body += "<div class=\"cards\">\n";
+  body += Card(eval.contains("psnr") ? format("{:.2f} dB", eval["psnr"].get<double>()) : "-", "held-out PSNR");
+  body += Card(eval.contains("ssim") ? format("{:.3f}", eval["ssim"].get<double>()) : "-", "held-out SSIM");
+  body += Card(train.contains("wall_seconds") ? format("{:.0f} s", train["wall_seconds"].get<double>()) : "-", "training time");
+  body += Card(format("{}", dataset.views.size()), "cameras");
+  if (exported.contains("mesh")) body += Card(format("{}", exported["mesh"]["triangles"].get<size_t>()), "mesh triangles");
+  body += "</div>\n";
+  body += TrainingSection(context.upstream_dirs.at("train"));
+  body += StagesSection(context);
+  body += CamerasSection(context, dataset, heldout_split);
+  body += HeldoutSection(render_dir, eval, background, options.image_width);
+  if (render.contains("path")) {
+    const nlohmann::json& path = render["path"];
+    body += format("<h2>New views</h2>\n<p>{} path, {} frames of {}x{} at {:.2f} frames per second ({:.1f} samples per ray).</p>\n",
+                   HtmlEscape(path.value("kind", "")), Number(path["frames"]), Number(path["width"]), Number(path["height"]),
+                   path.value("frames_per_second", 0.0), path.value("samples_per_ray", 0.0));
+    const fs::path video = render_dir / "video.mp4";
+    if (fs::exists(video)) {
+      const std::string source = options.embed_video ? FileDataUri(video, "video/mp4") : "../40_render/video.mp4";
+      body += format("<video id=\"path-video\" controls loop muted autoplay playsinline src=\"{}\" width=\"{}\"></video>\n",
+                     source, options.image_width);
+    } else {
+      body += format("<img src=\"{}\" alt=\"first frame\">\n", ImageDataUri(render_dir / "frames" / "0000.png", options.image_width));
+    }
+  }
+  if (exported.contains("mesh")) {
+    const nlohmann::json& mesh = exported["mesh"];
+    body += format("<h2>Exports</h2>\n<p>Mesh <a href=\"../50_export/mesh.ply\">mesh.ply</a>: {} vertices, {} triangles, "
+                   "{}watertight (marching cubes at {}^3, density threshold {}), in the {} frame.",
+                   Number(mesh["vertices"]), Number(mesh["triangles"]), mesh.value("watertight", false) ? "" : "not ",
+                   Number(mesh["resolution"]), Number(mesh["threshold"]), HtmlEscape(exported.value("frame", "")));
+    if (exported.contains("points")) {
+      body += format(" Point cloud <a href=\"../50_export/points.ply\">points.ply</a>: {} points.", Number(exported["points"]["count"]));
+    }
+    body += "</p>\n";
+  }
+  WriteFileAtomic(context.output_dir / "report.html", HtmlPage("photo2nerf report", body));
+  context.summary = {{"report", (context.workspace.StageDir(folder()) / "report.html").string()}};
+  LogInfo(format("report: {}", (context.workspace.StageDir(folder()) / "report.html").string()));
+}
+
+}  // namespace p2n

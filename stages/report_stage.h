@@ -1,0 +1,32 @@
+#pragma once
+// The report stage: one self-contained HTML page per workspace (report.html; images, plots, video and the
+// script of its 3D view are inside it, so it opens without a network or the workspace): error against run
+// time, the stages with their wall times, cache state and options, the camera recovery, the held-out photos
+// beside their renders and error maps, the video, a 3D view of the cameras and sparse points, the exports.
+
+#include "pipeline/stage.h"
+
+namespace p2n {
+
+struct ReportOptions {
+  int image_width = 480;     // images are embedded at most this wide
+  bool embed_video = true;   // embed video.mp4 in the page (else link to it)
+
+  template <class V>
+  void Visit(V& v) {
+    v("image_width", image_width, "images are embedded at most this wide", "pixels");
+    v("embed_video", embed_video, "embed the video in the page (else link to 40_render/video.mp4)");
+  }
+  void Check() const;
+};
+
+class ReportStage : public Stage {
+ public:
+  std::string name() const override { return "report"; }
+  std::string folder() const override { return "60_report"; }
+  int format_version() const override { return 1; }
+  std::vector<std::string> upstream() const override { return {"poses", "train", "render", "export"}; }
+  void Run(StageContext& context) const override;
+};
+
+}  // namespace p2n
