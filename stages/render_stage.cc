@@ -343,7 +343,8 @@ void RenderStage::Run(StageContext& context) const {
         break;
       }
     }
-    const PinholeCamera reference = Scaled(first->view.camera, options.width);
+    const int width = options.width > 0 ? options.width : std::min(first->view.camera.width, kDefaultMaxPathWidth);
+    const PinholeCamera reference = Scaled(first->view.camera, width);
     const std::vector<PinholeCamera> cameras = PathCameras(options, kind, dataset, reference);
     nlohmann::json path = RenderPath(model, dataset, cameras, options, render, context.output_dir);
     path["kind"] = kind;

@@ -13,12 +13,15 @@
 
 namespace p2n {
 
+inline constexpr int kDefaultMaxPathWidth = 640;
+
 struct RenderStageOptions {
   bool heldout = true;              // render and evaluate the held-out views
   std::string path = "auto";        // orbit | spiral | file | none; auto: spiral for LLFF captures, else orbit
   std::string path_file;            // cameras of the path (transforms.json layout) when path = file
   int frames = 60;                  // frames of an orbit or spiral
-  int width = 0;                    // path frames' width in pixels (height by the aspect); 0: the photos'
+  int width = 0;                    // path frames' width in pixels (height by the aspect); 0: the photos',
+                                    // at most kDefaultMaxPathWidth
   std::string elevation = "auto";   // orbit: degrees above the horizontal; auto: the cameras' mean
   double radius = 0;                // orbit: distance from the centre (normalised units); spiral: amplitude
                                     // (times the cameras' spread); 0: the cameras' mean distance, or 1
@@ -36,7 +39,7 @@ struct RenderStageOptions {
     v("path_file", path_file, "cameras of the path when render.path is file (transforms.json layout, e.g. an "
       "edited path.json)");
     v("frames", frames, "frames of an orbit or spiral", "frames");
-    v("width", width, "width of the path frames; 0: the photos' width", "pixels");
+    v("width", width, "width of the path frames; 0: the photos' width, at most 640", "pixels");
     v("elevation", elevation, "orbit: height above the horizontal; auto: the cameras' mean", "degrees");
     v("radius", radius, "orbit: distance from the centre (normalised units); spiral: amplitude in the cameras' "
       "spread; 0: the cameras' mean distance (orbit) or 1 (spiral)");
