@@ -1,5 +1,8 @@
 #include "nerf/camera.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace p2n {
 
 Eigen::Matrix3d OpenGlFromOpenCvCamera() { return Eigen::Vector3d(1, -1, -1).asDiagonal(); }
@@ -20,6 +23,19 @@ void OpenCvCamFromWorld(const Eigen::Matrix4d& world_from_gl_cam, Eigen::Quatern
   const Eigen::Matrix3d cv_from_world = world_from_cv.transpose();
   *cam_from_world_rotation = Eigen::Quaterniond(cv_from_world).normalized();
   *cam_from_world_translation = -cv_from_world * world_from_gl_cam.topRightCorner<3, 1>();
+}
+
+PinholeCamera ScaledCamera(const PinholeCamera& camera, int width) {
+  if (width == camera.width) return camera;
+  const double s = double(width) / camera.width;
+  PinholeCamera scaled = camera;
+  scaled.width = width;
+  scaled.height = std::max(1, static_cast<int>(std::lround(camera.height * s)));
+  scaled.fx *= s;
+  scaled.fy *= s;
+  scaled.cx *= s;
+  scaled.cy *= s;
+  return scaled;
 }
 
 Eigen::Matrix4d LookAtPose(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {

@@ -17,6 +17,9 @@ struct PinholeCamera {
   Eigen::Matrix4d world_from_cam = Eigen::Matrix4d::Identity();  // OpenGL camera axes
 };
 
+// The same camera with images `width` pixels wide (the height by the aspect ratio, at least 1), intrinsics scaled.
+PinholeCamera ScaledCamera(const PinholeCamera& camera, int width);
+
 // Maps points in OpenCV camera axes to OpenGL camera axes (flips y and z); its inverse is the paired
 // OpenCvFromOpenGlCamera() (the same matrix: the flip is its own inverse).
 Eigen::Matrix3d OpenGlFromOpenCvCamera();

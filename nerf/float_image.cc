@@ -69,8 +69,10 @@ double Ssim(const FloatImage& a, const FloatImage& b) {
   const cv::Mat mu_x = blur(x), mu_y = blur(y);
   const cv::Mat mu_xx = mu_x.mul(mu_x), mu_yy = mu_y.mul(mu_y), mu_xy = mu_x.mul(mu_y);
   const cv::Mat var_x = blur(x.mul(x)) - mu_xx, var_y = blur(y.mul(y)) - mu_yy, cov = blur(x.mul(y)) - mu_xy;
-  cv::Mat numerator = (2 * mu_xy + kC1).mul(2 * cov + kC2);
-  cv::Mat denominator = (mu_xx + mu_yy + kC1).mul(var_x + var_y + kC2);
+  // Constants as Scalar::all: a bare number added to a multi-channel Mat goes to the first channel only.
+  const cv::Scalar c1 = cv::Scalar::all(kC1), c2 = cv::Scalar::all(kC2);
+  cv::Mat numerator = (2 * mu_xy + c1).mul(2 * cov + c2);
+  cv::Mat denominator = (mu_xx + mu_yy + c1).mul(var_x + var_y + c2);
   cv::Mat ssim;
   cv::divide(numerator, denominator, ssim);
   const cv::Scalar mean = cv::mean(ssim);

@@ -7,6 +7,7 @@
 #include "nerf/mesh.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
+#include "pipeline/cancel.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
@@ -63,25 +64,21 @@ std::vector<ColouredPoint> DepthPoints(const NerfModel& model, const ImportedDat
   for (const ImportedView& view : dataset.views) {
     if (view.view.split != "train") continue;
     views.push_back(&view);
-    const PinholeCamera& camera = view.view.camera;
-    pixels += size_t(options.points_width) * std::max(1L, std::lround(double(camera.height) * options.points_width / camera.width));
+    const PinholeCamera camera = ScaledCamera(view.view.camera, options.points_width);
+    pixels += size_t(camera.width) * camera.height;
   }
   Progress progress("export: point cloud", static_cast<int64_t>(pixels), "pixels");
   RenderOptions render;
-  render.on_rays_done = [&](size_t n) { progress.Add(static_cast<int64_t>(n)); };
+  render.on_rays_done = [&](size_t n) {
+    progress.Add(static_cast<int64_t>(n));
+    ThrowIfCancelled();  // Ctrl-C stops within a tile
+  };
   std::vector<ColouredPoint> points;
   const double keep_every = std::max(1.0, double(pixels) / kMaxPoints);
   double next_keep = 0;
   size_t counter = 0;
   for (const ImportedView* view : views) {
-    PinholeCamera camera = view->view.camera;
-    const double s = double(options.points_width) / camera.width;
-    camera.width = options.points_width;
-    camera.height = static_cast<int>(std::max(1L, std::lround(camera.height * s)));
-    camera.fx *= s;
-    camera.fy *= s;
-    camera.cx *= s;
-    camera.cy *= s;
+    const PinholeCamera camera = ScaledCamera(view->view.camera, options.points_width);
     const RenderedView rendered = RenderView(model, camera, view->view.near, view->view.far, render);
     for (int y = 0; y < camera.height; ++y) {
       for (int x = 0; x < camera.width; ++x) {
@@ -124,7 +121,10 @@ void ExportStage::Run(StageContext& context) const {
   Mesh mesh;
   {
     Progress progress("export: density", options.resolution, "slices");
-    mesh = ExtractMesh(model, mesh_options, [&](size_t n) { progress.Add(static_cast<int64_t>(n)); });
+    mesh = ExtractMesh(model, mesh_options, [&](size_t n) {
+      progress.Add(static_cast<int64_t>(n));
+      ThrowIfCancelled();
+    });
   }
   const bool watertight = IsWatertight(mesh);
   for (Eigen::Vector3f& p : mesh.positions) p = frame.Point(p);

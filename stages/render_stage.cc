@@ -8,6 +8,7 @@
 #include "nerf/camera_path.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
+#include "pipeline/cancel.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
@@ -52,19 +53,6 @@ FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& 
     for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = alpha * (value[c] / 255.0f) + (1 - alpha) * background[c];
   }
   return image;
-}
-
-PinholeCamera Scaled(const PinholeCamera& camera, int width) {
-  if (width <= 0 || width == camera.width) return camera;
-  const double s = double(width) / camera.width;
-  PinholeCamera scaled = camera;
-  scaled.width = width;
-  scaled.height = std::max(1, static_cast<int>(std::lround(camera.height * s)));
-  scaled.fx *= s;
-  scaled.fy *= s;
-  scaled.cx *= s;
-  scaled.cy *= s;
-  return scaled;
 }
 
 Eigen::Matrix4d MatrixField(const nlohmann::json& value, const std::string& where) {
@@ -131,7 +119,10 @@ nlohmann::json RenderHeldout(const NerfModel& model, const ImportedDataset& data
   fs::create_directories(out / "heldout");
   Progress progress("render: held-out views", static_cast<int64_t>(pixels), "pixels");
   RenderOptions options = base;
-  options.on_rays_done = [&](size_t n) { progress.Add(static_cast<int64_t>(n)); };
+  options.on_rays_done = [&](size_t n) {
+    progress.Add(static_cast<int64_t>(n));
+    ThrowIfCancelled();  // Ctrl-C stops within a tile
+  };
   for (const ImportedView* view : views) {
     const TrainView photo_view = LoadTrainView(*view);
     const FloatImage photo = PhotoOnBackground(photo_view, model.background);
@@ -213,7 +204,10 @@ nlohmann::json RenderPath(const NerfModel& model, const ImportedDataset& dataset
   for (const PinholeCamera& camera : cameras) pixels += size_t(camera.width) * camera.height;
   Progress progress("render: path", static_cast<int64_t>(pixels), "pixels");
   RenderOptions render = base;
-  render.on_rays_done = [&](size_t n) { progress.Add(static_cast<int64_t>(n)); };
+  render.on_rays_done = [&](size_t n) {
+    progress.Add(static_cast<int64_t>(n));
+    ThrowIfCancelled();  // Ctrl-C stops within a tile
+  };
   std::unique_ptr<VideoWriter> video;
   if (options.video) video = std::make_unique<VideoWriter>(out / "video.mp4", cameras[0].width, cameras[0].height, options.fps);
   double seconds = 0;
@@ -344,7 +338,7 @@ void RenderStage::Run(StageContext& context) const {
       }
     }
     const int width = options.width > 0 ? options.width : std::min(first->view.camera.width, kDefaultMaxPathWidth);
-    const PinholeCamera reference = Scaled(first->view.camera, width);
+    const PinholeCamera reference = ScaledCamera(first->view.camera, width);
     const std::vector<PinholeCamera> cameras = PathCameras(options, kind, dataset, reference);
     nlohmann::json path = RenderPath(model, dataset, cameras, options, render, context.output_dir);
     path["kind"] = kind;

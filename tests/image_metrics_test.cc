@@ -44,6 +44,21 @@ TEST_CASE("image metrics: PSNR and SSIM have their known values", "[metrics]") {
   CHECK(noisy_ssim > 0.05);
   CHECK(noisy_ssim < 0.7);
   CHECK_THROWS_AS(Ssim(a, Pattern(64, 47)), std::invalid_argument);
+
+  // Every channel is treated alike: the SSIM of RGB is the mean of its channels' SSIMs.
+  double per_channel = 0;
+  for (int c = 0; c < 3; ++c) {
+    FloatImage x{a.width, a.height, 1, {}}, y{a.width, a.height, 1, {}};
+    for (size_t i = 0; i < a.pixels.size() / 3; ++i) {
+      x.pixels.push_back(a.pixels[3 * i + c]);
+      y.pixels.push_back(noisy.pixels[3 * i + c]);
+    }
+    per_channel += Ssim(x, y) / 3;
+  }
+  CHECK(noisy_ssim == Approx(per_channel).epsilon(1e-9));
+  // Flat images: the stabilising constants decide (0 / 0 without them), in every channel.
+  const FloatImage flat{16, 16, 3, std::vector<float>(16 * 16 * 3, 0.5f)};
+  CHECK(Ssim(flat, flat) == Approx(1.0));
 }
 
 TEST_CASE("image metrics: the error heat map is black where equal and bright at the cap", "[metrics]") {
