@@ -13,7 +13,7 @@
 
 namespace p2n {
 
-inline constexpr int kDefaultMaxPathWidth = 640;
+inline constexpr int kDefaultMaxPathWidth = 320;
 
 struct RenderStageOptions {
   bool heldout = true;              // render and evaluate the held-out views
@@ -39,7 +39,7 @@ struct RenderStageOptions {
     v("path_file", path_file, "cameras of the path when render.path is file (transforms.json layout, e.g. an "
       "edited path.json)");
     v("frames", frames, "frames of an orbit or spiral", "frames");
-    v("width", width, "width of the path frames; 0: the photos' width, at most 640", "pixels");
+    v("width", width, "width of the path frames; 0: the photos' width, at most 320", "pixels");
     v("elevation", elevation, "orbit: height above the horizontal; auto: the cameras' mean", "degrees");
     v("radius", radius, "orbit: distance from the centre (normalised units); spiral: amplitude in the cameras' "
       "spread; 0: the cameras' mean distance (orbit) or 1 (spiral)");
