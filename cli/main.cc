@@ -1,5 +1,6 @@
 // photo2nerf: a dispatch table of subcommands; the only place where errors become exit codes.
 
+#include <csignal>
 #include <cstring>
 #include <exception>
 #include <filesystem>
@@ -67,6 +68,9 @@ int main(int argc, char** argv) {
     return p2n::kExitUserError;
   }
   p2n::InstallCancelHandlers();
+  // Past a file-size limit (ulimit -f), a write fails with EFBIG, which names the file, instead of the
+  // signal killing the process without a word.
+  std::signal(SIGXFSZ, SIG_IGN);
   try {
     return command->run(argc - 1, argv + 1);
   } catch (const p2n::UserError& e) {

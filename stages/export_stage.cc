@@ -16,6 +16,7 @@
 #include "stages/dataset_import.h"
 #include "stages/mesh_io.h"
 #include "stages/ply.h"
+#include "stages/stage_io.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -112,7 +113,7 @@ void ExportOptions::Check() const {
 void ExportStage::Run(StageContext& context) const {
   const ExportOptions options = ReadOptions<ExportOptions>(context.config, "export");
   const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
-  const NerfModel model = LoadModel(context.upstream_dirs.at("train") / "model.bin");
+  const NerfModel model = LoadTrainedModel(context.upstream_dirs.at("train") / "model.bin");
   const OutputFrame frame = MakeOutputFrame(options.frame, transforms);
 
   MeshOptions mesh_options;

@@ -16,6 +16,7 @@
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
 #include "stages/dataset_import.h"
+#include "stages/stage_io.h"
 #include "stages/train_stage.h"
 #include "stages/video.h"
 
@@ -27,15 +28,13 @@ constexpr float kHeatMapMaxError = 0.2f;  // mean absolute error over RGB shown 
 
 // Image writes fail for the user's reasons (a full disk, permissions): UserError naming the file.
 void Save(const FloatImage& image, const fs::path& path, bool sixteen_bits = false) {
-  try {
+  WriteOrExplain([&] {
     if (path.extension() == ".exr") {
       SaveFloatImageExr(image, path);
     } else {
       SaveFloatImage(image, path, sixteen_bits);
     }
-  } catch (const std::runtime_error& error) {
-    throw UserError(format("{}; check the free space and permissions of {}", error.what(), path.parent_path().string()));
-  }
+  });
 }
 
 double Mean(const std::vector<double>& values) {
@@ -311,7 +310,7 @@ std::map<std::string, std::string> RenderStage::ExternalInputs(const Workspace&,
 void RenderStage::Run(StageContext& context) const {
   const RenderStageOptions options = ReadOptions<RenderStageOptions>(context.config, "render");
   const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
-  const NerfModel model = LoadModel(context.upstream_dirs.at("train") / "model.bin");
+  const NerfModel model = LoadTrainedModel(context.upstream_dirs.at("train") / "model.bin");
   const ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
   RenderOptions render;
   render.step_scale = options.step_scale;

@@ -19,6 +19,7 @@
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
 #include "stages/dataset_import.h"
+#include "stages/stage_io.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -320,7 +321,7 @@ void TrainStage::Run(StageContext& context) const {
     }
     if (options.checkpoint_interval > 0 &&
         std::chrono::duration<double>(Clock::now() - last_checkpoint).count() >= options.checkpoint_interval) {
-      if (ModelIsFinite(trainer.model())) SaveCheckpoint(checkpoint, context.key, state, trainer);
+      if (ModelIsFinite(trainer.model())) WriteOrExplain([&] { SaveCheckpoint(checkpoint, context.key, state, trainer); });
       last_checkpoint = Clock::now();
     }
   }
@@ -330,7 +331,7 @@ void TrainStage::Run(StageContext& context) const {
   const std::vector<double> psnrs = trainer.HeldoutPsnr(options.final_eval_pixels, &eval_stats);
   NerfModel& model = trainer.model();
   model.info = {{"transforms", transforms.string()}, {"steps", trainer.step()}, {"heldout_psnr", Mean(psnrs)}};
-  SaveModel(model, context.output_dir / "model.bin");
+  WriteOrExplain([&] { SaveModel(model, context.output_dir / "model.bin"); });
 
   const nlohmann::json report = TrainReport(trainer, trainer_options, options, data, heldout_split, psnrs, eval_stats,
                                             state.train_seconds, resumed_from);
@@ -339,8 +340,10 @@ void TrainStage::Run(StageContext& context) const {
   WriteFileAtomic(context.output_dir / "metrics.csv", metrics);
   const PlotSeries curve = CsvSeries("held-out PSNR", metrics, 0, 3);
   if (!curve.x.empty()) {
-    WriteLinePlot(context.output_dir / "psnr.png",
-                  {"held-out PSNR against training time", "training time (s)", "PSNR (dB)"}, {curve});
+    WriteOrExplain([&] {
+      WriteLinePlot(context.output_dir / "psnr.png",
+                    {"held-out PSNR against training time", "training time (s)", "PSNR (dB)"}, {curve});
+    });
   }
   context.summary = {{"steps", trainer.step()},
                      {"train_seconds", state.train_seconds},

@@ -1,0 +1,28 @@
+#include "stages/stage_io.h"
+
+#include "pipeline/errors.h"
+#include "pipeline/format.h"
+
+namespace p2n {
+
+void WriteOrExplain(const std::function<void()>& write) {
+  try {
+    write();
+  } catch (const UserError&) {
+    throw;
+  } catch (const std::runtime_error& error) {
+    throw UserError(format("{}; check the free space, file-size limit (ulimit -f) and permissions of the workspace, "
+                           "then run again (finished stages are kept)",
+                           error.what()));
+  }
+}
+
+NerfModel LoadTrainedModel(const std::filesystem::path& model_bin) {
+  try {
+    return LoadModel(model_bin);
+  } catch (const std::runtime_error& error) {
+    throw UserError(format("{}; remake it with: photo2nerf train -w WORKSPACE --force", error.what()));
+  }
+}
+
+}  // namespace p2n

@@ -1,0 +1,184 @@
+// Faults on the real program: Ctrl-C (SIGINT) stops cleanly with exit status 130 and training resumes from its
+// checkpoint; SIGKILL at many moments never leaves a stage that looks finished but is not, and the run that
+// follows gives the same result as an uninterrupted one; a file-size limit (a full disk, as far as writes are
+// concerned) gives a clear error naming the file and leaves the workspace consistent.
+
+#include <catch2/catch.hpp>
+
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <chrono>
+#include <thread>
+
+#include "pipeline/file_util.h"
+#include "pipeline/hash.h"
+#include "stage_fixtures.h"
+
+extern char** environ;
+
+namespace p2n::testing {
+namespace fs = std::filesystem;
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// `photo2nerf run` on the small dataset with short stages (about 10 s in all) and frequent checkpoints.
+std::vector<std::string> RunArgs(const fs::path& data, const fs::path& workspace) {
+  return {P2N_BINARY, "run", data.string(), "-w", workspace.string(), "--run.progress", "plain",
+          "--train.preset", "fast", "--train.steps", "120", "--train.checkpoint_interval", "0.2",
+          "--train.eval_interval", "1", "--render.frames", "4", "--export.resolution", "32",
+          "--export.points_width", "32", "--export.threshold", "5"};
+}
+
+// Starts a command with its output in `log`.
+pid_t Spawn(const std::vector<std::string>& args, const fs::path& log) {
+  std::vector<char*> argv;
+  for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  pid_t pid = 0;
+  const int error = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  REQUIRE(error == 0);
+  return pid;
+}
+
+// The exit code, or 128 + the signal.
+int Wait(pid_t pid) {
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status);
+}
+
+// Every stage folder with a manifest: its key, after checking that every output it lists has the SHA-1 it
+// lists (a half-written file would not).
+std::map<std::string, std::string> CheckedKeys(const fs::path& workspace) {
+  std::map<std::string, std::string> keys;
+  for (const auto& entry : fs::directory_iterator(workspace)) {
+    const fs::path manifest = entry.path() / "manifest.json";
+    // Result folders only (not X.partial, X.trash: a kill between the two renames of a commit leaves one).
+    if (entry.path().filename().string().find('.') != std::string::npos || !fs::exists(manifest)) continue;
+    const nlohmann::json json = ReadJsonFile(manifest);
+    for (const nlohmann::json& output : json["outputs"]) {
+      const fs::path file = entry.path() / output["path"].get<std::string>();
+      INFO(file.string());
+      REQUIRE(fs::exists(file));
+      CHECK(Sha1OfFile(file) == output["sha1"].get<std::string>());
+    }
+    keys[entry.path().filename().string()] = json["key"];
+  }
+  return keys;
+}
+
+}  // namespace
+
+TEST_CASE("faults: Ctrl-C stops with exit status 130, the stage is incomplete, the next run resumes training",
+          "[fault]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), workspace = dir / "ws";
+  const pid_t pid = Spawn(RunArgs(data, workspace), dir / "run.log");
+  const auto deadline = Clock::now() + std::chrono::seconds(120);
+  while (!fs::exists(workspace / "30_train.resume" / "checkpoint.bin") && Clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  REQUIRE(fs::exists(workspace / "30_train.resume" / "checkpoint.bin"));
+  ::kill(pid, SIGINT);
+  CHECK(Wait(pid) == 130);
+  INFO(ReadText(dir / "run.log"));
+  CHECK_THAT(ReadText(dir / "run.log"), Catch::Contains("interrupted"));
+
+  std::string status;
+  REQUIRE(RunCommand({P2N_BINARY, "status", "-w", workspace.string()}, &status) == 0);
+  CHECK_THAT(status, Catch::Matches("(.|\n)*train +incomplete(.|\n)*"));
+  std::string output;
+  REQUIRE(RunCommand(RunArgs(data, workspace), &output) == 0);
+  const nlohmann::json report = ReadJsonFile(workspace / "30_train" / "train_report.json");
+  CHECK(report["resumed_from_step"].get<int>() > 0);
+  CHECK(report["steps"] == 120);
+}
+
+TEST_CASE("faults: SIGKILL at many moments, then a rerun, gives the uninterrupted result", "[fault]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir);
+  std::string output;
+  REQUIRE(RunCommand(RunArgs(data, dir / "reference"), &output) == 0);
+  const std::map<std::string, std::string> reference = CheckedKeys(dir / "reference");
+  REQUIRE(reference.size() == 5);  // poses (import), train, render, export, report
+  const double reference_psnr = ReadJsonFile(dir / "reference" / "40_render" / "eval.json")["psnr"];
+
+  // Each run is killed the moment a file or folder appears (polled every millisecond): every stage's start, a
+  // checkpoint being written, results half written, manifests written but not yet moved into place. Each
+  // next run goes on from what the last one left.
+  const fs::path workspace = dir / "ws";
+  const std::vector<std::string> moments = {
+      "20_poses.partial",         "20_poses.partial/manifest.json",  "30_train.partial",
+      "30_train.resume/checkpoint.bin.tmp", "30_train.resume/checkpoint.bin", "30_train.partial/model.bin.tmp",
+      "30_train.partial/metrics.csv", "40_render.partial",        "40_render.partial/video.mp4",
+      "50_export.partial",        "50_export.partial/mesh.ply",      "60_report.partial",
+      "60_report.partial/manifest.json"};
+  const std::vector<std::string> stages = {"poses", "train", "render", "export", "report"};
+  std::vector<std::string> hit;
+  for (const std::string& moment : moments) {
+    // A moment of a stage that an earlier run finished: that stage and the later ones are removed first.
+    const std::string folder = moment.substr(0, moment.find_first_of("./"));
+    if (fs::exists(workspace / folder / "manifest.json")) {
+      const size_t first = std::stoi(folder.substr(0, 2)) / 10 - 2;  // 20_poses -> 0
+      std::vector<std::string> clean = {P2N_BINARY, "clean", "-w", workspace.string()};
+      for (size_t i = first; i < stages.size(); ++i) clean.insert(clean.end(), {"--stage", stages[i]});
+      std::string ignored;
+      REQUIRE(RunCommand(clean, &ignored) == 0);
+    }
+    const pid_t pid = Spawn(RunArgs(data, workspace), dir / "kills.log");
+    const auto deadline = Clock::now() + std::chrono::seconds(60);
+    int status = 0;
+    bool exited = false;
+    while (!fs::exists(workspace / moment) && Clock::now() < deadline) {
+      if (::waitpid(pid, &status, WNOHANG) == pid) {
+        exited = true;
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    if (exited) continue;  // the moment went by between two polls, or never came: the run finished
+    ::kill(pid, SIGKILL);
+    if (Wait(pid) != 128 + SIGKILL) continue;
+    hit.push_back(moment);
+    // Whatever looks finished is: every output as its manifest says, of the same inputs as the reference.
+    for (const auto& [stage, key] : CheckedKeys(workspace)) CHECK(key == reference.at(stage));
+    std::string status_text;
+    REQUIRE(RunCommand({P2N_BINARY, "status", "-w", workspace.string()}, &status_text) == 0);
+    CHECK_THAT(status_text, Catch::Contains("incomplete") || Catch::Contains("missing"));
+  }
+  INFO("killed at " << Catch::Detail::stringify(hit) << "\n" << ReadText(dir / "kills.log"));
+  CHECK(hit.size() >= 8);
+  REQUIRE(RunCommand(RunArgs(data, workspace), &output) == 0);
+  CHECK(CheckedKeys(workspace) == reference);
+  // Training resumed to the very same parameters, so the renders match to the last bit.
+  CHECK(ReadJsonFile(workspace / "40_render" / "eval.json")["psnr"].get<double>() == reference_psnr);
+}
+
+TEST_CASE("faults: a file-size limit gives a clear error naming the file and keeps the finished stages", "[fault]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), workspace = dir / "ws";
+  std::vector<std::string> limited = {"/bin/bash", "-c", "ulimit -f 256 && exec \"$@\"", "limited"};
+  for (const std::string& arg : RunArgs(data, workspace)) limited.push_back(arg);
+  std::string output;
+  CHECK(RunCommand(limited, &output) == 1);  // a user error: the environment, not a bug
+  INFO(output);
+  CHECK_THAT(output, Catch::Contains("30_train") && Catch::Contains("File too large") &&
+                         Catch::Contains("free space"));
+  std::string status;
+  REQUIRE(RunCommand({P2N_BINARY, "status", "-w", workspace.string()}, &status) == 0);
+  CHECK_THAT(status, Catch::Matches("(.|\n)*poses +fresh(.|\n)*"));
+  CHECK_THAT(status, Catch::Matches("(.|\n)*train +incomplete(.|\n)*"));
+  REQUIRE(RunCommand(RunArgs(data, workspace), &output) == 0);
+  CHECK_THAT(output, Catch::Contains("poses: fresh, skipped"));
+}
+
+}  // namespace p2n::testing
