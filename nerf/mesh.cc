@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <mutex>
@@ -137,18 +138,24 @@ Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options, const std::
   return mesh;
 }
 
-bool IsWatertight(const Mesh& mesh) {
-  // Each directed edge must appear once, and its reverse once.
-  std::map<std::pair<uint32_t, uint32_t>, int> directed;
+MeshEdges CountEdges(const Mesh& mesh) {
+  // For each undirected edge (low, high): how often it is run low -> high and high -> low.
+  std::map<std::pair<uint32_t, uint32_t>, std::array<int, 2>> runs;
   for (const auto& t : mesh.triangles) {
     for (int e = 0; e < 3; ++e) {
-      if (++directed[{t[e], t[(e + 1) % 3]}] > 1) return false;
+      const uint32_t a = t[e], b = t[(e + 1) % 3];
+      ++runs[{std::min(a, b), std::max(a, b)}][a < b ? 0 : 1];
     }
   }
-  for (const auto& [edge, count] : directed) {
-    if (directed.find({edge.second, edge.first}) == directed.end()) return false;
+  MeshEdges count;
+  count.edges = runs.size();
+  for (const auto& [edge, directions] : runs) {
+    const int uses = directions[0] + directions[1];
+    count.border += uses == 1;
+    count.non_manifold += uses > 2;
+    count.misoriented += uses == 2 && directions[0] != 1;
   }
-  return !mesh.triangles.empty();
+  return count;
 }
 
 }  // namespace p2n

@@ -34,8 +34,14 @@ struct MeshOptions {
 Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options,
                  const std::function<void(size_t)>& on_slices_done = {});
 
-// Whether every edge is shared by exactly two triangles with opposite orientations (a closed, consistently
-// oriented surface); the mesh's vertices are compared by index.
-bool IsWatertight(const Mesh& mesh);
+// How closed a mesh is, by its undirected edges (vertices compared by index): an edge of one triangle is on a
+// hole's border, an edge of three or more is non-manifold, and a pair of triangles that runs an edge the same
+// way round is inconsistently oriented.
+struct MeshEdges {
+  size_t edges = 0, border = 0, non_manifold = 0, misoriented = 0;
+  // Closed and consistently oriented: every edge shared by exactly two triangles running it opposite ways.
+  bool watertight() const { return edges > 0 && border == 0 && non_manifold == 0 && misoriented == 0; }
+};
+MeshEdges CountEdges(const Mesh& mesh);
 
 }  // namespace p2n

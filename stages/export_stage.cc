@@ -127,7 +127,8 @@ void ExportStage::Run(StageContext& context) const {
       ThrowIfCancelled();
     });
   }
-  const bool watertight = IsWatertight(mesh);
+  const MeshEdges edges = CountEdges(mesh);
+  const bool watertight = edges.watertight();
   for (Eigen::Vector3f& p : mesh.positions) p = frame.Point(p);
   for (Eigen::Vector3f& n : mesh.normals) n = frame.Direction(n);
   if (frame.rotation.determinant() < 0) {
@@ -148,6 +149,9 @@ void ExportStage::Run(StageContext& context) const {
                                      {"vertices", mesh.positions.size()},
                                      {"triangles", mesh.triangles.size()},
                                      {"watertight", watertight},
+                                     {"border_edges", edges.border},
+                                     {"non_manifold_edges", edges.non_manifold},
+                                     {"misoriented_edges", edges.misoriented},
                                      {"resolution", options.resolution},
                                      {"threshold", options.threshold}}},
                            {"frame", options.frame}};

@@ -54,7 +54,7 @@ TEST_CASE("mesh: a sphere's surface is closed, on the sphere, oriented outwards 
   const Mesh mesh = ExtractMesh(model, options, [&](size_t n) { slices += n; });
   CHECK(slices == 48);
   REQUIRE(mesh.triangles.size() > 1000);
-  CHECK(IsWatertight(mesh));
+  CHECK(CountEdges(mesh).watertight());
   const float cell = 2.0f / options.resolution;
   double signed_volume = 0;
   for (const auto& t : mesh.triangles) {
@@ -77,11 +77,12 @@ TEST_CASE("mesh: a surface cut by the box is closed by the box's faces, an empty
   options.resolution = 24;
   options.density_threshold = kThreshold;
   const Mesh cut = ExtractMesh(model, options);
-  CHECK(IsWatertight(cut));
+  CHECK(CountEdges(cut).watertight());
   for (const Eigen::Vector3f& p : cut.positions) CHECK(p.cwiseAbs().maxCoeff() <= 1.0f);
 
   options.density_threshold = 1e9f;
   CHECK(ExtractMesh(model, options).triangles.empty());
+  CHECK_FALSE(CountEdges(Mesh{}).watertight());
   options.resolution = 4;
   CHECK_THROWS_AS(ExtractMesh(model, options), std::invalid_argument);
 }
@@ -93,6 +94,27 @@ TEST_CASE("mesh: cells the occupancy grid marks empty are not evaluated", "[mesh
   MeshOptions options;
   options.resolution = 32;
   CHECK(ExtractMesh(model, options).triangles.empty());
+}
+
+TEST_CASE("mesh: edge counts find holes, non-manifold edges and flipped triangles", "[mesh]") {
+  Mesh tetrahedron;
+  tetrahedron.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  tetrahedron.triangles = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+  const MeshEdges closed = CountEdges(tetrahedron);
+  CHECK(closed.edges == 6);
+  CHECK(closed.watertight());
+
+  Mesh flipped = tetrahedron;
+  std::swap(flipped.triangles[3][1], flipped.triangles[3][2]);
+  CHECK(CountEdges(flipped).misoriented == 3);
+  Mesh holed = tetrahedron;
+  holed.triangles.pop_back();
+  CHECK(CountEdges(holed).border == 3);
+  Mesh fin = tetrahedron;
+  fin.positions.push_back({1, 1, 1});
+  fin.triangles.push_back({0, 1, 4});  // a third triangle on edge 0-1
+  CHECK(CountEdges(fin).non_manifold == 1);
+  CHECK_FALSE(CountEdges(fin).watertight());
 }
 
 }  // namespace p2n::testing
