@@ -109,12 +109,11 @@ std::string CamerasSection(const StageContext& context, const ImportedDataset& d
 
 std::string HeldoutSection(const fs::path& render_dir, const nlohmann::json& eval, const std::array<float, 3>& background,
                            int image_width) {
-  if (!eval.contains("views") || eval["views"].empty()) return "<h2>Held-out views</h2>\n<p>No views were held out.</p>\n";
+  if (!eval.contains("views") || eval["views"].empty()) return "<h2>Held-out views</h2>\n<p>None rendered: no view was held out, or render.heldout is false.</p>\n";
   std::string html = format("<h2>Held-out views</h2>\n<p>{} views of the {} split, never trained on: PSNR {} dB, SSIM {} "
                             "on average. Error maps: mean absolute RGB error, black 0 to yellow {} and above.</p>\n",
                             eval["views"].size(), HtmlEscape(eval.value("split", "")), Number(eval["psnr"], 4),
                             Number(eval["ssim"], 3), Number(eval["heat_map_max_error"], 2));
-  const int width = image_width;
   for (const nlohmann::json& view : eval["views"]) {
     const auto figure = [&](const std::string& uri, const std::string& caption) {
       return format("<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>", uri, HtmlEscape(caption),
@@ -122,9 +121,9 @@ std::string HeldoutSection(const fs::path& render_dir, const nlohmann::json& eva
     };
     const std::string name = view.value("view", "");
     html += "<div class=\"triple\">" +
-            figure(ImageDataUri(view.value("photo", ""), width, background), "photo " + name) +
-            figure(ImageDataUri(render_dir / view.value("render", ""), width), format("render: {:.2f} dB, SSIM {:.3f}", view["psnr"].get<double>(), view["ssim"].get<double>())) +
-            figure(ImageDataUri(render_dir / view.value("error_map", ""), width), "error map") + "</div>\n";
+            figure(ImageDataUri(view.value("photo", ""), image_width, background), "photo " + name) +
+            figure(ImageDataUri(render_dir / view.value("render", ""), image_width), format("render: {:.2f} dB, SSIM {:.3f}", view["psnr"].get<double>(), view["ssim"].get<double>())) +
+            figure(ImageDataUri(render_dir / view.value("error_map", ""), image_width), "error map") + "</div>\n";
   }
   return html;
 }
