@@ -14,25 +14,6 @@
 #include "nerf/renderer.h"
 #include "stages/train_stage.h"
 
-namespace {
-
-double Psnr(const std::vector<float>& a, const std::vector<float>& b) {
-  double squared = 0;
-  for (size_t i = 0; i < a.size(); ++i) squared += (a[i] - b[i]) * (a[i] - b[i]);
-  return -10 * std::log10(std::max(squared / a.size(), 1e-12));
-}
-
-std::vector<float> PhotoPixels(const p2n::TrainView& view, const std::array<float, 3>& background) {
-  std::vector<float> pixels;
-  for (size_t p = 0; p < view.pixels.size() / view.channels; ++p) {
-    const float alpha = view.channels == 4 ? view.pixels[p * 4 + 3] / 255.0f : 1.0f;
-    for (int c = 0; c < 3; ++c) pixels.push_back(alpha * view.pixels[p * view.channels + c] / 255.0f + (1 - alpha) * background[c]);
-  }
-  return pixels;
-}
-
-}  // namespace
-
 int main(int argc, char** argv) {
   if (argc < 3) {
     std::fprintf(stderr, "usage: render_bench WORKSPACE OUT [VIEWS]\n");
@@ -48,12 +29,13 @@ int main(int argc, char** argv) {
   p2n::NerfModel dense = p2n::LoadModel(ws / "30_train" / "model.bin");
   dense.occupancy.MarkAllOccupied();
 
-  std::vector<std::vector<float>> reference;
+  std::vector<p2n::FloatImage> reference, photos;
   p2n::RenderOptions fine;
   fine.step_scale = 0.125;
   fine.min_transmittance = 0;
   for (const p2n::TrainView& view : data.heldout) {
-    reference.push_back(p2n::RenderView(model, view.camera, view.near, view.far, fine).rgb.pixels);
+    reference.push_back(p2n::RenderView(model, view.camera, view.near, view.far, fine).rgb);
+    photos.push_back(p2n::PhotoOnBackground(view, model.background));
   }
   std::ofstream csv(out + ".csv");
   csv << "method,step_scale,seconds_per_frame,samples_per_ray,psnr_vs_reference,psnr_vs_photos\n";
@@ -78,8 +60,8 @@ int main(int argc, char** argv) {
         seconds += rendered.stats.seconds;
         samples += rendered.stats.samples_evaluated;
         rays += rendered.stats.rays;
-        vs_reference += Psnr(rendered.rgb.pixels, reference[v]);
-        vs_photos += Psnr(rendered.rgb.pixels, PhotoPixels(view, model.background));
+        vs_reference += p2n::Psnr(rendered.rgb, reference[v]);
+        vs_photos += p2n::Psnr(rendered.rgb, photos[v]);
       }
       const double n = data.heldout.size();
       csv << method.name << "," << scale << "," << seconds / n << "," << samples / rays << "," << vs_reference / n

@@ -279,6 +279,18 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
   return result;
 }
 
+FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& background) {
+  FloatImage image{view.camera.width, view.camera.height, 3, {}};
+  const size_t pixels = size_t(image.width) * image.height;
+  image.pixels.resize(3 * pixels);
+  for (size_t i = 0; i < pixels; ++i) {
+    const uint8_t* value = &view.pixels[i * view.channels];
+    const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
+    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = alpha * (value[c] / 255.0f) + (1 - alpha) * background[c];
+  }
+  return image;
+}
+
 std::vector<double> Trainer::HeldoutPsnr(size_t pixels_per_view, RenderStats* stats) const {
   std::vector<double> psnrs;
   RenderOptions render;

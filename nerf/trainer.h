@@ -16,6 +16,7 @@
 
 #include "nerf/adam.h"
 #include "nerf/camera.h"
+#include "nerf/float_image.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
 
@@ -30,6 +31,9 @@ struct TrainView {
   std::vector<uint8_t> pixels;
   std::string name;
 };
+
+// The photo as floats (RGB), composited on `background` where it has alpha: what a render is compared with.
+FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& background);
 
 struct TrainingData {
   std::vector<TrainView> train, heldout;

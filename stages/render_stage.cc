@@ -41,19 +41,6 @@ double Mean(const std::vector<double>& values) {
   return values.empty() ? std::nan("") : std::accumulate(values.begin(), values.end(), 0.0) / values.size();
 }
 
-// The photo as floats, composited on `background` where it has alpha.
-FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& background) {
-  FloatImage image{view.camera.width, view.camera.height, 3, {}};
-  const size_t pixels = size_t(image.width) * image.height;
-  image.pixels.resize(3 * pixels);
-  for (size_t i = 0; i < pixels; ++i) {
-    const uint8_t* value = &view.pixels[i * view.channels];
-    const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
-    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = alpha * (value[c] / 255.0f) + (1 - alpha) * background[c];
-  }
-  return image;
-}
-
 Eigen::Matrix4d MatrixField(const nlohmann::json& value, const std::string& where) {
   if (!value.is_array() || value.size() < 3) throw UserError(where + " must be a 4x4 (or 3x4) matrix");
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
@@ -153,9 +140,9 @@ nlohmann::json RenderHeldout(const NerfModel& model, const ImportedDataset& data
 
 std::vector<PinholeCamera> PathCameras(const RenderStageOptions& options, const std::string& kind,
                                        const ImportedDataset& dataset, const PinholeCamera& reference) {
+  if (kind == "file") return ReadCameraPath(options.path_file, reference);
   std::vector<PinholeCamera> cameras;
   for (const ImportedView& view : dataset.views) cameras.push_back(view.view.camera);
-  if (kind == "file") return ReadCameraPath(options.path_file, reference);
   CameraPathOptions path;
   path.frames = options.frames;
   if (kind == "spiral") {
@@ -172,18 +159,24 @@ std::vector<PinholeCamera> PathCameras(const RenderStageOptions& options, const 
 }
 
 // The range along the rays of a path camera that holds the scene: the views' nearest near and farthest far,
-// the far end moved out by how much farther from the centre the camera is than the views on average (unknown
-// ranges: the whole scene).
-Eigen::Vector2d PathRange(const ImportedDataset& dataset, const PinholeCamera& camera) {
-  double near = std::numeric_limits<double>::infinity(), far = 0, distance = 0;
-  for (const ImportedView& view : dataset.views) {
-    if (!(view.view.near >= 0 && view.view.far > view.view.near)) return {-1, -1};
-    near = std::min(near, view.view.near);
-    far = std::max(far, view.view.far);
-    distance += view.view.camera.world_from_cam.block<3, 1>(0, 3).norm() / dataset.views.size();
+// the far end moved out by how much farther from the centre the camera is than the views on average.
+struct PathRange {
+  bool known = true;  // false when a view's range is unknown: the whole scene
+  double near = std::numeric_limits<double>::infinity(), far = 0, mean_distance = 0;
+
+  explicit PathRange(const ImportedDataset& dataset) {
+    for (const ImportedView& view : dataset.views) {
+      known = known && view.view.near >= 0 && view.view.far > view.view.near;
+      near = std::min(near, view.view.near);
+      far = std::max(far, view.view.far);
+      mean_distance += view.view.camera.world_from_cam.block<3, 1>(0, 3).norm() / dataset.views.size();
+    }
   }
-  return {near, far + std::max(0.0, camera.world_from_cam.block<3, 1>(0, 3).norm() - distance)};
-}
+  Eigen::Vector2d For(const PinholeCamera& camera) const {
+    if (!known) return {-1, -1};
+    return {near, far + std::max(0.0, camera.world_from_cam.block<3, 1>(0, 3).norm() - mean_distance)};
+  }
+};
 
 nlohmann::json RenderPath(const NerfModel& model, const ImportedDataset& dataset,
                           const std::vector<PinholeCamera>& cameras, const RenderStageOptions& options,
@@ -209,10 +202,11 @@ nlohmann::json RenderPath(const NerfModel& model, const ImportedDataset& dataset
   };
   std::unique_ptr<VideoWriter> video;
   if (options.video) video = std::make_unique<VideoWriter>(out / "video.mp4", cameras[0].width, cameras[0].height, options.fps);
+  const PathRange path_range(dataset);
   double seconds = 0;
   size_t samples = 0, rays = 0;
   for (size_t f = 0; f < cameras.size(); ++f) {
-    const Eigen::Vector2d range = PathRange(dataset, cameras[f]);
+    const Eigen::Vector2d range = path_range.For(cameras[f]);
     const RenderedView frame = RenderView(model, cameras[f], range[0], range[1], render);
     const std::string name = format("{:04d}", f);
     Save(frame.rgb, out / "frames" / (name + ".png"));

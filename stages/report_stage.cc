@@ -80,7 +80,8 @@ std::string StagesSection(const StageContext& context) {
 std::string CamerasSection(const StageContext& context, const ImportedDataset& dataset, const std::string& heldout_split) {
   std::string html = "<h2>Cameras</h2>\n";
   const nlohmann::json sfm = ReadIfExists(context.workspace.StageDir("10_sfm") / "sfm_report.json");
-  if (!sfm.empty() && SourceDatasetKind(context.upstream_dirs.at("poses") / "transforms.json").empty()) {
+  const std::string dataset_kind = SourceDatasetKind(context.upstream_dirs.at("poses") / "transforms.json");
+  if (!sfm.empty() && dataset_kind.empty()) {
     html += format("<p>COLMAP {}: {} of {} images registered ({}), mean reprojection error {} px, {} sparse points, "
                    "mean track length {}, {} matching.</p>\n",
                    HtmlEscape(sfm.value("colmap_version", "")), Number(sfm["registered"]), Number(sfm["images_given"]),
@@ -95,7 +96,7 @@ std::string CamerasSection(const StageContext& context, const ImportedDataset& d
     }
   } else {
     html += format("<p>Cameras imported from a {} dataset (no structure from motion needed).</p>\n",
-                   HtmlEscape(SourceDatasetKind(context.upstream_dirs.at("poses") / "transforms.json")));
+                   HtmlEscape(dataset_kind));
   }
   std::vector<ViewerCamera> cameras;
   for (const ImportedView& view : dataset.views) cameras.push_back({view.view.camera, view.view.split == heldout_split});
@@ -144,11 +145,7 @@ void ReportStage::Run(StageContext& context) const {
   const nlohmann::json eval = ReadIfExists(render_dir / "eval.json");
   const nlohmann::json render = ReadIfExists(render_dir / "render_report.json");
   const nlohmann::json exported = ReadIfExists(export_dir / "export_report.json");
-  std::array<float, 3> background{1, 1, 1};
-  const nlohmann::json transforms_json = ReadJsonFile(transforms);
-  if (transforms_json.contains("background") && transforms_json["background"].size() == 3) {
-    for (int c = 0; c < 3; ++c) background[c] = transforms_json["background"][c].get<float>();
-  }
+  const std::array<float, 3> background = DatasetBackground(transforms);
 
   std::string body = "<h1>photo2nerf report</h1>\n";
   body += format("<p class=\"muted\">Workspace <code>{}</code>; input <code>{}</code>; photo2nerf {}; made {} UTC.</p>\n",

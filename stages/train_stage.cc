@@ -168,11 +168,8 @@ bool ModelIsFinite(NerfModel& model) {
 
 TrainingData LoadTrainingData(const fs::path& transforms, const fs::path& workspace_root, std::string* heldout_split) {
   const ImportedDataset dataset = LoadTransformsJson(transforms, workspace_root);
-  const nlohmann::json json = ReadJsonFile(transforms);
   TrainingData data;
-  if (json.contains("background") && json["background"].is_array() && json["background"].size() == 3) {
-    for (int c = 0; c < 3; ++c) data.background[c] = json["background"][c].get<float>();
-  }
+  data.background = DatasetBackground(transforms);
   *heldout_split = HeldoutSplit(dataset);
   std::vector<const ImportedView*> train, heldout;
   for (const ImportedView& view : dataset.views) {
@@ -192,6 +189,15 @@ TrainingData LoadTrainingData(const fs::path& transforms, const fs::path& worksp
     progress.Add();
   });
   return data;
+}
+
+std::array<float, 3> DatasetBackground(const fs::path& transforms) {
+  const nlohmann::json json = ReadJsonFile(transforms);
+  std::array<float, 3> background{1, 1, 1};
+  if (json.contains("background") && json["background"].is_array() && json["background"].size() == 3) {
+    for (int c = 0; c < 3; ++c) background[c] = json["background"][c].get<float>();
+  }
+  return background;
 }
 
 std::string SourceDatasetKind(const fs::path& transforms) {

@@ -4,6 +4,7 @@
 // heldout_psnr at fixed intervals of training time; evaluation time is not counted), train_report.json and a
 // plot of held-out PSNR against time. A killed run resumes from its last checkpoint (WS/30_train.resume/).
 
+#include <array>
 #include <filesystem>
 #include <string>
 
@@ -72,6 +73,8 @@ std::string HeldoutSplit(const ImportedDataset& dataset);
 // transforms.json whose images lie inside `root`, decoded to 8 bits; UserError naming a bad file.
 TrainingData LoadTrainingData(const std::filesystem::path& transforms, const std::filesystem::path& root,
                               std::string* heldout_split);
+// The colour transparent images were composited on, as transforms.json records it (white when it does not).
+std::array<float, 3> DatasetBackground(const std::filesystem::path& transforms);
 // The kind of dataset the poses came from as transforms.json records it ("blender", "llff", ...; "" for photos).
 std::string SourceDatasetKind(const std::filesystem::path& transforms);
 // Whether train.scene (auto: by the dataset kind recorded in transforms.json) makes the scene unbounded.
