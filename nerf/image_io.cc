@@ -60,6 +60,10 @@ ReadImageResult ReadImage(const std::filesystem::path& path) {
     return result;
   }
   result.orientation = spec.get_int_attribute("Orientation", 1);
+  for (const char* key : {"jpeg:ColorSpace", "tiff:ColorSpace"}) {
+    const std::string space = spec.get_string_attribute(key);
+    result.from_cmyk |= space == "CMYK" || space == "YCCK";
+  }
   if (result.orientation != 1) {
     result.image = OIIO::ImageBufAlgo::reorient(image);
     if (result.image.has_error()) {

@@ -12,6 +12,7 @@ packages=(
   catch2 nlohmann-json3-dev libcli11-dev zlib1g-dev
   libopenvdb-dev libblosc-dev libboost-dev      # marching cubes (OpenVDB's headers need Boost's)
   libassimp-dev                            # tests: an independent reader of our PLY and OBJ files
+  libjpeg-dev                              # tests: writes a CMYK JPEG
   chromium fonts-dejavu-core               # tests: the report page opened in a real browser
 )
 

@@ -36,6 +36,7 @@ struct IngestedImage {
   int width = 0, height = 0, channels = 0;
   int source_width = 0, source_height = 0;
   int orientation = 1;
+  bool from_cmyk = false;
   std::string fingerprint;
 };
 
@@ -57,10 +58,11 @@ std::variant<IngestedImage, Skipped> IngestOne(const fs::path& source, const fs:
   out.source_width = read.image.spec().width;
   out.source_height = read.image.spec().height;
   OIIO::ImageBuf image = DownsizeToFit(read.image, options.max_image_size);
-  const bool is_float = image.spec().format == OIIO::TypeDesc::FLOAT;
   const std::string extension = LowerExtension(source);
-  const bool unchanged = read.orientation == 1 && image.spec().width == out.source_width && !is_float &&
-                         (extension == "jpg" || extension == "jpeg" || extension == "png");
+  out.from_cmyk = read.from_cmyk;
+  const bool eight_bit = image.spec().format == OIIO::TypeDesc::UINT8;
+  const bool unchanged = read.orientation == 1 && image.spec().width == out.source_width && eight_bit &&
+                         !read.from_cmyk && (extension == "jpg" || extension == "jpeg" || extension == "png");
   out.width = image.spec().width;
   out.height = image.spec().height;
   out.channels = image.spec().nchannels;
@@ -71,16 +73,17 @@ std::variant<IngestedImage, Skipped> IngestOne(const fs::path& source, const fs:
     if (error) throw UserError(format("cannot write '{}': {}", (images_dir / out.name).string(), error.message()));
     return out;
   }
-  // Anything else becomes a PNG, named after the file and its extension so that names stay unique
-  // (a.png, a_tif.png, a_PNG.png); HDR (float) images are encoded to sRGB, 16 bits.
+  // Anything else becomes an 8-bit PNG, named after the file and its extension so that names stay unique
+  // (a.png, a_tif.png, a_PNG.png). Eight bits because COLMAP does not register 16-bit PNGs (the messy-folder
+  // test found it) and training reads 8 bits anyway; HDR (float) images are encoded to sRGB first.
   const std::string original_extension = source.extension().string().substr(1);
   out.name = source.stem().string() + (original_extension == "png" ? "" : "_" + original_extension) + ".png";
-  if (is_float) {
-    image = OIIO::ImageBufAlgo::colorconvert(image, "linear", "sRGB");
-    OIIO::ImageBuf sixteen(OIIO::ImageSpec(image.spec().width, image.spec().height, image.spec().nchannels,
-                                           OIIO::TypeDesc::UINT16));
-    sixteen.copy_pixels(image);
-    image = std::move(sixteen);
+  if (image.spec().format == OIIO::TypeDesc::FLOAT) image = OIIO::ImageBufAlgo::colorconvert(image, "linear", "sRGB");
+  if (!eight_bit) {
+    OIIO::ImageBuf eight(OIIO::ImageSpec(image.spec().width, image.spec().height, image.spec().nchannels,
+                                         OIIO::TypeDesc::UINT8));
+    eight.copy_pixels(image);
+    image = std::move(eight);
   }
   const std::string error = WriteImage(image, images_dir / out.name);
   if (!error.empty()) throw UserError(error);
@@ -160,6 +163,7 @@ void IngestStage::Run(StageContext& context) const {
   nlohmann::json images = nlohmann::json::array(), skipped = nlohmann::json::array();
   std::set<std::string> names;
   std::map<std::string, std::string> first_with_fingerprint;
+  size_t duplicates = 0;
   std::set<std::pair<int, int>> sizes;
   for (const auto& result : results) {
     if (const Skipped* skip = std::get_if<Skipped>(&result)) {
@@ -172,23 +176,36 @@ void IngestStage::Run(StageContext& context) const {
       throw UserError(format("two photos in '{}' map to the image name {}; rename one of them", folder.string(),
                              image.name));
     }
+    // A copy adds nothing to the reconstruction, and one copy held out while another is trained on would make
+    // the held-out error a lie: only the first (by name) is kept.
     const auto [it, first] = first_with_fingerprint.emplace(image.fingerprint, image.source);
-    if (!first) LogWarning(format("ingest: {} has the same pixels as {}", image.source, it->second));
+    if (!first) {
+      fs::remove(images_dir / image.name);
+      const std::string reason = format("the same pixels as {}", it->second);
+      LogWarning(format("ingest: skipped {}: {}", image.source, reason));
+      skipped.push_back({{"file", image.source}, {"reason", reason}});
+      ++duplicates;
+      continue;
+    }
     sizes.insert({image.width, image.height});
     images.push_back({{"name", image.name}, {"source", image.source}, {"width", image.width},
                       {"height", image.height}, {"channels", image.channels},
                       {"source_width", image.source_width}, {"source_height", image.source_height},
-                      {"exif_orientation", image.orientation}, {"fingerprint", image.fingerprint}});
+                      {"exif_orientation", image.orientation}, {"from_cmyk", image.from_cmyk},
+                      {"fingerprint", image.fingerprint}});
   }
   if (sizes.size() > 1) {
-    LogWarning(format("ingest: the photos have {} different sizes; cameras are estimated per size", sizes.size()));
+    LogWarning(format("ingest: the photos have {} different sizes; sfm will give each size a camera of its own",
+                      sizes.size()));
   }
   const nlohmann::json report = {{"input_folder", folder.string()}, {"images", images}, {"skipped", skipped}};
   WriteJsonAtomic(context.output_dir / "ingest_report.json", report);
   if (static_cast<int>(images.size()) < options.min_images) {
-    throw UserError(format("only {} usable images in '{}' ({} skipped, see the warnings above); photo2nerf needs at "
-                           "least {} (ingest.min_images): add more photos of the scene",
-                           images.size(), folder.string(), skipped.size(), options.min_images));
+    throw UserError(format("only {} usable images in '{}' ({} skipped{}, see the warnings above); photo2nerf needs "
+                           "at least {} (ingest.min_images): add more photos of the scene, taken from different places",
+                           images.size(), folder.string(), skipped.size(),
+                           duplicates ? format(", {} of them copies of another photo", duplicates) : "",
+                           options.min_images));
   }
   context.summary = {{"images", images.size()}, {"skipped", skipped.size()}};
   LogInfo(format("ingest: {} images, {} skipped", images.size(), skipped.size()));

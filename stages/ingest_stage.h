@@ -1,6 +1,7 @@
 #pragma once
 // The ingest stage: validates every photo by decoding it, applies EXIF orientation, optionally downsizes, and
-// writes the images the later stages use plus ingest_report.json. Bad files are skipped with a named reason.
+// writes the images the later stages use plus ingest_report.json. Bad files, and copies of a photo already taken,
+// are skipped with a named reason.
 
 #include <filesystem>
 #include <string>
@@ -30,7 +31,7 @@ class IngestStage : public Stage {
  public:
   std::string name() const override { return "ingest"; }
   std::string folder() const override { return "00_ingest"; }
-  int format_version() const override { return 1; }
+  int format_version() const override { return 2; }  // 2: 8-bit output, copies skipped, CMYK re-encoded
   // "image NAME" -> SHA-1 of the file's bytes, for every photo of the input folder.
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
   void Run(StageContext& context) const override;

@@ -61,6 +61,16 @@ std::vector<std::string> ImageNames(const fs::path& folder) {
   return names;
 }
 
+// The ingested images' names by image size (ingest's report lists each image's size).
+std::map<std::pair<int, int>, std::vector<std::string>> ImagesBySize(const fs::path& ingest_dir) {
+  const nlohmann::json report = ReadJsonFile(ingest_dir / "ingest_report.json");
+  std::map<std::pair<int, int>, std::vector<std::string>> groups;
+  for (const auto& image : report["images"]) {
+    groups[{image["width"].get<int>(), image["height"].get<int>()}].push_back(image["name"].get<std::string>());
+  }
+  return groups;
+}
+
 }  // namespace
 
 void SfmOptions::Check() const {
@@ -94,21 +104,39 @@ void SfmStage::Run(StageContext& context) const {
   const ColmapVersion version = DetectColmapVersion(options.colmap, logs / "version.log");
   const ColmapFlags flags = ColmapFlagsFor(version);
   const std::vector<std::string> names = ImageNames(images);
+  // COLMAP's shared camera would skip every photo of another size: with several sizes, features are extracted
+  // once per size, each run making one camera for its photos.
+  const auto groups = ImagesBySize(context.upstream_dirs.at("ingest"));
+  const bool camera_per_size = options.single_camera && groups.size() > 1;
+  if (camera_per_size) LogInfo(format("sfm: the photos have {} sizes: one camera for each size", groups.size()));
   const std::string matcher = options.matcher != "auto" ? options.matcher
                               : static_cast<int>(names.size()) <= options.exhaustive_max_images ? "exhaustive"
                                                                                                 : "sequential";
   LogInfo(format("sfm: COLMAP {}, {} photos, {} matching, features at {} px", version.ToString(), names.size(),
                  matcher, options.max_image_size));
   const std::string seed = std::to_string(options.seed), nthreads = std::to_string(threads);
-  StepRunner steps(logs, options.refine_principal_point ? 5 : 4);
+  StepRunner steps(logs, (options.refine_principal_point ? 5 : 4) + (camera_per_size ? groups.size() - 1 : 0));
 
-  steps.Run("feature extraction",
-            {options.colmap, "feature_extractor", "--database_path", database.string(), "--image_path",
-             images.string(), "--random_seed", seed, "--ImageReader.camera_model", options.camera_model,
-             "--ImageReader.single_camera", options.single_camera ? "1" : "0", flags.extraction_use_gpu, "0",
-             flags.extraction_num_threads, nthreads, flags.extraction_max_image_size,
-             std::to_string(options.max_image_size), flags.extraction_max_num_features,
-             std::to_string(options.max_num_features)});
+  const std::vector<std::string> extract = {
+      options.colmap, "feature_extractor", "--database_path", database.string(), "--image_path", images.string(),
+      "--random_seed", seed, "--ImageReader.camera_model", options.camera_model, "--ImageReader.single_camera",
+      options.single_camera ? "1" : "0", flags.extraction_use_gpu, "0", flags.extraction_num_threads, nthreads,
+      flags.extraction_max_image_size, std::to_string(options.max_image_size), flags.extraction_max_num_features,
+      std::to_string(options.max_num_features)};
+  if (!camera_per_size) {
+    steps.Run("feature extraction", extract);
+  } else {
+    for (const auto& [size, group] : groups) {
+      const std::string step = format("feature extraction {}x{}", size.first, size.second);
+      const fs::path list = logs / (format("images_{}x{}", size.first, size.second) + ".txt");
+      std::string lines;
+      for (const std::string& name : group) lines += name + "\n";
+      WriteFileAtomic(list, lines);
+      std::vector<std::string> argv = extract;
+      argv.insert(argv.end(), {"--image_list_path", list.string()});
+      steps.Run(step, argv);
+    }
+  }
   std::vector<std::string> match = {options.colmap, matcher + "_matcher", "--database_path", database.string(),
                                     "--random_seed", seed, flags.matching_use_gpu, "0", flags.matching_num_threads,
                                     nthreads};
