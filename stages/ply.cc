@@ -20,24 +20,14 @@ constexpr const char* kHeaderFormat =
     "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
 constexpr size_t kRecordSize = 3 * sizeof(float) + 3;
 
-std::string WithoutComments(const std::string& header) {
-  std::string kept;
-  size_t start = 0;
-  while (start < header.size()) {
-    const size_t end = std::min(header.find('\n', start), header.size() - 1) + 1;
-    if (header.compare(start, 8, "comment ") != 0) kept.append(header, start, end - start);
-    start = end;
-  }
-  return kept;
-}
-
 }  // namespace
 
 std::string PlyComments(const std::vector<std::string>& comments) {
   std::string text = "comment written by photo2nerf\n";
   for (const std::string& comment : comments) {
     std::string line = comment;
-    std::replace(line.begin(), line.end(), '\n', ' ');
+    // One line each, whatever it holds: other readers end a line at '\r' too.
+    std::replace_if(line.begin(), line.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
     text += "comment " + line + "\n";
   }
   return text;
@@ -63,20 +53,26 @@ std::vector<ColouredPoint> ReadPly(const std::filesystem::path& path) {
   std::stringstream buffer;
   buffer << in.rdbuf();
   const std::string data = buffer.str();
-  const size_t end = data.find("end_header\n");
+  // The header line by line, comments left out (they may hold any text, "end_header" too).
+  std::string header;
+  size_t at = 0, body = std::string::npos;
+  while (body == std::string::npos) {
+    const size_t newline = data.find('\n', at);
+    if (!in || newline == std::string::npos) {
+      throw UserError(format("'{}' is not a PLY point cloud photo2nerf reads", path.string()));
+    }
+    const std::string_view line(data.data() + at, newline - at);
+    at = newline + 1;
+    if (line.starts_with("comment ")) continue;
+    header.append(line).push_back('\n');
+    if (line == "end_header") body = at;
+  }
+  constexpr std::string_view kCountAt = "ply\nformat binary_little_endian 1.0\nelement vertex ";
   size_t count = 0;
-  const size_t element = data.find("element vertex ");
-  if (!in || end == std::string::npos || element == std::string::npos || element > end) {
-    throw UserError(format("'{}' is not a PLY point cloud photo2nerf reads", path.string()));
-  }
-  const char* digits = data.data() + element + 15;
-  const auto [end_of_count, error] = std::from_chars(digits, data.data() + end, count);
-  if (error != std::errc() || end_of_count == digits) {
-    throw UserError(format("'{}' is not a PLY point cloud photo2nerf reads (bad vertex count)", path.string()));
-  }
-  const std::string expected = format(kHeaderFormat, count);
-  const size_t body = end + 11;
-  if (WithoutComments(data.substr(0, body)) != expected || (data.size() - body) / kRecordSize < count) {
+  const char* digits = header.data() + std::min(kCountAt.size(), header.size());
+  const auto [end_of_count, error] = std::from_chars(digits, header.data() + header.size(), count);
+  if (!header.starts_with(kCountAt) || error != std::errc() || end_of_count == digits ||
+      header != format(kHeaderFormat, count) || (data.size() - body) / kRecordSize < count) {
     throw UserError(format("'{}' is not a PLY point cloud photo2nerf reads (or it is truncated)", path.string()));
   }
   std::vector<ColouredPoint> points(count);
