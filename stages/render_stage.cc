@@ -71,8 +71,8 @@ PinholeCamera WithIntrinsics(const nlohmann::json& json, PinholeCamera camera, c
     return true;
   };
   double w = camera.width, h = camera.height, angle = 0;
-  const bool resized = number("w", &w) | number("h", &h);
-  if (resized) {
+  const bool has_width = number("w", &w), has_height = number("h", &h);  // both read and checked
+  if (has_width || has_height) {
     camera.cx = 0.5 * w;
     camera.cy = 0.5 * h;
   }
