@@ -149,6 +149,19 @@ TEST_CASE("import: broken and hostile datasets are refused, naming the file and 
   WriteText(dir / "data" / "transforms.json",
             R"({"fl_x": 10, "w": 16, "h": 6, "frames": [{"file_path": "a.png", "transform_matrix": )" + identity + "}]}");
   CHECK_THROWS_WITH(Import(dir / "data", dir / "ws"), Catch::Contains("a.png' is 8x6 but the dataset declares 16x6"));
+
+  // A COLMAP project whose image name climbs out of the project.
+  fs::remove(dir / "data" / "transforms.json");
+  ColmapModel model;
+  model.cameras[1] = {1, "PINHOLE", 8, 6, {10, 10, 4, 3}};
+  ColmapImage outside;
+  outside.id = outside.camera_id = 1;
+  outside.name = "../../secret.png";
+  model.images[1] = outside;
+  WriteColmapModelBinary(model, dir / "data" / "sparse" / "0");
+  fs::create_directories(dir / "data" / "images");
+  CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("images/../../secret.png") &&
+                                                   Catch::Contains("outside the dataset"));
 }
 
 TEST_CASE("import: the shared datasets (fox, lego, lego_200, fern)", "[import][data]") {
