@@ -62,7 +62,8 @@ class BinaryReader {
     }
     if (count > (data_.size() - position_) / sizeof(T)) Fail("an array is longer than the file");
     std::vector<T> values(count);
-    std::memcpy(values.data(), Take(count * sizeof(T)), count * sizeof(T));
+    const char* bytes = Take(count * sizeof(T));
+    if (count > 0) std::memcpy(values.data(), bytes, count * sizeof(T));  // an empty vector's data() may be null
     return values;
   }
   std::string GetString() {
