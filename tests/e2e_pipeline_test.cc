@@ -26,7 +26,7 @@ TEST_CASE("photo2nerf run: photos to report with real COLMAP, then everything fr
   WriteSyntheticScene(scene, dir / "photos");
   const std::vector<std::string> command = {P2N_BINARY, "run", (dir / "photos").string(), "-w", (dir / "ws").string(),
                                             "--run.progress", "plain", "--train.preset", "fast",
-                                            "--train.time_budget", "25", "--render.frames", "8", "--render.width", "160",
+                                            "--train.steps", "200", "--train.time_budget", "600", "--render.frames", "8", "--render.width", "160",
                                             "--export.resolution", "96", "--export.threshold", "5", "--export.points_width", "64"};
   std::string output;
   REQUIRE(RunCommand(command, &output) == 0);
