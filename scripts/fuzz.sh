@@ -21,7 +21,7 @@ for target in "${targets[@]}"; do
   work=$(mktemp -d)
   cp tests/fuzz/corpus/"$target"/* "$work"/
   log=build-fuzz/"$target".log
-  if build-fuzz/tests/fuzz/"$target"_fuzz "$work" -max_total_time="$seconds" -rss_limit_mb=2048 -print_final_stats=1 \
+  if LSAN_OPTIONS=suppressions=tests/fuzz/lsan_suppressions.txt build-fuzz/tests/fuzz/"$target"_fuzz "$work" -max_total_time="$seconds" -rss_limit_mb=2048 -print_final_stats=1 \
       -artifact_prefix=build-fuzz/artifacts/"$target"- > "$log" 2>&1; then
     result="no findings"
   else
