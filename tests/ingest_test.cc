@@ -141,6 +141,13 @@ TEST_CASE("ingest: a table of unusual and bad photos, each kept as training expe
       {"text.JPG", [](const fs::path& path) { WriteText(path, "this is not an image\n"); }, "not a readable image",
        nullptr},
       {"zero.png", [](const fs::path& path) { WriteText(path, ""); }, "empty file (0 bytes)", nullptr},
+      {"bomb.exr",  // found by fuzzing: 217 bytes that made OpenEXR take 2 GB before refusing them
+       [](const fs::path& path) {
+         const int32_t size = 1953458498;
+         WriteText(path, std::string("\x76\x2f\x31\x01\x02\0\0\0Exif:ImageHistory\0string\0", 33) +
+                             std::string(reinterpret_cast<const char*>(&size), 4) + "only a few bytes");
+       },
+       "damaged EXR header: attribute 'Exif:ImageHistory' declares 1953458498 bytes in a file of 53", nullptr},
       {"zz_copy.png", image(0), "the same pixels as base0.png", nullptr},
       {"sixteen_bit.png", solid(3, OIIO::TypeDesc::UINT16, {1.0f, 0.5f, 0.0f}), "",
        [&](const nlohmann::json&, const TrainView& view) {
