@@ -1,5 +1,6 @@
 #include "pipeline/cancel.h"
 
+#include <atomic>
 #include <csignal>
 
 #include "pipeline/errors.h"
@@ -7,14 +8,17 @@
 namespace p2n {
 namespace {
 
-volatile std::sig_atomic_t g_cancel = 0;
+// Set by the signal handler and by RequestCancel, read by every worker thread: an atomic (lock-free, so safe in
+// a signal handler). A volatile sig_atomic_t was a data race between threads (ThreadSanitizer found it).
+std::atomic<bool> g_cancel{false};
+static_assert(std::atomic<bool>::is_always_lock_free);
 
 void OnSignal(int signal_number) {
   if (g_cancel && signal_number == SIGINT) {
     std::signal(SIGINT, SIG_DFL);
     std::raise(SIGINT);
   }
-  g_cancel = 1;
+  g_cancel = true;
 }
 
 }  // namespace
@@ -27,9 +31,9 @@ void InstallCancelHandlers() {
   sigaction(SIGTERM, &action, nullptr);
 }
 
-void RequestCancel() { g_cancel = 1; }
-bool CancelRequested() { return g_cancel != 0; }
-void ResetCancel() { g_cancel = 0; }
+void RequestCancel() { g_cancel = true; }
+bool CancelRequested() { return g_cancel; }
+void ResetCancel() { g_cancel = false; }
 
 void ThrowIfCancelled() {
   if (g_cancel) throw Cancelled("interrupted");
