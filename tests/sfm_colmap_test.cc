@@ -65,6 +65,17 @@ PoseErrors CompareWithTruth(const nlohmann::json& transforms, const std::map<std
   return errors;
 }
 
+// All 24 views in transforms.json, within `max_angle_deg` and `max_centre` (fraction of the spread) of the truth.
+void CheckPoses(const nlohmann::json& transforms, const std::map<std::string, Eigen::Matrix4d>& truth,
+                double max_angle_deg, double max_centre) {
+  REQUIRE(transforms["frames"].size() == 24);
+  const PoseErrors errors = CompareWithTruth(transforms, truth);
+  INFO("worst rotation error " << errors.worst_angle_deg << " deg, worst centre error " << 100 * errors.worst_centre
+                               << "% of spread");
+  CHECK(errors.worst_angle_deg < max_angle_deg);
+  CHECK(errors.worst_centre < max_centre);
+}
+
 Config QuietConfig() {
   static const OptionRegistry registry = AllOptions();
   Config config(registry);
@@ -107,12 +118,7 @@ TEST_CASE("sfm + poses recover the synthetic scene's cameras", "[colmap][e2e]") 
   const nlohmann::json transforms = ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json");
   std::map<std::string, Eigen::Matrix4d> true_poses;
   for (const auto& frame : truth["frames"]) true_poses[frame["file_path"]] = ReadMatrix(frame["transform_matrix"]);
-  REQUIRE(transforms["frames"].size() == 24);
-  const PoseErrors errors = CompareWithTruth(transforms, true_poses);
-  INFO("worst rotation error " << errors.worst_angle_deg << " deg, worst centre error " << 100 * errors.worst_centre
-                               << "% of spread");
-  CHECK(errors.worst_angle_deg < 0.5);
-  CHECK(errors.worst_centre < 0.01);
+  CheckPoses(transforms, true_poses, 0.5, 0.01);
   CHECK(fs::exists(dir / "ws" / "20_poses" / "sparse_points.ply"));
 }
 
@@ -190,12 +196,7 @@ TEST_CASE("sfm + poses on a messy folder: every encoding registered, the copy sk
   CHECK(report["registered"] == 24);
   CHECK(report["left_out"].get<std::vector<std::string>>() == unrelated);
   const nlohmann::json transforms = ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json");
-  REQUIRE(transforms["frames"].size() == 24);
-  const PoseErrors errors = CompareWithTruth(transforms, true_poses);
-  INFO("worst rotation error " << errors.worst_angle_deg << " deg, worst centre error " << 100 * errors.worst_centre
-                               << "% of spread");
-  CHECK(errors.worst_angle_deg < 1.0);
-  CHECK(errors.worst_centre < 0.02);
+  CheckPoses(transforms, true_poses, 1.0, 0.02);
 }
 
 }  // namespace p2n::testing
