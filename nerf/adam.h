@@ -1,7 +1,9 @@
 #pragma once
 // Adam (Kingma & Ba) for dense parameter vectors, and a sparse variant for hash tables that updates only the
 // entries that received a gradient, each with its own step count (as tiny-cuda-nn does): an entry that is
-// seldom touched is not decayed by steps it took no part in.
+// seldom touched is not decayed by steps it took no part in. As in tiny-cuda-nn, an entry took part in a step
+// when its gradient is not exactly zero; the sparse step sweeps the table in order (sequential memory access,
+// no list of touched entries) and zeroes the gradients it used, so the table's gradient is zero for the next.
 
 #include <cstddef>
 #include <cstdint>
@@ -29,22 +31,25 @@ class Adam {
 
   // Updates every parameter from `grads` (num_params values).
   void Step(T* params, const T* grads);
-  // Updates only the listed entries (indices of entries, not of values); `grads` is indexed like `params`.
-  void StepSparse(T* params, const T* grads, const std::vector<uint32_t>& entries);
+  // Updates only the entries whose gradient is not all zero, and zeroes their gradient; `grads` is indexed
+  // like `params`.
+  void StepSparse(T* params, T* grads);
 
   // The moments and step counts, for checkpoints (Load() checks the sizes).
   void Save(BinaryWriter* writer) const;
   void Load(BinaryReader* reader);
 
  private:
-  // Updates values [begin, end) as at step `step` (1-based).
-  void UpdateRange(T* params, const T* grads, size_t begin, size_t end, uint32_t step);
+  // Grows the bias-correction tables to step `step`.
+  void GrowTables(uint32_t step);
 
   AdamOptions options_;
   int entry_size_;
   std::vector<T> first_moment_, second_moment_;
   std::vector<uint32_t> entry_steps_;
-  std::vector<double> beta1_powers_{1.0}, beta2_powers_{1.0};  // beta^t, grown on demand
+  // Bias corrections of step t (1-based, grown on demand): 1 / (1 - beta1^t) and 1 / sqrt(1 - beta2^t).
+  std::vector<T> correction1_{T(0)}, correction2_{T(0)};
+  double beta1_power_ = 1, beta2_power_ = 1;  // of the last step in the tables
   uint32_t dense_step_ = 0;
   uint32_t sparse_calls_ = 0;  // StepSparse() calls: a bound on every entry's step
 };

@@ -27,20 +27,16 @@ class Encoding {
   // Trainable encodings (a hash grid) override these; fixed ones (positional encoding) have no parameters.
   virtual size_t num_params() const { return 0; }
   virtual T* params() { return nullptr; }
-  virtual const T* grads() const { return nullptr; }
+  // dL/d(params): Backward() adds to it, ZeroGrad() zeroes it (so does the sparse Adam step, for the entries
+  // it updates). An entry no input touched keeps a gradient of exactly zero.
+  virtual T* grads() { return nullptr; }
   // Values that share one optimiser step count (the features of one table entry).
   virtual int entry_size() const { return 1; }
-  // Starts a step: the gradient of the previous step is forgotten.
   virtual void ZeroGrad() {}
   // Adds dL/d(params) for `input` given dL/d(output) (output_dims x n).
   virtual void Backward(const Matrix& input, const Matrix& d_output) {
     (void)input;
     (void)d_output;
-  }
-  // The entries that received a gradient since ZeroGrad(), each once.
-  virtual const std::vector<uint32_t>& touched_entries() const {
-    static const std::vector<uint32_t> kNone;
-    return kNone;
   }
 };
 
@@ -74,7 +70,7 @@ struct HashGridConfig {
 
 // Multiresolution hash encoding (Mueller et al. 2022), D-linear interpolation of per-vertex features at each
 // level. Each level's table is contiguous. Backward runs one level per task (no two threads write one
-// entry) and tracks touched entries for a sparse optimiser step.
+// entry).
 template <typename T>
 class HashGridEncoding : public Encoding<T> {
  public:
@@ -88,11 +84,10 @@ class HashGridEncoding : public Encoding<T> {
 
   size_t num_params() const override { return params_.size(); }
   T* params() override { return params_.data(); }
-  const T* grads() const override { return grads_.data(); }
+  T* grads() override { return grads_.data(); }
   int entry_size() const override { return config_.features_per_level; }
   void ZeroGrad() override;
   void Backward(const Matrix& input, const Matrix& d_output) override;
-  const std::vector<uint32_t>& touched_entries() const override { return touched_; }
 
  private:
   struct Level {
@@ -112,10 +107,6 @@ class HashGridEncoding : public Encoding<T> {
   HashGridConfig config_;
   std::vector<Level> levels_;
   std::vector<T> params_, grads_;
-  std::vector<uint32_t> stamps_;  // step id of each entry's last gradient
-  uint32_t step_id_ = 0;
-  std::vector<std::vector<uint32_t>> touched_per_level_;
-  std::vector<uint32_t> touched_;
 };
 
 extern template class PositionalEncoding<float>;

@@ -1,3 +1,4 @@
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -67,8 +68,6 @@ HashGridEncoding<T>::HashGridEncoding(int dims, const HashGridConfig& config, ui
   std::uniform_real_distribution<double> uniform(-1e-4, 1e-4);
   for (T& value : params_) value = static_cast<T>(uniform(random));
   grads_.assign(values, T(0));
-  stamps_.assign(offset, 0);
-  touched_per_level_.resize(config.levels);
 }
 
 template <typename T>
@@ -154,13 +153,9 @@ void HashGridEncoding<T>::Forward(const Matrix& input, Matrix* output) const {
 
 template <typename T>
 void HashGridEncoding<T>::ZeroGrad() {
-  ++step_id_;
-  if (step_id_ == 0) {  // wrapped: every stamp is stale again
-    std::fill(stamps_.begin(), stamps_.end(), 0);
-    step_id_ = 1;
-  }
-  for (auto& touched : touched_per_level_) touched.clear();
-  touched_.clear();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grads_.size(), size_t{1} << 16), [&](const tbb::blocked_range<size_t>& range) {
+    std::fill(grads_.begin() + range.begin(), grads_.begin() + range.end(), T(0));
+  });
 }
 
 template <typename T>
@@ -168,22 +163,14 @@ void HashGridEncoding<T>::Backward(const Matrix& input, const Matrix& d_output) 
   const int features = config_.features_per_level;
   tbb::parallel_for(0, config_.levels, [&](int l) {
     FlushDenormalsOnThisThread();
-    std::vector<uint32_t>& touched = touched_per_level_[l];
     for (Eigen::Index i = 0; i < input.cols(); ++i) {
       const T* d_out = d_output.col(i).data() + l * features;
       ForEachCorner(levels_[l], input.col(i).data(), [&](uint32_t entry, T weight) {
         T* grad = grads_.data() + size_t{entry} * features;
-        if (stamps_[entry] != step_id_) {
-          stamps_[entry] = step_id_;
-          std::fill(grad, grad + features, T(0));
-          touched.push_back(entry);
-        }
         for (int f = 0; f < features; ++f) grad[f] += weight * d_out[f];
       });
     }
   });
-  touched_.clear();
-  for (const auto& touched : touched_per_level_) touched_.insert(touched_.end(), touched.begin(), touched.end());
 }
 
 template class HashGridEncoding<float>;

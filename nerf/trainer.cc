@@ -1,9 +1,12 @@
 #include "nerf/trainer.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 #include <stdexcept>
 
@@ -52,6 +55,16 @@ float ChannelLoss(bool huber, float difference, float* derivative) {
 template <typename Values>
 bool AllFinite(const Values& values) {
   return std::all_of(values.begin(), values.end(), [](float v) { return std::isfinite(v); });
+}
+
+// In parallel, for a hash table's gradient.
+bool AllFinite(const float* values, size_t count) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, count, size_t{1} << 16), true,
+      [&](const tbb::blocked_range<size_t>& range, bool finite) {
+        return finite && std::all_of(values + range.begin(), values + range.end(), [](float v) { return std::isfinite(v); });
+      },
+      std::logical_and<bool>());
 }
 
 }  // namespace
@@ -147,8 +160,7 @@ void Trainer::UpdateOccupancy() {
 
 StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
   RadianceField<float>& field = *model_.field;
-  Encoding<float>* grid = field.TrainableEncoding();
-  if (grid != nullptr) grid->ZeroGrad();
+  Encoding<float>* grid = field.TrainableEncoding();  // its gradient is zero (the last step used or zeroed it)
   const size_t rays = batch.rays.size();
   struct Chunk {
     std::vector<float> d_dense;
@@ -248,16 +260,11 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     result.problem = "the loss is not finite";
   } else if (!AllFinite(d_dense)) {
     result.problem = "a network gradient is not finite";
-  } else if (grid != nullptr) {
-    for (const uint32_t entry : grid->touched_entries()) {
-      const float* g = grid->grads() + size_t{entry} * grid->entry_size();
-      if (!std::all_of(g, g + grid->entry_size(), [](float v) { return std::isfinite(v); })) {
-        result.problem = "a hash-grid gradient is not finite";
-        break;
-      }
-    }
+  } else if (grid != nullptr && !AllFinite(grid->grads(), grid->num_params())) {
+    result.problem = "a hash-grid gradient is not finite";
   }
   if (!result.problem.empty()) {
+    if (grid != nullptr) grid->ZeroGrad();
     result.skipped = true;
     ++skipped_;
     return result;
@@ -272,7 +279,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
   }
   if (grid != nullptr) {
     grid_adam_->set_learning_rate(learning_rate);
-    grid_adam_->StepSparse(grid->params(), grid->grads(), grid->touched_entries());
+    grid_adam_->StepSparse(grid->params(), grid->grads());
   }
   const double per_ray = static_cast<double>(result.samples) / std::max<size_t>(rays, 1);
   samples_per_ray_ = samples_per_ray_ > 0 ? 0.9 * samples_per_ray_ + 0.1 * per_ray : per_ray;

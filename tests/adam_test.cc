@@ -32,17 +32,25 @@ TEST_CASE("sparse Adam equals dense Adam when every entry is touched, and counts
   Adam<double> dense({0.01, 0.9, 0.99, 1e-15}, 4, 2), sparse({0.01, 0.9, 0.99, 1e-15}, 4, 2);
   std::vector<double> a = {1, 2, 3, 4}, b = a;
   for (int step = 0; step < 5; ++step) {
-    std::vector<double> grads = {0.1 * step, -0.2, 0.3, 0.05 * step};
+    const std::vector<double> grads = {0.1 * step, -0.2, 0.3, 0.05 * step};
+    std::vector<double> consumed = grads;
     dense.Step(a.data(), grads.data());
-    sparse.StepSparse(b.data(), grads.data(), {0, 1});
+    sparse.StepSparse(b.data(), consumed.data());
+    CHECK(consumed == std::vector<double>(4, 0.0));  // the sparse step zeroes the gradient it used
   }
   for (int k = 0; k < 4; ++k) CHECK(a[k] == Approx(b[k]));
-  // An entry first touched at a later step gets the full first-step update (bias correction of step 1), not one
-  // shrunk by the steps it took no part in.
+  // An entry whose gradient is zero takes no step; one first touched at a later step gets the full first-step
+  // update (bias correction of step 1), not one shrunk by the steps it took no part in.
   Adam<double> late({0.01, 0.9, 0.99, 1e-15}, 4, 2);
-  std::vector<double> params = {0, 0, 0, 0}, grads = {1, 1, 1, 1};
-  for (int step = 0; step < 10; ++step) late.StepSparse(params.data(), grads.data(), {0});
-  late.StepSparse(params.data(), grads.data(), {1});
+  std::vector<double> params = {0, 0, 0, 0};
+  for (int step = 0; step < 10; ++step) {
+    std::vector<double> grads = {1, 1, 0, 0};
+    late.StepSparse(params.data(), grads.data());
+  }
+  CHECK(params[2] == 0);
+  CHECK(params[3] == 0);
+  std::vector<double> grads = {0, 0, 1, 1};
+  late.StepSparse(params.data(), grads.data());
   CHECK(params[2] == Approx(-0.01));
   CHECK(params[3] == Approx(-0.01));
 }
