@@ -13,7 +13,7 @@ namespace p2n {
 namespace {
 
 constexpr uint32_t kPrimes[3] = {1u, 2654435761u, 805459861u};
-constexpr Eigen::Index kChunk = 1024;
+constexpr Eigen::Index kBlock = 16384;  // points per task of Forward()
 
 }  // namespace
 
@@ -133,20 +133,22 @@ void HashGridEncoding<T>::ForEachCorner(const Level& level, const T* p, Visit vi
 
 template <typename T>
 void HashGridEncoding<T>::Forward(const Matrix& input, Matrix* output) const {
+  // Level by level, in blocks of points: a task reads one level's table (a few MB at most), which stays in the
+  // cache for its whole block; reading every level for each point would cycle through all the tables.
   const Eigen::Index n = input.cols();
   const int features = config_.features_per_level;
   output->setZero(output_dims(), n);
-  tbb::parallel_for(Eigen::Index{0}, (n + kChunk - 1) / kChunk, [&](Eigen::Index chunk) {
+  const Eigen::Index blocks = (n + kBlock - 1) / kBlock;
+  tbb::parallel_for(Eigen::Index{0}, config_.levels * blocks, [&](Eigen::Index task) {
     FlushDenormalsOnThisThread();
-    const Eigen::Index end = std::min(n, (chunk + 1) * kChunk);
-    for (int l = 0; l < config_.levels; ++l) {
-      for (Eigen::Index i = chunk * kChunk; i < end; ++i) {
-        T* out = output->col(i).data() + l * features;
-        ForEachCorner(levels_[l], input.col(i).data(), [&](uint32_t entry, T weight) {
-          const T* feature = params_.data() + size_t{entry} * features;
-          for (int f = 0; f < features; ++f) out[f] += weight * feature[f];
-        });
-      }
+    const int l = static_cast<int>(task / blocks);
+    const Eigen::Index begin = task % blocks * kBlock, end = std::min(n, begin + kBlock);
+    for (Eigen::Index i = begin; i < end; ++i) {
+      T* out = output->col(i).data() + l * features;
+      ForEachCorner(levels_[l], input.col(i).data(), [&](uint32_t entry, T weight) {
+        const T* feature = params_.data() + size_t{entry} * features;
+        for (int f = 0; f < features; ++f) out[f] += weight * feature[f];
+      });
     }
   });
 }

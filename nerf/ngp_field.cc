@@ -63,10 +63,18 @@ NgpField<T>::NgpField(const NgpFieldConfig& config, uint64_t seed)
 template <typename T>
 void NgpField<T>::Forward(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb,
                           Cache* cache) const {
+  Matrix encoded;
+  grid_.Forward(positions, &encoded);
+  ForwardEncoded(positions, encoded, directions, density, rgb, cache);
+}
+
+template <typename T>
+void NgpField<T>::ForwardEncoded(const Matrix& positions, const Matrix& encoded, const Matrix& directions,
+                                 Matrix* density, Matrix* rgb, Cache* cache) const {
   const Eigen::Index n = positions.cols();
   cache->positions = positions;
+  cache->encoded = encoded;
   cache->mlps.resize(2);
-  grid_.Forward(positions, &cache->encoded);
   density_mlp_.Forward(cache->encoded, &cache->hidden, &cache->mlps[0]);
   ExpDensity<T>(cache->hidden, density);
   cache->colour_in.resize(config_.geometry_features + kSphericalHarmonicsCount, n);

@@ -163,41 +163,74 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
   Encoding<float>* grid = field.TrainableEncoding();  // its gradient is zero (the last step used or zeroed it)
   const size_t rays = batch.rays.size();
   struct Chunk {
+    Eigen::MatrixXf positions, directions;  // of every sample marched
+    std::vector<float> t, delta;
+    std::vector<size_t> offsets;            // the first sample of each ray
+    Eigen::Index first_sample = 0;          // in the whole batch
     std::vector<float> d_dense;
-    Eigen::MatrixXf positions, d_encoded;  // of the samples before early termination only
+    Eigen::MatrixXf used_positions, d_encoded;  // of the samples before early termination only
     double loss = 0;
     size_t samples = 0, used = 0;
   };
   std::vector<Chunk> chunks((rays + kChunkRays - 1) / kChunkRays);
+  // 1. March the rays through the occupancy grid.
   tbb::parallel_for(size_t{0}, chunks.size(), [&](size_t c) {
     FlushDenormalsOnThisThread();
     Chunk& chunk = chunks[c];
     const size_t first = c * kChunkRays, count = std::min(rays, first + kChunkRays) - first;
     std::mt19937_64 random(MixSeed(options_.seed, step_, 2 + c));
     std::vector<std::vector<MarchSample>> samples(count);
-    std::vector<size_t> offsets(count + 1, 0);
+    chunk.offsets.assign(count + 1, 0);
     for (size_t r = 0; r < count; ++r) {
       const Eigen::Vector2d& range = batch.near_far[first + r];
       samples[r] = SampleRay(model_, batch.rays[first + r], range[0], range[1], options_.march_step,
                              options_.max_samples_per_ray, &random);
-      offsets[r + 1] = offsets[r] + samples[r].size();
+      chunk.offsets[r + 1] = chunk.offsets[r] + samples[r].size();
     }
-    const size_t n = offsets[count];
+    const size_t n = chunk.offsets[count];
     chunk.samples = n;
-    Eigen::MatrixXf positions(3, n), directions(3, n), density, colour;
-    std::vector<float> t(n), delta(n);
+    chunk.positions.resize(3, n);
+    chunk.directions.resize(3, n);
+    chunk.t.resize(n);
+    chunk.delta.resize(n);
     for (size_t r = 0; r < count; ++r) {
       for (size_t k = 0; k < samples[r].size(); ++k) {
-        const size_t i = offsets[r] + k;
+        const size_t i = chunk.offsets[r] + k;
         const Ray& ray = batch.rays[first + r];
-        positions.col(i) = FieldPoint(model_, ray.origin + samples[r][k].t * ray.direction).cast<float>();
-        directions.col(i) = ray.direction.cast<float>();
-        t[i] = static_cast<float>(samples[r][k].t);
-        delta[i] = static_cast<float>(samples[r][k].delta);
+        chunk.positions.col(i) = FieldPoint(model_, ray.origin + samples[r][k].t * ray.direction).cast<float>();
+        chunk.directions.col(i) = ray.direction.cast<float>();
+        chunk.t[i] = static_cast<float>(samples[r][k].t);
+        chunk.delta[i] = static_cast<float>(samples[r][k].delta);
       }
     }
+  });
+  // 2. The hash grid's encoding of the whole batch at once (level by level: see HashGridEncoding::Forward).
+  Eigen::MatrixXf encoded;
+  if (grid != nullptr) {
+    Eigen::Index total = 0;
+    for (Chunk& chunk : chunks) {
+      chunk.first_sample = total;
+      total += chunk.positions.cols();
+    }
+    Eigen::MatrixXf positions(3, total);
+    for (const Chunk& chunk : chunks) positions.middleCols(chunk.first_sample, chunk.positions.cols()) = chunk.positions;
+    grid->Forward(positions, &encoded);
+  }
+  // 3. The networks, compositing and the gradients, chunk by chunk.
+  tbb::parallel_for(size_t{0}, chunks.size(), [&](size_t c) {
+    FlushDenormalsOnThisThread();
+    Chunk& chunk = chunks[c];
+    const size_t first = c * kChunkRays, count = chunk.offsets.size() - 1, n = chunk.samples;
+    const std::vector<size_t>& offsets = chunk.offsets;
+    const std::vector<float>& t = chunk.t;
+    const std::vector<float>& delta = chunk.delta;
+    Eigen::MatrixXf density, colour;
     RadianceField<float>::Cache cache;
-    if (n > 0) field.Forward(positions, directions, &density, &colour, &cache);
+    if (n > 0) {
+      const Eigen::MatrixXf chunk_encoded =
+          grid != nullptr ? Eigen::MatrixXf(encoded.middleCols(chunk.first_sample, n)) : Eigen::MatrixXf();
+      field.ForwardEncoded(chunk.positions, chunk_encoded, chunk.directions, &density, &colour, &cache);
+    }
     Eigen::MatrixXf d_density = Eigen::MatrixXf::Zero(1, n), d_colour = Eigen::MatrixXf::Zero(3, n);
     std::vector<Eigen::Index> used;  // samples that got a gradient
     const float scale = 1.0f / (3.0f * static_cast<float>(rays));
@@ -226,7 +259,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
       field.Backward(cache, d_density, d_colour, chunk.d_dense.data(), &d_encoded);
       // Samples behind the termination point have no gradient: the hash grid need not visit them.
       if (d_encoded.size() > 0) {
-        chunk.positions = cache.positions(Eigen::all, used);
+        chunk.used_positions = cache.positions(Eigen::all, used);
         chunk.d_encoded = d_encoded(Eigen::all, used);
       }
     }
@@ -249,7 +282,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     Eigen::Index column = 0;
     for (const Chunk& chunk : chunks) {
       if (chunk.used == 0) continue;
-      positions.middleCols(column, chunk.used) = chunk.positions;
+      positions.middleCols(column, chunk.used) = chunk.used_positions;
       d_encoded.middleCols(column, chunk.used) = chunk.d_encoded;
       column += chunk.used;
     }
