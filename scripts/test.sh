@@ -3,11 +3,14 @@
 # and runs every test with CTest. Safe to run again: the build is incremental.
 #   scripts/test.sh              the normal build, in build/
 #   scripts/test.sh --sanitize   every test under AddressSanitizer + UndefinedBehaviorSanitizer (clang), in build-sanitize/
-#   scripts/test.sh --tsan       every test under ThreadSanitizer (clang), in build-tsan/, with oneTBB built for it
+#   scripts/test.sh --tsan       the training and rendering tests under ThreadSanitizer (clang), in build-tsan/, with
+#                                oneTBB built for it; further arguments go to ctest instead (e.g. -E COLMAP: all
+#                                but those)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
 mode="${1:-}"
+[ $# -gt 0 ] && shift
 if [ -n "$mode" ] && [ "$mode" != "--sanitize" ] && [ "$mode" != "--tsan" ]; then
   echo "usage: scripts/test.sh [--sanitize | --tsan]" >&2
   exit 2
@@ -58,5 +61,14 @@ if [ ! -f "$tbb/lib/libtbb.so.12" ]; then
 fi
 sanitizer_build build-tsan "-fsanitize=thread"
 # Suppressions (tests/tsan_suppressions.txt) cover libraries that are not built with ThreadSanitizer.
-LD_LIBRARY_PATH="$tbb/lib" TSAN_OPTIONS="second_deadlock_stack=1 suppressions=$PWD/tests/tsan_suppressions.txt" \
-  ctest --test-dir build-tsan -j"$(nproc)" --output-on-failure --timeout 3600
+tsan_ctest() {
+  LD_LIBRARY_PATH="$tbb/lib" TSAN_OPTIONS="second_deadlock_stack=1 suppressions=$PWD/tests/tsan_suppressions.txt" \
+    ctest --test-dir build-tsan -j"$(nproc)" --output-on-failure --timeout 3600 "$@"
+}
+if [ $# -gt 0 ]; then
+  tsan_ctest "$@"
+else
+  # The training and rendering tests: the engine's (label engine), then the stages and commands that train or render.
+  tsan_ctest -L engine
+  tsan_ctest -R "^(train stage|render stage|export stage|cli: fit-image|faults: Ctrl-C)"
+fi
