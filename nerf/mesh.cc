@@ -70,8 +70,8 @@ Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options, const std::
           accessor.setValue(coords[s], options.density_threshold - density[s]);
         }
       }
+      if (on_slices_done) on_slices_done(1);  // under the lock: the caller's callback need not be thread-safe
     }
-    if (on_slices_done) on_slices_done(1);
   });
 
   std::vector<openvdb::Vec3s> vertices;

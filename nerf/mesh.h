@@ -29,8 +29,8 @@ struct MeshOptions {
 // evaluated (their density counts as 0); where the surface meets the box it is closed by the box's faces, so the
 // mesh is watertight. Vertices are coloured by the field seen along minus their normal (looking at the
 // surface from outside). `on_slices_done`, when given, is called with the number of density slices just
-// sampled (resolution in all). std::invalid_argument for a resolution outside 8..1024 or a threshold that is
-// not positive.
+// sampled (resolution in all), from TBB's threads but never two calls at once. std::invalid_argument for a
+// resolution outside 8..1024 or a threshold that is not positive.
 Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options,
                  const std::function<void(size_t)>& on_slices_done = {});
 

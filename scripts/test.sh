@@ -69,6 +69,8 @@ if [ $# -gt 0 ]; then
   tsan_ctest "$@"
 else
   # The training and rendering tests: the engine's (label engine), then the stages and commands that train or render.
-  tsan_ctest -L engine
-  tsan_ctest -R "^(train stage|render stage|export stage|cli: fit-image|faults: Ctrl-C)"
+  status=0
+  tsan_ctest -L engine || status=1
+  tsan_ctest -R "^(train stage|render stage|export stage|cli: fit-image|faults: Ctrl-C)" || status=1
+  exit $status
 fi
