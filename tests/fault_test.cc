@@ -97,7 +97,9 @@ TEST_CASE("faults: Ctrl-C stops with exit status 130, the stage is incomplete, t
   REQUIRE(RunCommand({P2N_BINARY, "status", "-w", workspace.string()}, &status) == 0);
   CHECK_THAT(status, Catch::Matches("(.|\n)*train +incomplete(.|\n)*"));
   std::string output;
-  REQUIRE(RunCommand(RunArgs(data, workspace), &output) == 0);
+  const int rerun = RunCommand(RunArgs(data, workspace), &output);
+  INFO(output);  // what the rerun printed (under the sanitizers: their reports)
+  REQUIRE(rerun == 0);
   const nlohmann::json report = ReadJsonFile(workspace / "30_train" / "train_report.json");
   CHECK(report["resumed_from_step"].get<int>() > 0);
   CHECK(report["steps"] == 120);
