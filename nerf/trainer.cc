@@ -331,9 +331,11 @@ FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& 
   return image;
 }
 
-std::vector<double> Trainer::HeldoutPsnr(size_t pixels_per_view, RenderStats* stats) const {
+std::vector<double> Trainer::HeldoutPsnr(size_t pixels_per_view, RenderStats* stats,
+                                         const std::function<void(size_t)>& on_rays_done) const {
   std::vector<double> psnrs;
   RenderOptions render;
+  render.on_rays_done = on_rays_done;
   render.min_transmittance = options_.min_transmittance;
   for (size_t v = 0; v < data_.heldout.size(); ++v) {
     const TrainView& view = data_.heldout[v];

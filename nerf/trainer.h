@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -87,8 +88,10 @@ class Trainer {
   StepResult StepOnBatch(const RayBatch& batch, double progress);
   RayBatch SampleBatch(int rays);
 
-  // PSNR of each held-out view, from `pixels_per_view` fixed random pixels of it (0: every pixel).
-  std::vector<double> HeldoutPsnr(size_t pixels_per_view, RenderStats* stats = nullptr) const;
+  // PSNR of each held-out view, from `pixels_per_view` fixed random pixels of it (0: every pixel). `on_rays_done`
+  // is called as rays finish (from worker threads; an exception it throws, e.g. on Ctrl-C, stops the evaluation).
+  std::vector<double> HeldoutPsnr(size_t pixels_per_view, RenderStats* stats = nullptr,
+                                  const std::function<void(size_t)>& on_rays_done = {}) const;
 
   const NerfModel& model() const { return model_; }
   NerfModel& model() { return model_; }

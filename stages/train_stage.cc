@@ -288,8 +288,10 @@ void TrainStage::Run(StageContext& context) const {
     const double by_steps = options.steps > 0 ? double(trainer.step()) / options.steps : 0;
     return std::clamp(std::max(by_time, by_steps), 0.0, 1.0);
   };
+  const auto check_cancel = [](size_t) { ThrowIfCancelled(); };  // Ctrl-C stops an evaluation too
   const auto add_row = [&] {
-    const double psnr = data.heldout.empty() ? std::nan("") : Mean(trainer.HeldoutPsnr(options.eval_pixels));
+    const double psnr =
+        data.heldout.empty() ? std::nan("") : Mean(trainer.HeldoutPsnr(options.eval_pixels, nullptr, check_cancel));
     const double loss = state.loss_steps > 0 ? state.loss_sum / state.loss_steps : std::nan("");
     state.metrics += format("{:.3f},{},{:.6g},{:.4f}\n", state.train_seconds, trainer.step(), loss, psnr);
     state.loss_sum = 0;
@@ -334,7 +336,7 @@ void TrainStage::Run(StageContext& context) const {
 
   if (!ModelIsFinite(trainer.model())) throw InternalError("training ended with non-finite parameters");
   RenderStats eval_stats;
-  const std::vector<double> psnrs = trainer.HeldoutPsnr(options.final_eval_pixels, &eval_stats);
+  const std::vector<double> psnrs = trainer.HeldoutPsnr(options.final_eval_pixels, &eval_stats, check_cancel);
   NerfModel& model = trainer.model();
   model.info = {{"transforms", transforms.string()}, {"steps", trainer.step()}, {"heldout_psnr", Mean(psnrs)}};
   WriteOrExplain([&] { SaveModel(model, context.output_dir / "model.bin"); });
