@@ -25,12 +25,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// `photo2nerf run` on the small dataset with short stages (about 10 s in all) and frequent checkpoints.
+// `photo2nerf run` on the small dataset with short stages (about 10 s in all), frequent checkpoints and
+// evaluations on few pixels.
 std::vector<std::string> RunArgs(const fs::path& data, const fs::path& workspace) {
   return {P2N_BINARY, "run", data.string(), "-w", workspace.string(), "--run.progress", "plain",
           "--train.preset", "fast", "--train.steps", "120", "--train.checkpoint_interval", "0.2",
-          "--train.eval_interval", "1", "--render.frames", "4", "--export.resolution", "32",
-          "--export.points_width", "32", "--export.threshold", "5"};
+          "--train.eval_interval", "1", "--train.eval_pixels", "512", "--render.frames", "4",
+          "--export.resolution", "32", "--export.points_width", "32", "--export.threshold", "5"};
 }
 
 // Starts a command with its output in `log`.

@@ -23,6 +23,7 @@ Config SmallStageConfig(int steps) {
   config.Set("train.preset", "fast", "test");
   config.Set("train.steps", steps, "test");
   config.Set("train.eval_interval", 1.0, "test");
+  config.Set("train.eval_pixels", 512, "test");  // of 3072 per view: evaluations stay cheap (under sanitizers too)
   config.Set("render.frames", 6, "test");
   config.Set("render.fps", 6.0, "test");
   config.Set("export.resolution", 48, "test");
