@@ -4,7 +4,9 @@
 
 #include <catch2/catch.hpp>
 
+#include <atomic>
 #include <cmath>
+#include <stdexcept>
 
 #include "nerf/ngp_field.h"
 #include "nerf/synthetic_scene.h"
@@ -106,6 +108,22 @@ TEST_CASE("training learns a sphere: held-out PSNR rises far above the untrained
     const RenderedView view = RenderView(trainer.model(), data.heldout[1].camera, -1, -1, options);
     for (const float v : view.rgb.pixels) REQUIRE(std::isfinite(v));
   }
+}
+
+TEST_CASE("a held-out evaluation reports every ray, and an exception from its callback (Ctrl-C) stops it",
+          "[trainer]") {
+  const TrainingData data = SphereScene();
+  const Trainer trainer(SmallOptions(), data);
+  std::atomic<size_t> rays{0};
+  trainer.HeldoutPsnr(0, nullptr, [&](size_t count) { rays += count; });
+  CHECK(rays == data.heldout.size() * kSize * kSize);
+  std::atomic<int> calls{0};
+  const auto interrupt = [&](size_t) {
+    if (++calls == 2) throw std::runtime_error("interrupted");
+  };
+  CHECK_THROWS_WITH(trainer.HeldoutPsnr(0, nullptr, interrupt), "interrupted");
+  // The renderer reports chunks of 256 rays: the first view's 7 chunks at most, not the evaluation's 21.
+  CHECK(calls <= (kSize * kSize + 255) / 256);
 }
 
 TEST_CASE("a run resumed from a checkpoint reaches exactly the parameters of an uninterrupted one", "[trainer]") {
