@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "nerf/spherical_harmonics.h"
 
@@ -65,15 +66,15 @@ void NgpField<T>::Forward(const Matrix& positions, const Matrix& directions, Mat
                           Cache* cache) const {
   Matrix encoded;
   grid_.Forward(positions, &encoded);
-  ForwardEncoded(positions, encoded, directions, density, rgb, cache);
+  ForwardEncoded(positions, std::move(encoded), directions, density, rgb, cache);
 }
 
 template <typename T>
-void NgpField<T>::ForwardEncoded(const Matrix& positions, const Matrix& encoded, const Matrix& directions,
-                                 Matrix* density, Matrix* rgb, Cache* cache) const {
+void NgpField<T>::ForwardEncoded(const Matrix& positions, Matrix encoded, const Matrix& directions, Matrix* density,
+                                 Matrix* rgb, Cache* cache) const {
   const Eigen::Index n = positions.cols();
   cache->positions = positions;
-  cache->encoded = encoded;
+  cache->encoded = std::move(encoded);
   cache->mlps.resize(2);
   density_mlp_.Forward(cache->encoded, &cache->hidden, &cache->mlps[0]);
   ExpDensity<T>(cache->hidden, density);

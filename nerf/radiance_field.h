@@ -39,11 +39,11 @@ class RadianceField {
   // finite and >= 0) and rgb (3 x n, in (0, 1)).
   virtual void Forward(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb,
                        Cache* cache) const = 0;
-  // Forward() given the trainable encoding's output for `positions` (encoded: its output_dims x n), computed
-  // beforehand for a whole batch at once (the trainer does, so the hash tables are read level by level); a
-  // field without a trainable encoding ignores `encoded`.
-  virtual void ForwardEncoded(const Matrix& positions, const Matrix& encoded, const Matrix& directions,
-                              Matrix* density, Matrix* rgb, Cache* cache) const {
+  // Forward() given the trainable encoding's output for `positions` (encoded: its output_dims x n, kept in the
+  // cache), computed beforehand for a whole batch at once (the trainer does, so the hash tables are read level
+  // by level); a field without a trainable encoding ignores `encoded`.
+  virtual void ForwardEncoded(const Matrix& positions, Matrix encoded, const Matrix& directions, Matrix* density,
+                              Matrix* rgb, Cache* cache) const {
     (void)encoded;
     Forward(positions, directions, density, rgb, cache);
   }

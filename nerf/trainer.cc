@@ -9,6 +9,7 @@
 #include <functional>
 #include <random>
 #include <stdexcept>
+#include <utility>
 
 #include "nerf/denormals.h"
 #include "nerf/volume_rendering.h"
@@ -227,9 +228,9 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     Eigen::MatrixXf density, colour;
     RadianceField<float>::Cache cache;
     if (n > 0) {
-      const Eigen::MatrixXf chunk_encoded =
-          grid != nullptr ? Eigen::MatrixXf(encoded.middleCols(chunk.first_sample, n)) : Eigen::MatrixXf();
-      field.ForwardEncoded(chunk.positions, chunk_encoded, chunk.directions, &density, &colour, &cache);
+      Eigen::MatrixXf chunk_encoded;  // moved into the cache, not copied again
+      if (grid != nullptr) chunk_encoded = encoded.middleCols(chunk.first_sample, n);
+      field.ForwardEncoded(chunk.positions, std::move(chunk_encoded), chunk.directions, &density, &colour, &cache);
     }
     Eigen::MatrixXf d_density = Eigen::MatrixXf::Zero(1, n), d_colour = Eigen::MatrixXf::Zero(3, n);
     std::vector<Eigen::Index> used;  // samples that got a gradient
