@@ -26,10 +26,20 @@ class RadianceField {
  public:
   using Matrix = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic>;
 
-  // Activations of one Forward(), kept for Backward().
+  // Activations of one Forward(), kept for Backward(); every matrix has a column per sample.
   struct Cache {
     Matrix positions, encoded, hidden, colour_in;
     std::vector<typename Mlp<T>::Cache> mlps;
+
+    // Keeps the samples `columns` alone (in that order): Backward() with their dL/d(density) and dL/d(rgb) then
+    // costs nothing for the others (e.g. the samples behind a ray's termination point, which have no gradient).
+    void KeepColumns(const std::vector<Eigen::Index>& columns) {
+      const auto keep = [&](Matrix& m) { m = m(Eigen::all, columns).eval(); };
+      for (Matrix* m : {&positions, &encoded, &hidden, &colour_in}) keep(*m);
+      for (typename Mlp<T>::Cache& mlp : mlps) {
+        for (Matrix& m : mlp.activations) keep(m);
+      }
+    }
   };
 
   virtual ~RadianceField() = default;

@@ -1,12 +1,11 @@
 #include "nerf/trainer.h"
 
-#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 #include <stdexcept>
 #include <utility>
@@ -56,16 +55,6 @@ float ChannelLoss(bool huber, float difference, float* derivative) {
 template <typename Values>
 bool AllFinite(const Values& values) {
   return std::all_of(values.begin(), values.end(), [](float v) { return std::isfinite(v); });
-}
-
-// In parallel, for a hash table's gradient.
-bool AllFinite(const float* values, size_t count) {
-  return tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, count, size_t{1} << 16), true,
-      [&](const tbb::blocked_range<size_t>& range, bool finite) {
-        return finite && std::all_of(values + range.begin(), values + range.end(), [](float v) { return std::isfinite(v); });
-      },
-      std::logical_and<bool>());
 }
 
 }  // namespace
@@ -161,7 +150,8 @@ void Trainer::UpdateOccupancy() {
 
 StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
   RadianceField<float>& field = *model_.field;
-  Encoding<float>* grid = field.TrainableEncoding();  // its gradient is zero (the last step used or zeroed it)
+  // The grid's gradient is zero here: Adam zeroes the entries it used, and a skipped step writes none.
+  Encoding<float>* grid = field.TrainableEncoding();
   const size_t rays = batch.rays.size();
   struct Chunk {
     Eigen::MatrixXf positions, directions;  // of every sample marched
@@ -170,6 +160,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     Eigen::Index first_sample = 0;          // in the whole batch
     std::vector<float> d_dense;
     Eigen::MatrixXf used_positions, d_encoded;  // of the samples before early termination only
+    double d_encoded_magnitude = 0;             // the sum of |d_encoded|
     double loss = 0;
     size_t samples = 0, used = 0;
   };
@@ -255,13 +246,17 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     }
     chunk.d_dense.assign(dense_count_, 0.0f);
     chunk.used = used.size();
-    if (n > 0) {
+    if (!used.empty()) {
+      // Samples behind the termination point have no gradient: neither the networks nor the hash grid need
+      // visit them on the way back.
+      cache.KeepColumns(used);
       Eigen::MatrixXf d_encoded;
-      field.Backward(cache, d_density, d_colour, chunk.d_dense.data(), &d_encoded);
-      // Samples behind the termination point have no gradient: the hash grid need not visit them.
+      field.Backward(cache, d_density(Eigen::all, used), d_colour(Eigen::all, used), chunk.d_dense.data(),
+                     &d_encoded);
       if (d_encoded.size() > 0) {
-        chunk.used_positions = cache.positions(Eigen::all, used);
-        chunk.d_encoded = d_encoded(Eigen::all, used);
+        chunk.used_positions = std::move(cache.positions);
+        chunk.d_encoded = std::move(d_encoded);
+        chunk.d_encoded_magnitude = chunk.d_encoded.cwiseAbs().cast<double>().sum();
       }
     }
   });
@@ -269,7 +264,11 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
   StepResult result;
   result.rays = rays;
   std::vector<float>& d_dense = chunks.front().d_dense;
+  // A hash-table entry's gradient sums weight (<= 1) x dL/d(encoding) over samples, so this sum bounds them all:
+  // the table's gradient is finite when the sum is, with room to spare for rounding.
+  double d_encoded_magnitude = 0;
   for (size_t c = 0; c < chunks.size(); ++c) {
+    d_encoded_magnitude += chunks[c].d_encoded_magnitude;
     result.loss += chunks[c].loss;
     result.samples += chunks[c].samples;
     result.samples_used += chunks[c].used;
@@ -278,6 +277,19 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     }
   }
   result.loss /= static_cast<double>(std::max<size_t>(rays, 1));
+  ++step_;
+  if (!std::isfinite(result.loss)) {
+    result.problem = "the loss is not finite";
+  } else if (!AllFinite(d_dense)) {
+    result.problem = "a network gradient is not finite";
+  } else if (!(d_encoded_magnitude < 0.5 * std::numeric_limits<float>::max())) {
+    result.problem = "a hash-grid gradient is not finite";
+  }
+  if (!result.problem.empty()) {
+    result.skipped = true;
+    ++skipped_;
+    return result;
+  }
   if (grid != nullptr && result.samples_used > 0) {
     Eigen::MatrixXf positions(3, result.samples_used), d_encoded(grid->output_dims(), result.samples_used);
     Eigen::Index column = 0;
@@ -288,20 +300,6 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
       column += chunk.used;
     }
     grid->Backward(positions, d_encoded);
-  }
-  ++step_;
-  if (!std::isfinite(result.loss)) {
-    result.problem = "the loss is not finite";
-  } else if (!AllFinite(d_dense)) {
-    result.problem = "a network gradient is not finite";
-  } else if (grid != nullptr && !AllFinite(grid->grads(), grid->num_params())) {
-    result.problem = "a hash-grid gradient is not finite";
-  }
-  if (!result.problem.empty()) {
-    if (grid != nullptr) grid->ZeroGrad();
-    result.skipped = true;
-    ++skipped_;
-    return result;
   }
   const double learning_rate = LearningRate(progress);
   size_t offset = 0;
