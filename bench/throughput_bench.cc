@@ -1,7 +1,8 @@
 // Throughput of the ngp field's MLPs against this machine's dense matrix-multiply speed, measured in one run:
 // an Eigen single-precision GEMM of comparable shape (64 x 64 times 64 x N) and a large square one, then the
 // density and colour MLPs' forward + backward on N samples (FLOPs counted from their layer sizes), and the
-// whole field (hash grid included). Uses the TBB threads given (default: all cores) by splitting N.
+// whole field (hash grid included), and the hash grid alone. Uses the TBB threads given (default: all cores) by
+// splitting N.
 // Usage: throughput_bench [SAMPLES [REPEATS]]
 
 #include <Eigen/Core>
@@ -13,6 +14,7 @@
 #include <cstdlib>
 #include <vector>
 
+#include "nerf/encoding.h"
 #include "nerf/ngp_field.h"
 
 namespace {
@@ -98,6 +100,13 @@ int main(int argc, char** argv) {
     });
     for (int c = 0; c < chunks; ++c) field.grid().Backward(positions[c], d_encoded[c]);
   });
+  // The hash grid alone, as the trainer calls it (the whole batch at once), with the quality preset's layout.
+  p2n::HashGridEncoding<float> grid(3, {8, 4, 19, 16, 4096}, 1);
+  Eigen::MatrixXf all_positions(3, per_chunk * chunks), encoded;
+  for (int c = 0; c < chunks; ++c) all_positions.middleCols(c * per_chunk, per_chunk) = positions[c];
+  const Eigen::MatrixXf d_grid = Eigen::MatrixXf::Random(grid.output_dims(), all_positions.cols());
+  const double grid_forward_seconds = MedianSeconds(repeats, [&] { grid.Forward(all_positions, &encoded); });
+  const double grid_backward_seconds = MedianSeconds(repeats, [&] { grid.Backward(all_positions, d_grid); });
   const double samples = double(per_chunk) * chunks;
   std::printf("samples per batch                 %.0f\n", samples);
   std::printf("GEMM 64x64 * 64xN (chunked)       %.1f GFLOP/s\n", gemm_gflops);
@@ -108,5 +117,7 @@ int main(int argc, char** argv) {
   std::printf("MLP FLOPs per sample (fwd+bwd)    %.0f\n", mlp_flops);
   std::printf("whole field fwd+bwd               %.2f M samples/s (MLPs %.0f%% of its time)\n",
               samples / field_seconds / 1e6, 100 * mlp_seconds / field_seconds);
+  std::printf("hash grid 8x4, 2^19: forward      %.2f M samples/s, backward %.2f M samples/s\n",
+              samples / grid_forward_seconds / 1e6, samples / grid_backward_seconds / 1e6);
   return 0;
 }
