@@ -29,7 +29,7 @@ struct RenderStageOptions {
   bool video = true;                // write video.mp4 of the path
   bool depth = true;                // write depth and opacity images of the path
   bool exr = false;                 // also write linear float EXR images (RGB and depth)
-  double step_scale = 1;            // sample spacing as a multiple of the model's
+  double step_scale = 0.5;          // sample spacing as a multiple of the model's (training) step
 
   template <class V>
   void Visit(V& v) {
