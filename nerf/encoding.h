@@ -102,8 +102,8 @@ class HashGridEncoding : public Encoding<T> {
   // Calls visit(entry, weight) for the 2^D vertices around point `p` at `level`.
   template <class Visit>
   void ForEachCorner(const Level& level, const T* p, Visit visit) const;
-  // Asks the cache for the entries of `values` (params_ or grads_) around point `p` (to read or to write).
-  void Prefetch(const Level& level, const T* p, const T* values, bool write) const;
+  // Asks the cache for the entries around point `p` at `level` (hashed levels only).
+  void Prefetch(const Level& level, const T* p) const;
 
   int dims_;
   HashGridConfig config_;
