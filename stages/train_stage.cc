@@ -29,13 +29,18 @@ constexpr int kMaxConsecutiveSkips = 50;
 
 struct Preset {
   double time_budget;
-  int march_samples, batch_samples, log2_table_size, finest_resolution, occupancy_resolution;
+  int march_samples, batch_samples, occupancy_resolution;
+  HashGridConfig grid;  // levels, features per level, log2 table size, base and finest resolution
+  double final_learning_rate;  // of ngp, as a fraction of the first
 };
 
 Preset PresetFor(const std::string& name) {
-  if (name == "fast") return {60, 128, 1 << 15, 15, 1024, 64};
-  if (name == "quality") return {900, 512, 1 << 17, 19, 4096, 128};
-  return {300, 256, 1 << 16, 17, 2048, 128};
+  if (name == "fast") return {60, 128, 1 << 15, 64, {16, 2, 15, 16, 1024}, 0.1};
+  // Measured at lego 800 (5-minute runs): 8 levels of 4 features (half the table reads of 16 levels of 2, the
+  // same encoding width) train 19% more steps and reach +0.25 dB; a learning rate that ends at 0.3 of its start
+  // rather than 0.1, +0.25 dB more.
+  if (name == "quality") return {900, 512, 1 << 17, 128, {8, 4, 19, 16, 4096}, 0.3};
+  return {300, 256, 1 << 16, 128, {16, 2, 17, 16, 2048}, 0.1};
 }
 
 }  // namespace
@@ -242,8 +247,8 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options) {
     trainer.stratified_samples = options.vanilla_samples;
   } else {
     NgpFieldConfig field;
-    field.grid.log2_table_size = options.hash_table_log2 > 0 ? options.hash_table_log2 : preset.log2_table_size;
-    field.grid.finest_resolution = preset.finest_resolution;
+    field.grid = preset.grid;
+    if (options.hash_table_log2 > 0) field.grid.log2_table_size = options.hash_table_log2;
     trainer.field = field.ToJson();
   }
   const int march = options.march_samples > 0 ? options.march_samples : preset.march_samples;
@@ -251,7 +256,7 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options) {
   trainer.occupancy_resolution = preset.occupancy_resolution;
   trainer.batch_samples = options.batch_samples > 0 ? options.batch_samples : preset.batch_samples;
   trainer.learning_rate = options.learning_rate > 0 ? options.learning_rate : vanilla ? 5e-4 : 1e-2;
-  trainer.final_learning_rate = trainer.learning_rate * 0.1;
+  trainer.final_learning_rate = trainer.learning_rate * (vanilla ? 0.1 : preset.final_learning_rate);
   trainer.loss = options.loss;
   trainer.seed = static_cast<uint64_t>(options.seed);
   return trainer;
