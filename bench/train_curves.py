@@ -15,10 +15,12 @@ for run in runs:
     metrics = list(csv.DictReader(open(os.path.join(out, name, "metrics.csv"))))
     points = [(float(m["wall_seconds"]), float(m["heldout_psnr"])) for m in metrics]
     row = {"run": name}
-    for mark in marks:
-        # The evaluation nearest after the mark (evaluations are every 15 s of training).
-        later = [p for s, p in points if s >= mark - 0.5]
-        row[f"psnr_{mark}s"] = f"{later[0]:.2f}" if later and points[-1][0] >= mark - 0.5 else ""
+    for i, mark in enumerate(marks):
+        # The first evaluation at or after the mark, unless it is at or after the next mark (a run evaluated
+        # every 60 s has nothing to say at 15 s).
+        next_mark = marks[i + 1] if i + 1 < len(marks) else float("inf")
+        later = [(s, p) for s, p in points if s >= mark - 0.5]
+        row[f"psnr_{mark}s"] = f"{later[0][1]:.2f}" if later and later[0][0] < next_mark - 0.5 else ""
     for target in (23, 28, 30):
         reached = [s for s, p in points if p >= target]
         row[f"seconds_to_{target}dB"] = f"{reached[0]:.0f}" if reached else ""
