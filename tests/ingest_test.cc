@@ -148,6 +148,12 @@ TEST_CASE("ingest: a table of unusual and bad photos, each kept as training expe
                              std::string(reinterpret_cast<const char*>(&size), 4) + "only a few bytes");
        },
        "damaged EXR header: attribute 'Exif:ImageHistory' declares 1953458498 bytes in a file of 53", nullptr},
+      {"bomb.png",  // found by fuzzing: 320 bytes that made libpng take 2 GB before refusing them
+       [](const fs::path& path) {
+         WriteHugePng(path);
+         WriteText(path, ReadText(path).substr(0, 33) + std::string("\x74\x6f\x6f\x42tEXtonly a few bytes", 24));
+       },
+       "damaged PNG: chunk 'tEXt' declares 1953460034 bytes in a file of 57", nullptr},
       {"zz_copy.png", image(0), "the same pixels as base0.png", nullptr},
       {"sixteen_bit.png", solid(3, OIIO::TypeDesc::UINT16, {1.0f, 0.5f, 0.0f}), "",
        [&](const nlohmann::json&, const TrainView& view) {
