@@ -2,20 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <vector>
 
 namespace p2n {
-namespace {
-
-// Optical depth of a segment: finite and non-negative whatever the inputs (NaN density counts as none).
-template <typename T>
-T OpticalDepth(T sigma, T delta) {
-  const T s = std::max(sigma, T(0)) * std::max(delta, T(0));
-  return std::isnan(s) ? T(0) : std::min(s, std::numeric_limits<T>::max());
-}
-
-}  // namespace
 
 template <typename T>
 void CompositeAccumulator<T>::Add(T sigma, const T* rgb, T t, T delta) {

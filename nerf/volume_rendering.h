@@ -9,10 +9,19 @@
 // Gradients are analytic: with w_i = T_i - T_{i+1} and R_k the colour composited behind sample k (background
 // included), dC/d(sigma_k delta_k) = T_{k+1} c_k - R_k; computed in one reverse pass.
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 
 namespace p2n {
+
+// Optical depth sigma * delta of a segment: finite and non-negative whatever the inputs (NaN density counts as none).
+template <typename T>
+T OpticalDepth(T sigma, T delta) {
+  const T s = std::max(sigma, T(0)) * std::max(delta, T(0));
+  return std::isnan(s) ? T(0) : std::min(s, std::numeric_limits<T>::max());
+}
 
 template <typename T>
 struct RaySegments {
