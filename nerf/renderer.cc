@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 
 #include "nerf/denormals.h"
 #include "nerf/volume_rendering.h"
@@ -28,7 +29,7 @@ std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, doubl
   if (model.contracted) {
     double t = limited ? near : 0.0;
     const double end = limited ? far : kUnboundedFar;
-    const auto step_at = [&](double distance) { return std::max(step, 0.5 * step * distance); };
+    const auto step_at = [&](double distance) { return step * std::max(1.0, 0.5 * distance); };
     t += offset * step_at(t);
     while (t < end && samples.size() < max_samples) {
       const double dt = std::min(step_at(t), end - t);
@@ -60,10 +61,16 @@ std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, doubl
   return samples;
 }
 
+double DefaultStepScale(const NerfModel& model) { return model.contracted ? 1.0 : 0.5; }
+
+double SamplingDistance(const NerfModel& model, double t) {
+  return !model.contracted || t <= 2 ? t : 2 + 2 * std::log(0.5 * t);
+}
+
 void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std::vector<Eigen::Vector2d>& near_far,
                 const RenderOptions& options, float* rgb, float* depth, float* opacity, RenderStats* stats) {
   const auto start = std::chrono::steady_clock::now();
-  const double step = model.march_step * options.step_scale;
+  const double step = model.march_step * (options.step_scale > 0 ? options.step_scale : DefaultStepScale(model));
   std::atomic<size_t> marched{0}, evaluated{0};
   tbb::parallel_for(size_t{0}, (rays.size() + kChunkRays - 1) / kChunkRays, [&](size_t chunk) {
     FlushDenormalsOnThisThread();

@@ -56,6 +56,8 @@ struct TrainerOptions {
   double learning_rate = 1e-2;
   double final_learning_rate = 1e-3;    // reached at the end (exponential decay)
   std::string loss = "mse";             // "mse" or "huber" (delta 0.1)
+  // Weight of mip-NeRF 360's distortion loss (distortion_loss.h) per ray, in the sampler's metric; 0: off.
+  double distortion_weight = 0;
   float min_transmittance = 1e-4f;
   bool random_background = false;       // RGBA images: a random background per ray (learns transparency)
   uint64_t seed = 0;
@@ -69,7 +71,8 @@ struct RayBatch {
 };
 
 struct StepResult {
-  double loss = 0;          // of the batch
+  double loss = 0;          // of the batch: the photometric loss, mean over rays
+  double distortion = 0;    // the distortion loss, mean over rays (unweighted; 0 when off)
   size_t rays = 0;
   size_t samples = 0;       // marched and evaluated
   size_t samples_used = 0;  // before early termination (the ones with gradients)

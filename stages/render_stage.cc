@@ -254,7 +254,8 @@ void RenderStageOptions::Check() const {
   }
   CheckOption(radius >= 0 && std::isfinite(radius), "render.radius", "must be 0 (from the cameras) or positive");
   CheckOption(fps > 0 && fps <= 240, "render.fps", "must be in (0, 240]");
-  CheckOption(step_scale >= 0.01 && step_scale <= 100, "render.step_scale", "must be 0.01..100");
+  CheckOption(step_scale == 0 || (step_scale >= 0.01 && step_scale <= 100), "render.step_scale",
+              "must be 0 (by the scene) or 0.01..100");
 }
 
 std::vector<PinholeCamera> ReadCameraPath(const fs::path& file, const PinholeCamera& reference) {

@@ -29,7 +29,7 @@ struct RenderStageOptions {
   bool video = true;                // write video.mp4 of the path
   bool depth = true;                // write depth and opacity images of the path
   bool exr = false;                 // also write linear float EXR images (RGB and depth)
-  double step_scale = 0.5;          // sample spacing as a multiple of the model's (training) step
+  double step_scale = 0;            // sample spacing as a multiple of the model's (training) step; 0: by the scene
 
   template <class V>
   void Visit(V& v) {
@@ -47,7 +47,9 @@ struct RenderStageOptions {
     v("video", video, "write video.mp4 of the path (H.264)");
     v("depth", depth, "write depth and opacity images of the path");
     v("exr", exr, "also write linear 32-bit float EXR images (RGB and depth)");
-    v("step_scale", step_scale, "sample spacing as a multiple of the model's (below 1: finer and slower)");
+    v("step_scale", step_scale,
+      "sample spacing as a multiple of the model's (below 1: finer and slower); 0: by the scene, 0.5 for bounded "
+      "scenes (sharp surfaces) and 1 for unbounded ones");
   }
   void Check() const;
 };

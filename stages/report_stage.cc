@@ -48,6 +48,12 @@ std::string TrainingSection(const fs::path& train_dir) {
                    report["heldout_views"].get<int>(), HtmlEscape(report.value("heldout_split", "")),
                    Number(report["heldout_pixels_per_view"]), Number(report["samples_per_ray_rendered"], 3),
                    100 * report.value("occupied_fraction", 0.0));
+    const nlohmann::json evals = report.value("evaluations_during_training", nlohmann::json::object());
+    const nlohmann::json trainer = report.value("trainer", nlohmann::json::object());
+    html += format("<p>Distortion loss weight {}; {} held-out evaluations during training ({} pixels per view) took "
+                   "{:.1f} s.</p>\n",
+                   Number(trainer.value("distortion_weight", nlohmann::json(0))), evals.value("count", 0),
+                   Number(evals.value("pixels_per_view", nlohmann::json(nullptr))), evals.value("seconds", 0.0));
   }
   return html;
 }

@@ -27,7 +27,9 @@ struct TrainOptions {
   double learning_rate = 0;        // 0: the field's (ngp 1e-2, vanilla 5e-4)
   std::string loss = "mse";
   std::string background = "auto";  // auto: random for images with alpha, else the dataset's colour
+  std::string distortion = "auto";  // weight of the distortion loss; auto: by the scene (train_stage.cc)
   double eval_interval = 10;       // seconds of training between held-out evaluations
+  double eval_share = 0.1;         // held-out evaluations during training take at most this share of wall time
   int eval_pixels = 4096;          // held-out pixels per view in each evaluation during training (0: all)
   int final_eval_pixels = 65536;   // held-out pixels per view in the final evaluation (0: all)
   double checkpoint_interval = 60;  // seconds between checkpoints (0: none)
@@ -53,7 +55,13 @@ struct TrainOptions {
     v("loss", loss, "photometric loss", "", OptionKind::kResult, {"mse", "huber"});
     v("background", background, "auto: random behind images with alpha, else the dataset's background colour", "",
       OptionKind::kResult, {"auto", "random", "fixed"});
+    v("distortion", distortion,
+      "weight of the distortion loss, which gathers each ray's weight into one place (against haze and floaters); "
+      "auto: the weight measured best on real captures for unbounded scenes, 0 for bounded ones");
     v("eval_interval", eval_interval, "training time between held-out evaluations (metrics.csv rows)", "s");
+    v("eval_share", eval_share,
+      "held-out evaluations during training take at most this share of the wall time (the interval grows when "
+      "they would take more); 1: every train.eval_interval whatever they cost");
     v("eval_pixels", eval_pixels, "held-out pixels per view in each evaluation during training; 0: all", "pixels");
     v("final_eval_pixels", final_eval_pixels, "held-out pixels per view in the final evaluation; 0: all", "pixels");
     v("checkpoint_interval", checkpoint_interval, "time between checkpoints that a killed run resumes from; 0: none",
@@ -80,8 +88,8 @@ std::string SourceDatasetKind(const std::filesystem::path& transforms);
 // Whether train.scene (auto: by the dataset kind recorded in transforms.json) makes the scene unbounded.
 bool SceneIsUnbounded(const TrainOptions& options, const std::filesystem::path& transforms);
 
-// The trainer's options for these stage options (presets resolved).
-TrainerOptions MakeTrainerOptions(const TrainOptions& options);
+// The trainer's options for these stage options (presets resolved) in a bounded or unbounded scene.
+TrainerOptions MakeTrainerOptions(const TrainOptions& options, bool unbounded);
 // The preset's time budget unless one is given.
 double ResolvedTimeBudget(const TrainOptions& options);
 

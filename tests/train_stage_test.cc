@@ -46,6 +46,29 @@ TEST_CASE("train stage: model.bin, metrics.csv and train_report.json, fresh on a
   CHECK_THAT(after.reasons.front(), Catch::Contains("train.seed"));
 }
 
+TEST_CASE("train stage: held-out evaluations during training take at most train.eval_share of the time", "[train]") {
+  // Asked to evaluate after every step, on every held-out pixel (an evaluation costs about a step or more).
+  for (const double share : {1.0, 0.1}) {
+    StageWorkspace setup;
+    Config config = SmallStageConfig(40);
+    config.Set("train.eval_interval", 1e-6, "test");
+    config.Set("train.eval_pixels", 0, "test");
+    config.Set("train.eval_share", share, "test");
+    setup.runner.Run(setup.workspace, config, Until("train"));
+    const fs::path out = setup.dir / "ws" / "30_train";
+    const nlohmann::json evaluations = ReadJsonFile(out / "train_report.json")["evaluations_during_training"];
+    const std::string metrics = ReadText(out / "metrics.csv");
+    INFO("eval_share " << share);
+    CHECK(evaluations["count"].get<long>() == std::count(metrics.begin(), metrics.end(), '\n') - 1);  // its rows
+    CHECK(evaluations["pixels_per_view"] == "all");
+    if (share == 1.0) {
+      CHECK(evaluations["count"] == 40);
+    } else {
+      CHECK(evaluations["count"].get<int>() <= 20);
+    }
+  }
+}
+
 TEST_CASE("train stage: a cancelled run resumes from its checkpoint and finishes the same number of steps",
           "[train]") {
   StageWorkspace setup;

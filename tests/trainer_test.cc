@@ -240,6 +240,30 @@ TEST_CASE("unbounded scenes: the contraction maps all of space into the field's 
   REQUIRE(samples.size() > 10);
   CHECK(samples.back().t > 100);
   CHECK(samples.back().delta > 10 * samples.front().delta);
+  // In the sampler's metric (the distortion loss's) every sample has the same length, near and far.
+  for (size_t k = 0; k + 1 < samples.size(); k += 97) {
+    const double half = 0.5 * samples[k].delta;
+    const double length = SamplingDistance(model, samples[k].t + half) - SamplingDistance(model, samples[k].t - half);
+    INFO("sample " << k << " at t = " << samples[k].t);
+    CHECK(length == Approx(0.01).epsilon(0.02));
+  }
+}
+
+TEST_CASE("a render without a step samples at the scene's default: half the training step when bounded",
+          "[trainer]") {
+  const TrainingData data = SphereScene();
+  Trainer trainer(SmallOptions(), data);
+  const PinholeCamera& camera = data.heldout[0].camera;
+  for (const bool contracted : {false, true}) {
+    trainer.model().contracted = contracted;
+    RenderOptions by_scene, given;
+    given.step_scale = contracted ? 1.0 : 0.5;
+    CHECK(DefaultStepScale(trainer.model()) == given.step_scale);
+    const RenderStats a = RenderView(trainer.model(), camera, -1, -1, by_scene).stats;
+    const RenderStats b = RenderView(trainer.model(), camera, -1, -1, given).stats;
+    CHECK(a.samples_marched == b.samples_marched);
+    CHECK(a.samples_marched > 0);
+  }
 }
 
 }  // namespace p2n::testing
