@@ -53,9 +53,9 @@ float ChannelLoss(bool huber, float difference, float* derivative) {
   return difference * difference;
 }
 
-// The distortion loss of a ray's first `used` segments in the sampler's metric; adds `scale` x its gradient to
+// Adds `scale` x the gradient of the distortion loss of a ray's first `used` segments (in the sampler's metric) to
 // d_sigma.
-double RayDistortion(const NerfModel& model, const RaySegments<float>& segments, size_t used, float scale,
+void AddDistortionGradient(const NerfModel& model, const RaySegments<float>& segments, size_t used, float scale,
                      float* d_sigma) {
   std::vector<float> midpoints(used), lengths(used);
   for (size_t k = 0; k < used; ++k) {
@@ -64,7 +64,7 @@ double RayDistortion(const NerfModel& model, const RaySegments<float>& segments,
     const double begin = SamplingDistance(model, std::max(t - half, 0.0)), end = SamplingDistance(model, t + half);
     lengths[k] = static_cast<float>(end - begin);
   }
-  return DistortionLoss(segments, used, midpoints.data(), lengths.data(), scale, d_sigma);
+  DistortionLoss(segments, used, midpoints.data(), lengths.data(), scale, d_sigma);
 }
 
 template <typename Values>
@@ -176,7 +176,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     std::vector<float> d_dense;
     Eigen::MatrixXf used_positions, d_encoded;  // of the samples before early termination only
     double d_encoded_magnitude = 0;             // the sum of |d_encoded|
-    double loss = 0, distortion = 0;
+    double loss = 0;
     size_t samples = 0, used = 0;
   };
   std::vector<Chunk> chunks((rays + kChunkRays - 1) / kChunkRays);
@@ -259,7 +259,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
                           d_colour.data() + 3 * o);
         if (options_.distortion_weight > 0) {
           const float distortion_scale = static_cast<float>(options_.distortion_weight / rays);
-          chunk.distortion += RayDistortion(model_, segments, result.used, distortion_scale, d_density.data() + o);
+          AddDistortionGradient(model_, segments, result.used, distortion_scale, d_density.data() + o);
         }
       }
     }
@@ -289,7 +289,6 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
   for (size_t c = 0; c < chunks.size(); ++c) {
     d_encoded_magnitude += chunks[c].d_encoded_magnitude;
     result.loss += chunks[c].loss;
-    result.distortion += chunks[c].distortion;
     result.samples += chunks[c].samples;
     result.samples_used += chunks[c].used;
     if (c > 0) {
@@ -297,7 +296,6 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     }
   }
   result.loss /= static_cast<double>(std::max<size_t>(rays, 1));
-  result.distortion /= static_cast<double>(std::max<size_t>(rays, 1));
   ++step_;
   if (!std::isfinite(result.loss)) {
     result.problem = "the loss is not finite";

@@ -72,7 +72,6 @@ struct RayBatch {
 
 struct StepResult {
   double loss = 0;          // of the batch: the photometric loss, mean over rays
-  double distortion = 0;    // the distortion loss, mean over rays (unweighted; 0 when off)
   size_t rays = 0;
   size_t samples = 0;       // marched and evaluated
   size_t samples_used = 0;  // before early termination (the ones with gradients)

@@ -139,6 +139,9 @@ bool LoadCheckpoint(const fs::path& path, const std::string& key, RunState* stat
   }
 }
 
+// A pixels-per-view option as JSON: the count, or "all" for 0.
+nlohmann::json PixelsPerView(int pixels) { return pixels == 0 ? nlohmann::json("all") : nlohmann::json(pixels); }
+
 // The held-out evaluations during training (in this session of the run: a resumed run counts from its resumption).
 struct EvalLog {
   int count = 0;
@@ -157,14 +160,12 @@ nlohmann::json TrainReport(Trainer& trainer, const TrainerOptions& trainer_optio
           {"heldout_psnr", psnrs.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(psnrs))},
           {"heldout_views", data.heldout.size()},
           {"heldout_split", heldout_split},
-          {"heldout_pixels_per_view",
-           options.final_eval_pixels == 0 ? nlohmann::json("all") : nlohmann::json(options.final_eval_pixels)},
+          {"heldout_pixels_per_view", PixelsPerView(options.final_eval_pixels)},
           {"heldout_per_view", per_view},
           {"evaluations_during_training",
            {{"count", eval_log.count},
             {"seconds", eval_log.seconds},
-            {"pixels_per_view",
-             options.eval_pixels == 0 ? nlohmann::json("all") : nlohmann::json(options.eval_pixels)}}},
+            {"pixels_per_view", PixelsPerView(options.eval_pixels)}}},
           {"skipped_steps", trainer.skipped_steps()},
           {"resumed_from_step", resumed_from},
           {"training_views", data.train.size()},
