@@ -18,8 +18,25 @@ std::runtime_error FileError(const std::filesystem::path& path, const std::strin
 
 }  // namespace
 
+const char* SceneSpaceName(SceneSpace space) {
+  switch (space) {
+    case SceneSpace::kBounded: return "bounded";
+    case SceneSpace::kUnbounded: return "unbounded";
+    case SceneSpace::kForward: return "forward";
+  }
+  return "?";
+}
+
+SceneSpace SceneSpaceFromName(const std::string& name) {
+  for (const SceneSpace space : {SceneSpace::kBounded, SceneSpace::kUnbounded, SceneSpace::kForward}) {
+    if (name == SceneSpaceName(space)) return space;
+  }
+  throw std::invalid_argument("unknown scene space '" + name + "' (bounded, unbounded or forward)");
+}
+
 Eigen::Vector3d FieldPoint(const NerfModel& model, const Eigen::Vector3d& world) {
-  if (!model.contracted) return 0.5 * (world + Eigen::Vector3d::Ones());
+  if (model.space == SceneSpace::kBounded) return 0.5 * (world + Eigen::Vector3d::Ones());
+  if (model.space == SceneSpace::kForward) return 0.5 * (ForwardNdc(model.forward, world) + Eigen::Vector3d::Ones());
   const double norm = world.cwiseAbs().maxCoeff();
   const Eigen::Vector3d contracted = norm <= 1 ? world : ((2 - 1 / norm) / norm) * world;
   return 0.25 * (contracted + Eigen::Vector3d::Constant(2));
@@ -28,13 +45,14 @@ Eigen::Vector3d FieldPoint(const NerfModel& model, const Eigen::Vector3d& world)
 void WriteModel(const NerfModel& model, BinaryWriter* writer) {
   writer->PutBytes(kModelMagic, 8);
   writer->Put<uint32_t>(kModelFormatVersion);
-  const nlohmann::json header = {{"field", model.field->Config()},
-                                 {"occupancy_resolution", model.occupancy.resolution()},
-                                 {"background", model.background},
-                                 {"contracted", model.contracted},
-                                 {"march_step", model.march_step},
-                                 {"stratified_samples", model.stratified_samples},
-                                 {"info", model.info}};
+  nlohmann::json header = {{"field", model.field->Config()},
+                           {"occupancy_resolution", model.occupancy.resolution()},
+                           {"background", model.background},
+                           {"space", SceneSpaceName(model.space)},
+                           {"march_step", model.march_step},
+                           {"stratified_samples", model.stratified_samples},
+                           {"info", model.info}};
+  if (model.space == SceneSpace::kForward) header["forward_frame"] = ForwardFrameJson(model.forward);
   writer->PutString(header.dump());
   for (const ParamBlock<float>& block : model.field->DenseParams()) writer->PutArray(block.data, block.size);
   Encoding<float>* encoding = model.field->TrainableEncoding();
@@ -57,7 +75,11 @@ NerfModel ReadModel(BinaryReader* reader) {
     model.field = MakeField<float>(header.at("field"), 0);
     model.background = header.at("background").get<std::array<float, 3>>();
     model.march_step = header.at("march_step").get<double>();
-    model.contracted = header.value("contracted", false);
+    // Models written before forward-facing scenes say "contracted" instead of "space".
+    model.space = header.contains("space") ? SceneSpaceFromName(header.at("space").get<std::string>())
+                  : header.value("contracted", false) ? SceneSpace::kUnbounded
+                                                      : SceneSpace::kBounded;
+    if (model.space == SceneSpace::kForward) model.forward = ForwardFrameFromJson(header.at("forward_frame"));
     model.stratified_samples = header.value("stratified_samples", 0);
     if (model.stratified_samples < 0 || model.stratified_samples > 65536) reader->Fail("stratified_samples must be 0..65536");
     model.info = header.value("info", nlohmann::json::object());

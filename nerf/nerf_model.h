@@ -7,7 +7,8 @@
 // the field sees points of its unit cube. A bounded scene maps the box [-1, 1]^3 linearly onto it. An
 // unbounded one is first contracted (nerfacto's L-infinity form): points inside [-1, 1]^3 stay, a point x
 // outside goes to (2 - 1/|x|) x/|x| (|.| the max norm), so all of space fits in [-2, 2]^3, which maps onto the
-// unit cube.
+// unit cube. A forward-facing one holds the normalised device coordinates of a reference camera
+// (forward_space.h), [-1, 1]^3 mapped onto the unit cube; its densities are per NDC unit.
 
 #include <array>
 #include <filesystem>
@@ -16,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "nerf/binary_io.h"
+#include "nerf/forward_space.h"
 #include "nerf/occupancy_grid.h"
 #include "nerf/radiance_field.h"
 #include "nerf/rays.h"
@@ -24,11 +26,18 @@ namespace p2n {
 
 inline constexpr uint32_t kModelFormatVersion = 1;
 
+// How the scene's space maps onto the field's unit cube (above).
+enum class SceneSpace { kBounded, kUnbounded, kForward };
+const char* SceneSpaceName(SceneSpace space);  // "bounded", "unbounded", "forward"
+// std::invalid_argument for another name.
+SceneSpace SceneSpaceFromName(const std::string& name);
+
 struct NerfModel {
   std::unique_ptr<RadianceField<float>> field;
   OccupancyGrid occupancy{128};
   std::array<float, 3> background{1, 1, 1};  // behind the scene when rendering (the training background)
-  bool contracted = false;                    // an unbounded scene (see above)
+  SceneSpace space = SceneSpace::kBounded;
+  ForwardFrame forward;                       // kForward's reference camera
   double march_step = 0;                      // sample spacing along a ray (unbounded: near the centre)
   int stratified_samples = 0;                 // > 0: samples per ray in equal bins instead (no occupancy grid)
   nlohmann::json info = nlohmann::json::object();  // kept with the model: normalisation, training summary

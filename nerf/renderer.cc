@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "nerf/denormals.h"
 #include "nerf/volume_rendering.h"
@@ -17,6 +18,49 @@ constexpr size_t kChunkRays = 256;
 constexpr int kTileSide = 16;  // kTileSide^2 = kChunkRays: a chunk is one tile
 constexpr double kUnboundedFar = 1e3;  // world units: the contracted distance there is within 0.1% of the limit
 
+// Bounded and forward-facing scenes march through the occupancy grid along a straight ray in the field's cube,
+// where their box [-1, 1]^3 is half as long: samples (u, du) there. `to_world` turns them into samples along
+// the world ray.
+template <typename ToWorld>
+std::vector<MarchSample> MarchInCube(const NerfModel& model, const Ray& field_ray, double begin, double end,
+                                     double step, size_t max_samples, double offset, std::mt19937_64* jitter,
+                                     const ToWorld& to_world) {
+  std::vector<MarchSample> samples;
+  const auto box = IntersectBox(field_ray, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones());
+  if (!box) return samples;
+  begin = std::max(begin, box->first);
+  end = std::min(end, box->second);
+  if (!(end > begin)) return samples;
+  if (model.stratified_samples > 0) {
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    const double width = (end - begin) / model.stratified_samples;
+    for (int i = 0; i < model.stratified_samples; ++i) {
+      samples.push_back({begin + (i + (jitter != nullptr ? unit(*jitter) : 0.5)) * width, width});
+    }
+  } else {
+    samples = model.occupancy.March(field_ray, begin + offset * 0.5 * step, end, 0.5 * step, max_samples);
+  }
+  for (MarchSample& sample : samples) sample = to_world(sample);
+  return samples;
+}
+
+// The smallest share of a forward ray's NDC segment left before its point at infinity: no sample beyond.
+constexpr double kForwardEnd = 1 - 1e-6;
+
+std::vector<MarchSample> SampleForwardRay(const NerfModel& model, const Ray& ray, double near, double step,
+                                          size_t max_samples, double offset, std::mt19937_64* jitter) {
+  const ForwardRay forward = ToForward(model.forward, ray);
+  if (!forward.valid) return {};
+  const Eigen::Vector3d start = 0.5 * (forward.start + Eigen::Vector3d::Ones());
+  const Eigen::Vector3d along = 0.5 * (forward.end - forward.start);
+  const double length = along.norm();
+  if (!(length > 0)) return {};
+  const Ray field_ray{start, along / length};
+  const double begin = near > forward.t0 ? length * forward.Fraction(near) : 0.0;
+  return MarchInCube(model, field_ray, begin, kForwardEnd * length, step, max_samples, offset, jitter,
+                     [&](const MarchSample& s) { return MarchSample{forward.Distance(s.t / length), 2 * s.delta}; });
+}
+
 }  // namespace
 
 std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, double near, double far, double step,
@@ -24,9 +68,12 @@ std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, doubl
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double offset = jitter != nullptr ? unit(*jitter) : 0.5;
   const bool limited = near >= 0 && far >= 0;
-  std::vector<MarchSample> samples;
-  if (limited && !(far > near)) return samples;  // an empty segment
-  if (model.contracted) {
+  if (limited && !(far > near)) return {};  // an empty segment
+  if (model.space == SceneSpace::kForward) {
+    return SampleForwardRay(model, ray, limited ? near : 0.0, step, max_samples, offset, jitter);
+  }
+  if (model.space == SceneSpace::kUnbounded) {
+    std::vector<MarchSample> samples;
     double t = limited ? near : 0.0;
     const double end = limited ? far : kUnboundedFar;
     const auto step_at = [&](double distance) { return step * std::max(1.0, 0.5 * distance); };
@@ -39,32 +86,25 @@ std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, doubl
     }
     return samples;
   }
-  // Bounded: march in the field's cube, where distances are half the world's.
+  // Bounded: distances in the field's cube are half the world's.
   const Ray field_ray{FieldPoint(model, ray.origin), ray.direction};
-  const auto box = IntersectBox(field_ray, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones());
-  if (!box) return samples;
-  const double begin = std::max(box->first, limited ? 0.5 * near : 0.0);
-  const double end = std::min(box->second, limited ? 0.5 * far : box->second);
-  if (!(end > begin)) return samples;
-  if (model.stratified_samples > 0) {
-    const double width = (end - begin) / model.stratified_samples;
-    for (int i = 0; i < model.stratified_samples; ++i) {
-      samples.push_back({begin + (i + (jitter != nullptr ? unit(*jitter) : 0.5)) * width, width});
-    }
-  } else {
-    samples = model.occupancy.March(field_ray, begin + offset * 0.5 * step, end, 0.5 * step, max_samples);
-  }
-  for (MarchSample& sample : samples) {
-    sample.t *= 2;
-    sample.delta *= 2;
-  }
-  return samples;
+  return MarchInCube(model, field_ray, limited ? 0.5 * near : 0.0,
+                     limited ? 0.5 * far : std::numeric_limits<double>::infinity(), step, max_samples, offset, jitter,
+                     [](const MarchSample& s) { return MarchSample{2 * s.t, 2 * s.delta}; });
 }
 
-double DefaultStepScale(const NerfModel& model) { return model.contracted ? 1.0 : 0.5; }
+double DefaultStepScale(const NerfModel& model) { return model.space == SceneSpace::kBounded ? 0.5 : 1.0; }
 
-double SamplingDistance(const NerfModel& model, double t) {
-  return !model.contracted || t <= 2 ? t : 2 + 2 * std::log(0.5 * t);
+double SamplingDistance(const NerfModel& model, const Ray& ray, double t) {
+  switch (model.space) {
+    case SceneSpace::kBounded: return t;
+    case SceneSpace::kUnbounded: return t <= 2 ? t : 2 + 2 * std::log(0.5 * t);
+    case SceneSpace::kForward: {
+      const ForwardRay forward = ToForward(model.forward, ray);
+      return forward.valid ? (forward.end - forward.start).norm() * forward.Fraction(t) : t;
+    }
+  }
+  return t;
 }
 
 void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std::vector<Eigen::Vector2d>& near_far,

@@ -34,8 +34,10 @@ struct RenderStats {
 // Samples of the world `ray` within [near, far] (none when far <= near; negative: the whole scene), distances in world
 // units: stratified (the model's stratified_samples bins over the scene box), or every `step` through occupied
 // cells; in an unbounded scene the step grows with the distance beyond the unit box (step * t / 2), so that
-// contracted space is sampled about evenly. With `jitter`, samples are shifted by a random fraction of a step
-// (training); without, they sit in the middle of their segments.
+// contracted space is sampled about evenly; in a forward-facing one the samples are even in NDC (from near, or
+// the near plane, to infinity: `far` does not apply) and their lengths (delta) are in NDC units, as the densities
+// there are. With `jitter`, samples are shifted by a random fraction of a step (training); without, they sit in
+// the middle of their segments.
 std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, double near, double far, double step,
                                    size_t max_samples, std::mt19937_64* jitter);
 
@@ -48,8 +50,9 @@ double DefaultStepScale(const NerfModel& model);
 
 // Distance along a ray (from its origin, world units) in the metric in which SampleRay's step is the same
 // everywhere, so that a length in it is a number of samples: the world distance in a bounded scene; in an
-// unbounded one t up to 2 and 2 + 2 ln(t / 2) beyond, where the step grows as t / 2.
-double SamplingDistance(const NerfModel& model, double t);
+// unbounded one t up to 2 and 2 + 2 ln(t / 2) beyond, where the step grows as t / 2; in a forward-facing one the
+// NDC distance from where the ray crosses the near plane.
+double SamplingDistance(const NerfModel& model, const Ray& ray, double t);
 
 // Renders world rays (unit directions) between their near and far distances (world units; negative: the whole
 // scene). Writes rgb (3 per ray), depth (world units, weighted by opacity) and opacity.

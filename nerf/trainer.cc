@@ -34,7 +34,7 @@ nlohmann::json CheckpointIdentity(const TrainerOptions& options) {
   return {{"field", options.field},
           {"occupancy_resolution", options.occupancy_resolution},
           {"march_step", options.march_step},
-          {"contracted", options.contracted},
+          {"space", SceneSpaceName(options.space)},
           {"stratified_samples", options.stratified_samples},
           {"seed", options.seed}};
 }
@@ -54,15 +54,17 @@ float ChannelLoss(bool huber, float difference, float* derivative) {
 }
 
 // Adds `scale` x the gradient of the distortion loss of a ray's first `used` segments (in the sampler's metric) to
-// d_sigma.
-void AddDistortionGradient(const NerfModel& model, const RaySegments<float>& segments, size_t used, float scale,
-                     float* d_sigma) {
+// d_sigma. A forward-facing scene's segment lengths are in that metric already.
+void AddDistortionGradient(const NerfModel& model, const Ray& ray, const RaySegments<float>& segments, size_t used,
+                           float scale, float* d_sigma) {
   std::vector<float> midpoints(used), lengths(used);
   for (size_t k = 0; k < used; ++k) {
     const double t = segments.t[k], half = 0.5 * segments.delta[k];
-    midpoints[k] = static_cast<float>(SamplingDistance(model, t));
-    const double begin = SamplingDistance(model, std::max(t - half, 0.0)), end = SamplingDistance(model, t + half);
-    lengths[k] = static_cast<float>(end - begin);
+    midpoints[k] = static_cast<float>(SamplingDistance(model, ray, t));
+    lengths[k] = model.space == SceneSpace::kForward
+                     ? segments.delta[k]
+                     : static_cast<float>(SamplingDistance(model, ray, t + half) -
+                                          SamplingDistance(model, ray, std::max(t - half, 0.0)));
   }
   DistortionLoss(segments, used, midpoints.data(), lengths.data(), scale, d_sigma);
 }
@@ -85,7 +87,16 @@ Trainer::Trainer(const TrainerOptions& options, const TrainingData& data) : opti
   model_.occupancy = OccupancyGrid(options.occupancy_resolution);
   model_.background = data.background;
   model_.march_step = options.march_step;
-  model_.contracted = options.contracted;
+  model_.space = options.space;
+  if (options.space == SceneSpace::kForward) {
+    std::vector<PinholeCamera> cameras;
+    std::vector<double> nears;
+    for (const TrainView& view : data.train) {
+      cameras.push_back(view.camera);
+      nears.push_back(view.near);
+    }
+    model_.forward = FitForwardFrame(cameras, nears);
+  }
   model_.stratified_samples = options.stratified_samples;
   const AdamOptions adam{options.learning_rate, 0.9, 0.99, 1e-15};
   for (const ParamBlock<float>& block : model_.field->DenseParams()) {
@@ -259,7 +270,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
                           d_colour.data() + 3 * o);
         if (options_.distortion_weight > 0) {
           const float distortion_scale = static_cast<float>(options_.distortion_weight / rays);
-          AddDistortionGradient(model_, segments, result.used, distortion_scale, d_density.data() + o);
+          AddDistortionGradient(model_, batch.rays[first + r], segments, result.used, distortion_scale, d_density.data() + o);
         }
       }
     }

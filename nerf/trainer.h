@@ -48,7 +48,7 @@ struct TrainerOptions {
   int occupancy_warmup = 16;            // steps before the first update (the field knows nothing before)
   double occupancy_decay = 0.95;
   double march_step = 3.4641016 / 256;  // world units: 256 samples across the scene box's diagonal
-  bool contracted = false;              // an unbounded scene (nerf_model.h)
+  SceneSpace space = SceneSpace::kBounded;  // nerf_model.h; forward: the frame is fitted to the training views
   size_t max_samples_per_ray = 1024;
   int stratified_samples = 0;           // > 0: that many stratified samples per ray, no occupancy grid (vanilla)
   size_t batch_samples = size_t{1} << 16;  // samples per step (the rays per step follow)

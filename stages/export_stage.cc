@@ -88,7 +88,7 @@ std::vector<ColouredPoint> DepthPoints(const NerfModel& model, const ImportedDat
         next_keep += keep_every;
         const Ray ray = CameraRay(camera, x + 0.5, y + 0.5);
         const Eigen::Vector3d p = ray.origin + rendered.depth.pixels[i] * ray.direction;
-        if (!p.allFinite() || (!model.contracted && p.cwiseAbs().maxCoeff() > 1)) continue;
+        if (!p.allFinite() || (model.space == SceneSpace::kBounded && p.cwiseAbs().maxCoeff() > 1)) continue;
         ColouredPoint point;
         point.position = p.cast<float>();
         for (int c = 0; c < 3; ++c) {

@@ -190,7 +190,7 @@ nlohmann::json RenderPath(const NerfModel& model, const ImportedDataset& dataset
   // Depth PNGs share one scale (16 bits over 0..depth_max) so that the frames of a video match.
   double depth_max = 0;
   for (const PinholeCamera& camera : cameras) depth_max = std::max(depth_max, camera.world_from_cam.block<3, 1>(0, 3).norm());
-  depth_max = (depth_max + std::sqrt(3.0)) * (model.contracted ? 2 : 1);
+  depth_max = (depth_max + std::sqrt(3.0)) * (model.space == SceneSpace::kBounded ? 1 : 2);
 
   size_t pixels = 0;
   for (const PinholeCamera& camera : cameras) pixels += size_t(camera.width) * camera.height;

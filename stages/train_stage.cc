@@ -175,7 +175,7 @@ nlohmann::json TrainReport(Trainer& trainer, const TrainerOptions& trainer_optio
           {"field", model.field->Config()},
           {"trainer", {{"march_step", trainer_options.march_step},
                        {"batch_samples", trainer_options.batch_samples},
-                       {"contracted", trainer_options.contracted},
+                       {"scene", SceneSpaceName(trainer_options.space)},
                        {"learning_rate", trainer_options.learning_rate},
                        {"distortion_weight", trainer_options.distortion_weight},
                        {"random_background", trainer_options.random_background}}}};
@@ -235,10 +235,10 @@ std::string SourceDatasetKind(const fs::path& transforms) {
   return has ? json["dataset"]["kind"].get<std::string>() : "";
 }
 
-bool SceneIsUnbounded(const TrainOptions& options, const fs::path& transforms) {
-  if (options.scene != "auto") return options.scene == "unbounded";
+SceneSpace ResolveSceneSpace(const TrainOptions& options, const fs::path& transforms) {
+  if (options.scene != "auto") return SceneSpaceFromName(options.scene);
   const std::string kind = SourceDatasetKind(transforms);
-  return kind != "blender" && kind != "npz";
+  return kind == "blender" || kind == "npz" ? SceneSpace::kBounded : SceneSpace::kUnbounded;
 }
 
 void TrainOptions::Check() const {
@@ -272,12 +272,12 @@ double ResolvedTimeBudget(const TrainOptions& options) {
 }
 
 // train.distortion as a weight (Check() has made sure it is auto or a number >= 0).
-double DistortionWeight(const TrainOptions& options, bool unbounded) {
-  if (options.distortion == "auto") return unbounded ? kAutoDistortion : 0.0;
+double DistortionWeight(const TrainOptions& options, SceneSpace space) {
+  if (options.distortion == "auto") return space != SceneSpace::kBounded ? kAutoDistortion : 0.0;
   return std::stod(options.distortion);
 }
 
-TrainerOptions MakeTrainerOptions(const TrainOptions& options, bool unbounded) {
+TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space) {
   const Preset preset = PresetFor(options.preset);
   TrainerOptions trainer;
   const bool vanilla = options.field == "vanilla";
@@ -291,7 +291,7 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, bool unbounded) {
     trainer.field = field.ToJson();
   }
   const int march = options.march_samples > 0 ? options.march_samples
-                    : unbounded                ? preset.unbounded_march_samples
+                    : space != SceneSpace::kBounded ? preset.unbounded_march_samples
                                                : preset.march_samples;
   trainer.march_step = 2 * std::sqrt(3.0) / march;  // the scene box [-1, 1]^3's diagonal
   trainer.occupancy_resolution = preset.occupancy_resolution;
@@ -299,8 +299,8 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, bool unbounded) {
   trainer.learning_rate = options.learning_rate > 0 ? options.learning_rate : vanilla ? 5e-4 : 1e-2;
   trainer.final_learning_rate = trainer.learning_rate * (vanilla ? 0.1 : preset.final_learning_rate);
   trainer.loss = options.loss;
-  trainer.contracted = unbounded;
-  trainer.distortion_weight = DistortionWeight(options, unbounded);
+  trainer.space = space;
+  trainer.distortion_weight = DistortionWeight(options, space);
   trainer.seed = static_cast<uint64_t>(options.seed);
   return trainer;
 }
@@ -310,13 +310,13 @@ void TrainStage::Run(StageContext& context) const {
   const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
   std::string heldout_split;
   const TrainingData data = LoadTrainingData(transforms, context.workspace.root(), &heldout_split);
-  TrainerOptions trainer_options = MakeTrainerOptions(options, SceneIsUnbounded(options, transforms));
+  TrainerOptions trainer_options = MakeTrainerOptions(options, ResolveSceneSpace(options, transforms));
   const bool has_alpha = std::any_of(data.train.begin(), data.train.end(), [](const TrainView& v) { return v.channels == 4; });
   trainer_options.random_background = options.background == "random" || (options.background == "auto" && has_alpha);
   Trainer trainer(trainer_options, data);
   const double budget = ResolvedTimeBudget(options);
   LogInfo(format("train: {} field, {} scene, preset {}, {} training and {} held-out ({}) views, {}", options.field,
-                 trainer_options.contracted ? "unbounded" : "bounded", options.preset, data.train.size(), data.heldout.size(), heldout_split,
+                 SceneSpaceName(trainer_options.space), options.preset, data.train.size(), data.heldout.size(), heldout_split,
                  budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
 
   RunState state;

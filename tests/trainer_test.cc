@@ -18,8 +18,9 @@ namespace {
 
 constexpr int kSize = 40;
 
-// The view of a sphere of radius 0.5 at the origin, coloured 0.5 + 0.5 * normal, over white.
-TrainView SphereView(double angle, double height) {
+// The view of a sphere of radius 0.5 at the origin, coloured 0.5 + 0.5 * normal, over white, or with a wall
+// behind it (the plane x = -1.5, in stripes).
+TrainView SphereView(double angle, double height, bool wall = false) {
   TrainView view;
   view.camera = LookAtCamera(Eigen::Vector3d(2.5 * std::cos(angle), 2.5 * std::sin(angle), height),
                              Eigen::Vector3d::Zero(), kSize, kSize, 45);
@@ -29,6 +30,10 @@ TrainView SphereView(double angle, double height) {
       const Ray ray = CameraRay(view.camera, x + 0.5, y + 0.5);
       const double b = ray.origin.dot(ray.direction), c = ray.origin.squaredNorm() - 0.25;
       Eigen::Vector3d colour = Eigen::Vector3d::Ones();
+      if (wall && ray.direction.x() < 0) {
+        const Eigen::Vector3d p = ray.origin + (-1.5 - ray.origin.x()) / ray.direction.x() * ray.direction;
+        colour = Eigen::Vector3d(0.5 + 0.4 * std::sin(4 * p.y()), 0.5 + 0.4 * std::sin(3 * p.z()), 0.3);
+      }
       if (b * b - c > 0) {
         const Eigen::Vector3d normal = (ray.origin + (-b - std::sqrt(b * b - c)) * ray.direction).normalized();
         colour = 0.5 * (normal + Eigen::Vector3d::Ones());
@@ -227,7 +232,7 @@ TEST_CASE("extreme inputs stay finite: black and white targets, near = far, rays
 
 TEST_CASE("unbounded scenes: the contraction maps all of space into the field's cube, continuously", "[trainer]") {
   NerfModel model;
-  model.contracted = true;
+  model.space = SceneSpace::kUnbounded;
   CHECK(FieldPoint(model, Eigen::Vector3d::Zero()).isApprox(Eigen::Vector3d::Constant(0.5)));
   CHECK(FieldPoint(model, Eigen::Vector3d(1, 0, 0)).isApprox(Eigen::Vector3d(0.75, 0.5, 0.5)));  // the box's face
   CHECK(FieldPoint(model, Eigen::Vector3d(1 + 1e-9, 0, 0)).isApprox(Eigen::Vector3d(0.75, 0.5, 0.5), 1e-8));
@@ -236,14 +241,16 @@ TEST_CASE("unbounded scenes: the contraction maps all of space into the field's 
   CHECK(far.minCoeff() >= 0.0);
   CHECK(far[1] == Approx(0.0).margin(1e-9));
   // Samples of an unbounded ray get longer with the distance and reach far away.
-  const std::vector<MarchSample> samples = SampleRay(model, {{0, 0, 0}, {1, 0, 0}}, -1, -1, 0.01, 100000, nullptr);
+  const Ray ray{{0, 0, 0}, {1, 0, 0}};
+  const std::vector<MarchSample> samples = SampleRay(model, ray, -1, -1, 0.01, 100000, nullptr);
   REQUIRE(samples.size() > 10);
   CHECK(samples.back().t > 100);
   CHECK(samples.back().delta > 10 * samples.front().delta);
   // In the sampler's metric (the distortion loss's) every sample has the same length, near and far.
   for (size_t k = 0; k + 1 < samples.size(); k += 97) {
     const double half = 0.5 * samples[k].delta;
-    const double length = SamplingDistance(model, samples[k].t + half) - SamplingDistance(model, samples[k].t - half);
+    const double length =
+        SamplingDistance(model, ray, samples[k].t + half) - SamplingDistance(model, ray, samples[k].t - half);
     INFO("sample " << k << " at t = " << samples[k].t);
     CHECK(length == Approx(0.01).epsilon(0.02));
   }
@@ -254,16 +261,35 @@ TEST_CASE("a render without a step samples at the scene's default: half the trai
   const TrainingData data = SphereScene();
   Trainer trainer(SmallOptions(), data);
   const PinholeCamera& camera = data.heldout[0].camera;
-  for (const bool contracted : {false, true}) {
-    trainer.model().contracted = contracted;
+  for (const SceneSpace space : {SceneSpace::kBounded, SceneSpace::kUnbounded}) {
+    trainer.model().space = space;
     RenderOptions by_scene, given;
-    given.step_scale = contracted ? 1.0 : 0.5;
+    given.step_scale = space == SceneSpace::kBounded ? 0.5 : 1.0;
     CHECK(DefaultStepScale(trainer.model()) == given.step_scale);
     const RenderStats a = RenderView(trainer.model(), camera, -1, -1, by_scene).stats;
     const RenderStats b = RenderView(trainer.model(), camera, -1, -1, given).stats;
     CHECK(a.samples_marched == b.samples_marched);
     CHECK(a.samples_marched > 0);
   }
+}
+
+TEST_CASE("a forward-facing scene learns in the reference camera's NDC: the sphere before a wall, from one side", "[trainer]") {
+  TrainingData data;
+  for (int i = 0; i < 12; ++i) data.train.push_back(SphereView(0.05 * (i % 4) - 0.075, 0.12 * (i / 4) - 0.12, true));
+  for (int i = 0; i < 2; ++i) data.heldout.push_back(SphereView(0.05 * i - 0.02, 0.05, true));
+  for (TrainView& view : data.train) view.near = 1.5;  // the sphere's front is 2 away
+  TrainerOptions options = SmallOptions();
+  options.space = SceneSpace::kForward;
+  Trainer trainer(options, data);
+  const ForwardFrame& frame = trainer.model().forward;
+  CHECK(frame.near == Approx(0.8 * 1.5).epsilon(0.02));
+  CHECK((frame.cam_from_world.row(2).transpose() - Eigen::Vector3d(1, 0, 0)).norm() < 0.05);  // looks down -x
+  const double before = Mean(trainer.HeldoutPsnr(0));
+  for (int step = 0; step < 300; ++step) REQUIRE_FALSE(trainer.Step(step / 300.0).skipped);
+  const double after = Mean(trainer.HeldoutPsnr(0));
+  INFO("held-out PSNR before " << before << " dB, after " << after << " dB");
+  CHECK(after > 20.0);
+  CHECK(after > before + 10.0);
 }
 
 }  // namespace p2n::testing
