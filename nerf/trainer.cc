@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "nerf/appearance.h"
 #include "nerf/denormals.h"
 #include "nerf/distortion_loss.h"
 #include "nerf/volume_rendering.h"
@@ -20,6 +21,9 @@ namespace {
 constexpr size_t kChunkRays = 64;
 constexpr char kCheckpointMagic[] = "P2NCKPT1";
 constexpr float kHuberDelta = 0.1f;
+// The colour transforms learn at this share of the field's rate: Adam moves every parameter by about its rate a
+// step, and at the field's a photo's gain wanders by a percent a step.
+constexpr double kAppearanceLearningRate = 0.1;
 
 // A seed for (run seed, step, stream): streams of one step never share random numbers.
 uint64_t MixSeed(uint64_t seed, uint64_t step, uint64_t stream) {
@@ -36,6 +40,7 @@ nlohmann::json CheckpointIdentity(const TrainerOptions& options) {
           {"march_step", options.march_step},
           {"space", SceneSpaceName(options.space)},
           {"stratified_samples", options.stratified_samples},
+          {"appearance", options.appearance},
           {"seed", options.seed}};
 }
 
@@ -106,6 +111,11 @@ Trainer::Trainer(const TrainerOptions& options, const TrainingData& data) : opti
   if (Encoding<float>* grid = model_.field->TrainableEncoding()) {
     grid_adam_ = std::make_unique<Adam<float>>(adam, grid->num_params(), grid->entry_size());
   }
+  if (options.appearance) {
+    appearance_ = IdentityAppearance(data.train.size());
+    appearance_grads_.assign(appearance_.size(), 0.0f);
+    appearance_adam_ = std::make_unique<Adam<float>>(adam, appearance_.size(), kAppearanceParams);
+  }
   size_t offset = 0;
   for (const TrainView& view : data.train) {
     pixel_offsets_.push_back(offset);
@@ -125,6 +135,7 @@ RayBatch Trainer::SampleBatch(int rays) {
   batch.near_far.resize(rays);
   batch.target.resize(3, rays);
   batch.background.resize(3, rays);
+  batch.views.resize(rays);
   std::mt19937_64 random(MixSeed(options_.seed, step_, 0));
   std::uniform_int_distribution<size_t> pick(0, pixel_offsets_.back() - 1);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -136,6 +147,7 @@ RayBatch Trainer::SampleBatch(int rays) {
     const int x = static_cast<int>(pixel % view.camera.width), y = static_cast<int>(pixel / view.camera.width);
     batch.rays[r] = CameraRay(view.camera, x + unit(random), y + unit(random));
     batch.near_far[r] = Eigen::Vector2d(view.near, view.far);
+    batch.views[r] = static_cast<int>(v);
     const uint8_t* value = view.pixels.data() + pixel * view.channels;
     const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
     for (int c = 0; c < 3; ++c) {
@@ -184,7 +196,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     std::vector<float> t, delta;
     std::vector<size_t> offsets;            // the first sample of each ray
     Eigen::Index first_sample = 0;          // in the whole batch
-    std::vector<float> d_dense;
+    std::vector<float> d_dense, d_appearance;
     Eigen::MatrixXf used_positions, d_encoded;  // of the samples before early termination only
     double d_encoded_magnitude = 0;             // the sum of |d_encoded|
     double loss = 0;
@@ -253,16 +265,24 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     std::vector<Eigen::Index> used;  // samples that got a gradient
     const float scale = 1.0f / (3.0f * static_cast<float>(rays));
     const bool huber = options_.loss == "huber";
+    const bool appearance = !appearance_.empty() && !batch.views.empty();
+    if (appearance) chunk.d_appearance.assign(appearance_.size(), 0.0f);
     for (size_t r = 0; r < count; ++r) {
       const size_t o = offsets[r];
       const RaySegments<float> segments{density.data() + o, colour.data() + 3 * o, t.data() + o, delta.data() + o,
                                         offsets[r + 1] - o};
       const float* background = batch.background.col(first + r).data();
       const CompositeResult<float> result = Composite(segments, background, options_.min_transmittance);
-      float d_rgb[3];
+      const size_t params = appearance ? size_t(batch.views[first + r]) * kAppearanceParams : 0;
+      float rgb[3] = {result.rgb[0], result.rgb[1], result.rgb[2]}, d_rgb[3];
+      if (appearance) ApplyAppearance(&appearance_[params], result.rgb, rgb);
       for (int ch = 0; ch < 3; ++ch) {
-        chunk.loss += ChannelLoss(huber, result.rgb[ch] - batch.target(ch, first + r), &d_rgb[ch]) / 3.0;
+        chunk.loss += ChannelLoss(huber, rgb[ch] - batch.target(ch, first + r), &d_rgb[ch]) / 3.0;
         d_rgb[ch] *= scale;
+      }
+      if (appearance) {
+        const float d_out[3] = {d_rgb[0], d_rgb[1], d_rgb[2]};
+        AppearanceBackward(&appearance_[params], result.rgb, d_out, &chunk.d_appearance[params], d_rgb);
       }
       for (size_t k = 0; k < result.used; ++k) used.push_back(static_cast<Eigen::Index>(o + k));
       if (segments.count > 0) {
@@ -305,6 +325,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     if (c > 0) {
       for (size_t k = 0; k < dense_count_; ++k) d_dense[k] += chunks[c].d_dense[k];
     }
+    for (size_t k = 0; k < chunks[c].d_appearance.size(); ++k) appearance_grads_[k] += chunks[c].d_appearance[k];
   }
   result.loss /= static_cast<double>(std::max<size_t>(rays, 1));
   ++step_;
@@ -312,10 +333,13 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     result.problem = "the loss is not finite";
   } else if (!AllFinite(d_dense)) {
     result.problem = "a network gradient is not finite";
+  } else if (!AllFinite(appearance_grads_)) {
+    result.problem = "an appearance gradient is not finite";
   } else if (!(d_encoded_magnitude < 0.5 * std::numeric_limits<float>::max())) {
     result.problem = "a hash-grid gradient is not finite";
   }
   if (!result.problem.empty()) {
+    std::fill(appearance_grads_.begin(), appearance_grads_.end(), 0.0f);
     result.skipped = true;
     ++skipped_;
     return result;
@@ -343,6 +367,11 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     grid_adam_->set_learning_rate(learning_rate);
     grid_adam_->StepSparse(grid->params(), grid->grads());
   }
+  if (appearance_adam_) {  // views without rays in this batch keep their moments
+    appearance_adam_->set_learning_rate(kAppearanceLearningRate * learning_rate);
+    appearance_adam_->StepSparse(appearance_.data(), appearance_grads_.data());
+    CentreAppearance(&appearance_);
+  }
   const double per_ray = static_cast<double>(result.samples) / std::max<size_t>(rays, 1);
   samples_per_ray_ = samples_per_ray_ > 0 ? 0.9 * samples_per_ray_ + 0.1 * per_ray : per_ray;
   return result;
@@ -360,9 +389,37 @@ FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& 
   return image;
 }
 
+namespace {
+
+// n colours as an image one pixel high.
+FloatImage Row(std::vector<float> rgb) { return {static_cast<int>(rgb.size() / 3), 1, 3, std::move(rgb)}; }
+
+// NeRF-W's score of an unseen image: fit the colour transform on the pixels left of the middle, score the rest.
+double FittedPsnr(const TrainView& view, const std::vector<size_t>& pixels, const std::vector<float>& rgb,
+                  const std::vector<float>& target) {
+  std::vector<float> fit_rendered, fit_target, score_rendered, score_target;
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    const bool left = int(pixels[i] % view.camera.width) < view.camera.width / 2;
+    std::vector<float>& rendered_half = left ? fit_rendered : score_rendered;
+    std::vector<float>& target_half = left ? fit_target : score_target;
+    rendered_half.insert(rendered_half.end(), &rgb[3 * i], &rgb[3 * i + 3]);
+    target_half.insert(target_half.end(), &target[3 * i], &target[3 * i + 3]);
+  }
+  const std::vector<float> transform = FitAppearance(fit_rendered.data(), fit_target.data(), fit_rendered.size() / 3);
+  for (size_t i = 0; i < score_rendered.size(); i += 3) {
+    const float in[3] = {score_rendered[i], score_rendered[i + 1], score_rendered[i + 2]};
+    ApplyAppearance(transform.data(), in, &score_rendered[i]);
+  }
+  return Psnr(Row(std::move(score_rendered)), Row(std::move(score_target)));
+}
+
+}  // namespace
+
 std::vector<double> Trainer::HeldoutPsnr(size_t pixels_per_view, RenderStats* stats,
-                                         const std::function<void(size_t)>& on_rays_done) const {
+                                         const std::function<void(size_t)>& on_rays_done,
+                                         std::vector<double>* fitted) const {
   std::vector<double> psnrs;
+  if (fitted != nullptr) fitted->clear();
   RenderOptions render;
   render.on_rays_done = on_rays_done;
   render.min_transmittance = options_.min_transmittance;
@@ -383,19 +440,15 @@ std::vector<double> Trainer::HeldoutPsnr(size_t pixels_per_view, RenderStats* st
     for (size_t i = 0; i < pixels.size(); ++i) {
       rays[i] = CameraRay(view.camera, pixels[i] % view.camera.width + 0.5, pixels[i] / view.camera.width + 0.5);
     }
-    std::vector<float> rgb(3 * pixels.size()), depth(pixels.size()), opacity(pixels.size());
+    std::vector<float> rgb(3 * pixels.size()), depth(pixels.size()), opacity(pixels.size()), target(3 * pixels.size());
     RenderRays(model_, rays, near_far, render, rgb.data(), depth.data(), opacity.data(), stats);
-    double squared = 0;
     for (size_t i = 0; i < pixels.size(); ++i) {
       const uint8_t* value = view.pixels.data() + pixels[i] * view.channels;
       const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
-      for (int c = 0; c < 3; ++c) {
-        const double target = alpha * (value[c] / 255.0f) + (1 - alpha) * model_.background[c];
-        squared += (rgb[3 * i + c] - target) * (rgb[3 * i + c] - target);
-      }
+      for (int c = 0; c < 3; ++c) target[3 * i + c] = alpha * (value[c] / 255.0f) + (1 - alpha) * model_.background[c];
     }
-    const double mse = squared / (3.0 * pixels.size());
-    psnrs.push_back(-10.0 * std::log10(std::max(mse, 1e-12)));
+    if (fitted != nullptr) fitted->push_back(FittedPsnr(view, pixels, rgb, target));
+    psnrs.push_back(Psnr(Row(std::move(rgb)), Row(std::move(target))));
   }
   return psnrs;
 }
@@ -410,6 +463,10 @@ void Trainer::SaveCheckpoint(BinaryWriter* writer) const {
   writer->Put<uint64_t>(model_.occupancy.cursor());
   for (const Adam<float>& adam : dense_adams_) adam.Save(writer);
   if (grid_adam_) grid_adam_->Save(writer);
+  if (appearance_adam_) {
+    writer->PutVector(appearance_);
+    appearance_adam_->Save(writer);
+  }
 }
 
 void Trainer::LoadCheckpoint(BinaryReader* reader) {
@@ -423,7 +480,13 @@ void Trainer::LoadCheckpoint(BinaryReader* reader) {
   model.occupancy.set_cursor(reader->Get<uint64_t>());
   for (Adam<float>& adam : dense_adams_) adam.Load(reader);
   if (grid_adam_) grid_adam_->Load(reader);
+  std::vector<float> appearance;
+  if (appearance_adam_) {
+    appearance = reader->GetVector<float>(appearance_.size());
+    appearance_adam_->Load(reader);
+  }
   if (!reader->AtEnd()) reader->Fail("there are bytes after the checkpoint");
+  appearance_ = std::move(appearance);
   model_ = std::move(model);
   step_ = step;
   skipped_ = skipped;

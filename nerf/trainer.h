@@ -60,6 +60,7 @@ struct TrainerOptions {
   double distortion_weight = 0;
   float min_transmittance = 1e-4f;
   bool random_background = false;       // RGBA images: a random background per ray (learns transparency)
+  bool appearance = false;              // a colour transform per training image (appearance.h)
   uint64_t seed = 0;
 };
 
@@ -68,6 +69,7 @@ struct RayBatch {
   std::vector<Ray> rays;
   std::vector<Eigen::Vector2d> near_far;
   Eigen::Matrix3Xf target, background;
+  std::vector<int> views;  // each ray's training view, for its appearance (empty: none)
 };
 
 struct StepResult {
@@ -92,8 +94,14 @@ class Trainer {
 
   // PSNR of each held-out view, from `pixels_per_view` fixed random pixels of it (0: every pixel). `on_rays_done`
   // is called as rays finish (from worker threads; an exception it throws, e.g. on Ctrl-C, stops the evaluation).
+  // With `fitted`, also each view's PSNR as NeRF-W scores an image it never trained on: the colour transform
+  // that best maps the render of the pixels in its left half onto the photo (least squares) applied to those in
+  // its right half, scored there.
   std::vector<double> HeldoutPsnr(size_t pixels_per_view, RenderStats* stats = nullptr,
-                                  const std::function<void(size_t)>& on_rays_done = {}) const;
+                                  const std::function<void(size_t)>& on_rays_done = {},
+                                  std::vector<double>* fitted = nullptr) const;
+  // Each training view's colour transform (kAppearanceParams values a view); empty without options.appearance.
+  const std::vector<float>& appearance() const { return appearance_; }
 
   const NerfModel& model() const { return model_; }
   NerfModel& model() { return model_; }
@@ -114,6 +122,8 @@ class Trainer {
   NerfModel model_;
   std::vector<Adam<float>> dense_adams_;
   std::unique_ptr<Adam<float>> grid_adam_;
+  std::vector<float> appearance_, appearance_grads_;
+  std::unique_ptr<Adam<float>> appearance_adam_;
   size_t dense_count_ = 0;
   int step_ = 0;
   int skipped_ = 0;

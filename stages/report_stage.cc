@@ -54,6 +54,14 @@ std::string TrainingSection(const fs::path& train_dir) {
                    "{:.1f} s.</p>\n",
                    Number(trainer.value("distortion_weight", nlohmann::json(0))), evals.value("count", 0),
                    Number(evals.value("pixels_per_view", nlohmann::json(nullptr))), evals.value("seconds", 0.0));
+    const nlohmann::json appearance = report.value("appearance", nlohmann::json::object());
+    if (appearance.value("enabled", false)) {
+      html += format("<p>Each training photo has its own colour transform (exposure, white balance): it makes white "
+                     "{} to {} of itself. Novel views show the average photo; a held-out photo given its own, fitted on its left "
+                     "half, scores {} dB on its right half.</p>\n",
+                     Number(appearance["gain_min"], 3), Number(appearance["gain_max"], 3),
+                     Number(report.value("heldout_psnr_fitted", nlohmann::json(nullptr))));
+    }
   }
   return html;
 }

@@ -28,6 +28,7 @@ struct TrainOptions {
   std::string loss = "mse";
   std::string background = "auto";  // auto: random for images with alpha, else the dataset's colour
   std::string distortion = "auto";  // weight of the distortion loss; auto: by the scene (train_stage.cc)
+  std::string appearance = "off";   // a colour transform per training photo (on, off)
   double eval_interval = 10;       // seconds of training between held-out evaluations
   double eval_share = 0.1;         // held-out evaluations during training take at most this share of wall time
   int eval_pixels = 4096;          // held-out pixels per view in each evaluation during training (0: all)
@@ -59,6 +60,11 @@ struct TrainOptions {
     v("distortion", distortion,
       "weight of the distortion loss, which gathers each ray's weight into one place (against haze and floaters); "
       "auto: the weight measured best on real captures for unbounded scenes, 0 for bounded ones");
+    v("appearance", appearance,
+      "on: a colour transform per training photo learnt with the field, for photos that differ in exposure and "
+      "white balance (novel views show the average photo); off by measurement: fox after 5 minutes, held-out "
+      "PSNR 24.56 dB on against 25.83 off, and 26.15 against 25.92 with each held-out photo's transform fitted",
+      "", OptionKind::kResult, {"off", "on"});
     v("eval_interval", eval_interval, "training time between held-out evaluations (metrics.csv rows)", "s");
     v("eval_share", eval_share,
       "held-out evaluations during training take at most this share of the wall time (the interval grows when "

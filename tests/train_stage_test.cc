@@ -30,6 +30,10 @@ TEST_CASE("train stage: model.bin, metrics.csv and train_report.json, fresh on a
   CHECK(report["heldout_views"].get<int>() == 2);  // every 8th of 12
   CHECK(std::isfinite(report["heldout_psnr"].get<double>()));
   CHECK(report["heldout_per_view"].size() == 2);
+  // Photos: an unbounded scene; the held-out score with each photo's colour transform fitted on its left half.
+  CHECK(report["trainer"]["scene"] == "unbounded");
+  CHECK(report["appearance"]["enabled"] == false);
+  CHECK(std::isfinite(report["heldout_psnr_fitted"].get<double>()));
   const std::string metrics = ReadText(out / "metrics.csv");
   CHECK(metrics.rfind("wall_seconds,step,train_loss,heldout_psnr\n", 0) == 0);
   CHECK(std::count(metrics.begin(), metrics.end(), '\n') >= 2);  // the header and at least the final row
@@ -67,6 +71,22 @@ TEST_CASE("train stage: held-out evaluations during training take at most train.
       CHECK(evaluations["count"].get<int>() <= 20);
     }
   }
+}
+
+TEST_CASE("train stage: with train.appearance on, the report lists each training photo's colour transform", "[train]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(10);
+  config.Set("train.appearance", "on", "test");
+  setup.runner.Run(setup.workspace, config, Until("train"));
+  const nlohmann::json report = ReadJsonFile(setup.dir / "ws" / "30_train" / "train_report.json");
+  const nlohmann::json& appearance = report["appearance"];
+  CHECK(appearance["enabled"] == true);
+  CHECK(report["trainer"]["appearance"] == true);
+  REQUIRE(appearance["per_view"].size() == 10);
+  CHECK(appearance["per_view"][0]["transform"].size() == 12);
+  CHECK(appearance["gain_min"].get<double>() <= appearance["gain_max"].get<double>());
+  CHECK(appearance["gain_min"].get<double>() > 0.5);  // ten steps move a transform by about a percent at most
+  CHECK(appearance["gain_max"].get<double>() < 1.5);
 }
 
 TEST_CASE("train stage: a cancelled run resumes from its checkpoint and finishes the same number of steps",
