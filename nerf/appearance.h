@@ -2,9 +2,9 @@
 // Per-image appearance: photos of one scene differ in exposure and white balance. Each training image gets an
 // affine colour transform c' = M c + b (M 3 x 3, b 3), learnt with the field, applied to the rendered colour of
 // its rays before the loss; the field learns the scene as the average photo shows it (the transforms are kept
-// centred on the identity), and novel views show that. (A
-// colour transform rather than NeRF-W's latent code: it can change only what a camera changes, never the
-// scene, and an image that was never trained on is fitted in closed form, by least squares.)
+// centred on the identity), and novel views show that. (A colour transform rather than NeRF-W's latent code:
+// it can change only what a camera changes, never the scene, and an image that was never trained on is fitted
+// in closed form, by least squares.)
 
 #include <cstddef>
 #include <vector>

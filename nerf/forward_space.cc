@@ -77,9 +77,9 @@ ForwardFrame FitForwardFrame(const std::vector<PinholeCamera>& cameras, const st
   unit.tan_x = unit.tan_y = 1;
   double tan_x = 0, tan_y = 0;
   for (const PinholeCamera& camera : cameras) {
-    for (const Eigen::Vector2d& corner : {Eigen::Vector2d(0, 0), Eigen::Vector2d(camera.width, 0),
-                                         Eigen::Vector2d(0, camera.height), Eigen::Vector2d(camera.width, camera.height)}) {
-      const ForwardRay ray = ToForward(unit, CameraRay(camera, corner.x(), corner.y()));
+    for (const int corner : {0, 1, 2, 3}) {
+      const double u = corner % 2 == 0 ? 0 : camera.width, v = corner < 2 ? 0 : camera.height;
+      const ForwardRay ray = ToForward(unit, CameraRay(camera, u, v));
       if (!ray.valid) continue;
       tan_x = std::max({tan_x, std::abs(ray.start.x()), std::abs(ray.end.x())});
       tan_y = std::max({tan_y, std::abs(ray.start.y()), std::abs(ray.end.y())});

@@ -290,7 +290,8 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
                           d_colour.data() + 3 * o);
         if (options_.distortion_weight > 0) {
           const float distortion_scale = static_cast<float>(options_.distortion_weight / rays);
-          AddDistortionGradient(model_, batch.rays[first + r], segments, result.used, distortion_scale, d_density.data() + o);
+          AddDistortionGradient(model_, batch.rays[first + r], segments, result.used, distortion_scale,
+                                d_density.data() + o);
         }
       }
     }

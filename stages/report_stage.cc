@@ -57,8 +57,8 @@ std::string TrainingSection(const fs::path& train_dir) {
     const nlohmann::json appearance = report.value("appearance", nlohmann::json::object());
     if (appearance.value("enabled", false)) {
       html += format("<p>Each training photo has its own colour transform (exposure, white balance): it makes white "
-                     "{} to {} of itself. Novel views show the average photo; a held-out photo given its own, fitted on its left "
-                     "half, scores {} dB on its right half.</p>\n",
+                     "{} to {} of itself. Novel views show the average photo; a held-out photo given its own, "
+                     "fitted on its left half, scores {} dB on its right half.</p>\n",
                      Number(appearance["gain_min"], 3), Number(appearance["gain_max"], 3),
                      Number(report.value("heldout_psnr_fitted", nlohmann::json(nullptr))));
     }

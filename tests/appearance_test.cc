@@ -15,7 +15,7 @@ std::vector<float> SomeTransform() {
   return {0.9f, 0.05f, -0.02f, 0.03f, 1.1f, 0.04f, -0.01f, 0.02f, 0.8f, 0.05f, -0.03f, 0.1f};
 }
 
-TEST_CASE("appearance: the identity keeps colours; a transform maps them affinely", "[appearance]") {
+TEST_CASE("appearance: the identity keeps colours, and a transform maps them affinely", "[appearance]") {
   const std::vector<float> identity = IdentityAppearance(2);
   REQUIRE(identity.size() == 2 * kAppearanceParams);
   const float in[3] = {0.2f, 0.5f, 0.9f};
@@ -75,7 +75,7 @@ TEST_CASE("appearance: the gradient matches finite differences", "[appearance]")
   }
 }
 
-TEST_CASE("appearance: the least-squares fit recovers a known transform; ill-posed fits keep the identity",
+TEST_CASE("appearance: the least-squares fit recovers a known transform, and ill-posed fits keep the identity",
           "[appearance]") {
   const std::vector<float> truth = SomeTransform();
   std::mt19937 random(3);
@@ -94,7 +94,8 @@ TEST_CASE("appearance: the least-squares fit recovers a known transform; ill-pos
   const std::vector<float> identity = IdentityAppearance(1);
   std::vector<float> grey;
   for (int i = 0; i < 100; ++i) grey.insert(grey.end(), 3, i / 100.0f);
-  const std::vector<float> none = FitAppearance(nullptr, nullptr, 0), from_grey = FitAppearance(grey.data(), grey.data(), 100);
+  const std::vector<float> none = FitAppearance(nullptr, nullptr, 0);
+  const std::vector<float> from_grey = FitAppearance(grey.data(), grey.data(), 100);
   for (int k = 0; k < kAppearanceParams; ++k) {
     CHECK(none[k] == Approx(identity[k]).margin(1e-6));
     CHECK(from_grey[k] == Approx(identity[k]).margin(1e-4));

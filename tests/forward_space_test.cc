@@ -52,7 +52,7 @@ TEST_CASE("NDC: the near plane at z' = -1, infinity at 1, the frustum's edges at
   CHECK(ForwardNdc(frame, {1, 1, 0}).allFinite());
 }
 
-TEST_CASE("NDC: a ray stays straight; its fraction and distance are inverse", "[forward]") {
+TEST_CASE("NDC: a ray stays straight, and its fraction and distance are inverse", "[forward]") {
   const ForwardFrame frame = SimpleFrame();
   const Ray ray{{0.1, -0.05, 0.5}, Eigen::Vector3d(0.3, 0.1, -1).normalized()};
   const ForwardRay forward = ToForward(frame, ray);
@@ -129,7 +129,7 @@ TEST_CASE("NDC: samples are even in NDC from the near plane to infinity, lengths
   CHECK(from_three.back().t > 100);
 }
 
-TEST_CASE("NDC: model.bin keeps the scene space and the frame; a damaged frame is refused", "[forward]") {
+TEST_CASE("NDC: model.bin keeps the scene space and the frame, and a damaged frame is refused", "[forward]") {
   NerfModel model;
   model.field = MakeField<float>(NgpFieldConfig{}.ToJson(), 1);
   model.march_step = 0.01;

@@ -277,7 +277,8 @@ TEST_CASE("a render without a step samples at the scene's default: half the trai
   }
 }
 
-TEST_CASE("a forward-facing scene learns in the reference camera's NDC: the sphere before a wall, from one side", "[trainer]") {
+TEST_CASE("a forward-facing scene learns in the reference camera's NDC: the sphere before a wall, from one side",
+          "[trainer]") {
   TrainingData data;
   for (int i = 0; i < 12; ++i) data.train.push_back(SphereView(0.05 * (i % 4) - 0.075, 0.12 * (i / 4) - 0.12, true));
   for (int i = 0; i < 2; ++i) data.heldout.push_back(SphereView(0.05 * i - 0.02, 0.05, true));
