@@ -35,7 +35,7 @@ constexpr double kAutoDistortion = 0.002;
 struct Preset {
   double time_budget;
   int march_samples;            // across the box's diagonal, bounded scenes
-  int unbounded_march_samples;  // the same, unbounded scenes (below)
+  int unbounded_march_samples;  // the same, unbounded and forward scenes (below)
   int batch_samples, occupancy_resolution;
   HashGridConfig grid;  // levels, features per level, log2 table size, base and finest resolution
   double final_learning_rate;  // of ngp, as a fraction of the first
@@ -312,9 +312,9 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
     if (options.hash_table_log2 > 0) field.grid.log2_table_size = options.hash_table_log2;
     trainer.field = field.ToJson();
   }
-  const int march = options.march_samples > 0 ? options.march_samples
+  const int march = options.march_samples > 0       ? options.march_samples
                     : space != SceneSpace::kBounded ? preset.unbounded_march_samples
-                                               : preset.march_samples;
+                                                    : preset.march_samples;
   trainer.march_step = 2 * std::sqrt(3.0) / march;  // the scene box [-1, 1]^3's diagonal
   trainer.occupancy_resolution = preset.occupancy_resolution;
   trainer.batch_samples = options.batch_samples > 0 ? options.batch_samples : preset.batch_samples;
@@ -420,7 +420,8 @@ void TrainStage::Run(StageContext& context) const {
   model.info = {{"transforms", transforms.string()},
                 {"steps", trainer.step()},
                 {"heldout_psnr", Mean(psnrs)},
-                {"distortion_weight", trainer_options.distortion_weight}};
+                {"distortion_weight", trainer_options.distortion_weight},
+                {"appearance", trainer_options.appearance}};
   WriteOrExplain([&] { SaveModel(model, context.output_dir / "model.bin"); });
 
   nlohmann::json report = TrainReport(trainer, trainer_options, options, data, heldout_split, psnrs, eval_stats,

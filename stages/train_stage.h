@@ -93,8 +93,8 @@ std::array<float, 3> DatasetBackground(const std::filesystem::path& transforms);
 // The kind of dataset the poses came from as transforms.json records it ("blender", "llff", ...; "" for photos).
 std::string SourceDatasetKind(const std::filesystem::path& transforms);
 // The scene space train.scene asks for; auto: bounded for Blender and .npz data, else unbounded (also for LLFF
-// captures: fern after 1, 2 and 5 minutes of default, unbounded 20.25 / 21.08 / 21.79 dB, forward 19.79 / 20.82 /
-// 21.59 with 17% fewer steps in the time).
+// captures: on fern, 15 minutes of default, forward and unbounded are level within a run's noise: at 1, 2, 5, 10
+// and 15 minutes 19.77 / 20.88 / 21.83 / 22.34 / 22.52 dB against 19.77 / 20.73 / 21.74 / 22.24 / 22.44).
 SceneSpace ResolveSceneSpace(const TrainOptions& options, const std::filesystem::path& transforms);
 
 // The trainer's options for these stage options (presets resolved) in a scene of this space.
