@@ -37,9 +37,7 @@ ForwardRay ToForward(const ForwardFrame& frame, const Ray& ray) {
   out.valid = true;
   out.t0 = std::max(0.0, (frame.near - -origin.z()) / out.depth_rate);
   out.depth0 = -origin.z() + out.t0 * out.depth_rate;
-  const Eigen::Vector3d p = origin + out.t0 * direction;
-  out.start = Eigen::Vector3d(p.x() / (out.depth0 * frame.tan_x), p.y() / (out.depth0 * frame.tan_y),
-                              1 - 2 * frame.near / out.depth0);
+  out.start = ForwardNdc(frame, ray.origin + out.t0 * ray.direction);
   out.end = Eigen::Vector3d(direction.x() / (out.depth_rate * frame.tan_x),
                             direction.y() / (out.depth_rate * frame.tan_y), 1);
   return out;

@@ -37,6 +37,8 @@ struct ForwardRay {
 
   double Distance(double s) const { return t0 + depth0 * s / ((1 - s) * depth_rate); }
   double Fraction(double t) const { return 1 - depth0 / (depth0 + (t - t0) * depth_rate); }
+  // The NDC distance from `start` of the point at world distance t.
+  double NdcDistance(double t) const { return (end - start).norm() * Fraction(t); }
 };
 ForwardRay ToForward(const ForwardFrame& frame, const Ray& ray);
 

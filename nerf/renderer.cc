@@ -101,7 +101,7 @@ double SamplingDistance(const NerfModel& model, const Ray& ray, double t) {
     case SceneSpace::kUnbounded: return t <= 2 ? t : 2 + 2 * std::log(0.5 * t);
     case SceneSpace::kForward: {
       const ForwardRay forward = ToForward(model.forward, ray);
-      return forward.valid ? (forward.end - forward.start).norm() * forward.Fraction(t) : t;
+      return forward.valid ? forward.NdcDistance(t) : t;
     }
   }
   return t;

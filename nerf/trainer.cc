@@ -23,7 +23,7 @@ constexpr char kCheckpointMagic[] = "P2NCKPT1";
 constexpr float kHuberDelta = 0.1f;
 // The colour transforms learn at this share of the field's rate: Adam moves every parameter by about its rate a
 // step, and at the field's a photo's gain wanders by a percent a step.
-constexpr double kAppearanceLearningRate = 0.1;
+constexpr double kAppearanceRateShare = 0.1;
 
 // A seed for (run seed, step, stream): streams of one step never share random numbers.
 uint64_t MixSeed(uint64_t seed, uint64_t step, uint64_t stream) {
@@ -59,17 +59,22 @@ float ChannelLoss(bool huber, float difference, float* derivative) {
 }
 
 // Adds `scale` x the gradient of the distortion loss of a ray's first `used` segments (in the sampler's metric) to
-// d_sigma. A forward-facing scene's segment lengths are in that metric already.
+// d_sigma. A forward-facing scene's segment lengths are in that metric (NDC) already; its ray is mapped once.
 void AddDistortionGradient(const NerfModel& model, const Ray& ray, const RaySegments<float>& segments, size_t used,
                            float scale, float* d_sigma) {
   std::vector<float> midpoints(used), lengths(used);
+  const bool forward = model.space == SceneSpace::kForward;
+  const ForwardRay ndc = forward ? ToForward(model.forward, ray) : ForwardRay{};
   for (size_t k = 0; k < used; ++k) {
     const double t = segments.t[k], half = 0.5 * segments.delta[k];
-    midpoints[k] = static_cast<float>(SamplingDistance(model, ray, t));
-    lengths[k] = model.space == SceneSpace::kForward
-                     ? segments.delta[k]
-                     : static_cast<float>(SamplingDistance(model, ray, t + half) -
-                                          SamplingDistance(model, ray, std::max(t - half, 0.0)));
+    if (forward) {
+      midpoints[k] = static_cast<float>(ndc.valid ? ndc.NdcDistance(t) : t);
+      lengths[k] = segments.delta[k];
+    } else {
+      midpoints[k] = static_cast<float>(SamplingDistance(model, ray, t));
+      lengths[k] = static_cast<float>(SamplingDistance(model, ray, t + half) -
+                                      SamplingDistance(model, ray, std::max(t - half, 0.0)));
+    }
   }
   DistortionLoss(segments, used, midpoints.data(), lengths.data(), scale, d_sigma);
 }
@@ -369,7 +374,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     grid_adam_->StepSparse(grid->params(), grid->grads());
   }
   if (appearance_adam_) {  // views without rays in this batch keep their moments
-    appearance_adam_->set_learning_rate(kAppearanceLearningRate * learning_rate);
+    appearance_adam_->set_learning_rate(kAppearanceRateShare * learning_rate);
     appearance_adam_->StepSparse(appearance_.data(), appearance_grads_.data());
     CentreAppearance(&appearance_);
   }

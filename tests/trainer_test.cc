@@ -80,17 +80,22 @@ double Mean(const std::vector<double>& values) {
   return sum / values.size();
 }
 
+// 300 steps take the held-out PSNR above 20 dB and 10 dB above the untrained field's.
+void CheckLearns(Trainer* trainer) {
+  const double before = Mean(trainer->HeldoutPsnr(0));
+  for (int step = 0; step < 300; ++step) REQUIRE_FALSE(trainer->Step(step / 300.0).skipped);
+  const double after = Mean(trainer->HeldoutPsnr(0));
+  INFO("held-out PSNR before " << before << " dB, after " << after << " dB");
+  CHECK(after > 20.0);
+  CHECK(after > before + 10.0);
+}
+
 }  // namespace
 
 TEST_CASE("training learns a sphere: held-out PSNR rises far above the untrained field's", "[trainer]") {
   const TrainingData data = SphereScene();
   Trainer trainer(SmallOptions(), data);
-  const double before = Mean(trainer.HeldoutPsnr(0));
-  for (int step = 0; step < 300; ++step) REQUIRE_FALSE(trainer.Step(step / 300.0).skipped);
-  const double after = Mean(trainer.HeldoutPsnr(0));
-  INFO("held-out PSNR before " << before << " dB, after " << after << " dB");
-  CHECK(after > 20.0);
-  CHECK(after > before + 10.0);
+  CheckLearns(&trainer);
   // The occupancy grid has found the sphere: most of the cube is empty, and renders take few samples.
   CHECK(trainer.model().occupancy.OccupiedFraction() < 0.5);
   RenderStats stats;
@@ -289,12 +294,7 @@ TEST_CASE("a forward-facing scene learns in the reference camera's NDC: the sphe
   const ForwardFrame& frame = trainer.model().forward;
   CHECK(frame.near == Approx(0.8 * 1.5).epsilon(0.02));
   CHECK((frame.cam_from_world.row(2).transpose() - Eigen::Vector3d(1, 0, 0)).norm() < 0.05);  // looks down -x
-  const double before = Mean(trainer.HeldoutPsnr(0));
-  for (int step = 0; step < 300; ++step) REQUIRE_FALSE(trainer.Step(step / 300.0).skipped);
-  const double after = Mean(trainer.HeldoutPsnr(0));
-  INFO("held-out PSNR before " << before << " dB, after " << after << " dB");
-  CHECK(after > 20.0);
-  CHECK(after > before + 10.0);
+  CheckLearns(&trainer);
 }
 
 TEST_CASE("per-image appearance learns each photo's exposure and keeps it out of the field", "[trainer]") {
