@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 namespace p2n {
@@ -37,6 +38,14 @@ class Encoding {
   virtual void Backward(const Matrix& input, const Matrix& d_output) {
     (void)input;
     (void)d_output;
+  }
+  // Writes dL/d(input) (input_dims x n) given dL/d(output); a grid's is zero along an axis where it clamped the
+  // coordinate. std::logic_error for an encoding without it.
+  virtual void InputGradient(const Matrix& input, const Matrix& d_output, Matrix* d_input) const {
+    (void)input;
+    (void)d_output;
+    (void)d_input;
+    throw std::logic_error("this encoding has no gradient with respect to its input");
   }
 };
 
@@ -88,6 +97,7 @@ class HashGridEncoding : public Encoding<T> {
   int entry_size() const override { return config_.features_per_level; }
   void ZeroGrad() override;
   void Backward(const Matrix& input, const Matrix& d_output) override;
+  void InputGradient(const Matrix& input, const Matrix& d_output, Matrix* d_input) const override;
 
  private:
   struct Level {
@@ -99,11 +109,14 @@ class HashGridEncoding : public Encoding<T> {
   };
   // Entry of a grid vertex at `level`.
   uint32_t EntryIndex(const Level& level, const uint32_t* vertex) const;
-  // Calls visit(entry, weight) for the 2^D vertices around point `p` at `level`.
+  // Calls visit(entry, weight) for the 2^D vertices around point `p` at `level`, corner 0 to 2^D - 1 (bit d of a
+  // corner set: the upper vertex along axis d).
   template <class Visit>
   void ForEachCorner(const Level& level, const T* p, Visit visit) const;
   // Asks the cache for the entries around point `p` at `level` (hashed levels only).
   void Prefetch(const Level& level, const T* p) const;
+  // Adds this level's dL/d(p) for one point given dL/d(this level's features).
+  void AddInputGradient(const Level& level, const T* p, const T* d_features, T* d_p) const;
 
   int dims_;
   HashGridConfig config_;

@@ -28,6 +28,17 @@ Eigen::Vector3d ForwardNdc(const ForwardFrame& frame, const Eigen::Vector3d& wor
   return Eigen::Vector3d(p.x() / (depth * frame.tan_x), p.y() / (depth * frame.tan_y), 1 - 2 * frame.near / depth);
 }
 
+Eigen::Matrix3d ForwardNdcJacobian(const ForwardFrame& frame, const Eigen::Vector3d& world) {
+  const Eigen::Vector3d p = frame.cam_from_world * (world - frame.centre);
+  const double depth = -p.z();
+  if (!(depth > 0)) return Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d by_camera_point;  // rows: x', y', z'; depth = -p.z
+  by_camera_point << 1 / (depth * frame.tan_x), 0, p.x() / (frame.tan_x * depth * depth),  //
+      0, 1 / (depth * frame.tan_y), p.y() / (frame.tan_y * depth * depth),                  //
+      0, 0, -2 * frame.near / (depth * depth);
+  return by_camera_point * frame.cam_from_world;
+}
+
 ForwardRay ToForward(const ForwardFrame& frame, const Ray& ray) {
   ForwardRay out;
   const Eigen::Vector3d origin = frame.cam_from_world * (ray.origin - frame.centre);

@@ -27,6 +27,8 @@ struct ForwardFrame {
 
 // The NDC of a world point; a point at or behind the reference camera's plane goes to z' = -2 (outside the cube).
 Eigen::Vector3d ForwardNdc(const ForwardFrame& frame, const Eigen::Vector3d& world);
+// d(ForwardNdc)/d(world) at `world`; zero at or behind the reference camera's plane.
+Eigen::Matrix3d ForwardNdcJacobian(const ForwardFrame& frame, const Eigen::Vector3d& world);
 
 // A world ray in NDC: the segment from `start` (where the ray is first at least `near` deep) to `end` (its point at
 // infinity), and the map between the fraction s in [0, 1) of that segment and the distance t along the world ray.

@@ -188,6 +188,53 @@ void HashGridEncoding<T>::Backward(const Matrix& input, const Matrix& d_output) 
   });
 }
 
+template <typename T>
+void HashGridEncoding<T>::InputGradient(const Matrix& input, const Matrix& d_output, Matrix* d_input) const {
+  const int features = config_.features_per_level;
+  // Blocks of points as tasks, every level in turn within one (as Forward() reads the tables): a point's column
+  // is written by one task, its levels added in order.
+  const Eigen::Index n = input.cols();
+  d_input->setZero(dims_, n);
+  tbb::parallel_for(Eigen::Index{0}, (n + kBlock - 1) / kBlock, [&](Eigen::Index block) {
+    FlushDenormalsOnThisThread();
+    const Eigen::Index begin = block * kBlock, end = std::min(n, begin + kBlock);
+    for (int l = 0; l < config_.levels; ++l) {
+      for (Eigen::Index i = begin; i < end; ++i) {
+        AddInputGradient(levels_[l], input.col(i).data(), d_output.col(i).data() + l * features,
+                         d_input->col(i).data());
+      }
+    }
+  });
+}
+
+template <typename T>
+void HashGridEncoding<T>::AddInputGradient(const Level& level, const T* p, const T* d_features, T* d_p) const {
+  T fraction[3];
+  bool inside[3];  // a clamped coordinate has no gradient
+  for (int d = 0; d < dims_; ++d) {
+    const double position = std::clamp(static_cast<double>(p[d]), 0.0, 1.0) * level.scale;
+    fraction[d] = static_cast<T>(position - std::floor(position));
+    inside[d] = p[d] > T(0) && p[d] < T(1);
+  }
+  const int features = config_.features_per_level;
+  int corner = 0;
+  ForEachCorner(level, p, [&](uint32_t entry, T) {
+    const T* feature = params_.data() + size_t{entry} * features;
+    T d_weight = T(0);  // dL/d(this corner's weight)
+    for (int f = 0; f < features; ++f) d_weight += d_features[f] * feature[f];
+    for (int d = 0; d < dims_; ++d) {
+      if (!inside[d]) continue;
+      // The weight is a product over axes of fraction or 1 - fraction; fraction grows at `scale` per unit of p.
+      T slope = static_cast<T>(level.scale);
+      for (int e = 0; e < dims_; ++e) {
+        if (e != d) slope *= ((corner >> e) & 1) ? fraction[e] : T(1) - fraction[e];
+      }
+      d_p[d] += ((corner >> d) & 1) ? d_weight * slope : -d_weight * slope;
+    }
+    ++corner;
+  });
+}
+
 template class HashGridEncoding<float>;
 template class HashGridEncoding<double>;
 

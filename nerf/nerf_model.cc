@@ -42,6 +42,19 @@ Eigen::Vector3d FieldPoint(const NerfModel& model, const Eigen::Vector3d& world)
   return 0.25 * (contracted + Eigen::Vector3d::Constant(2));
 }
 
+Eigen::Matrix3d FieldPointJacobian(const NerfModel& model, const Eigen::Vector3d& world) {
+  if (model.space == SceneSpace::kBounded) return 0.5 * Eigen::Matrix3d::Identity();
+  if (model.space == SceneSpace::kForward) return 0.5 * ForwardNdcJacobian(model.forward, world);
+  Eigen::Index axis;
+  const double norm = world.cwiseAbs().maxCoeff(&axis);
+  if (norm <= 1) return 0.25 * Eigen::Matrix3d::Identity();
+  // contracted = g(norm) world with g(n) = 2/n - 1/n^2, and norm = |world[axis]|.
+  const double g = (2 - 1 / norm) / norm, slope = (2 / norm - 2) / (norm * norm);
+  Eigen::Matrix3d jacobian = g * Eigen::Matrix3d::Identity();
+  jacobian.col(axis) += slope * (world[axis] > 0 ? 1.0 : -1.0) * world;
+  return 0.25 * jacobian;
+}
+
 void WriteModel(const NerfModel& model, BinaryWriter* writer) {
   writer->PutBytes(kModelMagic, 8);
   writer->Put<uint32_t>(kModelFormatVersion);

@@ -45,6 +45,8 @@ struct NerfModel {
 
 // Where a world point lies in the field's unit cube.
 Eigen::Vector3d FieldPoint(const NerfModel& model, const Eigen::Vector3d& world);
+// d(FieldPoint)/d(world) at `world`.
+Eigen::Matrix3d FieldPointJacobian(const NerfModel& model, const Eigen::Vector3d& world);
 
 void WriteModel(const NerfModel& model, BinaryWriter* writer);
 // Reads what WriteModel wrote; std::runtime_error naming the source when it is damaged, of a newer format, or

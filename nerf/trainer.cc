@@ -11,38 +11,26 @@
 #include <utility>
 
 #include "nerf/appearance.h"
+#include "nerf/camera_refinement.h"
 #include "nerf/denormals.h"
 #include "nerf/distortion_loss.h"
+#include "nerf/random_streams.h"
 #include "nerf/volume_rendering.h"
 
 namespace p2n {
 namespace {
 
 constexpr size_t kChunkRays = 64;
-constexpr char kCheckpointMagic[] = "P2NCKPT1";
 constexpr float kHuberDelta = 0.1f;
 // The colour transforms learn at this share of the field's rate: Adam moves every parameter by about its rate a
 // step, and at the field's a photo's gain wanders by a percent a step.
 constexpr double kAppearanceRateShare = 0.1;
-
-// A seed for (run seed, step, stream): streams of one step never share random numbers.
-uint64_t MixSeed(uint64_t seed, uint64_t step, uint64_t stream) {
-  uint64_t x = seed * 0x9E3779B97F4A7C15ull ^ (step + 0x632BE59BD9B4E019ull) * 0xBF58476D1CE4E5B9ull ^
-               (stream + 1) * 0x94D049BB133111EBull;
-  x ^= x >> 31;
-  return x * 0xD6E8FEB86659FD93ull;
-}
-
-// The options that must match for a checkpoint to be resumed.
-nlohmann::json CheckpointIdentity(const TrainerOptions& options) {
-  return {{"field", options.field},
-          {"occupancy_resolution", options.occupancy_resolution},
-          {"march_step", options.march_step},
-          {"space", SceneSpaceName(options.space)},
-          {"stratified_samples", options.stratified_samples},
-          {"appearance", options.appearance},
-          {"seed", options.seed}};
-}
+// The camera corrections learn at this share of the field's rate (radians and world units a step).
+constexpr double kPoseRateShare = 0.1;
+// Their gradients come from the first 1 / kPoseChunkShare of each batch's chunks (the batch is random): the hash
+// grid's gradient with respect to its input costs about as much as its backward pass, and a pose has 6 values
+// where a batch has thousands of rays.
+constexpr size_t kPoseChunkShare = 8;
 
 // The loss of one colour channel and its derivative.
 float ChannelLoss(bool huber, float difference, float* derivative) {
@@ -121,6 +109,15 @@ Trainer::Trainer(const TrainerOptions& options, const TrainingData& data) : opti
     appearance_grads_.assign(appearance_.size(), 0.0f);
     appearance_adam_ = std::make_unique<Adam<float>>(adam, appearance_.size(), kAppearanceParams);
   }
+  if (options.refine_cameras) {
+    if (model_.field->TrainableEncoding() == nullptr) {
+      throw std::invalid_argument("camera refinement needs a field with a hash grid (the ngp field)");
+    }
+    poses_.assign(data.train.size() * kPoseParams, 0.0f);
+    pose_grads_.assign(poses_.size(), 0.0f);
+    pose_adam_ = std::make_unique<Adam<float>>(adam, poses_.size(), kPoseParams);
+    for (const TrainView& view : data.train) centres_.push_back(view.camera.world_from_cam.block<3, 1>(0, 3));
+  }
   size_t offset = 0;
   for (const TrainView& view : data.train) {
     pixel_offsets_.push_back(offset);
@@ -191,134 +188,193 @@ void Trainer::UpdateOccupancy() {
                           step_ == options_.occupancy_warmup ? cells : std::max<size_t>(cells / 16, 1));
 }
 
+// One chunk of a step's rays, from marching to gradients.
+struct Trainer::Chunk {
+  size_t first = 0, count = 0;            // the batch's rays [first, first + count)
+  Eigen::MatrixXf positions, directions;  // of every sample marched
+  std::vector<float> t, delta;
+  std::vector<size_t> offsets;            // the first sample of each ray, and one past the last
+  Eigen::Index first_sample = 0;          // in the whole batch
+  std::vector<float> d_dense, d_appearance, d_poses;
+  std::vector<Eigen::Index> used;             // the samples before early termination (the ones with gradients)
+  Eigen::MatrixXf used_positions, d_encoded;  // of those
+  double d_encoded_magnitude = 0;             // the sum of |d_encoded|
+  double loss = 0;
+};
+
+void Trainer::MarchChunk(const RayBatch& batch, const std::vector<Ray>& rays, size_t c, Chunk* chunk) const {
+  std::mt19937_64 random(MixSeed(options_.seed, step_, 2 + c));
+  chunk->first = c * kChunkRays;
+  chunk->count = std::min(rays.size(), chunk->first + kChunkRays) - chunk->first;
+  std::vector<std::vector<MarchSample>> samples(chunk->count);
+  chunk->offsets.assign(chunk->count + 1, 0);
+  for (size_t r = 0; r < chunk->count; ++r) {
+    const Eigen::Vector2d& range = batch.near_far[chunk->first + r];
+    samples[r] = SampleRay(model_, rays[chunk->first + r], range[0], range[1], options_.march_step,
+                           options_.max_samples_per_ray, &random);
+    chunk->offsets[r + 1] = chunk->offsets[r] + samples[r].size();
+  }
+  const size_t n = chunk->offsets.back();
+  chunk->positions.resize(3, n);
+  chunk->directions.resize(3, n);
+  chunk->t.resize(n);
+  chunk->delta.resize(n);
+  for (size_t r = 0; r < chunk->count; ++r) {
+    const Ray& ray = rays[chunk->first + r];
+    for (size_t k = 0; k < samples[r].size(); ++k) {
+      const size_t i = chunk->offsets[r] + k;
+      chunk->positions.col(i) = FieldPoint(model_, ray.origin + samples[r][k].t * ray.direction).cast<float>();
+      chunk->directions.col(i) = ray.direction.cast<float>();
+      chunk->t[i] = static_cast<float>(samples[r][k].t);
+      chunk->delta[i] = static_cast<float>(samples[r][k].delta);
+    }
+  }
+}
+
+Eigen::MatrixXf Trainer::EncodeBatch(std::vector<Chunk>* chunks) const {
+  Eigen::Index total = 0;
+  for (Chunk& chunk : *chunks) {
+    chunk.first_sample = total;
+    total += chunk.positions.cols();
+  }
+  Eigen::MatrixXf positions(3, total), encoded;
+  for (const Chunk& chunk : *chunks) positions.middleCols(chunk.first_sample, chunk.positions.cols()) = chunk.positions;
+  model_.field->TrainableEncoding()->Forward(positions, &encoded);
+  return encoded;
+}
+
+void Trainer::BackpropagateChunk(const RayBatch& batch, const std::vector<Ray>& rays, const Eigen::MatrixXf& encoded,
+                                 Chunk* chunk) const {
+  const RadianceField<float>& field = *model_.field;
+  const size_t n = chunk->offsets.back();
+  const std::vector<size_t>& offsets = chunk->offsets;
+  Eigen::MatrixXf density, colour;
+  RadianceField<float>::Cache cache;
+  if (n > 0) {
+    Eigen::MatrixXf chunk_encoded;  // moved into the cache, not copied again
+    if (encoded.size() > 0) chunk_encoded = encoded.middleCols(chunk->first_sample, n);
+    field.ForwardEncoded(chunk->positions, std::move(chunk_encoded), chunk->directions, &density, &colour, &cache);
+  }
+  Eigen::MatrixXf d_density = Eigen::MatrixXf::Zero(1, n), d_colour = Eigen::MatrixXf::Zero(3, n);
+  const float scale = 1.0f / (3.0f * static_cast<float>(rays.size()));
+  const bool huber = options_.loss == "huber";
+  const bool appearance = !appearance_.empty() && !batch.views.empty();
+  if (appearance) chunk->d_appearance.assign(appearance_.size(), 0.0f);
+  for (size_t r = 0; r < chunk->count; ++r) {
+    const size_t o = offsets[r], b = chunk->first + r;
+    const RaySegments<float> segments{density.data() + o, colour.data() + 3 * o, chunk->t.data() + o,
+                                      chunk->delta.data() + o, offsets[r + 1] - o};
+    const float* background = batch.background.col(b).data();
+    const CompositeResult<float> result = Composite(segments, background, options_.min_transmittance);
+    const size_t params = appearance ? size_t(batch.views[b]) * kAppearanceParams : 0;
+    float rgb[3] = {result.rgb[0], result.rgb[1], result.rgb[2]}, d_rgb[3];
+    if (appearance) ApplyAppearance(&appearance_[params], result.rgb, rgb);
+    for (int ch = 0; ch < 3; ++ch) {
+      chunk->loss += ChannelLoss(huber, rgb[ch] - batch.target(ch, b), &d_rgb[ch]) / 3.0;
+      d_rgb[ch] *= scale;
+    }
+    if (appearance) {
+      const float d_out[3] = {d_rgb[0], d_rgb[1], d_rgb[2]};
+      AppearanceBackward(&appearance_[params], result.rgb, d_out, &chunk->d_appearance[params], d_rgb);
+    }
+    for (size_t k = 0; k < result.used; ++k) chunk->used.push_back(static_cast<Eigen::Index>(o + k));
+    if (segments.count == 0) continue;
+    CompositeBackward(segments, background, result, d_rgb, 0.0f, 0.0f, d_density.data() + o, d_colour.data() + 3 * o);
+    if (options_.distortion_weight > 0) {
+      const float distortion_scale = static_cast<float>(options_.distortion_weight / rays.size());
+      AddDistortionGradient(model_, rays[b], segments, result.used, distortion_scale, d_density.data() + o);
+    }
+  }
+  chunk->d_dense.assign(dense_count_, 0.0f);
+  if (chunk->used.empty()) return;
+  // Samples behind the termination point have no gradient: neither the networks nor the hash grid need visit
+  // them on the way back.
+  cache.KeepColumns(chunk->used);
+  Eigen::MatrixXf d_encoded;
+  field.Backward(cache, d_density(Eigen::all, chunk->used), d_colour(Eigen::all, chunk->used), chunk->d_dense.data(),
+                 &d_encoded);
+  if (d_encoded.size() > 0) {
+    chunk->used_positions = std::move(cache.positions);
+    chunk->d_encoded = std::move(d_encoded);
+    chunk->d_encoded_magnitude = chunk->d_encoded.cwiseAbs().cast<double>().sum();
+  }
+}
+
+void Trainer::GatherUsed(const std::vector<Chunk>& chunks, size_t count, Eigen::MatrixXf* positions,
+                         Eigen::MatrixXf* d_encoded) const {
+  Eigen::Index total = 0;
+  for (size_t c = 0; c < count; ++c) total += chunks[c].d_encoded.cols();
+  positions->resize(3, total);
+  d_encoded->resize(model_.field->TrainableEncoding()->output_dims(), total);
+  Eigen::Index column = 0;
+  for (size_t c = 0; c < count; ++c) {
+    const Eigen::Index n = chunks[c].d_encoded.cols();
+    positions->middleCols(column, n) = chunks[c].used_positions;
+    d_encoded->middleCols(column, n) = chunks[c].d_encoded;
+    column += n;
+  }
+}
+
+void Trainer::AddPoseGradients(const RayBatch& batch, const std::vector<Ray>& rays, std::vector<Chunk>* chunks) {
+  const size_t count = (chunks->size() + kPoseChunkShare - 1) / kPoseChunkShare;
+  Eigen::MatrixXf positions, d_encoded, d_positions;
+  GatherUsed(*chunks, count, &positions, &d_encoded);
+  model_.field->TrainableEncoding()->InputGradient(positions, d_encoded, &d_positions);
+  std::vector<Eigen::Index> first_column(count + 1, 0);
+  for (size_t c = 0; c < count; ++c) first_column[c + 1] = first_column[c] + (*chunks)[c].d_encoded.cols();
+  tbb::parallel_for(size_t{0}, count, [&](size_t c) {
+    Chunk& chunk = (*chunks)[c];
+    chunk.d_poses.assign(poses_.size(), 0.0f);
+    Eigen::Index column = first_column[c];
+    size_t k = 0;  // into chunk.used
+    for (size_t r = 0; r < chunk.count; ++r) {
+      const Ray& ray = rays[chunk.first + r];
+      Eigen::Vector3d d_origin = Eigen::Vector3d::Zero(), d_direction = Eigen::Vector3d::Zero();
+      for (; k < chunk.used.size() && size_t(chunk.used[k]) < chunk.offsets[r + 1]; ++k, ++column) {
+        const double t = chunk.t[size_t(chunk.used[k])];
+        const Eigen::Vector3d point = ray.origin + t * ray.direction;
+        const Eigen::Vector3d d_point =
+            FieldPointJacobian(model_, point).transpose() * d_positions.col(column).cast<double>();
+        d_origin += d_point;
+        d_direction += t * d_point;
+      }
+      const size_t view = size_t(batch.views[chunk.first + r]) * kPoseParams;
+      CorrectRayBackward(&poses_[view], ray.direction, d_origin, d_direction, &chunk.d_poses[view]);
+    }
+  });
+  for (size_t c = 0; c < count; ++c) {
+    for (size_t k = 0; k < poses_.size(); ++k) pose_grads_[k] += (*chunks)[c].d_poses[k];
+  }
+}
+
 StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
   RadianceField<float>& field = *model_.field;
   // The grid's gradient is zero here: Adam zeroes the entries it used, and a skipped step writes none.
   Encoding<float>* grid = field.TrainableEncoding();
-  const size_t rays = batch.rays.size();
-  struct Chunk {
-    Eigen::MatrixXf positions, directions;  // of every sample marched
-    std::vector<float> t, delta;
-    std::vector<size_t> offsets;            // the first sample of each ray
-    Eigen::Index first_sample = 0;          // in the whole batch
-    std::vector<float> d_dense, d_appearance;
-    Eigen::MatrixXf used_positions, d_encoded;  // of the samples before early termination only
-    double d_encoded_magnitude = 0;             // the sum of |d_encoded|
-    double loss = 0;
-    size_t samples = 0, used = 0;
-  };
-  std::vector<Chunk> chunks((rays + kChunkRays - 1) / kChunkRays);
-  // 1. March the rays through the occupancy grid.
-  tbb::parallel_for(size_t{0}, chunks.size(), [&](size_t c) {
-    FlushDenormalsOnThisThread();
-    Chunk& chunk = chunks[c];
-    const size_t first = c * kChunkRays, count = std::min(rays, first + kChunkRays) - first;
-    std::mt19937_64 random(MixSeed(options_.seed, step_, 2 + c));
-    std::vector<std::vector<MarchSample>> samples(count);
-    chunk.offsets.assign(count + 1, 0);
-    for (size_t r = 0; r < count; ++r) {
-      const Eigen::Vector2d& range = batch.near_far[first + r];
-      samples[r] = SampleRay(model_, batch.rays[first + r], range[0], range[1], options_.march_step,
-                             options_.max_samples_per_ray, &random);
-      chunk.offsets[r + 1] = chunk.offsets[r] + samples[r].size();
+  const bool refine = !poses_.empty() && !batch.views.empty() && step_ >= options_.refine_warmup;
+  std::vector<Ray> corrected;
+  if (refine) {
+    corrected.resize(batch.rays.size());
+    for (size_t r = 0; r < corrected.size(); ++r) {
+      corrected[r] = CorrectRay(&poses_[size_t(batch.views[r]) * kPoseParams], batch.rays[r]);
     }
-    const size_t n = chunk.offsets[count];
-    chunk.samples = n;
-    chunk.positions.resize(3, n);
-    chunk.directions.resize(3, n);
-    chunk.t.resize(n);
-    chunk.delta.resize(n);
-    for (size_t r = 0; r < count; ++r) {
-      for (size_t k = 0; k < samples[r].size(); ++k) {
-        const size_t i = chunk.offsets[r] + k;
-        const Ray& ray = batch.rays[first + r];
-        chunk.positions.col(i) = FieldPoint(model_, ray.origin + samples[r][k].t * ray.direction).cast<float>();
-        chunk.directions.col(i) = ray.direction.cast<float>();
-        chunk.t[i] = static_cast<float>(samples[r][k].t);
-        chunk.delta[i] = static_cast<float>(samples[r][k].delta);
-      }
-    }
-  });
-  // 2. The hash grid's encoding of the whole batch at once (level by level: see HashGridEncoding::Forward).
-  Eigen::MatrixXf encoded;
-  if (grid != nullptr) {
-    Eigen::Index total = 0;
-    for (Chunk& chunk : chunks) {
-      chunk.first_sample = total;
-      total += chunk.positions.cols();
-    }
-    Eigen::MatrixXf positions(3, total);
-    for (const Chunk& chunk : chunks) positions.middleCols(chunk.first_sample, chunk.positions.cols()) = chunk.positions;
-    grid->Forward(positions, &encoded);
   }
-  // 3. The networks, compositing and the gradients, chunk by chunk.
+  const std::vector<Ray>& rays = refine ? corrected : batch.rays;
+  std::vector<Chunk> chunks((rays.size() + kChunkRays - 1) / kChunkRays);
+  // 1. March the rays through the occupancy grid; 2. the hash grid's encoding of the whole batch at once (level by
+  // level: see HashGridEncoding::Forward); 3. the networks, compositing and the gradients, chunk by chunk.
   tbb::parallel_for(size_t{0}, chunks.size(), [&](size_t c) {
     FlushDenormalsOnThisThread();
-    Chunk& chunk = chunks[c];
-    const size_t first = c * kChunkRays, count = chunk.offsets.size() - 1, n = chunk.samples;
-    const std::vector<size_t>& offsets = chunk.offsets;
-    const std::vector<float>& t = chunk.t;
-    const std::vector<float>& delta = chunk.delta;
-    Eigen::MatrixXf density, colour;
-    RadianceField<float>::Cache cache;
-    if (n > 0) {
-      Eigen::MatrixXf chunk_encoded;  // moved into the cache, not copied again
-      if (grid != nullptr) chunk_encoded = encoded.middleCols(chunk.first_sample, n);
-      field.ForwardEncoded(chunk.positions, std::move(chunk_encoded), chunk.directions, &density, &colour, &cache);
-    }
-    Eigen::MatrixXf d_density = Eigen::MatrixXf::Zero(1, n), d_colour = Eigen::MatrixXf::Zero(3, n);
-    std::vector<Eigen::Index> used;  // samples that got a gradient
-    const float scale = 1.0f / (3.0f * static_cast<float>(rays));
-    const bool huber = options_.loss == "huber";
-    const bool appearance = !appearance_.empty() && !batch.views.empty();
-    if (appearance) chunk.d_appearance.assign(appearance_.size(), 0.0f);
-    for (size_t r = 0; r < count; ++r) {
-      const size_t o = offsets[r];
-      const RaySegments<float> segments{density.data() + o, colour.data() + 3 * o, t.data() + o, delta.data() + o,
-                                        offsets[r + 1] - o};
-      const float* background = batch.background.col(first + r).data();
-      const CompositeResult<float> result = Composite(segments, background, options_.min_transmittance);
-      const size_t params = appearance ? size_t(batch.views[first + r]) * kAppearanceParams : 0;
-      float rgb[3] = {result.rgb[0], result.rgb[1], result.rgb[2]}, d_rgb[3];
-      if (appearance) ApplyAppearance(&appearance_[params], result.rgb, rgb);
-      for (int ch = 0; ch < 3; ++ch) {
-        chunk.loss += ChannelLoss(huber, rgb[ch] - batch.target(ch, first + r), &d_rgb[ch]) / 3.0;
-        d_rgb[ch] *= scale;
-      }
-      if (appearance) {
-        const float d_out[3] = {d_rgb[0], d_rgb[1], d_rgb[2]};
-        AppearanceBackward(&appearance_[params], result.rgb, d_out, &chunk.d_appearance[params], d_rgb);
-      }
-      for (size_t k = 0; k < result.used; ++k) used.push_back(static_cast<Eigen::Index>(o + k));
-      if (segments.count > 0) {
-        CompositeBackward(segments, background, result, d_rgb, 0.0f, 0.0f, d_density.data() + o,
-                          d_colour.data() + 3 * o);
-        if (options_.distortion_weight > 0) {
-          const float distortion_scale = static_cast<float>(options_.distortion_weight / rays);
-          AddDistortionGradient(model_, batch.rays[first + r], segments, result.used, distortion_scale,
-                                d_density.data() + o);
-        }
-      }
-    }
-    chunk.d_dense.assign(dense_count_, 0.0f);
-    chunk.used = used.size();
-    if (!used.empty()) {
-      // Samples behind the termination point have no gradient: neither the networks nor the hash grid need
-      // visit them on the way back.
-      cache.KeepColumns(used);
-      Eigen::MatrixXf d_encoded;
-      field.Backward(cache, d_density(Eigen::all, used), d_colour(Eigen::all, used), chunk.d_dense.data(),
-                     &d_encoded);
-      if (d_encoded.size() > 0) {
-        chunk.used_positions = std::move(cache.positions);
-        chunk.d_encoded = std::move(d_encoded);
-        chunk.d_encoded_magnitude = chunk.d_encoded.cwiseAbs().cast<double>().sum();
-      }
-    }
+    MarchChunk(batch, rays, c, &chunks[c]);
+  });
+  const Eigen::MatrixXf encoded = grid != nullptr ? EncodeBatch(&chunks) : Eigen::MatrixXf();
+  tbb::parallel_for(size_t{0}, chunks.size(), [&](size_t c) {
+    FlushDenormalsOnThisThread();
+    BackpropagateChunk(batch, rays, encoded, &chunks[c]);
   });
 
   StepResult result;
-  result.rays = rays;
+  result.rays = rays.size();
   std::vector<float>& d_dense = chunks.front().d_dense;
   // A hash-table entry's gradient sums weight (<= 1) x dL/d(encoding) over samples, so this sum bounds them all:
   // the table's gradient is finite when the sum is, with room to spare for rounding.
@@ -326,14 +382,14 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
   for (size_t c = 0; c < chunks.size(); ++c) {
     d_encoded_magnitude += chunks[c].d_encoded_magnitude;
     result.loss += chunks[c].loss;
-    result.samples += chunks[c].samples;
-    result.samples_used += chunks[c].used;
+    result.samples += chunks[c].offsets.back();
+    result.samples_used += chunks[c].used.size();
     if (c > 0) {
       for (size_t k = 0; k < dense_count_; ++k) d_dense[k] += chunks[c].d_dense[k];
     }
     for (size_t k = 0; k < chunks[c].d_appearance.size(); ++k) appearance_grads_[k] += chunks[c].d_appearance[k];
   }
-  result.loss /= static_cast<double>(std::max<size_t>(rays, 1));
+  result.loss /= static_cast<double>(std::max<size_t>(rays.size(), 1));
   ++step_;
   if (!std::isfinite(result.loss)) {
     result.problem = "the loss is not finite";
@@ -351,25 +407,27 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     return result;
   }
   if (grid != nullptr && result.samples_used > 0) {
-    Eigen::MatrixXf positions(3, result.samples_used), d_encoded(grid->output_dims(), result.samples_used);
-    Eigen::Index column = 0;
-    for (const Chunk& chunk : chunks) {
-      if (chunk.used == 0) continue;
-      positions.middleCols(column, chunk.used) = chunk.used_positions;
-      d_encoded.middleCols(column, chunk.used) = chunk.d_encoded;
-      column += chunk.used;
-    }
+    Eigen::MatrixXf positions, d_encoded;
+    GatherUsed(chunks, chunks.size(), &positions, &d_encoded);
     grid->Backward(positions, d_encoded);
+    if (refine) AddPoseGradients(batch, rays, &chunks);
   }
-  const double learning_rate = LearningRate(progress);
+  UpdateParameters(LearningRate(progress), d_dense.data(), refine);
+  const double per_ray = static_cast<double>(result.samples) / std::max<size_t>(rays.size(), 1);
+  samples_per_ray_ = samples_per_ray_ > 0 ? 0.9 * samples_per_ray_ + 0.1 * per_ray : per_ray;
+  return result;
+}
+
+void Trainer::UpdateParameters(double learning_rate, const float* d_dense, bool refine) {
+  RadianceField<float>& field = *model_.field;
   size_t offset = 0;
   std::vector<ParamBlock<float>> blocks = field.DenseParams();
   for (size_t b = 0; b < blocks.size(); ++b) {
     dense_adams_[b].set_learning_rate(learning_rate);
-    dense_adams_[b].Step(blocks[b].data, d_dense.data() + offset);
+    dense_adams_[b].Step(blocks[b].data, d_dense + offset);
     offset += blocks[b].size;
   }
-  if (grid != nullptr) {
+  if (Encoding<float>* grid = field.TrainableEncoding()) {
     grid_adam_->set_learning_rate(learning_rate);
     grid_adam_->StepSparse(grid->params(), grid->grads());
   }
@@ -378,125 +436,12 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     appearance_adam_->StepSparse(appearance_.data(), appearance_grads_.data());
     CentreAppearance(&appearance_);
   }
-  const double per_ray = static_cast<double>(result.samples) / std::max<size_t>(rays, 1);
-  samples_per_ray_ = samples_per_ray_ > 0 ? 0.9 * samples_per_ray_ + 0.1 * per_ray : per_ray;
-  return result;
-}
-
-FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& background) {
-  FloatImage image{view.camera.width, view.camera.height, 3, {}};
-  const size_t pixels = size_t(image.width) * image.height;
-  image.pixels.resize(3 * pixels);
-  for (size_t i = 0; i < pixels; ++i) {
-    const uint8_t* value = &view.pixels[i * view.channels];
-    const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
-    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = alpha * (value[c] / 255.0f) + (1 - alpha) * background[c];
+  if (refine && AllFinite(pose_grads_)) {
+    pose_adam_->set_learning_rate(kPoseRateShare * learning_rate);
+    pose_adam_->StepSparse(poses_.data(), pose_grads_.data());
+    RemoveCommonMotion(centres_, &poses_);
   }
-  return image;
-}
-
-namespace {
-
-// n colours as an image one pixel high.
-FloatImage Row(std::vector<float> rgb) { return {static_cast<int>(rgb.size() / 3), 1, 3, std::move(rgb)}; }
-
-// NeRF-W's score of an unseen image: fit the colour transform on the pixels left of the middle, score the rest.
-double FittedPsnr(const TrainView& view, const std::vector<size_t>& pixels, const std::vector<float>& rgb,
-                  const std::vector<float>& target) {
-  std::vector<float> fit_rendered, fit_target, score_rendered, score_target;
-  for (size_t i = 0; i < pixels.size(); ++i) {
-    const bool left = int(pixels[i] % view.camera.width) < view.camera.width / 2;
-    std::vector<float>& rendered_half = left ? fit_rendered : score_rendered;
-    std::vector<float>& target_half = left ? fit_target : score_target;
-    rendered_half.insert(rendered_half.end(), &rgb[3 * i], &rgb[3 * i + 3]);
-    target_half.insert(target_half.end(), &target[3 * i], &target[3 * i + 3]);
-  }
-  const std::vector<float> transform = FitAppearance(fit_rendered.data(), fit_target.data(), fit_rendered.size() / 3);
-  for (size_t i = 0; i < score_rendered.size(); i += 3) {
-    const float in[3] = {score_rendered[i], score_rendered[i + 1], score_rendered[i + 2]};
-    ApplyAppearance(transform.data(), in, &score_rendered[i]);
-  }
-  return Psnr(Row(std::move(score_rendered)), Row(std::move(score_target)));
-}
-
-}  // namespace
-
-std::vector<double> Trainer::HeldoutPsnr(size_t pixels_per_view, RenderStats* stats,
-                                         const std::function<void(size_t)>& on_rays_done,
-                                         std::vector<double>* fitted) const {
-  std::vector<double> psnrs;
-  if (fitted != nullptr) fitted->clear();
-  RenderOptions render;
-  render.on_rays_done = on_rays_done;
-  render.min_transmittance = options_.min_transmittance;
-  for (size_t v = 0; v < data_.heldout.size(); ++v) {
-    const TrainView& view = data_.heldout[v];
-    const size_t total = size_t(view.camera.width) * view.camera.height;
-    std::vector<size_t> pixels;
-    if (pixels_per_view == 0 || pixels_per_view >= total) {
-      pixels.resize(total);
-      for (size_t i = 0; i < total; ++i) pixels[i] = i;
-    } else {
-      std::mt19937_64 random(MixSeed(options_.seed, v, 3));
-      std::uniform_int_distribution<size_t> pick(0, total - 1);
-      for (size_t i = 0; i < pixels_per_view; ++i) pixels.push_back(pick(random));
-    }
-    std::vector<Ray> rays(pixels.size());
-    std::vector<Eigen::Vector2d> near_far(pixels.size(), Eigen::Vector2d(view.near, view.far));
-    for (size_t i = 0; i < pixels.size(); ++i) {
-      rays[i] = CameraRay(view.camera, pixels[i] % view.camera.width + 0.5, pixels[i] / view.camera.width + 0.5);
-    }
-    std::vector<float> rgb(3 * pixels.size()), depth(pixels.size()), opacity(pixels.size()), target(3 * pixels.size());
-    RenderRays(model_, rays, near_far, render, rgb.data(), depth.data(), opacity.data(), stats);
-    for (size_t i = 0; i < pixels.size(); ++i) {
-      const uint8_t* value = view.pixels.data() + pixels[i] * view.channels;
-      const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
-      for (int c = 0; c < 3; ++c) target[3 * i + c] = alpha * (value[c] / 255.0f) + (1 - alpha) * model_.background[c];
-    }
-    if (fitted != nullptr) fitted->push_back(FittedPsnr(view, pixels, rgb, target));
-    psnrs.push_back(Psnr(Row(std::move(rgb)), Row(std::move(target))));
-  }
-  return psnrs;
-}
-
-void Trainer::SaveCheckpoint(BinaryWriter* writer) const {
-  writer->PutBytes(kCheckpointMagic, 8);
-  writer->PutString(CheckpointIdentity(options_).dump());
-  WriteModel(model_, writer);
-  writer->Put<int32_t>(step_);
-  writer->Put<int32_t>(skipped_);
-  writer->Put<double>(samples_per_ray_);
-  writer->Put<uint64_t>(model_.occupancy.cursor());
-  for (const Adam<float>& adam : dense_adams_) adam.Save(writer);
-  if (grid_adam_) grid_adam_->Save(writer);
-  if (appearance_adam_) {
-    writer->PutVector(appearance_);
-    appearance_adam_->Save(writer);
-  }
-}
-
-void Trainer::LoadCheckpoint(BinaryReader* reader) {
-  reader->ExpectMagic(kCheckpointMagic, "a photo2nerf training checkpoint");
-  if (reader->GetString() != CheckpointIdentity(options_).dump()) {
-    reader->Fail("it was written by a training run with other options");
-  }
-  NerfModel model = ReadModel(reader);
-  const int step = reader->Get<int32_t>(), skipped = reader->Get<int32_t>();
-  const double samples_per_ray = reader->Get<double>();
-  model.occupancy.set_cursor(reader->Get<uint64_t>());
-  for (Adam<float>& adam : dense_adams_) adam.Load(reader);
-  if (grid_adam_) grid_adam_->Load(reader);
-  std::vector<float> appearance;
-  if (appearance_adam_) {
-    appearance = reader->GetVector<float>(appearance_.size());
-    appearance_adam_->Load(reader);
-  }
-  if (!reader->AtEnd()) reader->Fail("there are bytes after the checkpoint");
-  appearance_ = std::move(appearance);
-  model_ = std::move(model);
-  step_ = step;
-  skipped_ = skipped;
-  samples_per_ray_ = samples_per_ray;
+  std::fill(pose_grads_.begin(), pose_grads_.end(), 0.0f);
 }
 
 }  // namespace p2n

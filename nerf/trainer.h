@@ -61,6 +61,8 @@ struct TrainerOptions {
   float min_transmittance = 1e-4f;
   bool random_background = false;       // RGBA images: a random background per ray (learns transparency)
   bool appearance = false;              // a colour transform per training image (appearance.h)
+  bool refine_cameras = false;          // a pose correction per training image (camera_refinement.h)
+  int refine_warmup = 100;              // steps before the corrections learn (a younger field's gradients mislead)
   uint64_t seed = 0;
 };
 
@@ -102,6 +104,8 @@ class Trainer {
                                   std::vector<double>* fitted = nullptr) const;
   // Each training view's colour transform (kAppearanceParams values a view); empty without options.appearance.
   const std::vector<float>& appearance() const { return appearance_; }
+  // Each training view's pose correction (kPoseParams values a view); empty without options.refine_cameras.
+  const std::vector<float>& camera_corrections() const { return poses_; }
 
   const NerfModel& model() const { return model_; }
   NerfModel& model() { return model_; }
@@ -114,8 +118,20 @@ class Trainer {
   void LoadCheckpoint(BinaryReader* reader);
 
  private:
+  struct Chunk;  // one chunk of a step's rays (trainer.cc)
   void UpdateOccupancy();
   double LearningRate(double progress) const;
+  // The phases of StepOnBatch(): chunk c's rays marched; every sample's hash-grid encoding; a chunk's networks,
+  // compositing and gradients; the pose corrections' gradients (after the hash grid's); the optimisers' steps.
+  void MarchChunk(const RayBatch& batch, const std::vector<Ray>& rays, size_t c, Chunk* chunk) const;
+  Eigen::MatrixXf EncodeBatch(std::vector<Chunk>* chunks) const;
+  void BackpropagateChunk(const RayBatch& batch, const std::vector<Ray>& rays, const Eigen::MatrixXf& encoded,
+                          Chunk* chunk) const;
+  // The used samples' field points and dL/d(encoding) of chunks [0, count), one after another.
+  void GatherUsed(const std::vector<Chunk>& chunks, size_t count, Eigen::MatrixXf* positions,
+                  Eigen::MatrixXf* d_encoded) const;
+  void AddPoseGradients(const RayBatch& batch, const std::vector<Ray>& rays, std::vector<Chunk>* chunks);
+  void UpdateParameters(double learning_rate, const float* d_dense, bool refine);
 
   TrainerOptions options_;
   const TrainingData& data_;
@@ -124,6 +140,9 @@ class Trainer {
   std::unique_ptr<Adam<float>> grid_adam_;
   std::vector<float> appearance_, appearance_grads_;
   std::unique_ptr<Adam<float>> appearance_adam_;
+  std::vector<float> poses_, pose_grads_;
+  std::unique_ptr<Adam<float>> pose_adam_;
+  std::vector<Eigen::Vector3d> centres_;  // the training cameras' centres, as given
   size_t dense_count_ = 0;
   int step_ = 0;
   int skipped_ = 0;

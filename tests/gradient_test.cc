@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <random>
+#include <stdexcept>
 
 #include "nerf/encoding.h"
 #include "nerf/mlp.h"
@@ -26,6 +27,17 @@ double MlpLoss(const Mlp<double>& mlp, const Matrix& input, const Matrix& weight
   Mlp<double>::Cache cache;
   mlp.Forward(input, &out, &cache);
   return (out.array() * weights.array()).sum();
+}
+
+// Four levels, the coarse one dense and the fine ones hashed (64 entries a level).
+HashGridConfig SmallGridConfig() {
+  HashGridConfig config;
+  config.levels = 4;
+  config.features_per_level = 2;
+  config.log2_table_size = 6;
+  config.base_resolution = 2;
+  config.finest_resolution = 20;
+  return config;
 }
 
 }  // namespace
@@ -82,13 +94,7 @@ TEST_CASE("sigmoid output stays finite and saturates for huge inputs", "[gradien
 
 TEST_CASE("hash-grid gradients match finite differences, in 2D and 3D, dense and hashed levels", "[gradients]") {
   for (const int dims : {2, 3}) {
-    HashGridConfig config;
-    config.levels = 4;
-    config.features_per_level = 2;
-    config.log2_table_size = 6;  // 64 entries: the coarse level is dense, the fine ones are hashed
-    config.base_resolution = 2;
-    config.finest_resolution = 20;
-    HashGridEncoding<double> grid(dims, config, 3);
+    HashGridEncoding<double> grid(dims, SmallGridConfig(), 3);
     const Matrix input = Random(dims, 7, 4, 0, 1);
     const Matrix weights = Random(grid.output_dims(), 7, 5, -1, 1);
     grid.Backward(input, weights);
@@ -120,6 +126,42 @@ TEST_CASE("hash-grid gradients match finite differences, in 2D and 3D, dense and
     grid.ZeroGrad();
     CHECK(std::all_of(grid.grads(), grid.grads() + grid.num_params(), [](double g) { return g == 0; }));
   }
+}
+
+TEST_CASE("hash-grid gradients with respect to the input match finite differences", "[gradients]") {
+  for (const int dims : {2, 3}) {
+    HashGridEncoding<double> grid(dims, SmallGridConfig(), 3);
+    std::mt19937_64 random(6);
+    std::uniform_real_distribution<double> uniform(-1, 1);
+    for (size_t k = 0; k < grid.num_params(); ++k) grid.params()[k] = uniform(random);  // features of size 1
+    Matrix input = Random(dims, 9, 4, 0.01, 0.99);
+    input(0, 8) = 1.5;  // clamped along x: no gradient there
+    const Matrix weights = Random(grid.output_dims(), 9, 5, -1, 1);
+    Matrix d_input;
+    grid.InputGradient(input, weights, &d_input);
+    REQUIRE(d_input.rows() == dims);
+    REQUIRE(d_input.cols() == 9);
+    const auto loss = [&](const Matrix& points) {
+      Matrix out;
+      grid.Forward(points, &out);
+      return (out.array() * weights.array()).sum();
+    };
+    const double h = 1e-7;
+    for (Eigen::Index k = 0; k < input.size(); ++k) {
+      Matrix moved = input;
+      moved.data()[k] += h;
+      const double plus = loss(moved);
+      moved.data()[k] -= 2 * h;
+      const double numeric = (plus - loss(moved)) / (2 * h);
+      CHECK(d_input.data()[k] == Approx(numeric).margin(1e-6));
+    }
+    CHECK(d_input(0, 8) == 0);
+    CHECK(d_input.cwiseAbs().maxCoeff() > 1);  // features of size 1 over cells of 1/20: slopes of tens
+  }
+  // An encoding without an input gradient says so.
+  PositionalEncoding<double> fixed(3, 2);
+  Matrix d_input;
+  CHECK_THROWS_AS(fixed.InputGradient(Matrix::Zero(3, 1), Matrix::Zero(15, 1), &d_input), std::logic_error);
 }
 
 TEST_CASE("hash-grid interpolation reproduces vertex values and is continuous", "[gradients]") {

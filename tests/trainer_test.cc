@@ -6,9 +6,11 @@
 
 #include <atomic>
 #include <cmath>
+#include <random>
 #include <stdexcept>
 
 #include "nerf/appearance.h"
+#include "nerf/camera_refinement.h"
 #include "nerf/ngp_field.h"
 #include "nerf/synthetic_scene.h"
 #include "nerf/trainer.h"
@@ -141,6 +143,8 @@ TEST_CASE("a run resumed from a checkpoint reaches exactly the parameters of an 
   const TrainingData data = SphereScene();
   TrainerOptions options = SmallOptions();
   options.appearance = GENERATE(false, true);
+  options.refine_cameras = options.appearance;  // both or neither: each has its own state to resume
+  options.refine_warmup = 10;
   Trainer straight(options, data);
   for (int step = 0; step < 40; ++step) straight.Step(step / 40.0);
 
@@ -157,6 +161,7 @@ TEST_CASE("a run resumed from a checkpoint reaches exactly the parameters of an 
   for (int step = 20; step < 40; ++step) resumed.Step(step / 40.0);
   CHECK((Parameters(resumed.model()) == Parameters(straight.model())));
   CHECK(resumed.appearance() == straight.appearance());
+  CHECK(resumed.camera_corrections() == straight.camera_corrections());
 
   // A checkpoint of other options is refused.
   TrainerOptions other = options;
@@ -337,6 +342,59 @@ TEST_CASE("per-image appearance learns each photo's exposure and keeps it out of
   }
   INFO("held-out PSNR without appearance " << psnr[0] << " dB, with " << psnr[1] << " dB");
   CHECK(psnr[1] > psnr[0] + 2);
+}
+
+TEST_CASE("camera refinement moves perturbed training cameras back towards the truth", "[trainer]") {
+  // The sphere's photos from their true cameras, trained from cameras turned by about 1.5 degrees and moved by
+  // about 0.04 (a pixel or two at 40 x 40, free of any common motion of all cameras, which the photos cannot
+  // tell). A turn and a sideways move of a camera both shift the whole image; what the photos pin down is where
+  // the scene's points appear: the corrections must bring those back towards where the true cameras see them.
+  TrainingData data = SphereScene();
+  const std::vector<PinholeCamera> truth = [&] {
+    std::vector<PinholeCamera> cameras;
+    for (const TrainView& view : data.train) cameras.push_back(view.camera);
+    return cameras;
+  }();
+  std::mt19937_64 random(11);
+  std::normal_distribution<float> rotation(0.0f, 0.015f), shift(0.0f, 0.025f);
+  std::vector<float> perturbations(data.train.size() * kPoseParams);
+  std::vector<Eigen::Vector3d> centres;
+  for (size_t k = 0; k < perturbations.size(); ++k) perturbations[k] = k % 6 < 3 ? rotation(random) : shift(random);
+  for (const PinholeCamera& camera : truth) centres.push_back(camera.world_from_cam.block<3, 1>(0, 3));
+  RemoveCommonMotion(centres, &perturbations);
+  for (size_t v = 0; v < data.train.size(); ++v) {
+    data.train[v].camera = CorrectedCamera(truth[v], &perturbations[v * kPoseParams]);
+  }
+  // The mean distance in pixels between where the true and the (corrected) training cameras see points of the
+  // sphere's bounding box.
+  const auto reprojection_error = [&](const std::vector<float>& corrections) {
+    double sum = 0;
+    int count = 0;
+    for (size_t v = 0; v < truth.size(); ++v) {
+      const PinholeCamera camera =
+          corrections.empty() ? data.train[v].camera : CorrectedCamera(data.train[v].camera, &corrections[v * kPoseParams]);
+      for (int corner = 0; corner < 8; ++corner) {
+        const Eigen::Vector3d point(corner & 1 ? 0.5 : -0.5, corner & 2 ? 0.5 : -0.5, corner & 4 ? 0.5 : -0.5);
+        sum += (Project(camera, point) - Project(truth[v], point)).norm();
+        ++count;
+      }
+    }
+    return sum / count;
+  };
+  double psnr[2], pixels[2];
+  for (const bool refine : {false, true}) {
+    TrainerOptions options = SmallOptions();
+    options.refine_cameras = refine;
+    Trainer trainer(options, data);
+    for (int step = 0; step < 600; ++step) REQUIRE_FALSE(trainer.Step(step / 600.0).skipped);
+    psnr[refine] = Mean(trainer.HeldoutPsnr(0));
+    pixels[refine] = reprojection_error(trainer.camera_corrections());
+    CHECK(trainer.camera_corrections().size() == (refine ? data.train.size() * kPoseParams : 0));
+  }
+  INFO("reprojection error " << pixels[0] << " px as given, " << pixels[1] << " px refined; held-out PSNR "
+                             << psnr[0] << " dB fixed, " << psnr[1] << " dB refined");
+  CHECK(pixels[1] < 0.5 * pixels[0]);
+  CHECK(psnr[1] > psnr[0] + 1);
 }
 
 }  // namespace p2n::testing

@@ -1,0 +1,87 @@
+// The trainer's held-out evaluation (trainer.h: HeldoutPsnr) and the photos it compares with.
+
+#include <random>
+
+#include "nerf/appearance.h"
+#include "nerf/random_streams.h"
+#include "nerf/trainer.h"
+
+namespace p2n {
+
+FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& background) {
+  FloatImage image{view.camera.width, view.camera.height, 3, {}};
+  const size_t pixels = size_t(image.width) * image.height;
+  image.pixels.resize(3 * pixels);
+  for (size_t i = 0; i < pixels; ++i) {
+    const uint8_t* value = &view.pixels[i * view.channels];
+    const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
+    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = alpha * (value[c] / 255.0f) + (1 - alpha) * background[c];
+  }
+  return image;
+}
+
+namespace {
+
+// n colours as an image one pixel high.
+FloatImage Row(std::vector<float> rgb) { return {static_cast<int>(rgb.size() / 3), 1, 3, std::move(rgb)}; }
+
+// NeRF-W's score of an unseen image: fit the colour transform on the pixels left of the middle, score the rest.
+double FittedPsnr(const TrainView& view, const std::vector<size_t>& pixels, const std::vector<float>& rgb,
+                  const std::vector<float>& target) {
+  std::vector<float> fit_rendered, fit_target, score_rendered, score_target;
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    const bool left = int(pixels[i] % view.camera.width) < view.camera.width / 2;
+    std::vector<float>& rendered_half = left ? fit_rendered : score_rendered;
+    std::vector<float>& target_half = left ? fit_target : score_target;
+    rendered_half.insert(rendered_half.end(), &rgb[3 * i], &rgb[3 * i + 3]);
+    target_half.insert(target_half.end(), &target[3 * i], &target[3 * i + 3]);
+  }
+  const std::vector<float> transform = FitAppearance(fit_rendered.data(), fit_target.data(), fit_rendered.size() / 3);
+  for (size_t i = 0; i < score_rendered.size(); i += 3) {
+    const float in[3] = {score_rendered[i], score_rendered[i + 1], score_rendered[i + 2]};
+    ApplyAppearance(transform.data(), in, &score_rendered[i]);
+  }
+  return Psnr(Row(std::move(score_rendered)), Row(std::move(score_target)));
+}
+
+}  // namespace
+
+std::vector<double> Trainer::HeldoutPsnr(size_t pixels_per_view, RenderStats* stats,
+                                         const std::function<void(size_t)>& on_rays_done,
+                                         std::vector<double>* fitted) const {
+  std::vector<double> psnrs;
+  if (fitted != nullptr) fitted->clear();
+  RenderOptions render;
+  render.on_rays_done = on_rays_done;
+  render.min_transmittance = options_.min_transmittance;
+  for (size_t v = 0; v < data_.heldout.size(); ++v) {
+    const TrainView& view = data_.heldout[v];
+    const size_t total = size_t(view.camera.width) * view.camera.height;
+    std::vector<size_t> pixels;
+    if (pixels_per_view == 0 || pixels_per_view >= total) {
+      pixels.resize(total);
+      for (size_t i = 0; i < total; ++i) pixels[i] = i;
+    } else {
+      std::mt19937_64 random(MixSeed(options_.seed, v, 3));
+      std::uniform_int_distribution<size_t> pick(0, total - 1);
+      for (size_t i = 0; i < pixels_per_view; ++i) pixels.push_back(pick(random));
+    }
+    std::vector<Ray> rays(pixels.size());
+    std::vector<Eigen::Vector2d> near_far(pixels.size(), Eigen::Vector2d(view.near, view.far));
+    for (size_t i = 0; i < pixels.size(); ++i) {
+      rays[i] = CameraRay(view.camera, pixels[i] % view.camera.width + 0.5, pixels[i] / view.camera.width + 0.5);
+    }
+    std::vector<float> rgb(3 * pixels.size()), depth(pixels.size()), opacity(pixels.size()), target(3 * pixels.size());
+    RenderRays(model_, rays, near_far, render, rgb.data(), depth.data(), opacity.data(), stats);
+    for (size_t i = 0; i < pixels.size(); ++i) {
+      const uint8_t* value = view.pixels.data() + pixels[i] * view.channels;
+      const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
+      for (int c = 0; c < 3; ++c) target[3 * i + c] = alpha * (value[c] / 255.0f) + (1 - alpha) * model_.background[c];
+    }
+    if (fitted != nullptr) fitted->push_back(FittedPsnr(view, pixels, rgb, target));
+    psnrs.push_back(Psnr(Row(std::move(rgb)), Row(std::move(target))));
+  }
+  return psnrs;
+}
+
+}  // namespace p2n
