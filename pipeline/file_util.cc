@@ -61,7 +61,7 @@ nlohmann::json ReadJsonFile(const fs::path& path) {
   if (!in) throw UserError(format("cannot read '{}'", path.string()));
   try {
     return nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // a syntax error, or a number too large (out_of_range)
     throw UserError(format("'{}' is not valid JSON: {}", path.string(), e.what()));
   }
 }

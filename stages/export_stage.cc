@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <map>
 
 #include "nerf/mesh.h"
 #include "nerf/nerf_model.h"
@@ -13,10 +14,12 @@
 #include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
+#include "stages/camera_corrections.h"
 #include "stages/dataset_import.h"
 #include "stages/mesh_io.h"
 #include "stages/ply.h"
 #include "stages/stage_io.h"
+#include "stages/transforms_json.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -32,6 +35,17 @@ struct OutputFrame {
 
   Eigen::Vector3f Point(const Eigen::Vector3f& p) const { return (rotation * p.cast<double>() + translation).cast<float>(); }
   Eigen::Vector3f Direction(const Eigen::Vector3f& d) const { return (rotation * d.cast<double>()).normalized().cast<float>(); }
+  double Scale() const { return std::cbrt(rotation.determinant()); }
+  // A camera in this frame: its centre mapped, its axes turned, its near and far scaled.
+  CameraView Camera(const CameraView& view) const {
+    CameraView out = view;
+    const double scale = Scale();
+    out.camera.world_from_cam.topLeftCorner<3, 3>() = rotation / scale * view.camera.world_from_cam.topLeftCorner<3, 3>();
+    out.camera.world_from_cam.topRightCorner<3, 1>() = rotation * view.camera.world_from_cam.topRightCorner<3, 1>() + translation;
+    if (view.near > 0) out.near = view.near * scale;
+    if (view.far > 0) out.far = view.far * scale;
+    return out;
+  }
 };
 
 // applied_transform (normalised_from_source, 3x4) of transforms.json, inverted when the source frame is asked for.
@@ -57,6 +71,27 @@ OutputFrame MakeOutputFrame(const std::string& frame, const fs::path& transforms
   out.translation = source_from_normalized.topRightCorner<3, 1>();
   out.description = "frame: source (COLMAP's world, or the dataset's: the inverse of applied_transform in 20_poses/transforms.json)";
   return out;
+}
+
+// The training views' cameras as the field saw them: corrected where camera refinement moved them.
+void ApplyCameraCorrections(const std::map<std::string, CameraCorrection>& corrections, ImportedDataset* dataset) {
+  for (ImportedView& view : dataset->views) {
+    const auto found = corrections.find(view.source.filename().string());
+    if (view.view.split == "train" && found != corrections.end()) {
+      view.view.camera = CorrectedCamera(view.view.camera, found->second.data());
+    }
+  }
+}
+
+// transforms.json of every view (the training ones as refined) in the files' frame, naming the images by their full
+// paths so that the file works from where it is.
+void WriteCameras(const fs::path& path, const ImportedDataset& dataset, const OutputFrame& frame, bool refined) {
+  std::vector<CameraView> views;
+  for (const ImportedView& view : dataset.views) {
+    views.push_back(frame.Camera(view.view));
+    views.back().file_path = fs::absolute(view.source).string();
+  }
+  WriteTransformsJson(path, views, Normalization{}, {{"frame", frame.description}, {"cameras_refined", refined}});
 }
 
 std::vector<ColouredPoint> DepthPoints(const NerfModel& model, const ImportedDataset& dataset, const ExportOptions& options) {
@@ -155,8 +190,13 @@ void ExportStage::Run(StageContext& context) const {
                                      {"resolution", options.resolution},
                                      {"threshold", options.threshold}}},
                            {"frame", options.frame}};
+  ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
+  const std::map<std::string, CameraCorrection> corrections =
+      ReadCameraCorrections(context.upstream_dirs.at("train") / "train_report.json");
+  ApplyCameraCorrections(corrections, &dataset);
+  WriteCameras(context.output_dir / "transforms.json", dataset, frame, !corrections.empty());
+  report["cameras"] = {{"file", "transforms.json"}, {"views", dataset.views.size()}, {"refined", !corrections.empty()}};
   if (options.points) {
-    const ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
     std::vector<ColouredPoint> points = DepthPoints(model, dataset, options);
     for (ColouredPoint& point : points) point.position = frame.Point(point.position);
     WritePly(context.output_dir / "points.ply", points,

@@ -1,7 +1,8 @@
 #pragma once
 // The export stage: a mesh of the trained scene's surface (marching cubes on the density inside the scene box,
-// coloured from the field) and a coloured point cloud from the rendered depth of the training views, in
-// COLMAP's (or the dataset's) world frame or the normalised one; binary PLY (and OBJ when asked).
+// coloured from the field), a coloured point cloud from the rendered depth of the training views, and the
+// cameras (transforms.json, the training ones as camera refinement left them), in COLMAP's (or the dataset's)
+// world frame or the normalised one; binary PLY (and OBJ when asked).
 
 #include <string>
 
@@ -37,7 +38,7 @@ class ExportStage : public Stage {
  public:
   std::string name() const override { return "export"; }
   std::string folder() const override { return "50_export"; }
-  int format_version() const override { return 1; }
+  int format_version() const override { return 2; }
   std::vector<std::string> upstream() const override { return {"poses", "train"}; }
   void Run(StageContext& context) const override;
 };

@@ -62,6 +62,14 @@ std::string TrainingSection(const fs::path& train_dir) {
                      Number(appearance["gain_min"], 3), Number(appearance["gain_max"], 3),
                      Number(report.value("heldout_psnr_fitted", nlohmann::json(nullptr))));
     }
+    const nlohmann::json cameras = report.value("camera_refinement", nlohmann::json::object());
+    if (cameras.value("enabled", false)) {
+      html += format("<p>Camera refinement turned the training cameras by {}&deg; (median; at most {}&deg;) and "
+                     "moved them by {} (median; at most {}) normalised units; the export stage writes the refined "
+                     "cameras (transforms.json).</p>\n",
+                     Number(cameras["rotation_degrees_median"], 3), Number(cameras["rotation_degrees_max"], 3),
+                     Number(cameras["shift_median"], 3), Number(cameras["shift_max"], 3));
+    }
   }
   return html;
 }

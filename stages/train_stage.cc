@@ -20,6 +20,7 @@
 #include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
+#include "stages/camera_corrections.h"
 #include "stages/dataset_import.h"
 #include "stages/stage_io.h"
 
@@ -200,6 +201,7 @@ nlohmann::json TrainReport(Trainer& trainer, const TrainerOptions& trainer_optio
                        {"learning_rate", trainer_options.learning_rate},
                        {"distortion_weight", trainer_options.distortion_weight},
                        {"appearance", trainer_options.appearance},
+                       {"refine_cameras", trainer_options.refine_cameras},
                        {"random_background", trainer_options.random_background}}}};
 }
 
@@ -281,6 +283,8 @@ void TrainOptions::Check() const {
     }
   }
   CheckOption(distortion_ok, "train.distortion", format("must be auto or a weight >= 0, not '{}'", distortion));
+  CheckOption(refine_cameras == "off" || field == "ngp", "train.refine_cameras",
+              "needs train.field ngp (the vanilla field has no gradient with respect to its input)");
   CheckOption(eval_interval > 0, "train.eval_interval", "must be positive");
   CheckOption(eval_share > 0 && eval_share <= 1, "train.eval_share", "must be in (0, 1]");
   CheckOption(eval_pixels >= 0, "train.eval_pixels", "must be 0 (all) or positive");
@@ -324,6 +328,7 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
   trainer.space = space;
   trainer.distortion_weight = DistortionWeight(options, space);
   trainer.appearance = options.appearance == "on";
+  trainer.refine_cameras = options.refine_cameras == "on";
   trainer.seed = static_cast<uint64_t>(options.seed);
   return trainer;
 }
@@ -421,7 +426,8 @@ void TrainStage::Run(StageContext& context) const {
                 {"steps", trainer.step()},
                 {"heldout_psnr", Mean(psnrs)},
                 {"distortion_weight", trainer_options.distortion_weight},
-                {"appearance", trainer_options.appearance}};
+                {"appearance", trainer_options.appearance},
+                {"refine_cameras", trainer_options.refine_cameras}};
   WriteOrExplain([&] { SaveModel(model, context.output_dir / "model.bin"); });
 
   nlohmann::json report = TrainReport(trainer, trainer_options, options, data, heldout_split, psnrs, eval_stats,
@@ -430,6 +436,9 @@ void TrainStage::Run(StageContext& context) const {
   report["heldout_psnr_fitted_is"] =
       "each held-out photo's colour transform fitted (least squares) on its left half, PSNR on its right half (NeRF-W)";
   report["appearance"] = AppearanceReport(trainer, data);
+  std::vector<std::string> names;
+  for (const TrainView& view : data.train) names.push_back(view.name);
+  report["camera_refinement"] = CameraRefinementJson(names, trainer.camera_corrections());
   WriteJsonAtomic(context.output_dir / "train_report.json", report);
   const std::string metrics = "wall_seconds,step,train_loss,heldout_psnr\n" + state.metrics;
   WriteFileAtomic(context.output_dir / "metrics.csv", metrics);

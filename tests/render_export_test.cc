@@ -10,12 +10,15 @@
 #include <opencv2/videoio.hpp>
 
 #include <cmath>
+#include <map>
 
 #include "nerf/float_image.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/hash.h"
 #include "stage_fixtures.h"
+#include "nerf/camera_refinement.h"
+#include "stages/camera_corrections.h"
 #include "stages/render_stage.h"
 
 namespace p2n::testing {
@@ -158,6 +161,52 @@ TEST_CASE("export stage: mesh and point cloud open in Assimp, finite, in the sou
     const Eigen::Vector3d back = normalized_from_source * source.homogeneous();
     CHECK((back - Eigen::Vector3d(normalized[v].x, normalized[v].y, normalized[v].z)).norm() < 1e-4);
   }
+}
+
+TEST_CASE("export stage: transforms.json holds the cameras, the training ones as camera refinement moved them",
+          "[export]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(150);
+  config.Set("train.refine_cameras", "on", "test");
+  config.Set("export.frame", "normalized", "test");
+  config.Set("export.points", false, "test");
+  config.Set("export.resolution", 8, "test");
+  setup.runner.Run(setup.workspace, config, Until("export"));
+  const nlohmann::json poses = ReadJsonFile(setup.dir / "ws" / "20_poses" / "transforms.json");
+  const nlohmann::json exported = ReadJsonFile(setup.dir / "ws" / "50_export" / "transforms.json");
+  const std::map<std::string, CameraCorrection> corrections =
+      ReadCameraCorrections(setup.dir / "ws" / "30_train" / "train_report.json");
+  CHECK(exported["cameras_refined"] == true);
+  REQUIRE(exported["frames"].size() == poses["frames"].size());
+  const auto matrix = [](const nlohmann::json& json) {
+    Eigen::Matrix4d m;
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c) m(r, c) = json[r][c].get<double>();
+    }
+    return m;
+  };
+  size_t refined = 0;
+  double largest_turn = 0;
+  for (size_t f = 0; f < poses["frames"].size(); ++f) {
+    const nlohmann::json& frame = exported["frames"][f];
+    const fs::path image = frame["file_path"].get<std::string>();
+    CHECK(image.is_absolute());
+    CHECK(fs::exists(image));
+    PinholeCamera camera;
+    camera.world_from_cam = matrix(poses["frames"][f]["transform_matrix"]);
+    const auto found = corrections.find(image.filename().string());
+    INFO(image.filename().string());
+    CHECK((found != corrections.end()) == (poses["frames"][f]["split"] == "train"));
+    if (found != corrections.end()) {
+      camera = CorrectedCamera(camera, found->second.data());
+      largest_turn = std::max(largest_turn, CorrectionDegrees(found->second.data()));
+      ++refined;
+    }
+    CHECK((matrix(frame["transform_matrix"]) - camera.world_from_cam).norm() < 1e-5);
+  }
+  CHECK(refined == corrections.size());
+  CHECK(largest_turn > 0);  // 50 steps after the warm-up moved them
+  CHECK(largest_turn < 2);
 }
 
 }  // namespace p2n::testing
