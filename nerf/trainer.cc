@@ -300,28 +300,30 @@ void Trainer::BackpropagateChunk(const RayBatch& batch, const std::vector<Ray>& 
   }
 }
 
-void Trainer::GatherUsed(const std::vector<Chunk>& chunks, size_t count, Eigen::MatrixXf* positions,
+void Trainer::GatherUsed(const std::vector<Chunk>& chunks, Eigen::MatrixXf* positions,
                          Eigen::MatrixXf* d_encoded) const {
   Eigen::Index total = 0;
-  for (size_t c = 0; c < count; ++c) total += chunks[c].d_encoded.cols();
+  for (const Chunk& chunk : chunks) total += chunk.d_encoded.cols();
   positions->resize(3, total);
   d_encoded->resize(model_.field->TrainableEncoding()->output_dims(), total);
   Eigen::Index column = 0;
-  for (size_t c = 0; c < count; ++c) {
-    const Eigen::Index n = chunks[c].d_encoded.cols();
-    positions->middleCols(column, n) = chunks[c].used_positions;
-    d_encoded->middleCols(column, n) = chunks[c].d_encoded;
+  for (const Chunk& chunk : chunks) {
+    const Eigen::Index n = chunk.d_encoded.cols();
+    positions->middleCols(column, n) = chunk.used_positions;
+    d_encoded->middleCols(column, n) = chunk.d_encoded;
     column += n;
   }
 }
 
-void Trainer::AddPoseGradients(const RayBatch& batch, const std::vector<Ray>& rays, std::vector<Chunk>* chunks) {
+void Trainer::AddPoseGradients(const RayBatch& batch, const std::vector<Ray>& rays, const Eigen::MatrixXf& positions,
+                               const Eigen::MatrixXf& d_encoded, std::vector<Chunk>* chunks) {
   const size_t count = (chunks->size() + kPoseChunkShare - 1) / kPoseChunkShare;
-  Eigen::MatrixXf positions, d_encoded, d_positions;
-  GatherUsed(*chunks, count, &positions, &d_encoded);
-  model_.field->TrainableEncoding()->InputGradient(positions, d_encoded, &d_positions);
   std::vector<Eigen::Index> first_column(count + 1, 0);
   for (size_t c = 0; c < count; ++c) first_column[c + 1] = first_column[c] + (*chunks)[c].d_encoded.cols();
+  // Those chunks' samples lead the gathered columns.
+  Eigen::MatrixXf d_positions;
+  model_.field->TrainableEncoding()->InputGradient(positions.leftCols(first_column[count]),
+                                                   d_encoded.leftCols(first_column[count]), &d_positions);
   tbb::parallel_for(size_t{0}, count, [&](size_t c) {
     Chunk& chunk = (*chunks)[c];
     chunk.d_poses.assign(poses_.size(), 0.0f);
@@ -408,9 +410,9 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
   }
   if (grid != nullptr && result.samples_used > 0) {
     Eigen::MatrixXf positions, d_encoded;
-    GatherUsed(chunks, chunks.size(), &positions, &d_encoded);
+    GatherUsed(chunks, &positions, &d_encoded);
     grid->Backward(positions, d_encoded);
-    if (refine) AddPoseGradients(batch, rays, &chunks);
+    if (refine) AddPoseGradients(batch, rays, positions, d_encoded, &chunks);
   }
   UpdateParameters(LearningRate(progress), d_dense.data(), refine);
   const double per_ray = static_cast<double>(result.samples) / std::max<size_t>(rays.size(), 1);

@@ -127,10 +127,11 @@ class Trainer {
   Eigen::MatrixXf EncodeBatch(std::vector<Chunk>* chunks) const;
   void BackpropagateChunk(const RayBatch& batch, const std::vector<Ray>& rays, const Eigen::MatrixXf& encoded,
                           Chunk* chunk) const;
-  // The used samples' field points and dL/d(encoding) of chunks [0, count), one after another.
-  void GatherUsed(const std::vector<Chunk>& chunks, size_t count, Eigen::MatrixXf* positions,
-                  Eigen::MatrixXf* d_encoded) const;
-  void AddPoseGradients(const RayBatch& batch, const std::vector<Ray>& rays, std::vector<Chunk>* chunks);
+  // The used samples' field points and dL/d(encoding), chunk after chunk.
+  void GatherUsed(const std::vector<Chunk>& chunks, Eigen::MatrixXf* positions, Eigen::MatrixXf* d_encoded) const;
+  // From the first 1 / kPoseChunkShare of the chunks, given what GatherUsed() gathered.
+  void AddPoseGradients(const RayBatch& batch, const std::vector<Ray>& rays, const Eigen::MatrixXf& positions,
+                        const Eigen::MatrixXf& d_encoded, std::vector<Chunk>* chunks);
   void UpdateParameters(double learning_rate, const float* d_dense, bool refine);
 
   TrainerOptions options_;
