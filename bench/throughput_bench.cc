@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <utility>
 #include <vector>
 
 #include "nerf/encoding.h"
@@ -100,13 +101,20 @@ int main(int argc, char** argv) {
     });
     for (int c = 0; c < chunks; ++c) field.grid().Backward(positions[c], d_encoded[c]);
   });
-  // The hash grid alone, as the trainer calls it (the whole batch at once), with the quality preset's layout.
-  p2n::HashGridEncoding<float> grid(3, {8, 4, 19, 16, 4096}, 1);
-  Eigen::MatrixXf all_positions(3, per_chunk * chunks), encoded;
+  // The hash grid alone, as the trainer calls it (the whole batch at once), in the default layout and the quality
+  // preset's.
+  Eigen::MatrixXf all_positions(3, per_chunk * chunks);
   for (int c = 0; c < chunks; ++c) all_positions.middleCols(c * per_chunk, per_chunk) = positions[c];
-  const Eigen::MatrixXf d_grid = Eigen::MatrixXf::Random(grid.output_dims(), all_positions.cols());
-  const double grid_forward_seconds = MedianSeconds(repeats, [&] { grid.Forward(all_positions, &encoded); });
-  const double grid_backward_seconds = MedianSeconds(repeats, [&] { grid.Backward(all_positions, d_grid); });
+  const auto grid_seconds = [&](const p2n::HashGridConfig& layout) {
+    p2n::HashGridEncoding<float> grid(3, layout, 1);
+    Eigen::MatrixXf encoded;
+    const Eigen::MatrixXf d_grid = Eigen::MatrixXf::Random(grid.output_dims(), all_positions.cols());
+    return std::pair(MedianSeconds(repeats, [&] { grid.Forward(all_positions, &encoded); }),
+                     MedianSeconds(repeats, [&] { grid.Backward(all_positions, d_grid); }));
+  };
+  const p2n::HashGridConfig default_layout = config.grid, quality_layout{8, 4, 19, 16, 4096};
+  const auto [default_forward, default_backward] = grid_seconds(default_layout);
+  const auto [quality_forward, quality_backward] = grid_seconds(quality_layout);
   const double samples = double(per_chunk) * chunks;
   std::printf("samples per batch                 %.0f\n", samples);
   std::printf("GEMM 64x64 * 64xN (chunked)       %.1f GFLOP/s\n", gemm_gflops);
@@ -117,7 +125,11 @@ int main(int argc, char** argv) {
   std::printf("MLP FLOPs per sample (fwd+bwd)    %.0f\n", mlp_flops);
   std::printf("whole field fwd+bwd               %.2f M samples/s (MLPs %.0f%% of its time)\n",
               samples / field_seconds / 1e6, 100 * mlp_seconds / field_seconds);
-  std::printf("hash grid 8x4, 2^19: forward      %.2f M samples/s, backward %.2f M samples/s\n",
-              samples / grid_forward_seconds / 1e6, samples / grid_backward_seconds / 1e6);
+  const auto print_grid = [&](const p2n::HashGridConfig& layout, double forward, double backward) {
+    std::printf("hash grid %2dx%d, 2^%d: forward   %.2f M samples/s, backward %.2f M samples/s\n", layout.levels,
+                layout.features_per_level, layout.log2_table_size, samples / forward / 1e6, samples / backward / 1e6);
+  };
+  print_grid(default_layout, default_forward, default_backward);
+  print_grid(quality_layout, quality_forward, quality_backward);
   return 0;
 }

@@ -47,6 +47,25 @@ void Update(const AdamOptions& options, T c1, T c2, size_t count, T* params, con
   }
 }
 
+// Update() of `count` values each at its own step (step_size: lr c1; correction: c2, 0 for a value that takes no
+// step and keeps its moments), zeroing the gradient; written without branches, so that it vectorises.
+template <typename T>
+void UpdateSome(const AdamOptions& options, const T* step_size, const T* correction, size_t count, T* params,
+                T* grads, T* m, T* v) {
+  const T beta1 = static_cast<T>(options.beta1), beta2 = static_cast<T>(options.beta2);
+  const T epsilon = static_cast<T>(options.epsilon);
+  for (size_t k = 0; k < count; ++k) {
+    const T g = grads[k];
+    const bool active = correction[k] != T(0);
+    const T m_new = beta1 * m[k] + (1 - beta1) * g, v_new = beta2 * v[k] + (1 - beta2) * g * g;
+    const T p_new = params[k] - step_size[k] * m_new / (std::sqrt(v_new) * correction[k] + epsilon);
+    m[k] = active ? m_new : m[k];
+    v[k] = active ? v_new : v[k];
+    params[k] = active ? p_new : params[k];
+    grads[k] = T(0);
+  }
+}
+
 }  // namespace
 
 template <typename T>
@@ -57,19 +76,35 @@ void Adam<T>::Step(T* params, const T* grads) {
 }
 
 template <typename T>
-void Adam<T>::StepSparse(T* params, T* grads) {
+void Adam<T>::StepSparse(T* params, T* grads, TouchMarks* marks) {
   // No entry can be past step `sparse_calls_` (one step per call at most): grow the tables that far first, then
-  // sweep the entries in parallel ranges.
+  // sweep the groups of entries (the marked ones, given marks) in parallel ranges.
   GrowTables(++sparse_calls_);
-  const size_t n = entry_size_;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, entry_steps_.size(), 16384), [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t entry = range.begin(); entry < range.end(); ++entry) {
-      T* g = grads + entry * n;
-      if (std::all_of(g, g + n, [](T value) { return value == T(0); })) continue;
-      const uint32_t step = ++entry_steps_[entry];
-      Update(options_, correction1_[step], correction2_[step], n, params + entry * n, g,
-             first_moment_.data() + entry * n, second_moment_.data() + entry * n);
-      std::fill(g, g + n, T(0));
+  const size_t n = entry_size_, entries = entry_steps_.size(), group = TouchMarks::kGroupEntries;
+  const T learning_rate = static_cast<T>(options_.learning_rate);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, (entries + group - 1) / group, 2048), [&](const tbb::blocked_range<size_t>& range) {
+    // Per value of a group: lr / (1 - beta1^t) and 1 / sqrt(1 - beta2^t) at its entry's step t (0 and 0 for an
+    // entry without a gradient, which takes no step).
+    std::vector<T> step_size(group * n), correction(group * n);
+    for (size_t g = range.begin(); g < range.end(); ++g) {
+      if (marks != nullptr) {
+        if (!marks->marked(g)) continue;
+        marks->Clear(g);
+      }
+      const size_t first = g * group, count = std::min(entries, first + group) - first;
+      bool any = false;
+      for (size_t e = 0; e < count; ++e) {
+        const T* gradient = grads + (first + e) * n;
+        const bool touched = std::any_of(gradient, gradient + n, [](T value) { return value != T(0); });
+        const uint32_t step = touched ? ++entry_steps_[first + e] : 0;
+        any |= touched;
+        std::fill_n(step_size.begin() + e * n, n, learning_rate * correction1_[step]);
+        std::fill_n(correction.begin() + e * n, n, correction2_[step]);
+      }
+      if (any) {
+        UpdateSome(options_, step_size.data(), correction.data(), count * n, params + first * n, grads + first * n,
+                   first_moment_.data() + first * n, second_moment_.data() + first * n);
+      }
     }
   });
 }

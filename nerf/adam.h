@@ -2,14 +2,16 @@
 // Adam (Kingma & Ba) for dense parameter vectors, and a sparse variant for hash tables that updates only the
 // entries that received a gradient, each with its own step count (as tiny-cuda-nn does): an entry that is
 // seldom touched is not decayed by steps it took no part in. As in tiny-cuda-nn, an entry took part in a step
-// when its gradient is not exactly zero; the sparse step sweeps the table in order (sequential memory access,
-// no list of touched entries) and zeroes the gradients it used, so the table's gradient is zero for the next.
+// when its gradient is not exactly zero; the sparse step sweeps the table in order (sequential memory access)
+// and zeroes the gradients it used, so the table's gradient is zero for the next. Given the gradient's touch
+// marks, it reads only the groups of entries marked, and clears the marks.
 
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
 #include "nerf/binary_io.h"
+#include "nerf/touch_marks.h"
 
 namespace p2n {
 
@@ -32,8 +34,8 @@ class Adam {
   // Updates every parameter from `grads` (num_params values).
   void Step(T* params, const T* grads);
   // Updates only the entries whose gradient is not all zero, and zeroes their gradient; `grads` is indexed
-  // like `params`.
-  void StepSparse(T* params, T* grads);
+  // like `params`. With `marks` (one entry of them per Adam entry), only the marked groups are read.
+  void StepSparse(T* params, T* grads, TouchMarks* marks = nullptr);
 
   // The moments and step counts, for checkpoints (Load() checks the sizes).
   void Save(BinaryWriter* writer) const;

@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "nerf/touch_marks.h"
+
 namespace p2n {
 
 template <typename T>
@@ -33,6 +35,8 @@ class Encoding {
   virtual T* grads() { return nullptr; }
   // Values that share one optimiser step count (the features of one table entry).
   virtual int entry_size() const { return 1; }
+  // Which entries Backward() touched since the sparse Adam step cleared them (nullptr: not recorded).
+  virtual TouchMarks* touched() { return nullptr; }
   virtual void ZeroGrad() {}
   // Adds dL/d(params) for `input` given dL/d(output) (output_dims x n).
   virtual void Backward(const Matrix& input, const Matrix& d_output) {
@@ -95,6 +99,7 @@ class HashGridEncoding : public Encoding<T> {
   T* params() override { return params_.data(); }
   T* grads() override { return grads_.data(); }
   int entry_size() const override { return config_.features_per_level; }
+  TouchMarks* touched() override { return touched_.get(); }
   void ZeroGrad() override;
   void Backward(const Matrix& input, const Matrix& d_output) override;
   void InputGradient(const Matrix& input, const Matrix& d_output, Matrix* d_input) const override;
@@ -109,12 +114,20 @@ class HashGridEncoding : public Encoding<T> {
   };
   // Entry of a grid vertex at `level`.
   uint32_t EntryIndex(const Level& level, const uint32_t* vertex) const;
-  // Calls visit(entry, weight) for the 2^D vertices around point `p` at `level`, corner 0 to 2^D - 1 (bit d of a
-  // corner set: the upper vertex along axis d).
-  template <class Visit>
-  void ForEachCorner(const Level& level, const T* p, Visit visit) const;
-  // Asks the cache for the entries around point `p` at `level` (hashed levels only).
-  void Prefetch(const Level& level, const T* p) const;
+  // The entries of the 2^D vertices around point `p` at `level` and their interpolation weights, corner 0 to
+  // 2^D - 1 (bit d of a corner set: the upper vertex along axis d).
+  void Corners(const Level& level, const T* p, uint32_t* entries, T* weights) const;
+  // Corners() of `count` (at most kGroup) points from column `first` of `input`, corner after corner: point i's
+  // corner c at c * kGroup + i.
+  void GroupCorners(const Level& level, const Matrix& input, Eigen::Index first, int count, uint32_t* entries,
+                    T* weights) const;
+  // Asks the cache for the `corners` entries of `table` at entries[c * kGroup] (for writing or reading).
+  void PrefetchEntries(const uint32_t* entries, int corners, const T* table, bool write) const;
+  // Forward() and Backward() at level l (kFeatures: features per level, 0 for any).
+  template <int kFeatures>
+  void ForwardLevel(int l, const Matrix& input, Eigen::Index begin, Eigen::Index end, Matrix* output) const;
+  template <int kFeatures>
+  void BackwardLevel(int l, const Matrix& input, const Matrix& d_output);
   // Adds this level's dL/d(p) for one point given dL/d(this level's features).
   void AddInputGradient(const Level& level, const T* p, const T* d_features, T* d_p) const;
 
@@ -122,6 +135,7 @@ class HashGridEncoding : public Encoding<T> {
   HashGridConfig config_;
   std::vector<Level> levels_;
   std::vector<T> params_, grads_;
+  std::unique_ptr<TouchMarks> touched_;  // of grads_
 };
 
 extern template class PositionalEncoding<float>;

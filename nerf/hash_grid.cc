@@ -14,10 +14,12 @@ namespace {
 
 constexpr uint32_t kPrimes[3] = {1u, 2654435761u, 805459861u};
 constexpr Eigen::Index kBlock = 16384;  // points per task of Forward()
-// A hashed level's entries are scattered over a table larger than the cache: Forward() asks for the entries of
-// the point this far ahead while it works on the current one, so that several points' reads are in flight
-// (throughput_bench: +8%; the same in Backward() gained nothing).
-constexpr Eigen::Index kPrefetchAhead = 4;
+// Points whose corners are found before any of their entries is read: the reads of a group are independent, so
+// many are in flight at once (a hashed level's table is larger than the core's cache).
+// Within a group, the cache is asked for a point's entries this many points before they are read (throughput_bench,
+// random points: forward 2.7 -> 4.6 M samples/s, backward 2.8 -> 5.1 with the default layout; 4 and 16 were slower).
+constexpr Eigen::Index kGroup = 64;
+constexpr int kPrefetchAhead = 8;
 
 }  // namespace
 
@@ -72,6 +74,7 @@ HashGridEncoding<T>::HashGridEncoding(int dims, const HashGridConfig& config, ui
   std::uniform_real_distribution<double> uniform(-1e-4, 1e-4);
   for (T& value : params_) value = static_cast<T>(uniform(random));
   grads_.assign(values, T(0));
+  touched_ = std::make_unique<TouchMarks>(offset);
 }
 
 template <typename T>
@@ -98,20 +101,17 @@ uint32_t HashGridEncoding<T>::EntryIndex(const Level& level, const uint32_t* ver
 }
 
 template <typename T>
-template <class Visit>
-void HashGridEncoding<T>::ForEachCorner(const Level& level, const T* p, Visit visit) const {
+void HashGridEncoding<T>::Corners(const Level& level, const T* p, uint32_t* entries, T* weights) const {
   uint32_t base[3];
   T fraction[3];
   for (int d = 0; d < dims_; ++d) {
-    const double position = std::clamp(static_cast<double>(p[d]), 0.0, 1.0) * level.scale;
+    // Into [0, 1] (a NaN coordinate to 0: std::max returns its first argument unless the second is greater).
+    const double position = std::min(std::max(0.0, static_cast<double>(p[d])), 1.0) * level.scale;
     const double floor = std::floor(position);
     base[d] = static_cast<uint32_t>(floor);
     fraction[d] = static_cast<T>(position - floor);
   }
-  if (dims_ == 3) {
-    // The common case, unrolled: the 8 entries are computed before any is read, so the loads overlap.
-    uint32_t entries[8];
-    T weights[8];
+  if (dims_ == 3) {  // the common case, unrolled
     for (int corner = 0; corner < 8; ++corner) {
       const uint32_t x = base[0] + (corner & 1), y = base[1] + ((corner >> 1) & 1), z = base[2] + (corner >> 2);
       entries[corner] = level.offset + (level.dense ? x + level.vertices * (y + level.vertices * z)
@@ -120,7 +120,6 @@ void HashGridEncoding<T>::ForEachCorner(const Level& level, const T* p, Visit vi
                         ((corner & 2) ? fraction[1] : T(1) - fraction[1]) *
                         ((corner & 4) ? fraction[2] : T(1) - fraction[2]);
     }
-    for (int corner = 0; corner < 8; ++corner) visit(entries[corner], weights[corner]);
     return;
   }
   for (int corner = 0; corner < (1 << dims_); ++corner) {
@@ -131,16 +130,90 @@ void HashGridEncoding<T>::ForEachCorner(const Level& level, const T* p, Visit vi
       vertex[d] = base[d] + upper;
       weight *= upper ? fraction[d] : T(1) - fraction[d];
     }
-    visit(EntryIndex(level, vertex), weight);
+    entries[corner] = EntryIndex(level, vertex);
+    weights[corner] = weight;
   }
 }
 
 template <typename T>
-void HashGridEncoding<T>::Prefetch(const Level& level, const T* p) const {
-  if (level.dense) return;  // small enough to stay in the cache
-  ForEachCorner(level, p, [&](uint32_t entry, T) {
-    __builtin_prefetch(params_.data() + size_t{entry} * config_.features_per_level);
-  });
+void HashGridEncoding<T>::GroupCorners(const Level& level, const Matrix& input, Eigen::Index first, int count,
+                                       uint32_t* entries, T* weights) const {
+  if (dims_ != 3) {
+    for (int i = 0; i < count; ++i) {
+      uint32_t point_entries[8];
+      T point_weights[8];
+      Corners(level, input.col(first + i).data(), point_entries, point_weights);
+      for (int corner = 0; corner < (1 << dims_); ++corner) {
+        entries[corner * kGroup + i] = point_entries[corner];
+        weights[corner * kGroup + i] = point_weights[corner];
+      }
+    }
+    return;
+  }
+  // The common case as loops over the points without branches, which vectorise: first each point's cell and
+  // where in it the point lies, then the corners.
+  uint32_t base[3][kGroup];
+  T fraction[3][kGroup];
+  double coordinate[kGroup];
+  for (int d = 0; d < 3; ++d) {
+    const T* p = input.data() + first * 3 + d;
+    for (int i = 0; i < count; ++i) coordinate[i] = static_cast<double>(p[3 * i]);
+    for (int i = 0; i < count; ++i) {
+      // As in Corners(); the position is at least 0, so truncation is its floor. (Clamping the coordinate
+      // before it is a double, or with std::clamp, keeps GCC 12 from vectorising the loop.)
+      const double position = std::min(std::max(0.0, coordinate[i]), 1.0) * level.scale;
+      const int32_t cell = static_cast<int32_t>(position);
+      base[d][i] = static_cast<uint32_t>(cell);
+      fraction[d][i] = static_cast<T>(position - cell);
+    }
+  }
+  const uint32_t stride = level.dense ? level.vertices : kPrimes[1];
+  const uint32_t stride2 = level.dense ? level.vertices * level.vertices : kPrimes[2];
+  const uint32_t mask = level.dense ? ~0u : level.size - 1;
+  for (int corner = 0; corner < 8; ++corner) {
+    const uint32_t dx = corner & 1, dy = (corner >> 1) & 1, dz = corner >> 2;
+    for (int i = 0; i < count; ++i) {
+      const uint32_t x = base[0][i] + dx, y = (base[1][i] + dy) * stride, z = (base[2][i] + dz) * stride2;
+      entries[corner * kGroup + i] = level.offset + (level.dense ? x + y + z : (x ^ y ^ z) & mask);
+      weights[corner * kGroup + i] = (dx ? fraction[0][i] : T(1) - fraction[0][i]) *
+                                     (dy ? fraction[1][i] : T(1) - fraction[1][i]) *
+                                     (dz ? fraction[2][i] : T(1) - fraction[2][i]);
+    }
+  }
+}
+
+template <typename T>
+void HashGridEncoding<T>::PrefetchEntries(const uint32_t* entries, int corners, const T* table, bool write) const {
+  for (int c = 0; c < corners; ++c) {
+    const T* address = table + size_t{entries[c * kGroup]} * config_.features_per_level;
+    if (write) {
+      __builtin_prefetch(address, 1);
+    } else {
+      __builtin_prefetch(address, 0);
+    }
+  }
+}
+
+template <typename T>
+template <int kFeatures>
+void HashGridEncoding<T>::ForwardLevel(int l, const Matrix& input, Eigen::Index begin, Eigen::Index end,
+                                       Matrix* output) const {
+  const int features = kFeatures > 0 ? kFeatures : config_.features_per_level, corners = 1 << dims_;
+  uint32_t entries[kGroup * 8];
+  T weights[kGroup * 8];
+  for (Eigen::Index group = begin; group < end; group += kGroup) {
+    const int count = static_cast<int>(std::min(kGroup, end - group));
+    GroupCorners(levels_[l], input, group, count, entries, weights);
+    for (int i = 0; i < count; ++i) {
+      if (i + kPrefetchAhead < count) PrefetchEntries(entries + i + kPrefetchAhead, corners, params_.data(), false);
+      T sum[8] = {};
+      for (int c = 0; c < corners; ++c) {
+        const T* feature = params_.data() + size_t{entries[c * kGroup + i]} * features;
+        for (int f = 0; f < features; ++f) sum[f] += weights[c * kGroup + i] * feature[f];
+      }
+      std::copy(sum, sum + features, output->col(group + i).data() + l * features);
+    }
+  }
 }
 
 template <typename T>
@@ -148,20 +221,16 @@ void HashGridEncoding<T>::Forward(const Matrix& input, Matrix* output) const {
   // Level by level, in blocks of points: a task reads one level's table (a few MB at most), which stays in the
   // cache for its whole block; reading every level for each point would cycle through all the tables.
   const Eigen::Index n = input.cols();
-  const int features = config_.features_per_level;
-  output->setZero(output_dims(), n);
+  output->resize(output_dims(), n);  // every value is written
   const Eigen::Index blocks = (n + kBlock - 1) / kBlock;
   tbb::parallel_for(Eigen::Index{0}, config_.levels * blocks, [&](Eigen::Index task) {
     FlushDenormalsOnThisThread();
     const int l = static_cast<int>(task / blocks);
     const Eigen::Index begin = task % blocks * kBlock, end = std::min(n, begin + kBlock);
-    for (Eigen::Index i = begin; i < end; ++i) {
-      if (i + kPrefetchAhead < end) Prefetch(levels_[l], input.col(i + kPrefetchAhead).data());
-      T* out = output->col(i).data() + l * features;
-      ForEachCorner(levels_[l], input.col(i).data(), [&](uint32_t entry, T weight) {
-        const T* feature = params_.data() + size_t{entry} * features;
-        for (int f = 0; f < features; ++f) out[f] += weight * feature[f];
-      });
+    switch (config_.features_per_level) {
+      case 2: ForwardLevel<2>(l, input, begin, end, output); break;
+      case 4: ForwardLevel<4>(l, input, begin, end, output); break;
+      default: ForwardLevel<0>(l, input, begin, end, output);
     }
   });
 }
@@ -171,19 +240,40 @@ void HashGridEncoding<T>::ZeroGrad() {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, grads_.size(), size_t{1} << 16), [&](const tbb::blocked_range<size_t>& range) {
     std::fill(grads_.begin() + range.begin(), grads_.begin() + range.end(), T(0));
   });
+  touched_->ClearAll();
+}
+
+template <typename T>
+template <int kFeatures>
+void HashGridEncoding<T>::BackwardLevel(int l, const Matrix& input, const Matrix& d_output) {
+  const int features = kFeatures > 0 ? kFeatures : config_.features_per_level, corners = 1 << dims_;
+  uint32_t entries[kGroup * 8];
+  T weights[kGroup * 8];
+  for (Eigen::Index group = 0; group < input.cols(); group += kGroup) {
+    const int count = static_cast<int>(std::min(kGroup, input.cols() - group));
+    GroupCorners(levels_[l], input, group, count, entries, weights);
+    for (int i = 0; i < count; ++i) {
+      if (i + kPrefetchAhead < count) PrefetchEntries(entries + i + kPrefetchAhead, corners, grads_.data(), true);
+      T d_out[8];
+      std::copy_n(d_output.col(group + i).data() + l * features, features, d_out);
+      for (int c = 0; c < corners; ++c) {
+        const uint32_t entry = entries[c * kGroup + i];
+        touched_->Mark(entry);
+        T* grad = grads_.data() + size_t{entry} * features;
+        for (int f = 0; f < features; ++f) grad[f] += weights[c * kGroup + i] * d_out[f];
+      }
+    }
+  }
 }
 
 template <typename T>
 void HashGridEncoding<T>::Backward(const Matrix& input, const Matrix& d_output) {
-  const int features = config_.features_per_level;
   tbb::parallel_for(0, config_.levels, [&](int l) {
     FlushDenormalsOnThisThread();
-    for (Eigen::Index i = 0; i < input.cols(); ++i) {
-      const T* d_out = d_output.col(i).data() + l * features;
-      ForEachCorner(levels_[l], input.col(i).data(), [&](uint32_t entry, T weight) {
-        T* grad = grads_.data() + size_t{entry} * features;
-        for (int f = 0; f < features; ++f) grad[f] += weight * d_out[f];
-      });
+    switch (config_.features_per_level) {
+      case 2: BackwardLevel<2>(l, input, d_output); break;
+      case 4: BackwardLevel<4>(l, input, d_output); break;
+      default: BackwardLevel<0>(l, input, d_output);
     }
   });
 }
@@ -217,9 +307,11 @@ void HashGridEncoding<T>::AddInputGradient(const Level& level, const T* p, const
     inside[d] = p[d] > T(0) && p[d] < T(1);
   }
   const int features = config_.features_per_level;
-  int corner = 0;
-  ForEachCorner(level, p, [&](uint32_t entry, T) {
-    const T* feature = params_.data() + size_t{entry} * features;
+  uint32_t entries[8];
+  T weights[8];
+  Corners(level, p, entries, weights);
+  for (int corner = 0; corner < (1 << dims_); ++corner) {
+    const T* feature = params_.data() + size_t{entries[corner]} * features;
     T d_weight = T(0);  // dL/d(this corner's weight)
     for (int f = 0; f < features; ++f) d_weight += d_features[f] * feature[f];
     for (int d = 0; d < dims_; ++d) {
@@ -231,8 +323,7 @@ void HashGridEncoding<T>::AddInputGradient(const Level& level, const T* p, const
       }
       d_p[d] += ((corner >> d) & 1) ? d_weight * slope : -d_weight * slope;
     }
-    ++corner;
-  });
+  }
 }
 
 template class HashGridEncoding<float>;

@@ -156,7 +156,7 @@ double TrainStep(Model& model, const FloatImage& target, const std::vector<uint3
   model.mlp_adam->Step(model.mlp->params(), total.data());
   if (trainable_encoding) {
     model.encoding->Backward(coordinates, d_encoded);  // its gradient is zero: the last sparse step zeroed it
-    model.encoding_adam->StepSparse(model.encoding->params(), model.encoding->grads());
+    model.encoding_adam->StepSparse(model.encoding->params(), model.encoding->grads(), model.encoding->touched());
   }
   return loss;
 }

@@ -431,7 +431,7 @@ void Trainer::UpdateParameters(double learning_rate, const float* d_dense, bool 
   }
   if (Encoding<float>* grid = field.TrainableEncoding()) {
     grid_adam_->set_learning_rate(learning_rate);
-    grid_adam_->StepSparse(grid->params(), grid->grads());
+    grid_adam_->StepSparse(grid->params(), grid->grads(), grid->touched());
   }
   if (appearance_adam_) {  // views without rays in this batch keep their moments
     appearance_adam_->set_learning_rate(kAppearanceRateShare * learning_rate);

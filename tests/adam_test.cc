@@ -55,4 +55,32 @@ TEST_CASE("sparse Adam equals dense Adam when every entry is touched, and counts
   CHECK(params[3] == Approx(-0.01));
 }
 
+TEST_CASE("sparse Adam given touch marks reads only the marked groups, updates them as without marks and clears them",
+          "[adam]") {
+  const size_t entries = 40, group = TouchMarks::kGroupEntries;
+  Adam<double> with_marks({0.01, 0.9, 0.99, 1e-15}, 2 * entries, 2), without({0.01, 0.9, 0.99, 1e-15}, 2 * entries, 2);
+  std::vector<double> a(2 * entries, 1.0), b = a;
+  TouchMarks marks(entries);
+  for (int step = 0; step < 3; ++step) {
+    std::vector<double> grads(2 * entries, 0.0);
+    for (const size_t entry : {size_t{3}, size_t{17}, size_t{39}}) {
+      grads[2 * entry] = 0.1 * (step + 1);
+      marks.Mark(entry);
+    }
+    std::vector<double> unmarked = grads;
+    with_marks.StepSparse(a.data(), grads.data(), &marks);
+    without.StepSparse(b.data(), unmarked.data());
+    CHECK(a == b);
+    CHECK(grads == std::vector<double>(2 * entries, 0.0));
+    for (size_t g = 0; g < marks.groups(); ++g) CHECK_FALSE(marks.marked(g));
+  }
+  // A gradient in a group nobody marked is not read: the marks are a promise.
+  std::vector<double> grads(2 * entries, 0.0);
+  grads[2 * 25] = 1;
+  with_marks.StepSparse(a.data(), grads.data(), &marks);
+  CHECK(a[2 * 25] == 1.0);
+  CHECK(grads[2 * 25] == 1.0);
+  CHECK(25 / group != 17 / group);
+}
+
 }  // namespace p2n::testing

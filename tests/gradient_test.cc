@@ -92,13 +92,23 @@ TEST_CASE("sigmoid output stays finite and saturates for huge inputs", "[gradien
   CHECK(out.allFinite());
 }
 
-TEST_CASE("hash-grid gradients match finite differences, in 2D and 3D, dense and hashed levels", "[gradients]") {
-  for (const int dims : {2, 3}) {
-    HashGridEncoding<double> grid(dims, SmallGridConfig(), 3);
-    const Matrix input = Random(dims, 7, 4, 0, 1);
-    const Matrix weights = Random(grid.output_dims(), 7, 5, -1, 1);
+TEST_CASE("hash-grid gradients match finite differences, in 2D and 3D, dense and hashed levels, 1 to 4 features",
+          "[gradients]") {
+  // 70 points: more than one group of points whose entries are found before they are read (hash_grid.cc).
+  for (const auto& [dims, features] : {std::pair(2, 2), std::pair(3, 1), std::pair(3, 2), std::pair(3, 3),
+                                       std::pair(3, 4)}) {
+    CAPTURE(dims, features);
+    HashGridConfig config = SmallGridConfig();
+    config.features_per_level = features;
+    HashGridEncoding<double> grid(dims, config, 3);
+    const Matrix input = Random(dims, 70, 4, 0, 1);
+    const Matrix weights = Random(grid.output_dims(), 70, 5, -1, 1);
     grid.Backward(input, weights);
     const std::vector<double> analytic(grid.grads(), grid.grads() + grid.num_params());
+    // Every entry with a gradient is in a group the sparse Adam step will read.
+    for (size_t k = 0; k < grid.num_params(); ++k) {
+      if (analytic[k] != 0) REQUIRE(grid.touched()->marked(k / features / TouchMarks::kGroupEntries));
+    }
     const auto loss = [&] {
       Matrix out;
       grid.Forward(input, &out);
