@@ -119,16 +119,30 @@ Trainer::Trainer(const TrainerOptions& options, const TrainingData& data) : opti
     for (const TrainView& view : data.train) centres_.push_back(view.camera.world_from_cam.block<3, 1>(0, 3));
   }
   size_t offset = 0;
+  std::vector<std::pair<int, int>> sizes;
   for (const TrainView& view : data.train) {
     pixel_offsets_.push_back(offset);
     offset += size_t(view.camera.width) * view.camera.height;
+    sizes.emplace_back(view.camera.width, view.camera.height);
   }
   pixel_offsets_.push_back(offset);
+  if (options.error_sampling) error_map_ = std::make_unique<ErrorMap>(sizes);
 }
 
 double Trainer::LearningRate(double progress) const {
   progress = std::clamp(progress, 0.0, 1.0);
   return options_.learning_rate * std::pow(options_.final_learning_rate / options_.learning_rate, progress);
+}
+
+ErrorMap::Draw Trainer::DrawPixel(std::mt19937_64* random) const {
+  if (error_map_) return error_map_->Sample(random);
+  ErrorMap::Draw draw;  // uniform over all training pixels
+  const size_t global = std::uniform_int_distribution<size_t>(0, pixel_offsets_.back() - 1)(*random);
+  draw.view = std::upper_bound(pixel_offsets_.begin(), pixel_offsets_.end(), global) - pixel_offsets_.begin() - 1;
+  const size_t pixel = global - pixel_offsets_[draw.view];
+  draw.x = static_cast<int>(pixel % data_.train[draw.view].camera.width);
+  draw.y = static_cast<int>(pixel / data_.train[draw.view].camera.width);
+  return draw;
 }
 
 RayBatch Trainer::SampleBatch(int rays) {
@@ -138,18 +152,23 @@ RayBatch Trainer::SampleBatch(int rays) {
   batch.target.resize(3, rays);
   batch.background.resize(3, rays);
   batch.views.resize(rays);
+  if (error_map_) {
+    batch.weights.resize(rays);
+    batch.cells.resize(rays);
+  }
   std::mt19937_64 random(MixSeed(options_.seed, step_, 0));
-  std::uniform_int_distribution<size_t> pick(0, pixel_offsets_.back() - 1);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (int r = 0; r < rays; ++r) {
-    const size_t global = pick(random);
-    const size_t v = std::upper_bound(pixel_offsets_.begin(), pixel_offsets_.end(), global) - pixel_offsets_.begin() - 1;
-    const TrainView& view = data_.train[v];
-    const size_t pixel = global - pixel_offsets_[v];
-    const int x = static_cast<int>(pixel % view.camera.width), y = static_cast<int>(pixel / view.camera.width);
-    batch.rays[r] = CameraRay(view.camera, x + unit(random), y + unit(random));
+    const ErrorMap::Draw draw = DrawPixel(&random);
+    if (error_map_) {
+      batch.weights[r] = draw.weight;
+      batch.cells[r] = draw.cell;
+    }
+    const TrainView& view = data_.train[draw.view];
+    const size_t pixel = size_t(draw.y) * view.camera.width + draw.x;
+    batch.rays[r] = CameraRay(view.camera, draw.x + unit(random), draw.y + unit(random));
     batch.near_far[r] = Eigen::Vector2d(view.near, view.far);
-    batch.views[r] = static_cast<int>(v);
+    batch.views[r] = static_cast<int>(draw.view);
     const uint8_t* value = view.pixels.data() + pixel * view.channels;
     const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
     for (int c = 0; c < 3; ++c) {
@@ -199,7 +218,8 @@ struct Trainer::Chunk {
   std::vector<Eigen::Index> used;             // the samples before early termination (the ones with gradients)
   Eigen::MatrixXf used_positions, d_encoded;  // of those
   double d_encoded_magnitude = 0;             // the sum of |d_encoded|
-  double loss = 0;
+  double loss = 0;                            // weighted, summed over the rays
+  std::vector<float> ray_losses;              // each ray's, unweighted
 };
 
 void Trainer::MarchChunk(const RayBatch& batch, const std::vector<Ray>& rays, size_t c, Chunk* chunk) const {
@@ -269,10 +289,14 @@ void Trainer::BackpropagateChunk(const RayBatch& batch, const std::vector<Ray>& 
     const size_t params = appearance ? size_t(batch.views[b]) * kAppearanceParams : 0;
     float rgb[3] = {result.rgb[0], result.rgb[1], result.rgb[2]}, d_rgb[3];
     if (appearance) ApplyAppearance(&appearance_[params], result.rgb, rgb);
+    const float weight = batch.weights.empty() ? 1.0f : batch.weights[b];
+    float ray_loss = 0;
     for (int ch = 0; ch < 3; ++ch) {
-      chunk->loss += ChannelLoss(huber, rgb[ch] - batch.target(ch, b), &d_rgb[ch]) / 3.0;
-      d_rgb[ch] *= scale;
+      ray_loss += ChannelLoss(huber, rgb[ch] - batch.target(ch, b), &d_rgb[ch]) / 3.0f;
+      d_rgb[ch] *= scale * weight;
     }
+    chunk->loss += weight * ray_loss;
+    chunk->ray_losses.push_back(ray_loss);
     if (appearance) {
       const float d_out[3] = {d_rgb[0], d_rgb[1], d_rgb[2]};
       AppearanceBackward(&appearance_[params], result.rgb, d_out, &chunk->d_appearance[params], d_rgb);
@@ -415,6 +439,12 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     if (refine) AddPoseGradients(batch, rays, positions, d_encoded, &chunks);
   }
   UpdateParameters(LearningRate(progress), d_dense.data(), refine);
+  if (error_map_ && !batch.cells.empty()) {
+    for (const Chunk& chunk : chunks) {
+      for (size_t r = 0; r < chunk.count; ++r) error_map_->Record(batch.cells[chunk.first + r], chunk.ray_losses[r]);
+    }
+    error_map_->Rebuild();
+  }
   const double per_ray = static_cast<double>(result.samples) / std::max<size_t>(rays.size(), 1);
   samples_per_ray_ = samples_per_ray_ > 0 ? 0.9 * samples_per_ray_ + 0.1 * per_ray : per_ray;
   return result;

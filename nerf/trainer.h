@@ -10,6 +10,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,7 @@
 
 #include "nerf/adam.h"
 #include "nerf/camera.h"
+#include "nerf/error_map.h"
 #include "nerf/float_image.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
@@ -63,6 +65,7 @@ struct TrainerOptions {
   bool appearance = false;              // a colour transform per training image (appearance.h)
   bool refine_cameras = false;          // a pose correction per training image (camera_refinement.h)
   int refine_warmup = 100;              // steps before the corrections learn (a younger field's gradients mislead)
+  bool error_sampling = false;          // pixels drawn by the error map (error_map.h), their losses weighted
   uint64_t seed = 0;
 };
 
@@ -72,6 +75,8 @@ struct RayBatch {
   std::vector<Eigen::Vector2d> near_far;
   Eigen::Matrix3Xf target, background;
   std::vector<int> views;  // each ray's training view, for its appearance (empty: none)
+  std::vector<float> weights;   // each ray's loss weight (empty: all 1)
+  std::vector<uint32_t> cells;  // each ray's error-map cell (empty: none), where its loss is recorded
 };
 
 struct StepResult {
@@ -120,6 +125,8 @@ class Trainer {
  private:
   struct Chunk;  // one chunk of a step's rays (trainer.cc)
   void UpdateOccupancy();
+  // A training pixel: by the error map, or uniformly over all of them (weight 1).
+  ErrorMap::Draw DrawPixel(std::mt19937_64* random) const;
   double LearningRate(double progress) const;
   // The phases of StepOnBatch(): chunk c's rays marched; every sample's hash-grid encoding; a chunk's networks,
   // compositing and gradients; the pose corrections' gradients (after the hash grid's); the optimisers' steps.
@@ -149,6 +156,7 @@ class Trainer {
   int skipped_ = 0;
   double samples_per_ray_ = 0;  // running mean, for the batch size
   std::vector<size_t> pixel_offsets_;  // first global pixel index of each training view
+  std::unique_ptr<ErrorMap> error_map_;  // with options.error_sampling
 };
 
 }  // namespace p2n

@@ -1,5 +1,6 @@
 // The trainer's checkpoints (trainer.h: SaveCheckpoint, LoadCheckpoint): magic, the options that must match, the
-// model, the step counters, every optimiser's moments, and the per-view appearance and camera corrections.
+// model, the step counters, every optimiser's moments, the per-view appearance and camera corrections, and the
+// error map.
 
 #include "nerf/trainer.h"
 
@@ -17,6 +18,7 @@ nlohmann::json CheckpointIdentity(const TrainerOptions& options) {
           {"stratified_samples", options.stratified_samples},
           {"appearance", options.appearance},
           {"refine_cameras", options.refine_cameras},
+          {"error_sampling", options.error_sampling},
           {"seed", options.seed}};
 }
 
@@ -40,6 +42,7 @@ void Trainer::SaveCheckpoint(BinaryWriter* writer) const {
     writer->PutVector(poses_);
     pose_adam_->Save(writer);
   }
+  if (error_map_) error_map_->Save(writer);
 }
 
 void Trainer::LoadCheckpoint(BinaryReader* reader) {
@@ -63,9 +66,15 @@ void Trainer::LoadCheckpoint(BinaryReader* reader) {
     poses = reader->GetVector<float>(poses_.size());
     pose_adam_->Load(reader);
   }
+  std::unique_ptr<ErrorMap> error_map;
+  if (error_map_) {
+    error_map = std::make_unique<ErrorMap>(*error_map_);
+    error_map->Load(reader);
+  }
   if (!reader->AtEnd()) reader->Fail("there are bytes after the checkpoint");
   appearance_ = std::move(appearance);
   poses_ = std::move(poses);
+  error_map_ = std::move(error_map);
   model_ = std::move(model);
   step_ = step;
   skipped_ = skipped;

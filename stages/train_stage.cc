@@ -202,6 +202,7 @@ nlohmann::json TrainReport(Trainer& trainer, const TrainerOptions& trainer_optio
                        {"distortion_weight", trainer_options.distortion_weight},
                        {"appearance", trainer_options.appearance},
                        {"refine_cameras", trainer_options.refine_cameras},
+                       {"error_sampling", trainer_options.error_sampling},
                        {"random_background", trainer_options.random_background}}}};
 }
 
@@ -329,6 +330,7 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
   trainer.distortion_weight = DistortionWeight(options, space);
   trainer.appearance = options.appearance == "on";
   trainer.refine_cameras = options.refine_cameras == "on";
+  trainer.error_sampling = options.error_sampling == "on";
   trainer.seed = static_cast<uint64_t>(options.seed);
   return trainer;
 }

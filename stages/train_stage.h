@@ -30,6 +30,7 @@ struct TrainOptions {
   std::string distortion = "auto";  // weight of the distortion loss; auto: by the scene (train_stage.cc)
   std::string appearance = "off";   // a colour transform per training photo (on, off)
   std::string refine_cameras = "off";  // a pose correction per training photo (on, off; ngp only)
+  std::string error_sampling = "off";  // pixels drawn where the error is (on, off)
   double eval_interval = 10;       // seconds of training between held-out evaluations
   double eval_share = 0.1;         // held-out evaluations during training take at most this share of wall time
   int eval_pixels = 4096;          // held-out pixels per view in each evaluation during training (0: all)
@@ -70,6 +71,11 @@ struct TrainOptions {
       "on: each training photo's camera is corrected by a small turn and shift learnt with the field (ngp only); "
       "train_report.json says how far each moved, and the refined cameras are exported; off by measurement: fox "
       "after 5 minutes, held-out PSNR 25.27 dB on against 25.76 off",
+      "", OptionKind::kResult, {"off", "on"});
+    v("error_sampling", error_sampling,
+      "on: training pixels are drawn half uniformly and half where the recent error is large (instant-ngp's error "
+      "map), their losses weighted so that the expected gradient is the uniform one's; off by measurement: 5 "
+      "minutes of default, fox 26.59 dB on against 26.62 off, fern 22.30 against 22.26, lego 28.25 against 28.09",
       "", OptionKind::kResult, {"off", "on"});
     v("eval_interval", eval_interval, "training time between held-out evaluations (metrics.csv rows)", "s");
     v("eval_share", eval_share,

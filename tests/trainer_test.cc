@@ -96,8 +96,12 @@ void CheckLearns(Trainer* trainer) {
 
 TEST_CASE("training learns a sphere: held-out PSNR rises far above the untrained field's", "[trainer]") {
   const TrainingData data = SphereScene();
-  Trainer trainer(SmallOptions(), data);
+  TrainerOptions options = SmallOptions();
+  options.error_sampling = GENERATE(false, true);
+  CAPTURE(options.error_sampling);
+  Trainer trainer(options, data);
   CheckLearns(&trainer);
+  if (options.error_sampling) return;
   // The occupancy grid has found the sphere: most of the cube is empty, and renders take few samples.
   CHECK(trainer.model().occupancy.OccupiedFraction() < 0.5);
   RenderStats stats;
@@ -143,7 +147,9 @@ TEST_CASE("a run resumed from a checkpoint reaches exactly the parameters of an 
   const TrainingData data = SphereScene();
   TrainerOptions options = SmallOptions();
   options.appearance = GENERATE(false, true);
-  options.refine_cameras = options.appearance;  // both or neither: each has its own state to resume
+  // All or none: each has its own state to resume.
+  options.refine_cameras = options.appearance;
+  options.error_sampling = options.appearance;
   options.refine_warmup = 10;
   Trainer straight(options, data);
   for (int step = 0; step < 40; ++step) straight.Step(step / 40.0);
