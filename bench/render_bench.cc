@@ -2,7 +2,9 @@
 // views with sample spacings from coarse to fine, (a) as the renderer does (occupancy grid + early termination),
 // (b) without early termination, (c) without either (every cell occupied). Error is PSNR against a very fine
 // reference render (spacing / 8, no termination) and against the photos. Writes OUT.csv and OUT.png.
-// Usage: render_bench WORKSPACE OUT [VIEWS]
+// With --speed instead of OUT: renders the held-out views as the render stage does and prints the seconds per
+// view, samples per ray and samples (field evaluations) per second.
+// Usage: render_bench WORKSPACE OUT|--speed [VIEWS]
 
 #include <chrono>
 #include <cmath>
@@ -16,7 +18,7 @@
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: render_bench WORKSPACE OUT [VIEWS]\n");
+    std::fprintf(stderr, "usage: render_bench WORKSPACE OUT|--speed [VIEWS]\n");
     return 1;
   }
   const std::filesystem::path ws = argv[1];
@@ -26,6 +28,19 @@ int main(int argc, char** argv) {
   p2n::TrainingData data = p2n::LoadTrainingData(ws / "20_poses" / "transforms.json", ws, &split);
   if (data.heldout.size() > max_views) data.heldout.resize(max_views);
   const p2n::NerfModel model = p2n::LoadModel(ws / "30_train" / "model.bin");
+  if (out == "--speed") {
+    p2n::RenderStats total;
+    for (const p2n::TrainView& view : data.heldout) {
+      const p2n::RenderStats stats = p2n::RenderView(model, view.camera, view.near, view.far, {}).stats;
+      total.seconds += stats.seconds;
+      total.rays += stats.rays;
+      total.samples_evaluated += stats.samples_evaluated;
+    }
+    std::printf("%zu views: %.3f s per view, %.2f samples per ray, %.2f M samples/s, %.2f M rays/s\n",
+                data.heldout.size(), total.seconds / data.heldout.size(), double(total.samples_evaluated) / total.rays,
+                total.samples_evaluated / total.seconds / 1e6, total.rays / total.seconds / 1e6);
+    return 0;
+  }
   p2n::NerfModel dense = p2n::LoadModel(ws / "30_train" / "model.bin");
   dense.occupancy.MarkAllOccupied();
 
