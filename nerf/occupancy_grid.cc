@@ -16,6 +16,7 @@ OccupancyGrid::OccupancyGrid(int resolution)
       densities_(static_cast<size_t>(resolution) * resolution * resolution, -1.0f),
       bits_((densities_.size() + 7) / 8, 0xff) {
   if (resolution < 1 || resolution > 1024) throw std::invalid_argument("occupancy grid resolution must be 1..1024");
+  BuildBlocks();
 }
 
 OccupancyGrid::OccupancyGrid(int resolution, std::vector<float> densities, std::vector<uint8_t> bits)
@@ -25,9 +26,46 @@ OccupancyGrid::OccupancyGrid(int resolution, std::vector<float> densities, std::
   }
   densities_ = std::move(densities);
   bits_ = std::move(bits);
+  BuildBlocks();
 }
 
-void OccupancyGrid::MarkAllOccupied() { std::fill(bits_.begin(), bits_.end(), 0xff); }
+void OccupancyGrid::MarkAllOccupied() {
+  std::fill(bits_.begin(), bits_.end(), 0xff);
+  BuildBlocks();
+}
+
+void OccupancyGrid::BuildBlocks() {
+  blocks_.clear();
+  // Level k's flags from level k - 1's (level 0: the bits), up to blocks of 2^kMaxBlockLevel cells a side.
+  constexpr int kMaxBlockLevel = 5;
+  int previous = resolution_;  // the finer level's blocks per axis
+  for (int k = 1; k <= kMaxBlockLevel && previous > 1; ++k) {
+    const int size = (previous + 1) / 2;
+    std::vector<uint8_t> flags(static_cast<size_t>(size) * size * size, 0);
+    for (int z = 0; z < previous; ++z) {
+      for (int y = 0; y < previous; ++y) {
+        for (int x = 0; x < previous; ++x) {
+          const size_t fine = (static_cast<size_t>(z) * previous + y) * previous + x;
+          const bool occupied = k == 1 ? (bits_[fine / 8] >> (fine % 8)) & 1 : blocks_.back()[fine];
+          if (occupied) flags[(static_cast<size_t>(z / 2) * size + y / 2) * size + x / 2] = 1;
+        }
+      }
+    }
+    blocks_.push_back(std::move(flags));
+    previous = size;
+  }
+}
+
+int OccupancyGrid::EmptyBlockSide(const int* cell) const {
+  int level = 0;
+  for (; level < static_cast<int>(blocks_.size()); ++level) {
+    const int size = (resolution_ + (2 << level) - 1) >> (level + 1);  // blocks per axis at level + 1
+    const int shift = level + 1;
+    const size_t index = (static_cast<size_t>(cell[2] >> shift) * size + (cell[1] >> shift)) * size + (cell[0] >> shift);
+    if (blocks_[level][index]) break;
+  }
+  return 1 << level;
+}
 
 void OccupancyGrid::Update(const DensityFunction& density, float threshold, float decay, uint64_t seed,
                            size_t cells) {
@@ -66,6 +104,7 @@ void OccupancyGrid::Update(const DensityFunction& density, float threshold, floa
   for (size_t cell = 0; cell < total; ++cell) {
     if (densities_[cell] > threshold || densities_[cell] < 0) bits_[cell / 8] |= static_cast<uint8_t>(1u << (cell % 8));
   }
+  BuildBlocks();
 }
 
 double OccupancyGrid::MeanDensity() const {
@@ -110,13 +149,21 @@ std::vector<MarchSample> OccupancyGrid::March(const Ray& ray, double near, doubl
       t = end;
       continue;
     }
-    // Leap to where the ray leaves this cell, then on by whole steps so that samples stay on one lattice.
+    // Leap to where the ray leaves this cell (or the empty block around it, inside the grid), then on by whole
+    // steps so that samples stay on one lattice.
+    int cell[3];
+    bool inside = true;
+    for (int axis = 0; axis < 3; ++axis) {
+      cell[axis] = static_cast<int>(std::floor(point[axis] * resolution_));
+      inside = inside && cell[axis] >= 0 && cell[axis] < resolution_;
+    }
+    const int side = inside ? EmptyBlockSide(cell) : 1;
     double exit = far;
     for (int axis = 0; axis < 3; ++axis) {
       const double d = ray.direction[axis];
       if (d == 0) continue;
-      const double cell = std::floor(point[axis] * resolution_);
-      const double boundary = (d > 0 ? cell + 1 : cell) / resolution_;
+      const double block = std::floor(point[axis] * resolution_ / side) * side;  // its first cell along the axis
+      const double boundary = (d > 0 ? block + side : block) / resolution_;
       exit = std::min(exit, middle + (boundary - point[axis]) / d);
     }
     t += std::max(step, std::ceil((exit - t) / step) * step);

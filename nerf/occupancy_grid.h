@@ -41,7 +41,7 @@ class OccupancyGrid {
   double OccupiedFraction() const;
 
   // Samples every `step` along `ray` within [near, far] (in the grid's [0, 1]^3 frame), leaping over
-  // unoccupied cells to their exit; at most `max_samples`.
+  // unoccupied cells (the largest empty block of them around) to their exit; at most `max_samples`.
   std::vector<MarchSample> March(const Ray& ray, double near, double far, double step, size_t max_samples) const;
 
   const std::vector<float>& densities() const { return densities_; }
@@ -54,11 +54,18 @@ class OccupancyGrid {
   size_t CellIndex(int x, int y, int z) const {
     return (static_cast<size_t>(z) * resolution_ + y) * resolution_ + x;
   }
+  // The blocks from the bits (after every change of them).
+  void BuildBlocks();
+  // The side, in cells, of the largest empty block that holds the empty cell `cell` (1: the cell alone).
+  int EmptyBlockSide(const int* cell) const;
 
   int resolution_;
   size_t cursor_ = 0;              // where the next partial update starts in the scattered order
   std::vector<float> densities_;   // negative: never evaluated
   std::vector<uint8_t> bits_;  // one bit per cell
+  // Coarser views of the bits, for leaping over empty space in few steps: blocks_[k - 1] has a flag per block of
+  // 2^k x 2^k x 2^k cells (clipped at the far faces), set when a cell in it is occupied.
+  std::vector<std::vector<uint8_t>> blocks_;
 };
 
 }  // namespace p2n

@@ -3,6 +3,8 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <random>
+#include <vector>
 
 #include "nerf/occupancy_grid.h"
 
@@ -77,6 +79,51 @@ TEST_CASE("occupancy grid: partial updates visit every cell once per round and k
   const OccupancyGrid copy(16, grid.densities(), grid.bits());
   CHECK(copy.OccupiedFraction() == 0.0);
   CHECK_THROWS_AS(OccupancyGrid(8, grid.densities(), grid.bits()), std::invalid_argument);
+}
+
+TEST_CASE("occupancy grid: leaping over empty blocks keeps every sample the lattice gives in occupied cells",
+          "[occupancy]") {
+  // Small balls scattered through a grid whose side is not a power of two (blocks clipped at the far faces).
+  OccupancyGrid grid(100);
+  std::mt19937_64 random(3);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  Eigen::Matrix3Xf centres(3, 12);
+  for (int c = 0; c < 12; ++c) centres.col(c) = Eigen::Vector3f(unit(random), unit(random), unit(random));
+  grid.Update([&](const Eigen::Matrix3Xf& p) {
+    Eigen::VectorXf density = Eigen::VectorXf::Zero(p.cols());
+    for (Eigen::Index i = 0; i < p.cols(); ++i) density[i] = (centres.colwise() - p.col(i)).colwise().norm().minCoeff() < 0.06f;
+    return density;
+  }, 0.5f, 0.9f, 1);
+  REQUIRE(grid.OccupiedFraction() > 0.005);
+  REQUIRE(grid.OccupiedFraction() < 0.2);
+  size_t marched = 0;
+  for (int r = 0; r < 300; ++r) {
+    const Eigen::Vector3d origin(unit(random), unit(random), unit(random));
+    const Ray ray{origin, Eigen::Vector3d(unit(random) - 0.5, unit(random) - 0.5, unit(random) - 0.5).normalized()};
+    const double near = 0.01, far = 2, step = 1.0 / 700;
+    // The lattice's samples in occupied cells, and how many runs of them there are.
+    std::vector<double> lattice;
+    size_t runs = 0;
+    bool previous = false;
+    for (double t = near; t < far; t += step) {
+      const double middle = std::min(t + 0.5 * step, 0.5 * (t + far));
+      const bool occupied = grid.Occupied(ray.origin + middle * ray.direction);
+      if (occupied) lattice.push_back(middle);
+      runs += occupied && !previous;
+      previous = occupied;
+    }
+    const std::vector<MarchSample> samples = grid.March(ray, near, far, step, 100000);
+    for (const MarchSample& s : samples) {
+      REQUIRE(grid.Occupied(ray.origin + s.t * ray.direction));
+      const double k = (s.t - 0.5 * s.delta - near) / step;
+      REQUIRE(std::abs(k - std::round(k)) < 1e-6);
+    }
+    // A leap lands on the first lattice point past an empty cell's exit, which may skip one at a run's start.
+    CHECK(samples.size() <= lattice.size());
+    CHECK(samples.size() + runs >= lattice.size());
+    marched += samples.size();
+  }
+  CHECK(marched > 300);
 }
 
 }  // namespace p2n::testing
