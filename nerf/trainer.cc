@@ -305,7 +305,7 @@ void Trainer::BackpropagateChunk(const RayBatch& batch, const std::vector<Ray>& 
     if (segments.count == 0) continue;
     CompositeBackward(segments, background, result, d_rgb, 0.0f, 0.0f, d_density.data() + o, d_colour.data() + 3 * o);
     if (options_.distortion_weight > 0) {
-      const float distortion_scale = static_cast<float>(options_.distortion_weight / rays.size());
+      const float distortion_scale = static_cast<float>(options_.distortion_weight / rays.size()) * weight;
       AddDistortionGradient(model_, rays[b], segments, result.used, distortion_scale, d_density.data() + o);
     }
   }
