@@ -3,8 +3,9 @@
 // (b) without early termination, (c) without either (every cell occupied). Error is PSNR against a very fine
 // reference render (spacing / 8, no termination) and against the photos. Writes OUT.csv and OUT.png.
 // With --speed instead of OUT: renders the held-out views as the render stage does and prints the seconds per
-// view, samples per ray and samples (field evaluations) per second.
-// Usage: render_bench WORKSPACE OUT|--speed [VIEWS]
+// view, samples per ray, samples (field evaluations) per second and the PSNR against the photos, at the render
+// stage's sample spacing or STEP_SCALE times the model's march step.
+// Usage: render_bench WORKSPACE OUT|--speed [VIEWS] [STEP_SCALE]
 
 #include <chrono>
 #include <cmath>
@@ -14,11 +15,11 @@
 
 #include "nerf/plot.h"
 #include "nerf/renderer.h"
-#include "stages/train_stage.h"
+#include "stages/training_data.h"
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: render_bench WORKSPACE OUT|--speed [VIEWS]\n");
+    std::fprintf(stderr, "usage: render_bench WORKSPACE OUT|--speed [VIEWS] [STEP_SCALE]\n");
     return 1;
   }
   const std::filesystem::path ws = argv[1];
@@ -29,16 +30,20 @@ int main(int argc, char** argv) {
   if (data.heldout.size() > max_views) data.heldout.resize(max_views);
   const p2n::NerfModel model = p2n::LoadModel(ws / "30_train" / "model.bin");
   if (out == "--speed") {
+    p2n::RenderOptions options;
+    options.step_scale = argc > 4 ? std::atof(argv[4]) : 0.0;
     p2n::RenderStats total;
+    double psnr = 0;
     for (const p2n::TrainView& view : data.heldout) {
-      const p2n::RenderStats stats = p2n::RenderView(model, view.camera, view.near, view.far, {}).stats;
-      total.seconds += stats.seconds;
-      total.rays += stats.rays;
-      total.samples_evaluated += stats.samples_evaluated;
+      const p2n::RenderedView rendered = p2n::RenderView(model, view.camera, view.near, view.far, options);
+      total.seconds += rendered.stats.seconds;
+      total.rays += rendered.stats.rays;
+      total.samples_evaluated += rendered.stats.samples_evaluated;
+      psnr += p2n::Psnr(rendered.rgb, p2n::PhotoOnBackground(view, model.background)) / data.heldout.size();
     }
-    std::printf("%zu views: %.3f s per view, %.2f samples per ray, %.2f M samples/s, %.2f M rays/s\n",
+    std::printf("%zu views: %.3f s per view, %.2f samples per ray, %.2f M samples/s, %.2f M rays/s, %.2f dB\n",
                 data.heldout.size(), total.seconds / data.heldout.size(), double(total.samples_evaluated) / total.rays,
-                total.samples_evaluated / total.seconds / 1e6, total.rays / total.seconds / 1e6);
+                total.samples_evaluated / total.seconds / 1e6, total.rays / total.seconds / 1e6, psnr);
     return 0;
   }
   p2n::NerfModel dense = p2n::LoadModel(ws / "30_train" / "model.bin");

@@ -44,7 +44,8 @@ void AddOptionFlags(CLI::App& app, const OptionRegistry& registry, std::map<std:
         ->type_name(type)
         ->default_str(default_text)
         ->group(spec.kind == OptionKind::kResult ? "Options that change results (remembered by the workspace)"
-                                                 : "Runtime options (not remembered, not in any cache key)");
+                : spec.kind == OptionKind::kCheck ? "Checks on results (remembered, not in any cache key)"
+                                                  : "Runtime options (not remembered, not in any cache key)");
   }
 }
 
@@ -88,6 +89,20 @@ Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace,
   WriteJsonAtomic(remembered, config.ExplicitResultOptions());
   WriteJsonAtomic(workspace.ConfigPath(), config.ToJson());
   return config;
+}
+
+std::string RememberedOptionsText(const Workspace& workspace) {
+  const fs::path remembered = workspace.root() / "options.json";
+  if (!fs::exists(remembered)) return "";
+  const nlohmann::json options = ReadJsonFile(remembered);
+  std::string text;
+  for (const auto& [section, values] : options.items()) {
+    for (const auto& [name, value] : values.items()) {
+      text += format("{}{}.{} {}", text.empty() ? "" : ", ", section, name,
+                     value.is_string() ? value.get<std::string>() : value.dump());
+    }
+  }
+  return text;
 }
 
 std::unique_ptr<tbb::global_control> ApplyRunOptions(const Config& config, const fs::path& log_file) {

@@ -38,6 +38,9 @@ std::optional<int> Parse(CLI::App& app, const OptionRegistry& registry, int argc
 Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace, const CommonFlags& flags,
                      bool remember);
 
+// The options the workspace remembers (options.json), as "key value" pairs joined by ", "; "" when none.
+std::string RememberedOptionsText(const Workspace& workspace);
+
 // Applies run.threads, run.log_level and run.progress and sends the log also to `log_file`. The returned
 // object keeps the thread limit alive.
 std::unique_ptr<tbb::global_control> ApplyRunOptions(const Config& config, const std::filesystem::path& log_file);

@@ -2,6 +2,7 @@
 
 #include <tbb/global_control.h>
 
+#include <array>
 #include <filesystem>
 #include <iostream>
 
@@ -29,7 +30,7 @@ std::string CommandLine(int argc, char** argv) {
 }
 
 // What ran and how long each stage took, then where the results are and how good they are.
-void PrintRunSummary(const Workspace& workspace, const std::vector<StageRun>& runs) {
+void PrintRunSummary(const Workspace& workspace, const Runner& stages, const std::vector<StageRun>& runs) {
   size_t ran = 0;
   double seconds = 0;
   for (const StageRun& run : runs) {
@@ -41,7 +42,12 @@ void PrintRunSummary(const Workspace& workspace, const std::vector<StageRun>& ru
   for (const StageRun& run : runs) {
     LogInfo(format("  {:<8} {}", run.stage, run.ran ? format("ran in {:.1f} s", run.wall_seconds) : "fresh"));
   }
-  const fs::path eval = workspace.StageDir("40_render") / "eval.json";
+  const std::string remembered = RememberedOptionsText(workspace);
+  if (!remembered.empty()) LogInfo(format("  options the workspace remembers: {}", remembered));
+  const auto file_of = [&](const char* stage, const char* file) {
+    return workspace.StageDir(stages.Get(stage).folder()) / file;
+  };
+  const fs::path eval = file_of("render", "eval.json");
   if (fs::exists(eval)) {
     const nlohmann::json json = ReadJsonFile(eval);
     if (json.contains("psnr")) {
@@ -49,13 +55,13 @@ void PrintRunSummary(const Workspace& workspace, const std::vector<StageRun>& ru
                      json["ssim"].get<double>(), json["views"].size()));
     }
   }
-  const std::pair<const char*, const char*> results[] = {{"60_report/report.html", "report"},
-                                                         {"40_render/video.mp4", "video"},
-                                                         {"50_export/mesh.ply", "mesh"},
-                                                         {"50_export/points.ply", "point cloud"},
-                                                         {"30_train/model.bin", "model"}};
-  for (const auto& [file, what] : results) {
-    const fs::path path = workspace.root() / file;
+  const std::array<std::array<const char*, 3>, 5> results = {{{"report", "report.html", "report"},
+                                                               {"render", "video.mp4", "video"},
+                                                               {"export", "mesh.ply", "mesh"},
+                                                               {"export", "points.ply", "point cloud"},
+                                                               {"train", "model.bin", "model"}}};
+  for (const auto& [stage, file, what] : results) {
+    const fs::path path = file_of(stage, file);
     if (fs::exists(path)) LogInfo(format("  {:<12} {}", what, path.string()));
   }
 }
@@ -116,7 +122,7 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
   LogInfo(format("{} (workspace {})", CommandLine(argc, argv), workspace.root().string()));
 
   const std::vector<StageRun> runs = stages.Run(workspace, config, request);
-  PrintRunSummary(workspace, runs);
+  PrintRunSummary(workspace, stages, runs);
   return kExitOk;
 }
 
@@ -143,6 +149,9 @@ int RunStatus(int argc, char** argv) {
     std::cout << (kind.empty() ? "photos    " : "dataset   ") << workspace.input()->string() << "\n";
     if (!kind.empty()) std::cout << "          a " << kind << " dataset with cameras: ingest and sfm are not needed\n";
   }
+  const std::string remembered = RememberedOptionsText(workspace);
+  std::cout << "options   " << (remembered.empty() ? "the defaults" : remembered)
+            << (remembered.empty() ? "\n" : " (remembered from earlier commands; give another value to change one)\n");
   for (const StageStatus& status : runner.Status(workspace, config)) {
     std::string detail;
     if (status.state == StageState::kFresh) {

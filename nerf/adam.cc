@@ -7,7 +7,17 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "nerf/config_check.h"
+
 namespace p2n {
+
+void AdamOptions::Check() const {
+  CheckField(learning_rate >= 0 && std::isfinite(learning_rate), "adam", "learning_rate", "be at least 0",
+             learning_rate);
+  CheckField(beta1 >= 0 && beta1 < 1, "adam", "beta1", "be in [0, 1)", beta1);
+  CheckField(beta2 >= 0 && beta2 < 1, "adam", "beta2", "be in [0, 1)", beta2);
+  CheckField(epsilon > 0, "adam", "epsilon", "be positive", epsilon);
+}
 
 template <typename T>
 Adam<T>::Adam(AdamOptions options, size_t num_params, int entry_size)
@@ -16,6 +26,7 @@ Adam<T>::Adam(AdamOptions options, size_t num_params, int entry_size)
       first_moment_(num_params, T(0)),
       second_moment_(num_params, T(0)),
       entry_steps_(num_params / entry_size, 0) {
+  options.Check();
   if (entry_size <= 0 || num_params % entry_size != 0) {
     throw std::invalid_argument("Adam: the parameter count must be a multiple of the entry size");
   }

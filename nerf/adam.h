@@ -20,6 +20,9 @@ struct AdamOptions {
   double beta1 = 0.9;
   double beta2 = 0.999;
   double epsilon = 1e-8;
+
+  // std::invalid_argument naming the field and its rule (Adam checks its options).
+  void Check() const;
 };
 
 template <typename T>

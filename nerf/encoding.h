@@ -76,9 +76,13 @@ struct HashGridConfig {
   int base_resolution = 16;      // cells per axis of the coarsest level
   int finest_resolution = 2048;  // cells per axis of the finest level
 
+  // std::invalid_argument naming the field and its rule.
+  void Check() const;
   nlohmann::json ToJson() const;
-  // The inverse of ToJson(); missing keys keep their defaults.
+  // The inverse of ToJson(); missing keys keep their defaults; std::invalid_argument for an unknown key or a
+  // value of the wrong type.
   static HashGridConfig FromJson(const nlohmann::json& json);
+  bool operator==(const HashGridConfig& other) const = default;
 };
 
 // Multiresolution hash encoding (Mueller et al. 2022), D-linear interpolation of per-vertex features at each

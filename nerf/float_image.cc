@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <stdexcept>
 
 #include <opencv2/core.hpp>
@@ -52,7 +53,13 @@ double Psnr(const FloatImage& a, const FloatImage& b) {
     const double d = a.pixels[i] - b.pixels[i];
     squared_error += d * d;
   }
-  return -10 * std::log10(std::max(squared_error / a.pixels.size(), 1e-20));
+  return PsnrOfMse(squared_error / a.pixels.size());
+}
+
+double PsnrOfMse(double mse) { return -10 * std::log10(std::max(mse, 1e-20)); }
+
+double Mean(const std::vector<double>& values) {
+  return values.empty() ? std::nan("") : std::accumulate(values.begin(), values.end(), 0.0) / values.size();
 }
 
 double Ssim(const FloatImage& a, const FloatImage& b) {

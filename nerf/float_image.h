@@ -18,6 +18,10 @@ void SaveFloatImageExr(const FloatImage& image, const std::filesystem::path& pat
 
 // Peak signal-to-noise ratio for a peak of 1, in dB; std::invalid_argument when the sizes differ.
 double Psnr(const FloatImage& a, const FloatImage& b);
+// PSNR in dB of a mean squared error of values in [0, 1] (capped at 200 dB for a zero error).
+double PsnrOfMse(double mse);
+// The mean of per-view scores; NaN for none.
+double Mean(const std::vector<double>& values);
 // Structural similarity (Wang et al. 2004: 11x11 Gaussian window, sigma 1.5, K1 0.01, K2 0.03, peak 1) of
 // the luminance-free per-channel form, averaged over pixels and channels; std::invalid_argument when the sizes
 // differ.

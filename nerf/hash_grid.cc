@@ -6,6 +6,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "nerf/config_check.h"
 #include "nerf/denormals.h"
 #include "nerf/encoding.h"
 
@@ -33,25 +34,38 @@ nlohmann::json HashGridConfig::ToJson() const {
           {"finest_resolution", finest_resolution}};
 }
 
+void HashGridConfig::Check() const {
+  CheckField(levels >= 1 && levels <= 64, "hash_grid", "levels", "be 1..64", levels);
+  CheckField(features_per_level >= 1 && features_per_level <= 8, "hash_grid", "features_per_level", "be 1..8",
+             features_per_level);
+  CheckField(log2_table_size >= 4 && log2_table_size <= 24, "hash_grid", "log2_table_size", "be 4..24",
+             log2_table_size);
+  CheckField(base_resolution >= 1, "hash_grid", "base_resolution", "be at least 1", base_resolution);
+  CheckField(finest_resolution >= base_resolution && finest_resolution <= (1 << 20), "hash_grid",
+             "finest_resolution", "be base_resolution..2^20", finest_resolution);
+}
+
 HashGridConfig HashGridConfig::FromJson(const nlohmann::json& json) {
   HashGridConfig config;
-  config.levels = json.value("levels", config.levels);
-  config.features_per_level = json.value("features_per_level", config.features_per_level);
-  config.log2_table_size = json.value("log2_table_size", config.log2_table_size);
-  config.base_resolution = json.value("base_resolution", config.base_resolution);
-  config.finest_resolution = json.value("finest_resolution", config.finest_resolution);
+  RejectUnknownKeys(json, {"otype", "levels", "features_per_level", "log2_table_size", "base_resolution",
+                           "finest_resolution"}, "hash grid config");
+  try {
+    config.levels = json.value("levels", config.levels);
+    config.features_per_level = json.value("features_per_level", config.features_per_level);
+    config.log2_table_size = json.value("log2_table_size", config.log2_table_size);
+    config.base_resolution = json.value("base_resolution", config.base_resolution);
+    config.finest_resolution = json.value("finest_resolution", config.finest_resolution);
+  } catch (const nlohmann::json::exception& error) {
+    throw std::invalid_argument("hash grid config: " + std::string(error.what()));
+  }
   return config;
 }
 
 template <typename T>
 HashGridEncoding<T>::HashGridEncoding(int dims, const HashGridConfig& config, uint64_t seed)
     : dims_(dims), config_(config) {
-  if (dims < 1 || dims > 3 || config.levels < 1 || config.levels > 64 || config.features_per_level < 1 ||
-      config.features_per_level > 8 || config.log2_table_size < 4 || config.log2_table_size > 24 ||
-      config.base_resolution < 1 || config.finest_resolution < config.base_resolution ||
-      config.finest_resolution > (1 << 20)) {
-    throw std::invalid_argument("hash grid: invalid config " + config.ToJson().dump());
-  }
+  if (dims < 1 || dims > 3) throw std::invalid_argument("hash grid: " + std::to_string(dims) + " dimensions");
+  config.Check();
   const double growth = config.levels > 1 ? std::exp((std::log(config.finest_resolution) -
                                                       std::log(config.base_resolution)) / (config.levels - 1))
                                           : 1.0;

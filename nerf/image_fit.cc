@@ -110,7 +110,7 @@ double PsnrOfPixels(const Model& model, const FloatImage& target, const std::vec
       squared_error += d * d;
     }
   }
-  return -10 * std::log10(std::max(squared_error / (pixels.size() * target.channels), 1e-20));
+  return PsnrOfMse(squared_error / (pixels.size() * target.channels));
 }
 
 // One Adam step on a random batch; returns the batch's mean squared error.

@@ -11,6 +11,7 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "nerf/config_check.h"
 #include "nerf/denormals.h"
 
 namespace p2n {
@@ -20,8 +21,9 @@ using Matrix = RadianceField<float>::Matrix;
 
 constexpr size_t kBatch = 4096;
 
-// Densities at world points (3 x n), in parallel batches.
-std::vector<float> Densities(const NerfModel& model, const std::vector<Eigen::Vector3d>& points) {
+}  // namespace
+
+std::vector<float> DensitiesAt(const NerfModel& model, const std::vector<Eigen::Vector3d>& points) {
   std::vector<float> density(points.size(), 0.0f);
   tbb::parallel_for(size_t{0}, (points.size() + kBatch - 1) / kBatch, [&](size_t batch) {
     FlushDenormalsOnThisThread();
@@ -34,19 +36,32 @@ std::vector<float> Densities(const NerfModel& model, const std::vector<Eigen::Ve
   return density;
 }
 
-}  // namespace
+float SurfaceThreshold(const NerfModel& model, const std::vector<Eigen::Vector3d>& surface_points) {
+  std::vector<float> density = DensitiesAt(model, surface_points);
+  if (density.empty()) return 0;
+  std::nth_element(density.begin(), density.begin() + density.size() / 2, density.end());
+  return 0.5f * density[density.size() / 2];
+}
 
-Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options, const std::function<void(size_t)>& on_slices_done) {
-  const int n = options.resolution;
-  if (n < 8 || n > 1024) throw std::invalid_argument("the mesh resolution must be 8..1024");
-  if (!(options.density_threshold > 0)) throw std::invalid_argument("the mesh density threshold must be positive");
+void MeshOptions::Check() const {
+  CheckField(resolution >= 8 && resolution <= 1024, "mesh", "resolution", "be 8..1024", resolution);
+  CheckField(density_threshold > 0 && std::isfinite(density_threshold), "mesh", "density_threshold", "be positive",
+             density_threshold);
+}
+
+namespace {
+
+// The centre of lattice cell (i, j, k) of n per side of the box [-1, 1]^3 (fractional indices interpolate).
+Eigen::Vector3d LatticePoint(int n, double i, double j, double k) {
   const double spacing = 2.0 / n;
-  const auto world_of = [&](double i, double j, double k) {
-    return Eigen::Vector3d(-1 + (i + 0.5) * spacing, -1 + (j + 0.5) * spacing, -1 + (k + 0.5) * spacing);
-  };
+  return Eigen::Vector3d(-1 + (i + 0.5) * spacing, -1 + (j + 0.5) * spacing, -1 + (k + 0.5) * spacing);
+}
 
-  // The level set threshold - density (negative inside), sampled slice by slice; empty space is left to the
-  // grid's background value (density 0).
+// The level set threshold - density (negative inside) on the lattice, sampled slice by slice; empty space is
+// left to the grid's background value (density 0).
+openvdb::FloatGrid::Ptr SampleLevelSet(const NerfModel& model, const MeshOptions& options,
+                                       const std::function<void(size_t)>& on_slices_done) {
+  const int n = options.resolution;
   openvdb::initialize();
   openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(options.density_threshold);
   std::mutex grid_mutex;
@@ -55,36 +70,37 @@ Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options, const std::
     std::vector<openvdb::Coord> coords;
     for (int j = 0; j < n; ++j) {
       for (int k = 0; k < n; ++k) {
-        const Eigen::Vector3d p = world_of(i, j, k);
+        const Eigen::Vector3d p = LatticePoint(n, i, j, k);
         if (!model.occupancy.Occupied(FieldPoint(model, p))) continue;
         points.push_back(p);
         coords.emplace_back(i, j, k);
       }
     }
-    const std::vector<float> density = Densities(model, points);
-    {
-      std::lock_guard<std::mutex> lock(grid_mutex);
-      openvdb::FloatGrid::Accessor accessor = grid->getAccessor();
-      for (size_t s = 0; s < points.size(); ++s) {
-        if (density[s] > 1e-4f * options.density_threshold) {
-          accessor.setValue(coords[s], options.density_threshold - density[s]);
-        }
+    const std::vector<float> density = DensitiesAt(model, points);
+    std::lock_guard<std::mutex> lock(grid_mutex);
+    openvdb::FloatGrid::Accessor accessor = grid->getAccessor();
+    for (size_t s = 0; s < points.size(); ++s) {
+      if (density[s] > 1e-4f * options.density_threshold) {
+        accessor.setValue(coords[s], options.density_threshold - density[s]);
       }
-      if (on_slices_done) on_slices_done(1);  // under the lock: the caller's callback need not be thread-safe
     }
+    if (on_slices_done) on_slices_done(1);  // under the lock: the caller's callback need not be thread-safe
   });
+  return grid;
+}
 
+// The level set's zero crossing as triangles in world units, degenerate ones left out.
+Mesh Polygonize(const openvdb::FloatGrid& grid, int n) {
   std::vector<openvdb::Vec3s> vertices;
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
-  openvdb::tools::volumeToMesh(*grid, vertices, triangles, quads, 0.0, 0.0);
-
+  openvdb::tools::volumeToMesh(grid, vertices, triangles, quads, 0.0, 0.0);
   Mesh mesh;
   mesh.positions.reserve(vertices.size());
   // Where the surface is cut by the box, the cap interpolates to the empty space beyond the last samples: it is
   // put on the box's face.
   for (const openvdb::Vec3s& v : vertices) {
-    mesh.positions.push_back(world_of(v.x(), v.y(), v.z()).cwiseMax(-1.0).cwiseMin(1.0).cast<float>());
+    mesh.positions.push_back(LatticePoint(n, v.x(), v.y(), v.z()).cwiseMax(-1.0).cwiseMin(1.0).cast<float>());
   }
   // OpenVDB orders a polygon's corners counter-clockwise seen from the side where the level set is positive
   // (outside).
@@ -99,23 +115,24 @@ Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options, const std::
     add(q[0], q[1], q[2]);
     add(q[0], q[2], q[3]);
   }
+  return mesh;
+}
 
-  // Normals from the density gradient (central differences over a tenth of a cell), then colours seen from
-  // outside along them.
-  const double h = 0.1 * spacing;
+// Normals from the density gradient (central differences over `h`), then colours seen from outside along them.
+void Shade(const NerfModel& model, double h, Mesh* mesh) {
   std::vector<Eigen::Vector3d> probes;
-  probes.reserve(6 * mesh.positions.size());
-  for (const Eigen::Vector3f& p : mesh.positions) {
+  probes.reserve(6 * mesh->positions.size());
+  for (const Eigen::Vector3f& p : mesh->positions) {
     for (int axis = 0; axis < 3; ++axis) {
       for (const double sign : {1.0, -1.0}) probes.push_back(p.cast<double>() + sign * h * Eigen::Vector3d::Unit(axis));
     }
   }
-  const std::vector<float> probe_density = Densities(model, probes);
-  mesh.normals.resize(mesh.positions.size());
-  mesh.colours.resize(mesh.positions.size());
-  tbb::parallel_for(size_t{0}, (mesh.positions.size() + kBatch - 1) / kBatch, [&](size_t batch) {
+  const std::vector<float> probe_density = DensitiesAt(model, probes);
+  mesh->normals.resize(mesh->positions.size());
+  mesh->colours.resize(mesh->positions.size());
+  tbb::parallel_for(size_t{0}, (mesh->positions.size() + kBatch - 1) / kBatch, [&](size_t batch) {
     FlushDenormalsOnThisThread();
-    const size_t first = batch * kBatch, count = std::min(mesh.positions.size(), first + kBatch) - first;
+    const size_t first = batch * kBatch, count = std::min(mesh->positions.size(), first + kBatch) - first;
     Matrix positions(3, count), directions(3, count), density, rgb;
     RadianceField<float>::Cache cache;
     for (size_t i = 0; i < count; ++i) {
@@ -124,17 +141,26 @@ Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options, const std::
       for (int axis = 0; axis < 3; ++axis) gradient[axis] = probe_density[6 * v + 2 * axis] - probe_density[6 * v + 2 * axis + 1];
       Eigen::Vector3f normal = -gradient;
       normal = normal.norm() > 0 && normal.allFinite() ? normal.normalized() : Eigen::Vector3f::UnitZ();
-      mesh.normals[v] = normal;
-      positions.col(i) = FieldPoint(model, mesh.positions[v].cast<double>()).cast<float>();
+      mesh->normals[v] = normal;
+      positions.col(i) = FieldPoint(model, mesh->positions[v].cast<double>()).cast<float>();
       directions.col(i) = -normal;
     }
     model.field->Forward(positions, directions, &density, &rgb, &cache);
     for (size_t i = 0; i < count; ++i) {
       for (int c = 0; c < 3; ++c) {
-        mesh.colours[first + i][c] = static_cast<uint8_t>(std::lround(255 * std::clamp(rgb(c, i), 0.0f, 1.0f)));
+        mesh->colours[first + i][c] = static_cast<uint8_t>(std::lround(255 * std::clamp(rgb(c, i), 0.0f, 1.0f)));
       }
     }
   });
+}
+
+}  // namespace
+
+Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options, const std::function<void(size_t)>& on_slices_done) {
+  options.Check();
+  const openvdb::FloatGrid::Ptr grid = SampleLevelSet(model, options, on_slices_done);
+  Mesh mesh = Polygonize(*grid, options.resolution);
+  Shade(model, 0.1 * 2.0 / options.resolution, &mesh);  // a tenth of a cell
   return mesh;
 }
 

@@ -23,14 +23,24 @@ struct Mesh {
 struct MeshOptions {
   int resolution = 256;           // density samples along each side of the box
   float density_threshold = 25;  // the surface: where the density (1 / world unit) crosses this
+
+  // std::invalid_argument naming the field and its rule (ExtractMesh checks its options).
+  void Check() const;
 };
+
+// The field's densities (1 / world unit) at world points.
+std::vector<float> DensitiesAt(const NerfModel& model, const std::vector<Eigen::Vector3d>& points);
+// A density threshold for ExtractMesh from points where rendered rays end (their expected depth, where opaque):
+// half the median density there. Inside a surface of density s the expected depth lies about 1 / s behind it,
+// where the density is s: the threshold s / 2 puts the mesh on the surface the views see, whatever the scale
+// of the densities a field learnt. 0 for no points.
+float SurfaceThreshold(const NerfModel& model, const std::vector<Eigen::Vector3d>& surface_points);
 
 // The surface where the density crosses the threshold. Cells the occupancy grid marks empty are not
 // evaluated (their density counts as 0); where the surface meets the box it is closed by the box's faces, so the
 // mesh is watertight. Vertices are coloured by the field seen along minus their normal (looking at the
 // surface from outside). `on_slices_done`, when given, is called with the number of density slices just
-// sampled (resolution in all), from TBB's threads but never two calls at once. std::invalid_argument for a
-// resolution outside 8..1024 or a threshold that is not positive.
+// sampled (resolution in all), from TBB's threads but never two calls at once.
 Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options,
                  const std::function<void(size_t)>& on_slices_done = {});
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <utility>
 
+#include "nerf/config_check.h"
 #include "nerf/spherical_harmonics.h"
 
 namespace p2n {
@@ -42,6 +43,9 @@ nlohmann::json NgpFieldConfig::ToJson() const {
 
 NgpFieldConfig NgpFieldConfig::FromJson(const nlohmann::json& json) {
   NgpFieldConfig config;
+  RejectUnknownKeys(json, {"otype", "encoding", "geometry_features", "width", "density_hidden_layers",
+                           "colour_hidden_layers", "direction_encoding", "density_network", "colour_network",
+                           "density_activation"}, "NgpField config");
   try {
     if (json.contains("encoding")) config.grid = HashGridConfig::FromJson(json.at("encoding"));
     config.geometry_features = json.value("geometry_features", config.geometry_features);
@@ -51,6 +55,9 @@ NgpFieldConfig NgpFieldConfig::FromJson(const nlohmann::json& json) {
   } catch (const nlohmann::json::exception& error) {
     throw std::invalid_argument("NgpField config: " + std::string(error.what()));
   }
+  CheckDerivedKeys(json, config.ToJson(),
+                   {"direction_encoding", "density_network", "colour_network", "density_activation"},
+                   "NgpField config");
   return config;
 }
 

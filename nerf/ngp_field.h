@@ -19,8 +19,10 @@ struct NgpFieldConfig {
   int colour_hidden_layers = 2;
 
   nlohmann::json ToJson() const;
-  // The inverse of ToJson(); missing keys keep their defaults, std::invalid_argument on a wrong type.
+  // The inverse of ToJson(); missing keys keep their defaults; std::invalid_argument for a wrong type, an unknown
+  // key, or a derived key (the networks' shapes) that does not follow from the others.
   static NgpFieldConfig FromJson(const nlohmann::json& json);
+  bool operator==(const NgpFieldConfig& other) const = default;
 };
 
 template <typename T>

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include "nerf/config_check.h"
 #include "nerf/denormals.h"
 #include "nerf/volume_rendering.h"
 
@@ -107,8 +108,16 @@ double SamplingDistance(const NerfModel& model, const Ray& ray, double t) {
   return t;
 }
 
+void RenderOptions::Check() const {
+  CheckField(step_scale >= 0 && std::isfinite(step_scale), "render", "step_scale", "be at least 0", step_scale);
+  CheckField(min_transmittance >= 0 && min_transmittance < 1, "render", "min_transmittance", "be in [0, 1)",
+             min_transmittance);
+  CheckField(max_samples >= 1, "render", "max_samples", "be at least 1", max_samples);
+}
+
 void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std::vector<Eigen::Vector2d>& near_far,
                 const RenderOptions& options, float* rgb, float* depth, float* opacity, RenderStats* stats) {
+  options.Check();
   const auto start = std::chrono::steady_clock::now();
   const double step = model.march_step * (options.step_scale > 0 ? options.step_scale : DefaultStepScale(model));
   std::atomic<size_t> marched{0}, evaluated{0};

@@ -22,6 +22,9 @@ struct RenderOptions {
   size_t max_samples = 4096;      // per ray
   // Called (from any worker thread) with the number of rays just finished; e.g. to advance a progress bar.
   std::function<void(size_t)> on_rays_done;
+
+  // std::invalid_argument naming the field and its rule (RenderRays checks its options).
+  void Check() const;
 };
 
 struct RenderStats {

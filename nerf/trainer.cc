@@ -12,6 +12,7 @@
 
 #include "nerf/appearance.h"
 #include "nerf/camera_refinement.h"
+#include "nerf/config_check.h"
 #include "nerf/denormals.h"
 #include "nerf/distortion_loss.h"
 #include "nerf/random_streams.h"
@@ -74,7 +75,30 @@ bool AllFinite(const Values& values) {
 
 }  // namespace
 
+void TrainerOptions::Check() const {
+  constexpr const char* kWhat = "trainer";
+  CheckField(occupancy_resolution >= 1 && occupancy_resolution <= 1024, kWhat, "occupancy_resolution", "be 1..1024",
+             occupancy_resolution);
+  CheckField(occupancy_interval >= 1, kWhat, "occupancy_interval", "be at least 1", occupancy_interval);
+  CheckField(occupancy_warmup >= 0, kWhat, "occupancy_warmup", "be at least 0", occupancy_warmup);
+  CheckField(occupancy_decay > 0 && occupancy_decay <= 1, kWhat, "occupancy_decay", "be in (0, 1]", occupancy_decay);
+  CheckField(march_step > 0 && std::isfinite(march_step), kWhat, "march_step", "be positive", march_step);
+  CheckField(max_samples_per_ray >= 1, kWhat, "max_samples_per_ray", "be at least 1", max_samples_per_ray);
+  CheckField(stratified_samples >= 0, kWhat, "stratified_samples", "be at least 0", stratified_samples);
+  CheckField(batch_samples >= 1, kWhat, "batch_samples", "be at least 1", batch_samples);
+  CheckField(min_batch_rays >= 1 && min_batch_rays <= max_batch_rays, kWhat, "min_batch_rays",
+             "be 1..max_batch_rays", min_batch_rays);
+  CheckField(learning_rate > 0, kWhat, "learning_rate", "be positive", learning_rate);
+  CheckField(final_learning_rate > 0, kWhat, "final_learning_rate", "be positive", final_learning_rate);
+  CheckField(loss == "mse" || loss == "huber", kWhat, "loss", "be mse or huber", loss);
+  CheckField(distortion_weight >= 0, kWhat, "distortion_weight", "be at least 0", distortion_weight);
+  CheckField(min_transmittance >= 0 && min_transmittance < 1, kWhat, "min_transmittance", "be in [0, 1)",
+             min_transmittance);
+  CheckField(refine_warmup >= 0, kWhat, "refine_warmup", "be at least 0", refine_warmup);
+}
+
 Trainer::Trainer(const TrainerOptions& options, const TrainingData& data) : options_(options), data_(data) {
+  options.Check();
   if (data.train.empty()) throw std::invalid_argument("there are no training views");
   for (const TrainView& view : data.train) {
     if (view.pixels.size() != size_t(view.camera.width) * view.camera.height * view.channels) {
@@ -169,13 +193,11 @@ RayBatch Trainer::SampleBatch(int rays) {
     batch.rays[r] = CameraRay(view.camera, draw.x + unit(random), draw.y + unit(random));
     batch.near_far[r] = Eigen::Vector2d(view.near, view.far);
     batch.views[r] = static_cast<int>(draw.view);
-    const uint8_t* value = view.pixels.data() + pixel * view.channels;
-    const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
     for (int c = 0; c < 3; ++c) {
       const float background = options_.random_background && view.channels == 4 ? static_cast<float>(unit(random))
                                                                                 : data_.background[c];
       batch.background(c, r) = background;
-      batch.target(c, r) = alpha * (value[c] / 255.0f) + (1 - alpha) * background;
+      batch.target(c, r) = view.OnBackground(pixel, c, background);
     }
   }
   return batch;

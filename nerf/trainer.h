@@ -33,6 +33,13 @@ struct TrainView {
   int channels = 3;
   std::vector<uint8_t> pixels;
   std::string name;
+
+  // Channel c (0-2) of a pixel (index y * width + x) as a float in [0, 1], over `background` by its alpha.
+  float OnBackground(size_t pixel, int c, float background) const {
+    const uint8_t* value = pixels.data() + pixel * channels;
+    const float alpha = channels == 4 ? value[3] / 255.0f : 1.0f;
+    return alpha * (value[c] / 255.0f) + (1 - alpha) * background;
+  }
 };
 
 // The photo as floats (RGB), composited on `background` where it has alpha: what a render is compared with.
@@ -67,6 +74,9 @@ struct TrainerOptions {
   int refine_warmup = 100;              // steps before the corrections learn (a younger field's gradients mislead)
   bool error_sampling = false;          // pixels drawn by the error map (error_map.h), their losses weighted
   uint64_t seed = 0;
+
+  // std::invalid_argument naming the field and its rule (the Trainer checks its options).
+  void Check() const;
 };
 
 // A batch of world rays with their targets (RGB) and backgrounds.

@@ -13,9 +13,7 @@ FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& 
   const size_t pixels = size_t(image.width) * image.height;
   image.pixels.resize(3 * pixels);
   for (size_t i = 0; i < pixels; ++i) {
-    const uint8_t* value = &view.pixels[i * view.channels];
-    const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
-    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = alpha * (value[c] / 255.0f) + (1 - alpha) * background[c];
+    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = view.OnBackground(i, c, background[c]);
   }
   return image;
 }
@@ -74,9 +72,7 @@ std::vector<double> Trainer::HeldoutPsnr(size_t pixels_per_view, RenderStats* st
     std::vector<float> rgb(3 * pixels.size()), depth(pixels.size()), opacity(pixels.size()), target(3 * pixels.size());
     RenderRays(model_, rays, near_far, render, rgb.data(), depth.data(), opacity.data(), stats);
     for (size_t i = 0; i < pixels.size(); ++i) {
-      const uint8_t* value = view.pixels.data() + pixels[i] * view.channels;
-      const float alpha = view.channels == 4 ? value[3] / 255.0f : 1.0f;
-      for (int c = 0; c < 3; ++c) target[3 * i + c] = alpha * (value[c] / 255.0f) + (1 - alpha) * model_.background[c];
+      for (int c = 0; c < 3; ++c) target[3 * i + c] = view.OnBackground(pixels[i], c, model_.background[c]);
     }
     if (fitted != nullptr) fitted->push_back(FittedPsnr(view, pixels, rgb, target));
     psnrs.push_back(Psnr(Row(std::move(rgb)), Row(std::move(target))));

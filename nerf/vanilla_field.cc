@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "nerf/config_check.h"
+
 namespace p2n {
 
 nlohmann::json VanillaFieldConfig::ToJson() const {
@@ -19,6 +21,9 @@ nlohmann::json VanillaFieldConfig::ToJson() const {
 
 VanillaFieldConfig VanillaFieldConfig::FromJson(const nlohmann::json& json) {
   VanillaFieldConfig config;
+  RejectUnknownKeys(json, {"otype", "position_encoding", "direction_encoding", "position_levels", "direction_levels",
+                           "width", "layers", "skip_after", "colour_width", "density_activation"},
+                    "VanillaField config");
   try {
     config.position_levels = json.value("position_levels", config.position_levels);
     config.direction_levels = json.value("direction_levels", config.direction_levels);
@@ -31,6 +36,8 @@ VanillaFieldConfig VanillaFieldConfig::FromJson(const nlohmann::json& json) {
   if (config.layers < 2 || config.layers % 2 != 0) {
     throw std::invalid_argument("VanillaField config: layers must be even and at least 2");
   }
+  CheckDerivedKeys(json, config.ToJson(), {"position_encoding", "direction_encoding", "skip_after", "density_activation"},
+                   "VanillaField config");
   return config;
 }
 

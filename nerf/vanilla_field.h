@@ -19,7 +19,9 @@ struct VanillaFieldConfig {
   int colour_width = 128;
 
   nlohmann::json ToJson() const;
+  // As NgpFieldConfig::FromJson; also layers must be even and at least 2.
   static VanillaFieldConfig FromJson(const nlohmann::json& json);
+  bool operator==(const VanillaFieldConfig& other) const = default;
 };
 
 template <typename T>

@@ -1,6 +1,7 @@
 #include "pipeline/manifest.h"
 
 #include <algorithm>
+#include <set>
 
 #include "pipeline/errors.h"
 #include "pipeline/format.h"
@@ -49,14 +50,18 @@ std::vector<std::string> DescribeChanges(const KeyInputs& before, const KeyInput
   if (before.format_version != now.format_version) {
     reasons.push_back(format("format version {} -> {}", before.format_version, now.format_version));
   }
-  std::map<std::string, nlohmann::json> options_before, options_now;
-  for (const auto& [key, value] : before.options.items()) options_before[key] = value;
-  for (const auto& [key, value] : now.options.items()) options_now[key] = value;
-  CompareMaps(options_before, options_now, "option",
-              [](const std::string& key, const nlohmann::json& old_value, const nlohmann::json& new_value) {
-                return format("option {} changed ({} -> {})", key, Short(old_value), Short(new_value));
-              },
-              &reasons);
+  // The key holds only options set to other than their defaults: one missing on a side is at its default there.
+  std::set<std::string> keys;
+  for (const auto& [key, value] : before.options.items()) keys.insert(key);
+  for (const auto& [key, value] : now.options.items()) keys.insert(key);
+  const auto value_text = [](const nlohmann::json& options, const std::string& key) {
+    return options.contains(key) ? Short(options[key]) : std::string("default");
+  };
+  for (const std::string& key : keys) {
+    if (before.options.value(key, nlohmann::json()) == now.options.value(key, nlohmann::json())) continue;
+    reasons.push_back(
+        format("option {} changed ({} -> {})", key, value_text(before.options, key), value_text(now.options, key)));
+  }
   CompareMaps(before.upstream_keys, now.upstream_keys, "upstream",
               [](const std::string& name, const std::string&, const std::string&) {
                 return format("upstream {} changed", name);

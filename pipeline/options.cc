@@ -165,7 +165,8 @@ nlohmann::json Config::ResultOptions(std::string_view section) const {
   nlohmann::json result = nlohmann::json::object();
   const std::string prefix = std::string(section) + ".";
   for (const OptionSpec& spec : registry_->specs()) {
-    if (spec.kind == OptionKind::kResult && spec.key.rfind(prefix, 0) == 0) result[spec.key] = Get(spec.key);
+    if (spec.kind != OptionKind::kResult || spec.key.rfind(prefix, 0) != 0) continue;
+    if (Get(spec.key) != spec.default_value) result[spec.key] = Get(spec.key);
   }
   return result;
 }

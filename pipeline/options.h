@@ -24,9 +24,12 @@
 
 namespace p2n {
 
-// kResult options change a stage's output and are part of its cache key; kRuntime ones (threads, log level,
-// progress display) do not, and are not remembered in the workspace.
-enum class OptionKind { kResult, kRuntime };
+// kResult options change a stage's output: the cache key holds those set to other than their defaults (so an
+// option added later does not make old results stale; a stage whose output changes with a default bumps its
+// format version). kCheck options are pass/fail thresholds on a result (ingest.min_images): remembered in the
+// workspace, never in a key, applied to fresh results too (Stage::CheckResult). kRuntime ones (threads, log
+// level, progress display) change nothing in any result and are not remembered.
+enum class OptionKind { kResult, kCheck, kRuntime };
 
 struct OptionSpec {
   std::string key;                   // dotted: "section.name"
@@ -71,11 +74,11 @@ class Config {
     return Get(key).get<T>();
   }
 
-  // Flat {"section.name": value} of the section's result options (what a cache key includes).
+  // Flat {"section.name": value} of the section's kResult options not at their defaults (what a cache key holds).
   nlohmann::json ResultOptions(std::string_view section) const;
   // Nested {"section": {"name": value}} of every option (the resolved config written beside results).
   nlohmann::json ToJson() const;
-  // Nested, only the kResult options that were set (not left at their defaults): what a workspace remembers.
+  // Nested, the kResult and kCheck options that were set (not left at their defaults): what a workspace remembers.
   nlohmann::json ExplicitResultOptions() const;
   const OptionRegistry& registry() const { return *registry_; }
 

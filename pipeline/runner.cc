@@ -34,6 +34,7 @@ const char* StageStateName(StageState state) {
     case StageState::kMissing: return "missing";
     case StageState::kIncomplete: return "incomplete";
     case StageState::kStale: return "stale";
+    case StageState::kBlocked: return "blocked";
   }
   return "?";
 }
@@ -63,6 +64,13 @@ size_t Runner::IndexOf(std::string_view name) const {
 
 const Stage& Runner::Get(std::string_view name) const { return *stages_[IndexOf(name)]; }
 
+const Stage* Runner::Find(std::string_view name) const {
+  for (const auto& stage : stages_) {
+    if (stage->name() == name) return stage.get();
+  }
+  return nullptr;
+}
+
 bool Runner::DependsOn(size_t i, size_t j) const {
   for (const std::string& up : stages_[i]->upstream()) {
     const size_t k = IndexOf(up);
@@ -81,7 +89,14 @@ std::vector<StageStatus> Runner::Status(const Workspace& workspace, const Config
     expected.format_version = stage->format_version();
     for (const std::string& section : stage->option_sections()) expected.options.update(config.ResultOptions(section));
     for (const std::string& up : stage->upstream()) expected.upstream_keys[up] = statuses[IndexOf(up)].expected_key;
-    expected.inputs = stage->ExternalInputs(workspace, config);
+    try {
+      expected.inputs = stage->ExternalInputs(workspace, config);
+    } catch (const UserError& e) {
+      status.state = StageState::kBlocked;
+      status.reasons.push_back(e.what());
+      statuses.push_back(std::move(status));
+      continue;
+    }
     status.expected_key = expected.Key();
 
     const fs::path dir = workspace.StageDir(stage->folder());
@@ -146,12 +161,16 @@ std::vector<StageRun> Runner::Run(const Workspace& workspace, const Config& conf
     }
   }
 
+  for (size_t i = first; i <= last; ++i) {
+    if (statuses[i].state == StageState::kBlocked) throw UserError(statuses[i].reasons.front());
+  }
   std::vector<StageRun> runs;
   for (size_t i = first; i <= last; ++i) {
     ThrowIfCancelled();
     const StageStatus& status = statuses[i];
     const std::string& name = stages_[i]->name();
     if (status.state == StageState::kFresh && !forced[i]) {
+      stages_[i]->CheckResult(workspace.StageDir(stages_[i]->folder()), config);
       LogInfo(format("{}: fresh, skipped (key {})", name, status.expected_key.substr(0, 12)));
       runs.push_back({name, false, 0});
       continue;
@@ -184,8 +203,14 @@ void Runner::RunOne(const Workspace& workspace, const Config& config, const Stag
   fs::create_directories(staging, error);
   if (error) throw UserError(format("cannot create '{}': {}", staging.string(), error.message()));
 
-  StageContext context{staging, workspace, config, {}, nlohmann::json::object(), status.expected_key,
-                       workspace.ResumeDir(stage.folder())};
+  StageContext context{staging,
+                       workspace,
+                       config,
+                       {},
+                       nlohmann::json::object(),
+                       status.expected_key,
+                       workspace.ResumeDir(stage.folder()),
+                       this};
   for (const std::string& up : stage.upstream()) context.upstream_dirs[up] = workspace.StageDir(Get(up).folder());
   const auto start = std::chrono::steady_clock::now();
   stage.Run(context);

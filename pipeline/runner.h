@@ -12,7 +12,8 @@
 
 namespace p2n {
 
-enum class StageState { kFresh, kMissing, kIncomplete, kStale };
+// kBlocked: its inputs from outside the workspace cannot be read (the reason says which); it cannot run.
+enum class StageState { kFresh, kMissing, kIncomplete, kStale, kBlocked };
 const char* StageStateName(StageState state);
 
 struct StageStatus {
@@ -44,6 +45,8 @@ class Runner {
   const std::vector<std::unique_ptr<Stage>>& stages() const { return stages_; }
   // The stage of that name; UserError listing the stages when there is none.
   const Stage& Get(std::string_view name) const;
+  // The stage of that name, or nullptr when this table has none (an imported dataset has no sfm stage).
+  const Stage* Find(std::string_view name) const;
 
   std::vector<StageStatus> Status(const Workspace& workspace, const Config& config) const;
   // Runs what the request asks for. Throws what a stage throws (its staging folder stays, so `status` says

@@ -16,6 +16,8 @@
 
 namespace p2n {
 
+class Runner;
+
 // What a stage's Run() sees.
 struct StageContext {
   std::filesystem::path output_dir;                             // the staging folder to write into
@@ -26,6 +28,7 @@ struct StageContext {
   std::string key;                                              // the cache key of the result being made
   // Where the stage may keep state across a kill (checkpoints; tag them with `key`); removed on completion.
   std::filesystem::path resume_dir;
+  const Runner* runner = nullptr;  // the stage table this stage runs in (for a report of every stage)
 };
 
 class Stage {
@@ -49,6 +52,13 @@ class Stage {
     return {};
   }
   virtual void Run(StageContext& context) const = 0;
+  // Applies the stage's kCheck thresholds to its complete result in `result_dir`; throws UserError saying what
+  // fails. Run() applies the same check to what it makes; the runner calls this on a fresh result, whose
+  // thresholds may have changed since (they are not in the key).
+  virtual void CheckResult(const std::filesystem::path& result_dir, const Config& config) const {
+    (void)result_dir;
+    (void)config;
+  }
 };
 
 }  // namespace p2n

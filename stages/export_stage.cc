@@ -26,6 +26,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr size_t kMaxPoints = 2'000'000;
+constexpr float kFallbackThreshold = 25;  // per normalised unit: what fits lego's surface
 
 // The similarity from the normalised frame to the one the files are written in.
 struct OutputFrame {
@@ -136,11 +137,26 @@ std::vector<ColouredPoint> DepthPoints(const NerfModel& model, const ImportedDat
   return points;
 }
 
+// The mesh's resolution and threshold: export.threshold, or, when it is 0, SurfaceThreshold at the depth points
+// (the fixed kFallbackThreshold when no pixel of a training view is opaque).
+MeshOptions ChooseMeshOptions(const NerfModel& model, const ExportOptions& options,
+                              const std::vector<ColouredPoint>& depth_points) {
+  MeshOptions mesh;
+  mesh.resolution = options.resolution;
+  mesh.density_threshold = static_cast<float>(options.threshold);
+  if (options.threshold > 0) return mesh;
+  std::vector<Eigen::Vector3d> surface;
+  for (const ColouredPoint& point : depth_points) surface.push_back(point.position.cast<double>());
+  const float threshold = SurfaceThreshold(model, surface);
+  mesh.density_threshold = threshold > 0 ? threshold : kFallbackThreshold;
+  return mesh;
+}
+
 }  // namespace
 
 void ExportOptions::Check() const {
   CheckOption(resolution >= 8 && resolution <= 1024, "export.resolution", "must be 8..1024");
-  CheckOption(threshold > 0 && std::isfinite(threshold), "export.threshold", "must be positive");
+  CheckOption(threshold >= 0 && std::isfinite(threshold), "export.threshold", "must be 0 (from the field) or positive");
   CheckOption(points_width >= 8 && points_width <= 8192, "export.points_width", "must be 8..8192");
   CheckOption(points_opacity > 0 && points_opacity <= 1, "export.points_opacity", "must be in (0, 1]");
 }
@@ -150,10 +166,15 @@ void ExportStage::Run(StageContext& context) const {
   const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
   const NerfModel model = LoadTrainedModel(context.upstream_dirs.at("train") / "model.bin");
   const OutputFrame frame = MakeOutputFrame(options.frame, transforms);
+  ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
+  const std::map<std::string, CameraCorrection> corrections =
+      ReadCameraCorrections(context.upstream_dirs.at("train") / "train_report.json");
+  ApplyCameraCorrections(corrections, &dataset);
+  const bool auto_threshold = options.threshold == 0;
+  std::vector<ColouredPoint> points;
+  if (options.points || auto_threshold) points = DepthPoints(model, dataset, options);
 
-  MeshOptions mesh_options;
-  mesh_options.resolution = options.resolution;
-  mesh_options.density_threshold = static_cast<float>(options.threshold);
+  const MeshOptions mesh_options = ChooseMeshOptions(model, options, points);
   Mesh mesh;
   {
     Progress progress("export: density", options.resolution, "slices");
@@ -170,14 +191,14 @@ void ExportStage::Run(StageContext& context) const {
     for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
   }
   const std::vector<std::string> comments = {
-      frame.description,
-      format("marching cubes at {}^3 samples of the box [-1, 1]^3 (normalised), density threshold {}", options.resolution,
-             options.threshold)};
+      frame.description, format("marching cubes at {}^3 samples of the box [-1, 1]^3 (normalised), density threshold "
+                                "{:.4g}{}", options.resolution, mesh_options.density_threshold,
+                                auto_threshold ? " (from the field)" : "")};
   WriteMeshPly(context.output_dir / "mesh.ply", mesh, comments);
   if (options.obj) WriteMeshObj(context.output_dir / "mesh.obj", mesh, comments);
   if (mesh.triangles.empty()) {
-    LogWarning(format("export: the density never reaches {} inside the scene box: the mesh is empty; lower "
-                      "--export.threshold", options.threshold));
+    LogWarning(format("export: the density never reaches {:.4g} inside the scene box: the mesh is empty; lower "
+                      "--export.threshold", mesh_options.density_threshold));
   }
 
   nlohmann::json report = {{"mesh", {{"file", "mesh.ply"},
@@ -188,16 +209,12 @@ void ExportStage::Run(StageContext& context) const {
                                      {"non_manifold_edges", edges.non_manifold},
                                      {"misoriented_edges", edges.misoriented},
                                      {"resolution", options.resolution},
-                                     {"threshold", options.threshold}}},
+                                     {"threshold", mesh_options.density_threshold},
+                                     {"threshold_from_field", auto_threshold}}},
                            {"frame", options.frame}};
-  ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
-  const std::map<std::string, CameraCorrection> corrections =
-      ReadCameraCorrections(context.upstream_dirs.at("train") / "train_report.json");
-  ApplyCameraCorrections(corrections, &dataset);
   WriteCameras(context.output_dir / "transforms.json", dataset, frame, !corrections.empty());
   report["cameras"] = {{"file", "transforms.json"}, {"views", dataset.views.size()}, {"refined", !corrections.empty()}};
   if (options.points) {
-    std::vector<ColouredPoint> points = DepthPoints(model, dataset, options);
     for (ColouredPoint& point : points) point.position = frame.Point(point.position);
     WritePly(context.output_dir / "points.ply", points,
              {frame.description, format("points where the rendered opacity of a training view is at least {}", options.points_opacity)});
@@ -206,8 +223,8 @@ void ExportStage::Run(StageContext& context) const {
   WriteJsonAtomic(context.output_dir / "export_report.json", report);
   context.summary = {{"mesh_triangles", mesh.triangles.size()}, {"watertight", watertight}};
   if (options.points) context.summary["points"] = report["points"]["count"];
-  LogInfo(format("export: mesh of {} vertices and {} triangles ({}watertight){}", mesh.positions.size(),
-                 mesh.triangles.size(), watertight ? "" : "not ",
+  LogInfo(format("export: mesh of {} vertices and {} triangles ({}watertight) at density {:.4g}{}",
+                 mesh.positions.size(), mesh.triangles.size(), watertight ? "" : "not ", mesh_options.density_threshold,
                  options.points ? format(", {} points", report["points"]["count"].get<size_t>()) : ""));
 }
 

@@ -12,7 +12,7 @@ namespace p2n {
 
 struct ExportOptions {
   int resolution = 256;       // density samples along each side of the scene box
-  double threshold = 25;      // surface density (1 / normalised unit)
+  double threshold = 0;       // surface density (1 / normalised unit); 0: from the field (SurfaceThreshold)
   std::string frame = "source";  // source: COLMAP's world (or the dataset's); normalized: the training frame
   bool obj = false;           // also write mesh.obj
   bool points = true;         // write points.ply
@@ -23,7 +23,8 @@ struct ExportOptions {
   void Visit(V& v) {
     v("resolution", resolution, "density samples along each side of the scene box (memory and time grow as its cube)",
       "samples");
-    v("threshold", threshold, "the surface's density, per normalised unit", "1/unit");
+    v("threshold", threshold, "the surface's density, per normalised unit; 0: half the median density where the "
+      "training views' rays end (nerf/mesh.h)", "1/unit");
     v("frame", frame, "coordinates of the files: source (COLMAP's world, or the dataset's) or normalized (the "
       "training frame)", "", OptionKind::kResult, {"source", "normalized"});
     v("obj", obj, "also write the mesh as mesh.obj");
@@ -38,7 +39,7 @@ class ExportStage : public Stage {
  public:
   std::string name() const override { return "export"; }
   std::string folder() const override { return "50_export"; }
-  int format_version() const override { return 2; }
+  int format_version() const override { return 3; }  // 3: the surface threshold from the field by default
   std::vector<std::string> upstream() const override { return {"poses", "train"}; }
   void Run(StageContext& context) const override;
 };

@@ -20,6 +20,8 @@ namespace p2n {
 namespace fs = std::filesystem;
 namespace {
 
+const std::string kDuplicateReason = "the same pixels as ";  // a skipped photo's reason
+
 const std::set<std::string> kImageExtensions = {"jpg", "jpeg", "png", "tif", "tiff", "exr"};
 
 fs::path InputFolder(const Workspace& workspace) {
@@ -90,6 +92,20 @@ std::variant<IngestedImage, Skipped> IngestOne(const fs::path& source, const fs:
   return out;
 }
 
+// UserError when the report counts fewer usable images than ingest.min_images.
+void CheckImageCount(const nlohmann::json& report, int min_images) {
+  const size_t count = report.at("images").size();
+  if (static_cast<int>(count) >= min_images) return;
+  size_t duplicates = 0;
+  for (const nlohmann::json& skip : report.at("skipped")) {
+    duplicates += skip.at("reason").get<std::string>().rfind(kDuplicateReason, 0) == 0;
+  }
+  throw UserError(format("only {} usable images in '{}' ({} skipped{}, see the warnings above); photo2nerf needs at "
+                         "least {} (ingest.min_images): add more photos of the scene, taken from different places",
+                         count, report.at("input_folder").get<std::string>(), report.at("skipped").size(),
+                         duplicates ? format(", {} of them copies of another photo", duplicates) : "", min_images));
+}
+
 }  // namespace
 
 void IngestOptions::Check() const {
@@ -142,6 +158,11 @@ std::map<std::string, std::string> IngestStage::ExternalInputs(const Workspace& 
   return inputs;
 }
 
+void IngestStage::CheckResult(const fs::path& result_dir, const Config& config) const {
+  const IngestOptions options = ReadOptions<IngestOptions>(config, "ingest");
+  CheckImageCount(ReadJsonFile(result_dir / "ingest_report.json"), options.min_images);
+}
+
 void IngestStage::Run(StageContext& context) const {
   const IngestOptions options = ReadOptions<IngestOptions>(context.config, "ingest");
   const fs::path folder = InputFolder(context.workspace);
@@ -163,7 +184,6 @@ void IngestStage::Run(StageContext& context) const {
   nlohmann::json images = nlohmann::json::array(), skipped = nlohmann::json::array();
   std::set<std::string> names;
   std::map<std::string, std::string> first_with_fingerprint;
-  size_t duplicates = 0;
   std::set<std::pair<int, int>> sizes;
   for (const auto& result : results) {
     if (const Skipped* skip = std::get_if<Skipped>(&result)) {
@@ -181,10 +201,9 @@ void IngestStage::Run(StageContext& context) const {
     const auto [it, first] = first_with_fingerprint.emplace(image.fingerprint, image.source);
     if (!first) {
       fs::remove(images_dir / image.name);
-      const std::string reason = format("the same pixels as {}", it->second);
+      const std::string reason = kDuplicateReason + it->second;
       LogWarning(format("ingest: skipped {}: {}", image.source, reason));
       skipped.push_back({{"file", image.source}, {"reason", reason}});
-      ++duplicates;
       continue;
     }
     sizes.insert({image.width, image.height});
@@ -200,13 +219,7 @@ void IngestStage::Run(StageContext& context) const {
   }
   const nlohmann::json report = {{"input_folder", folder.string()}, {"images", images}, {"skipped", skipped}};
   WriteJsonAtomic(context.output_dir / "ingest_report.json", report);
-  if (static_cast<int>(images.size()) < options.min_images) {
-    throw UserError(format("only {} usable images in '{}' ({} skipped{}, see the warnings above); photo2nerf needs "
-                           "at least {} (ingest.min_images): add more photos of the scene, taken from different places",
-                           images.size(), folder.string(), skipped.size(),
-                           duplicates ? format(", {} of them copies of another photo", duplicates) : "",
-                           options.min_images));
-  }
+  CheckImageCount(report, options.min_images);
   context.summary = {{"images", images.size()}, {"skipped", skipped.size()}};
   LogInfo(format("ingest: {} images, {} skipped", images.size(), skipped.size()));
 }

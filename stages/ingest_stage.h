@@ -18,7 +18,7 @@ struct IngestOptions {
   template <class V>
   void Visit(V& v) {
     v("max_image_size", max_image_size, "longest image side after downsizing (area filter); 0 keeps the size", "px");
-    v("min_images", min_images, "fewer usable images than this is an error", "images");
+    v("min_images", min_images, "fewer usable images than this is an error", "images", OptionKind::kCheck);
   }
   void Check() const;
 };
@@ -35,6 +35,7 @@ class IngestStage : public Stage {
   // "image NAME" -> SHA-1 of the file's bytes, for every photo of the input folder.
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
   void Run(StageContext& context) const override;
+  void CheckResult(const std::filesystem::path& result_dir, const Config& config) const override;
 };
 
 }  // namespace p2n

@@ -51,10 +51,12 @@ void PosesStage::Run(StageContext& context) const {
   std::vector<CameraView> views;
   std::vector<Eigen::Vector3d> points;
   for (const auto& [id, point] : model.points) points.push_back(point.xyz);
+  // transforms.json names the images relative to itself: from this stage's folder into the sfm stage's.
+  const std::string images_from_poses = "../" + sfm.filename().string() + "/undistorted/images/";
   size_t without_bounds = 0;
   for (const ColmapImage* image : images) {
     CameraView view;
-    view.file_path = "../10_sfm/undistorted/images/" + image->name;
+    view.file_path = images_from_poses + image->name;
     view.camera = Intrinsics(model.cameras.at(image->camera_id));
     view.camera.world_from_cam = WorldFromOpenGlCamera(image->cam_from_world_rotation, image->cam_from_world_translation);
     std::vector<double> depths;

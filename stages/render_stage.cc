@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "nerf/camera_path.h"
+#include "nerf/float_image.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
 #include "pipeline/cancel.h"
@@ -17,7 +18,7 @@
 #include "pipeline/progress.h"
 #include "stages/dataset_import.h"
 #include "stages/stage_io.h"
-#include "stages/train_stage.h"
+#include "stages/training_data.h"
 #include "stages/video.h"
 
 namespace p2n {
@@ -35,10 +36,6 @@ void Save(const FloatImage& image, const fs::path& path, bool sixteen_bits = fal
       SaveFloatImage(image, path, sixteen_bits);
     }
   });
-}
-
-double Mean(const std::vector<double>& values) {
-  return values.empty() ? std::nan("") : std::accumulate(values.begin(), values.end(), 0.0) / values.size();
 }
 
 Eigen::Matrix4d MatrixField(const nlohmann::json& value, const std::string& where) {

@@ -7,10 +7,10 @@
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/log.h"
+#include "pipeline/runner.h"
 #include "stages/dataset_import.h"
 #include "stages/report_html.h"
-#include "stages/stages.h"
-#include "stages/train_stage.h"
+#include "stages/training_data.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -77,17 +77,13 @@ std::string TrainingSection(const fs::path& train_dir) {
 std::string StagesSection(const StageContext& context) {
   std::string html = "<h2>Stages</h2>\n<table>\n<tr><th>stage</th><th>state</th><th>wall time</th><th>finished (UTC)"
                      "</th><th>key</th><th>summary</th><th>options set (the others at their defaults)</th></tr>\n";
-  const Runner runner = MakeRunner(context.workspace.input());
-  for (const StageStatus& status : runner.Status(context.workspace, context.config)) {
+  for (const StageStatus& status : context.runner->Status(context.workspace, context.config)) {
     const std::string name = status.stage->name();
     if (name == "report") continue;
     std::string summary, options;
     if (status.manifest) {
       for (const auto& [key, value] : status.manifest->summary.items()) summary += key + " " + Number(value) + "; ";
-      for (const auto& [key, value] : status.manifest->inputs.options.items()) {
-        const OptionSpec* spec = context.config.registry().Find(key);
-        if (spec == nullptr || spec->default_value != value) options += key + " = " + Number(value) + "; ";
-      }
+      for (const auto& [key, value] : status.manifest->inputs.options.items()) options += key + " = " + Number(value) + "; ";
       if (options.empty()) options = "(defaults)";
     }
     html += format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td></tr>\n",
@@ -101,7 +97,9 @@ std::string StagesSection(const StageContext& context) {
 
 std::string CamerasSection(const StageContext& context, const ImportedDataset& dataset, const std::string& heldout_split) {
   std::string html = "<h2>Cameras</h2>\n";
-  const nlohmann::json sfm = ReadIfExists(context.workspace.StageDir("10_sfm") / "sfm_report.json");
+  const Stage* sfm_stage = context.runner->Find("sfm");
+  const nlohmann::json sfm =
+      sfm_stage ? ReadIfExists(context.workspace.StageDir(sfm_stage->folder()) / "sfm_report.json") : nlohmann::json::object();
   const std::string dataset_kind = SourceDatasetKind(context.upstream_dirs.at("poses") / "transforms.json");
   if (!sfm.empty() && dataset_kind.empty()) {
     html += format("<p>COLMAP {}: {} of {} images registered ({}), mean reprojection error {} px, {} sparse points, "

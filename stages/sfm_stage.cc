@@ -21,6 +21,8 @@ namespace {
 
 constexpr double kSuspiciousFocusAngleDeg = 20;  // correct orbit models stay near 8 (DESIGN.md §7)
 constexpr size_t kMaxNamesListed = 20;
+constexpr const char* kAdvice = "try --sfm.matcher exhaustive, more features (--sfm.max_num_features), a larger "
+                                "--sfm.max_image_size, or photos with more overlap";
 
 // Runs the COLMAP steps in order with their own logs and timings.
 class StepRunner {
@@ -71,6 +73,164 @@ std::map<std::pair<int, int>, std::vector<std::string>> ImagesBySize(const fs::p
   return groups;
 }
 
+// One COLMAP reconstruction in the staging folder `out`: each step a subprocess through `steps`.
+struct ColmapRun {
+  const SfmOptions& options;
+  ColmapFlags flags;
+  fs::path images, out;
+  std::string seed, threads;
+  StepRunner* steps;
+
+  fs::path database() const { return out / "database.db"; }  // always new: the staging folder starts empty
+
+  // One extraction for every photo, or one per image size when `groups` (size -> names) is not empty.
+  void ExtractFeatures(const std::map<std::pair<int, int>, std::vector<std::string>>& groups) const {
+    const std::vector<std::string> extract = {
+        options.colmap, "feature_extractor", "--database_path", database().string(), "--image_path", images.string(),
+        "--random_seed", seed, "--ImageReader.camera_model", options.camera_model, "--ImageReader.single_camera",
+        options.single_camera ? "1" : "0", flags.extraction_use_gpu, "0", flags.extraction_num_threads, threads,
+        flags.extraction_max_image_size, std::to_string(options.max_image_size), flags.extraction_max_num_features,
+        std::to_string(options.max_num_features)};
+    if (groups.empty()) {
+      steps->Run("feature extraction", extract);
+      return;
+    }
+    for (const auto& [size, group] : groups) {
+      const fs::path list = out / "logs" / (format("images_{}x{}", size.first, size.second) + ".txt");
+      std::string lines;
+      for (const std::string& name : group) lines += name + "\n";
+      WriteFileAtomic(list, lines);
+      std::vector<std::string> argv = extract;
+      argv.insert(argv.end(), {"--image_list_path", list.string()});
+      steps->Run(format("feature extraction {}x{}", size.first, size.second), argv);
+    }
+  }
+
+  void Match(const std::string& matcher) const {
+    std::vector<std::string> match = {options.colmap, matcher + "_matcher", "--database_path", database().string(),
+                                      "--random_seed", seed, flags.matching_use_gpu, "0", flags.matching_num_threads,
+                                      threads};
+    if (matcher == "sequential") {
+      match.insert(match.end(), {"--SequentialMatching.overlap", std::to_string(options.sequential_overlap),
+                                 "--SequentialMatching.loop_detection", "0"});
+    }
+    steps->Run(matcher + " matching", match);
+  }
+
+  // Runs the mapper; returns the folder of the model with the most registered images (COLMAP's exit code says
+  // nothing about that) and lists every model in `models`. UserError when there is none.
+  fs::path MapLargestModel(size_t photos, nlohmann::json* models) const {
+    const fs::path log = steps->Run(
+        "mapping",
+        {options.colmap, "mapper", "--database_path", database().string(), "--image_path", images.string(),
+         "--output_path", (out / "sparse").string(), "--random_seed", seed, "--Mapper.num_threads", threads,
+         "--Mapper.min_model_size", "3"},
+        /*allow_failure=*/true);
+    if (!steps->last_ok()) {
+      if (ReadTextFile(log).find("No good initial image pair found") != std::string::npos) {
+        throw UserError(format("COLMAP found no pair of photos to start the reconstruction from (log: {}): the "
+                               "photos overlap too little or show too little texture; {}",
+                               log.string(), kAdvice));
+      }
+      throw ExternalToolError(format("COLMAP's mapper failed; log: {}", log.string()));
+    }
+    *models = nlohmann::json::array();
+    fs::path chosen;
+    size_t most = 0;
+    for (const fs::directory_entry& entry : fs::directory_iterator(out / "sparse")) {
+      if (!entry.is_directory()) continue;
+      const size_t registered = ReadColmapModel(entry.path()).images.size();
+      models->push_back({{"path", fs::relative(entry.path(), out).string()}, {"registered", registered}});
+      if (registered > most) {
+        most = registered;
+        chosen = entry.path();
+      }
+    }
+    if (chosen.empty()) {
+      throw UserError(format("COLMAP could not reconstruct any camera from the {} photos (log: {}); {}", photos,
+                             log.string(), kAdvice));
+    }
+    return chosen;
+  }
+
+  // A final bundle adjustment that also refines the principal point; returns the refined model's folder.
+  fs::path RefinePrincipalPoint(const fs::path& model) const {
+    const fs::path refined = out / "refined";
+    fs::create_directories(refined);
+    steps->Run("bundle adjustment", {options.colmap, "bundle_adjuster", "--input_path", model.string(), "--output_path",
+                                     refined.string(), "--BundleAdjustment.refine_principal_point", "1"});
+    return refined;
+  }
+
+  // Pinhole images and model in out/undistorted (without COLMAP's dense-stereo scripts).
+  void Undistort(const fs::path& model) const {
+    const fs::path undistorted = out / "undistorted";
+    const fs::path log = steps->Run(
+        "undistortion", {options.colmap, "image_undistorter", "--image_path", images.string(), "--input_path",
+                         model.string(), "--output_path", undistorted.string(), "--output_type", "COLMAP"});
+    if (!fs::exists(undistorted / "sparse" / "cameras.bin")) {
+      throw ExternalToolError(
+          format("COLMAP's image_undistorter wrote no model into '{}'; log: {}", undistorted.string(), log.string()));
+    }
+    for (const fs::directory_entry& entry : fs::directory_iterator(undistorted)) {
+      if (entry.path().extension() == ".sh") fs::remove(entry.path());
+    }
+  }
+};
+
+// What sfm_report.json says of a model: registration, points, errors, and whether the cameras look at a common
+// point (a warning when not).
+nlohmann::json ModelReport(const ColmapModel& model, const std::vector<std::string>& names) {
+  std::set<std::string> registered_names;
+  std::vector<Eigen::Vector3d> centres, axes;
+  for (const auto& [id, image] : model.images) {
+    registered_names.insert(image.name);
+    const Eigen::Matrix3d world_from_cam = image.cam_from_world_rotation.toRotationMatrix().transpose();
+    centres.push_back(-world_from_cam * image.cam_from_world_translation);
+    axes.push_back(world_from_cam.col(2));  // COLMAP cameras look along +z
+  }
+  std::vector<std::string> left_out;
+  for (const std::string& name : names) {
+    if (!registered_names.count(name)) left_out.push_back(name);
+  }
+  double error_sum = 0, observations = 0;
+  for (const auto& [id, point] : model.points) {
+    error_sum += point.error * point.track.size();
+    observations += point.track.size();
+  }
+  nlohmann::json report = {
+      {"images_given", names.size()},
+      {"registered", model.images.size()},
+      {"registered_percent", 100.0 * model.images.size() / names.size()},
+      {"left_out", left_out},
+      {"points", model.points.size()},
+      {"mean_reprojection_error_px", observations > 0 ? error_sum / observations : 0.0},
+      {"mean_track_length", model.points.empty() ? 0.0 : observations / model.points.size()}};
+  if (const auto focus = FindFocusPoint(centres, axes)) {
+    report["median_axis_to_focus_angle_deg"] = focus->median_angle_deg;
+    if (focus->median_angle_deg > kSuspiciousFocusAngleDeg) {
+      LogWarning(format("sfm: the cameras' optical axes miss their common focus point by a median {:.1f} degrees; "
+                        "for photos taken around an object this suggests a wrong reconstruction; {}",
+                        focus->median_angle_deg, kAdvice));
+    }
+  }
+  return report;
+}
+
+// UserError when sfm_report.json's model registers less than sfm.min_registered of the photos.
+void CheckRegistered(const nlohmann::json& report, double min_registered) {
+  const double fraction = report.at("registered").get<double>() / report.at("images_given").get<double>();
+  if (fraction >= min_registered) return;
+  const std::vector<std::string> left_out = report.at("left_out").get<std::vector<std::string>>();
+  std::string listed;
+  for (size_t i = 0; i < left_out.size() && i < kMaxNamesListed; ++i) listed += (i ? ", " : "") + left_out[i];
+  if (left_out.size() > kMaxNamesListed) listed += format(" and {} more", left_out.size() - kMaxNamesListed);
+  throw UserError(format("COLMAP registered only {} of {} photos ({:.0f}%, sfm.min_registered is {:.0f}%); left out: "
+                         "{}; {}",
+                         report.at("registered").get<size_t>(), report.at("images_given").get<size_t>(),
+                         100 * fraction, 100 * min_registered, listed, kAdvice));
+}
+
 }  // namespace
 
 void SfmOptions::Check() const {
@@ -91,18 +251,18 @@ std::map<std::string, std::string> SfmStage::ExternalInputs(const Workspace& wor
   }
 }
 
+void SfmStage::CheckResult(const fs::path& result_dir, const Config& config) const {
+  CheckRegistered(ReadJsonFile(result_dir / "sfm_report.json"), ReadOptions<SfmOptions>(config, "sfm").min_registered);
+}
+
 void SfmStage::Run(StageContext& context) const {
   const SfmOptions options = ReadOptions<SfmOptions>(context.config, "sfm");
   const int threads = context.config.Get<int>("run.threads") > 0 ? context.config.Get<int>("run.threads") : -1;
-  const fs::path images = context.upstream_dirs.at("ingest") / "images";
   const fs::path out = context.output_dir;
-  const fs::path logs = out / "logs";
-  const fs::path database = out / "database.db";  // always new: the staging folder starts empty
-  fs::create_directories(logs);
+  fs::create_directories(out / "logs");
   fs::create_directories(out / "sparse");
-
-  const ColmapVersion version = DetectColmapVersion(options.colmap, logs / "version.log");
-  const ColmapFlags flags = ColmapFlagsFor(version);
+  const ColmapVersion version = DetectColmapVersion(options.colmap, out / "logs" / "version.log");
+  const fs::path images = context.upstream_dirs.at("ingest") / "images";
   const std::vector<std::string> names = ImageNames(images);
   // COLMAP's shared camera would skip every photo of another size: with several sizes, features are extracted
   // once per size, each run making one camera for its photos.
@@ -114,143 +274,29 @@ void SfmStage::Run(StageContext& context) const {
                                                                                                 : "sequential";
   LogInfo(format("sfm: COLMAP {}, {} photos, {} matching, features at {} px", version.ToString(), names.size(),
                  matcher, options.max_image_size));
-  const std::string seed = std::to_string(options.seed), nthreads = std::to_string(threads);
-  StepRunner steps(logs, (options.refine_principal_point ? 5 : 4) + (camera_per_size ? groups.size() - 1 : 0));
+  StepRunner steps(out / "logs", (options.refine_principal_point ? 5 : 4) + (camera_per_size ? groups.size() - 1 : 0));
+  const ColmapRun colmap{options, ColmapFlagsFor(version), images, out, std::to_string(options.seed),
+                         std::to_string(threads), &steps};
 
-  const std::vector<std::string> extract = {
-      options.colmap, "feature_extractor", "--database_path", database.string(), "--image_path", images.string(),
-      "--random_seed", seed, "--ImageReader.camera_model", options.camera_model, "--ImageReader.single_camera",
-      options.single_camera ? "1" : "0", flags.extraction_use_gpu, "0", flags.extraction_num_threads, nthreads,
-      flags.extraction_max_image_size, std::to_string(options.max_image_size), flags.extraction_max_num_features,
-      std::to_string(options.max_num_features)};
-  if (!camera_per_size) {
-    steps.Run("feature extraction", extract);
-  } else {
-    for (const auto& [size, group] : groups) {
-      const std::string step = format("feature extraction {}x{}", size.first, size.second);
-      const fs::path list = logs / (format("images_{}x{}", size.first, size.second) + ".txt");
-      std::string lines;
-      for (const std::string& name : group) lines += name + "\n";
-      WriteFileAtomic(list, lines);
-      std::vector<std::string> argv = extract;
-      argv.insert(argv.end(), {"--image_list_path", list.string()});
-      steps.Run(step, argv);
-    }
-  }
-  std::vector<std::string> match = {options.colmap, matcher + "_matcher", "--database_path", database.string(),
-                                    "--random_seed", seed, flags.matching_use_gpu, "0", flags.matching_num_threads,
-                                    nthreads};
-  if (matcher == "sequential") {
-    match.insert(match.end(), {"--SequentialMatching.overlap", std::to_string(options.sequential_overlap),
-                               "--SequentialMatching.loop_detection", "0"});
-  }
-  steps.Run(matcher + " matching", match);
-  const fs::path mapper_log = steps.Run(
-      "mapping",
-      {options.colmap, "mapper", "--database_path", database.string(), "--image_path", images.string(),
-       "--output_path", (out / "sparse").string(), "--random_seed", seed, "--Mapper.num_threads", nthreads,
-       "--Mapper.min_model_size", "3"},
-      /*allow_failure=*/true);
-  const std::string advice = "try --sfm.matcher exhaustive, more features (--sfm.max_num_features), a larger "
-                             "--sfm.max_image_size, or photos with more overlap";
-  if (!steps.last_ok()) {
-    if (ReadTextFile(mapper_log).find("No good initial image pair found") != std::string::npos) {
-      throw UserError(format("COLMAP found no pair of photos to start the reconstruction from (log: {}): the photos "
-                             "overlap too little or show too little texture; {}",
-                             mapper_log.string(), advice));
-    }
-    throw ExternalToolError(format("COLMAP's mapper failed; log: {}", mapper_log.string()));
-  }
-
-  // The model with the most registered images (COLMAP's exit code says nothing about that).
-  nlohmann::json models = nlohmann::json::array();
-  fs::path chosen;
-  size_t most = 0;
-  for (const fs::directory_entry& entry : fs::directory_iterator(out / "sparse")) {
-    if (!entry.is_directory()) continue;
-    const size_t registered = ReadColmapModel(entry.path()).images.size();
-    models.push_back({{"path", fs::relative(entry.path(), out).string()}, {"registered", registered}});
-    if (registered > most) {
-      most = registered;
-      chosen = entry.path();
-    }
-  }
-  if (chosen.empty()) {
-    throw UserError(format("COLMAP could not reconstruct any camera from the {} photos (log: {}); {}", names.size(),
-                           mapper_log.string(), advice));
-  }
-  fs::path model_dir = chosen;
-  if (options.refine_principal_point) {
-    model_dir = out / "refined";
-    fs::create_directories(model_dir);
-    steps.Run("bundle adjustment",
-              {options.colmap, "bundle_adjuster", "--input_path", chosen.string(), "--output_path",
-               model_dir.string(), "--BundleAdjustment.refine_principal_point", "1"});
-  }
+  colmap.ExtractFeatures(camera_per_size ? groups : decltype(groups){});
+  colmap.Match(matcher);
+  nlohmann::json models;
+  const fs::path chosen = colmap.MapLargestModel(names.size(), &models);
+  const fs::path model_dir = options.refine_principal_point ? colmap.RefinePrincipalPoint(chosen) : chosen;
   const ColmapModel model = ReadColmapModel(model_dir);
-  std::set<std::string> registered_names;
-  std::vector<Eigen::Vector3d> centres, axes;
-  for (const auto& [id, image] : model.images) {
-    registered_names.insert(image.name);
-    const Eigen::Matrix3d world_from_cam = image.cam_from_world_rotation.toRotationMatrix().transpose();
-    centres.push_back(-world_from_cam * image.cam_from_world_translation);
-    axes.push_back(world_from_cam.col(2));  // COLMAP cameras look along +z
-  }
-  std::vector<std::string> left_out;
-  for (const std::string& name : names) {
-    if (!registered_names.count(name)) left_out.push_back(name);
-  }
-  double error_sum = 0, observations = 0;
-  for (const auto& [id, point] : model.points) {
-    error_sum += point.error * point.track.size();
-    observations += point.track.size();
-  }
-  const double fraction = static_cast<double>(model.images.size()) / names.size();
-  nlohmann::json report = {
-      {"colmap_version", version.ToString()},
-      {"matcher", matcher},
-      {"images_given", names.size()},
-      {"registered", model.images.size()},
-      {"registered_percent", 100 * fraction},
-      {"left_out", left_out},
-      {"points", model.points.size()},
-      {"mean_reprojection_error_px", observations > 0 ? error_sum / observations : 0.0},
-      {"mean_track_length", model.points.empty() ? 0.0 : observations / model.points.size()},
-      {"models", models},
-      {"chosen_model", fs::relative(chosen, out).string()},
-      {"steps", steps.timings()}};
-  if (const auto focus = FindFocusPoint(centres, axes)) {
-    report["median_axis_to_focus_angle_deg"] = focus->median_angle_deg;
-    if (focus->median_angle_deg > kSuspiciousFocusAngleDeg) {
-      LogWarning(format("sfm: the cameras' optical axes miss their common focus point by a median {:.1f} degrees; "
-                        "for photos taken around an object this suggests a wrong reconstruction; {}",
-                        focus->median_angle_deg, advice));
-    }
-  }
+  nlohmann::json report = ModelReport(model, names);
+  report.update({{"colmap_version", version.ToString()},
+                 {"matcher", matcher},
+                 {"models", models},
+                 {"chosen_model", fs::relative(chosen, out).string()},
+                 {"steps", steps.timings()}});
   WriteJsonAtomic(out / "sfm_report.json", report);  // also for a run that fails the check below
   context.summary = {{"registered", model.images.size()}, {"images", names.size()}, {"points", model.points.size()}};
   LogInfo(format("sfm: {}/{} photos registered, {} points, mean reprojection error {:.2f} px",
                  model.images.size(), names.size(), model.points.size(),
                  report["mean_reprojection_error_px"].get<double>()));
-  if (fraction < options.min_registered) {
-    std::string listed;
-    for (size_t i = 0; i < left_out.size() && i < kMaxNamesListed; ++i) listed += (i ? ", " : "") + left_out[i];
-    if (left_out.size() > kMaxNamesListed) listed += format(" and {} more", left_out.size() - kMaxNamesListed);
-    throw UserError(format("COLMAP registered only {} of {} photos ({:.0f}%, sfm.min_registered is {:.0f}%); left "
-                           "out: {}; {}",
-                           model.images.size(), names.size(), 100 * fraction, 100 * options.min_registered, listed,
-                           advice));
-  }
-  const fs::path undistortion_log = steps.Run(
-      "undistortion", {options.colmap, "image_undistorter", "--image_path", images.string(), "--input_path",
-                       model_dir.string(), "--output_path", (out / "undistorted").string(), "--output_type", "COLMAP"});
-  if (!fs::exists(out / "undistorted" / "sparse" / "cameras.bin")) {
-    throw ExternalToolError(format("COLMAP's image_undistorter wrote no model into '{}'; log: {}",
-                                   (out / "undistorted").string(), undistortion_log.string()));
-  }
-  for (const fs::directory_entry& entry : fs::directory_iterator(out / "undistorted")) {
-    if (entry.path().extension() == ".sh") fs::remove(entry.path());  // COLMAP's dense-stereo scripts
-  }
+  CheckRegistered(report, options.min_registered);
+  colmap.Undistort(model_dir);
   report["steps"] = steps.timings();
   WriteJsonAtomic(out / "sfm_report.json", report);
 }

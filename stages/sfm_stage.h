@@ -35,7 +35,8 @@ struct SfmOptions {
     v("max_image_size", max_image_size, "longest image side for feature extraction", "px");
     v("max_num_features", max_num_features, "features per photo at most", "features");
     v("refine_principal_point", refine_principal_point, "final bundle adjustment that also refines cx, cy");
-    v("min_registered", min_registered, "fraction of photos that must be registered, else an error");
+    v("min_registered", min_registered, "fraction of photos that must be registered, else an error", "",
+      OptionKind::kCheck);
     v("seed", seed, "COLMAP's random seed");
     v("colmap", colmap, "the COLMAP program (name on PATH or a path)", "", OptionKind::kRuntime);
   }
@@ -51,6 +52,7 @@ class SfmStage : public Stage {
   // "tool colmap" -> its version: a result made with another COLMAP is stale.
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
   void Run(StageContext& context) const override;
+  void CheckResult(const std::filesystem::path& result_dir, const Config& config) const override;
 };
 
 }  // namespace p2n

@@ -17,30 +17,33 @@ void RunOptions::Check() const {
   CheckOption(threads >= 0, "run.threads", format("must be 0 (every core) or more, not {}", threads));
 }
 
+namespace {
+
+// Calls `section.operator()<Options>(name)` for every option section, in the order `--help` lists them: the one
+// table of sections.
+template <class Section>
+void ForEachSection(Section&& section) {
+  section.template operator()<RunOptions>("run");
+  section.template operator()<IngestOptions>("ingest");
+  section.template operator()<SfmOptions>("sfm");
+  section.template operator()<PosesOptions>("poses");
+  section.template operator()<ImportOptions>("import");
+  section.template operator()<TrainOptions>("train");
+  section.template operator()<RenderStageOptions>("render");
+  section.template operator()<ExportOptions>("export");
+  section.template operator()<ReportOptions>("report");
+}
+
+}  // namespace
+
 OptionRegistry AllOptions() {
   OptionRegistry registry;
-  RegisterOptions<RunOptions>(registry, "run");
-  RegisterOptions<IngestOptions>(registry, "ingest");
-  RegisterOptions<SfmOptions>(registry, "sfm");
-  RegisterOptions<PosesOptions>(registry, "poses");
-  RegisterOptions<ImportOptions>(registry, "import");
-  RegisterOptions<TrainOptions>(registry, "train");
-  RegisterOptions<RenderStageOptions>(registry, "render");
-  RegisterOptions<ExportOptions>(registry, "export");
-  RegisterOptions<ReportOptions>(registry, "report");
+  ForEachSection([&]<class Options>(const char* name) { RegisterOptions<Options>(registry, name); });
   return registry;
 }
 
 void CheckAllOptions(const Config& config) {
-  ReadOptions<RunOptions>(config, "run");
-  ReadOptions<IngestOptions>(config, "ingest");
-  ReadOptions<SfmOptions>(config, "sfm");
-  ReadOptions<PosesOptions>(config, "poses");
-  ReadOptions<ImportOptions>(config, "import");
-  ReadOptions<TrainOptions>(config, "train");
-  ReadOptions<RenderStageOptions>(config, "render");
-  ReadOptions<ExportOptions>(config, "export");
-  ReadOptions<ReportOptions>(config, "report");
+  ForEachSection([&]<class Options>(const char* name) { ReadOptions<Options>(config, name); });
 }
 
 Runner MakeRunner(const std::optional<std::filesystem::path>& input) {

@@ -1,16 +1,11 @@
 #include "stages/train_stage.h"
 
-#include <OpenImageIO/imagebufalgo.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <fstream>
-#include <numeric>
 
 #include "nerf/appearance.h"
-#include "nerf/image_io.h"
+#include "nerf/float_image.h"
 #include "nerf/ngp_field.h"
 #include "nerf/plot.h"
 #include "nerf/vanilla_field.h"
@@ -23,6 +18,7 @@
 #include "stages/camera_corrections.h"
 #include "stages/dataset_import.h"
 #include "stages/stage_io.h"
+#include "stages/training_data.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -58,46 +54,15 @@ Preset PresetFor(const std::string& name) {
 
 }  // namespace
 
-TrainView LoadTrainView(const ImportedView& imported) {
-  TrainView view;
-  view.camera = imported.view.camera;
-  view.near = imported.view.near;
-  view.far = imported.view.far;
-  view.name = imported.source.filename().string();
-  const ReadImageResult read = ReadImage(imported.source);
-  if (!read.ok()) throw UserError(format("cannot read '{}': {}", imported.source.string(), read.error));
-  OIIO::ImageBuf image = read.image;
-  const int channels = image.spec().nchannels;
-  if (channels == 1 || channels == 2) {
-    const int order[] = {0, 0, 0, 1};
-    image = OIIO::ImageBufAlgo::channels(image, channels + 2, OIIO::cspan<int>(order, channels + 2));
-  } else if (channels > 4) {
-    image = OIIO::ImageBufAlgo::channels(image, 4, {});
-  }
-  const OIIO::ImageSpec& spec = image.spec();
-  if (spec.width != view.camera.width || spec.height != view.camera.height) {
-    throw UserError(format("'{}' is {}x{} but transforms.json says {}x{}; rerun the poses stage",
-                           imported.source.string(), spec.width, spec.height, view.camera.width, view.camera.height));
-  }
-  view.channels = spec.nchannels;
-  view.pixels.resize(size_t(spec.width) * spec.height * spec.nchannels);
-  if (!image.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::UINT8, view.pixels.data())) {
-    throw UserError(format("cannot convert '{}': {}", imported.source.string(), image.geterror()));
-  }
-  return view;
-}
-
-std::string HeldoutSplit(const ImportedDataset& dataset) {
-  const bool has_test = std::any_of(dataset.views.begin(), dataset.views.end(),
-                                    [](const ImportedView& v) { return v.view.split == "test"; });
-  return has_test ? "test" : "val";
-}
-
 namespace {
 
-double Mean(const std::vector<double>& values) {
-  return values.empty() ? std::nan("") : std::accumulate(values.begin(), values.end(), 0.0) / values.size();
-}
+// What a training is made from: the stage's options, the trainer's they resolve to, and the data.
+struct TrainingSetup {
+  TrainOptions options;
+  TrainerOptions trainer;
+  TrainingData data;
+  std::string heldout_split;
+};
 
 // The run's state besides the trainer's, kept in checkpoints.
 struct RunState {
@@ -219,47 +184,6 @@ bool ModelIsFinite(NerfModel& model) {
 
 }  // namespace
 
-TrainingData LoadTrainingData(const fs::path& transforms, const fs::path& workspace_root, std::string* heldout_split) {
-  const ImportedDataset dataset = LoadTransformsJson(transforms, workspace_root);
-  TrainingData data;
-  data.background = DatasetBackground(transforms);
-  *heldout_split = HeldoutSplit(dataset);
-  std::vector<const ImportedView*> train, heldout;
-  for (const ImportedView& view : dataset.views) {
-    if (view.view.split == "train") train.push_back(&view);
-    if (view.view.split == *heldout_split) heldout.push_back(&view);
-  }
-  if (train.empty()) throw UserError(format("'{}' has no training view (split \"train\")", transforms.string()));
-  data.train.resize(train.size());
-  data.heldout.resize(heldout.size());
-  Progress progress("train: loading images", static_cast<int64_t>(train.size() + heldout.size()), "images");
-  tbb::parallel_for(size_t{0}, train.size() + heldout.size(), [&](size_t i) {
-    if (i < train.size()) {
-      data.train[i] = LoadTrainView(*train[i]);
-    } else {
-      data.heldout[i - train.size()] = LoadTrainView(*heldout[i - train.size()]);
-    }
-    progress.Add();
-  });
-  return data;
-}
-
-std::array<float, 3> DatasetBackground(const fs::path& transforms) {
-  const nlohmann::json json = ReadJsonFile(transforms);
-  std::array<float, 3> background{1, 1, 1};
-  if (json.contains("background") && json["background"].is_array() && json["background"].size() == 3) {
-    for (int c = 0; c < 3; ++c) background[c] = json["background"][c].get<float>();
-  }
-  return background;
-}
-
-std::string SourceDatasetKind(const fs::path& transforms) {
-  const nlohmann::json json = ReadJsonFile(transforms);
-  const bool has = json.contains("dataset") && json["dataset"].is_object() && json["dataset"].contains("kind") &&
-                   json["dataset"]["kind"].is_string();
-  return has ? json["dataset"]["kind"].get<std::string>() : "";
-}
-
 SceneSpace ResolveSceneSpace(const TrainOptions& options, const fs::path& transforms) {
   if (options.scene != "auto") return SceneSpaceFromName(options.scene);
   const std::string kind = SourceDatasetKind(transforms);
@@ -335,56 +259,41 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
   return trainer;
 }
 
-void TrainStage::Run(StageContext& context) const {
-  const TrainOptions options = ReadOptions<TrainOptions>(context.config, "train");
-  const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
-  std::string heldout_split;
-  const TrainingData data = LoadTrainingData(transforms, context.workspace.root(), &heldout_split);
-  TrainerOptions trainer_options = MakeTrainerOptions(options, ResolveSceneSpace(options, transforms));
-  const bool has_alpha = std::any_of(data.train.begin(), data.train.end(), [](const TrainView& v) { return v.channels == 4; });
-  trainer_options.random_background = options.background == "random" || (options.background == "auto" && has_alpha);
-  Trainer trainer(trainer_options, data);
-  const double budget = ResolvedTimeBudget(options);
-  LogInfo(format("train: {} field, {} scene, preset {}, {} training and {} held-out ({}) views, {}", options.field,
-                 SceneSpaceName(trainer_options.space), options.preset, data.train.size(), data.heldout.size(), heldout_split,
-                 budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
+namespace {
 
-  RunState state;
-  const fs::path checkpoint = context.resume_dir / "checkpoint.bin";
-  int resumed_from = 0;
-  if (LoadCheckpoint(checkpoint, context.key, &state, &trainer)) {
-    resumed_from = trainer.step();
-    LogInfo(format("train: resumed at step {} ({:.1f} s of training) from {}", trainer.step(), state.train_seconds,
-                   checkpoint.string()));
-  }
+void CheckCancel(size_t) { ThrowIfCancelled(); }  // Ctrl-C stops an evaluation too
+
+// Trains until the budget (seconds, else steps) is spent, from where `state` left off: a metrics row at every
+// evaluation (evaluations take at most train.eval_share of the wall time), checkpoints every
+// train.checkpoint_interval seconds into `checkpoint`, tagged with the result's `key`.
+void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptions& options, double budget,
+                    const fs::path& checkpoint, const std::string& key, RunState* state, EvalLog* eval_log) {
+  using Clock = std::chrono::steady_clock;
   const auto done = [&] {
-    return (budget > 0 && state.train_seconds >= budget) || (options.steps > 0 && trainer.step() >= options.steps);
+    return (budget > 0 && state->train_seconds >= budget) || (options.steps > 0 && trainer.step() >= options.steps);
   };
   const auto progress_of = [&] {
-    const double by_time = budget > 0 ? state.train_seconds / budget : 0;
+    const double by_time = budget > 0 ? state->train_seconds / budget : 0;
     const double by_steps = options.steps > 0 ? double(trainer.step()) / options.steps : 0;
     return std::clamp(std::max(by_time, by_steps), 0.0, 1.0);
   };
-  using Clock = std::chrono::steady_clock;
-  const auto check_cancel = [](size_t) { ThrowIfCancelled(); };  // Ctrl-C stops an evaluation too
-  EvalLog eval_log;
   const auto add_row = [&] {  // returns the seconds it took
     const auto start = Clock::now();
     const double psnr =
-        data.heldout.empty() ? std::nan("") : Mean(trainer.HeldoutPsnr(options.eval_pixels, nullptr, check_cancel));
-    const double loss = state.loss_steps > 0 ? state.loss_sum / state.loss_steps : std::nan("");
-    state.metrics += format("{:.3f},{},{:.6g},{:.4f}\n", state.train_seconds, trainer.step(), loss, psnr);
-    state.loss_sum = 0;
-    state.loss_steps = 0;
+        data.heldout.empty() ? std::nan("") : Mean(trainer.HeldoutPsnr(options.eval_pixels, nullptr, CheckCancel));
+    const double loss = state->loss_steps > 0 ? state->loss_sum / state->loss_steps : std::nan("");
+    state->metrics += format("{:.3f},{},{:.6g},{:.4f}\n", state->train_seconds, trainer.step(), loss, psnr);
+    state->loss_sum = 0;
+    state->loss_steps = 0;
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    eval_log.seconds += seconds;
-    ++eval_log.count;
+    eval_log->seconds += seconds;
+    ++eval_log->count;
     return seconds;
   };
 
   Progress progress("train", budget > 0 ? static_cast<int64_t>(budget) : options.steps, budget > 0 ? "s" : "steps");
-  progress.Add(budget > 0 ? static_cast<int64_t>(state.train_seconds) : trainer.step());
-  double next_eval = (std::floor(state.train_seconds / options.eval_interval) + 1) * options.eval_interval;
+  progress.Add(budget > 0 ? static_cast<int64_t>(state->train_seconds) : trainer.step());
+  double next_eval = (std::floor(state->train_seconds / options.eval_interval) + 1) * options.eval_interval;
   auto last_checkpoint = Clock::now();
   int consecutive_skips = 0;
   while (!done()) {
@@ -392,9 +301,9 @@ void TrainStage::Run(StageContext& context) const {
     const auto start = Clock::now();
     const StepResult step = trainer.Step(progress_of());
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    const int64_t whole_before = static_cast<int64_t>(state.train_seconds);
-    state.train_seconds += seconds;
-    progress.Add(budget > 0 ? static_cast<int64_t>(state.train_seconds) - whole_before : 1);
+    const int64_t whole_before = static_cast<int64_t>(state->train_seconds);
+    state->train_seconds += seconds;
+    progress.Add(budget > 0 ? static_cast<int64_t>(state->train_seconds) - whole_before : 1);
     if (step.skipped) {
       LogWarning(format("train: step {} skipped: {}", trainer.step(), step.problem));
       if (++consecutive_skips >= kMaxConsecutiveSkips) {
@@ -404,53 +313,92 @@ void TrainStage::Run(StageContext& context) const {
       continue;
     }
     consecutive_skips = 0;
-    state.loss_sum += step.loss;
-    ++state.loss_steps;
-    if (state.train_seconds >= next_eval || done()) {
-      // Evaluations take at most train.eval_share of the wall time: the interval grows when they are slow.
-      const double seconds = add_row();
-      next_eval = std::max((std::floor(state.train_seconds / options.eval_interval) + 1) * options.eval_interval,
-                           state.train_seconds + seconds * (1 - options.eval_share) / options.eval_share);
+    state->loss_sum += step.loss;
+    ++state->loss_steps;
+    if (state->train_seconds >= next_eval || done()) {
+      const double eval_seconds = add_row();
+      next_eval = std::max((std::floor(state->train_seconds / options.eval_interval) + 1) * options.eval_interval,
+                           state->train_seconds + eval_seconds * (1 - options.eval_share) / options.eval_share);
     }
     if (options.checkpoint_interval > 0 &&
         std::chrono::duration<double>(Clock::now() - last_checkpoint).count() >= options.checkpoint_interval) {
-      if (ModelIsFinite(trainer.model())) WriteOrExplain([&] { SaveCheckpoint(checkpoint, context.key, state, trainer); });
+      if (ModelIsFinite(trainer.model())) WriteOrExplain([&] { SaveCheckpoint(checkpoint, key, *state, trainer); });
       last_checkpoint = Clock::now();
     }
   }
+}
+
+// What a finished training writes besides the model: train_report.json, metrics.csv and psnr.png; returns the
+// report.
+nlohmann::json WriteTrainReport(const fs::path& out, Trainer& trainer, const TrainingSetup& setup,
+                                const std::vector<double>& psnrs, const std::vector<double>& fitted,
+                                const RenderStats& eval_stats, const RunState& state, int resumed_from,
+                                const EvalLog& eval_log) {
+  nlohmann::json report = TrainReport(trainer, setup.trainer, setup.options, setup.data, setup.heldout_split, psnrs,
+                                      eval_stats, state.train_seconds, resumed_from, eval_log);
+  report["heldout_psnr_fitted"] = fitted.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(fitted));
+  report["heldout_psnr_fitted_is"] =
+      "each held-out photo's colour transform fitted (least squares) on its left half, PSNR on its right half (NeRF-W)";
+  report["appearance"] = AppearanceReport(trainer, setup.data);
+  std::vector<std::string> names;
+  for (const TrainView& view : setup.data.train) names.push_back(view.name);
+  report["camera_refinement"] = CameraRefinementJson(names, trainer.camera_corrections());
+  WriteJsonAtomic(out / "train_report.json", report);
+  const std::string metrics = "wall_seconds,step,train_loss,heldout_psnr\n" + state.metrics;
+  WriteFileAtomic(out / "metrics.csv", metrics);
+  const PlotSeries curve = CsvSeries("held-out PSNR", metrics, 0, 3);
+  if (!curve.x.empty()) {
+    WriteOrExplain([&] {
+      WriteLinePlot(out / "psnr.png", {"held-out PSNR against training time", "training time (s)", "PSNR (dB)"},
+                    {curve});
+    });
+  }
+  return report;
+}
+
+}  // namespace
+
+void TrainStage::Run(StageContext& context) const {
+  TrainingSetup setup;
+  setup.options = ReadOptions<TrainOptions>(context.config, "train");
+  const TrainOptions& options = setup.options;
+  const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
+  setup.data = LoadTrainingData(transforms, context.workspace.root(), &setup.heldout_split);
+  const TrainingData& data = setup.data;
+  setup.trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, transforms));
+  const bool has_alpha = std::any_of(data.train.begin(), data.train.end(), [](const TrainView& v) { return v.channels == 4; });
+  setup.trainer.random_background = options.background == "random" || (options.background == "auto" && has_alpha);
+  Trainer trainer(setup.trainer, data);
+  const double budget = ResolvedTimeBudget(options);
+  LogInfo(format("train: {} field, {} scene, preset {}, {} training and {} held-out ({}) views, {}", options.field,
+                 SceneSpaceName(setup.trainer.space), options.preset, data.train.size(), data.heldout.size(),
+                 setup.heldout_split, budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
+
+  RunState state;
+  const fs::path checkpoint = context.resume_dir / "checkpoint.bin";
+  int resumed_from = 0;
+  if (LoadCheckpoint(checkpoint, context.key, &state, &trainer)) {
+    resumed_from = trainer.step();
+    LogInfo(format("train: resumed at step {} ({:.1f} s of training) from {}", trainer.step(), state.train_seconds,
+                   checkpoint.string()));
+  }
+  EvalLog eval_log;
+  TrainUntilDone(trainer, data, options, budget, checkpoint, context.key, &state, &eval_log);
 
   if (!ModelIsFinite(trainer.model())) throw InternalError("training ended with non-finite parameters");
   RenderStats eval_stats;
   std::vector<double> fitted;
-  const std::vector<double> psnrs = trainer.HeldoutPsnr(options.final_eval_pixels, &eval_stats, check_cancel, &fitted);
+  const std::vector<double> psnrs = trainer.HeldoutPsnr(options.final_eval_pixels, &eval_stats, CheckCancel, &fitted);
   NerfModel& model = trainer.model();
   model.info = {{"transforms", transforms.string()},
                 {"steps", trainer.step()},
                 {"heldout_psnr", Mean(psnrs)},
-                {"distortion_weight", trainer_options.distortion_weight},
-                {"appearance", trainer_options.appearance},
-                {"refine_cameras", trainer_options.refine_cameras}};
+                {"distortion_weight", setup.trainer.distortion_weight},
+                {"appearance", setup.trainer.appearance},
+                {"refine_cameras", setup.trainer.refine_cameras}};
   WriteOrExplain([&] { SaveModel(model, context.output_dir / "model.bin"); });
-
-  nlohmann::json report = TrainReport(trainer, trainer_options, options, data, heldout_split, psnrs, eval_stats,
-                                      state.train_seconds, resumed_from, eval_log);
-  report["heldout_psnr_fitted"] = fitted.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(fitted));
-  report["heldout_psnr_fitted_is"] =
-      "each held-out photo's colour transform fitted (least squares) on its left half, PSNR on its right half (NeRF-W)";
-  report["appearance"] = AppearanceReport(trainer, data);
-  std::vector<std::string> names;
-  for (const TrainView& view : data.train) names.push_back(view.name);
-  report["camera_refinement"] = CameraRefinementJson(names, trainer.camera_corrections());
-  WriteJsonAtomic(context.output_dir / "train_report.json", report);
-  const std::string metrics = "wall_seconds,step,train_loss,heldout_psnr\n" + state.metrics;
-  WriteFileAtomic(context.output_dir / "metrics.csv", metrics);
-  const PlotSeries curve = CsvSeries("held-out PSNR", metrics, 0, 3);
-  if (!curve.x.empty()) {
-    WriteOrExplain([&] {
-      WriteLinePlot(context.output_dir / "psnr.png",
-                    {"held-out PSNR against training time", "training time (s)", "PSNR (dB)"}, {curve});
-    });
-  }
+  const nlohmann::json report = WriteTrainReport(context.output_dir, trainer, setup, psnrs, fitted, eval_stats, state,
+                                                 resumed_from, eval_log);
   context.summary = {{"steps", trainer.step()},
                      {"train_seconds", state.train_seconds},
                      {"heldout_psnr", report["heldout_psnr"]}};

@@ -4,12 +4,10 @@
 // heldout_psnr at fixed intervals of training time; evaluation time is not counted), train_report.json and a
 // plot of held-out PSNR against time. A killed run resumes from its last checkpoint (WS/30_train.resume/).
 
-#include <array>
 #include <filesystem>
 #include <string>
 
 #include "nerf/trainer.h"
-#include "stages/dataset_import.h"
 #include "pipeline/stage.h"
 
 namespace p2n {
@@ -90,20 +88,6 @@ struct TrainOptions {
   void Check() const;
 };
 
-// The view's image decoded to 8-bit RGB or RGBA (grey expanded); UserError naming the file when it cannot be read or
-// its size is not the camera's.
-TrainView LoadTrainView(const ImportedView& imported);
-// The split held out for evaluation: "test" when any view has it, else "val".
-std::string HeldoutSplit(const ImportedDataset& dataset);
-
-// The training views ("train" split) and held-out views (the "test" split when it has images, else "val") of a
-// transforms.json whose images lie inside `root`, decoded to 8 bits; UserError naming a bad file.
-TrainingData LoadTrainingData(const std::filesystem::path& transforms, const std::filesystem::path& root,
-                              std::string* heldout_split);
-// The colour transparent images were composited on, as transforms.json records it (white when it does not).
-std::array<float, 3> DatasetBackground(const std::filesystem::path& transforms);
-// The kind of dataset the poses came from as transforms.json records it ("blender", "llff", ...; "" for photos).
-std::string SourceDatasetKind(const std::filesystem::path& transforms);
 // The scene space train.scene asks for; auto: bounded for Blender and .npz data, else unbounded (also for LLFF
 // captures: on fern, 15 minutes of default, forward and unbounded are level within a run's noise: at 1, 2, 5, 10
 // and 15 minutes 19.77 / 20.88 / 21.83 / 22.34 / 22.52 dB against 19.77 / 20.73 / 21.74 / 22.24 / 22.44).

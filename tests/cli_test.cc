@@ -62,7 +62,8 @@ TEST_CASE("cli: a run, a fresh rerun, status and clean", "[cli]") {
   CHECK_THAT(second.output, Catch::Contains("ingest: fresh, skipped"));
   // An option given once is remembered; the stage command reruns the stage with it.
   CHECK(Photo2Nerf({"ingest", "-w", ws, "--ingest.max_image_size", "16"}).code == 0);
-  CHECK_THAT(Photo2Nerf({"status", "-w", ws}).output, Catch::Contains("fresh"));
+  CHECK_THAT(Photo2Nerf({"status", "-w", ws}).output,
+             Catch::Contains("fresh") && Catch::Contains("options   ingest.max_image_size 16 (remembered"));
   Result status = Photo2Nerf({"status", "-w", ws, "--ingest.max_image_size", "20"});
   CHECK_THAT(status.output, Catch::Contains("stale") && Catch::Contains("option ingest.max_image_size changed (16 -> 20)"));
   // An option given twice: the last value wins (as with most tools).

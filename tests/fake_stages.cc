@@ -28,7 +28,16 @@ class FakeStage : public Stage {
   std::map<std::string, std::string> ExternalInputs(const Workspace&, const Config&) const override {
     const fs::path input = counter_dir_ / "input.txt";
     if (name_ != "a" || !fs::exists(input)) return {};
+    if (!fs::is_regular_file(input)) throw UserError(format("{} is not a file", input.string()));
     return {{"file input.txt", Sha1OfFile(input)}};
+  }
+  void CheckResult(const fs::path& result_dir, const Config& config) const override {
+    const FakeOptions options = ReadOptions<FakeOptions>(config, name_);
+    const std::string text = ReadText(result_dir / "out.txt");
+    const std::string own = text.substr(0, text.find(';'));  // "b=3"
+    if (std::stoi(own.substr(own.find('=') + 1)) < options.min_value) {
+      throw UserError(format("{} is below {}.min_value {}", own, name_, options.min_value));
+    }
   }
 
   void Run(StageContext& context) const override {
@@ -39,6 +48,7 @@ class FakeStage : public Stage {
     for (const auto& [up, dir] : context.upstream_dirs) text += format(";{}", ReadText(dir / "out.txt"));
     std::ofstream(context.output_dir / "out.txt") << text;
     if (options.fail) throw UserError(format("stage {} failed on purpose", name_));
+    CheckResult(context.output_dir, context.config);
     if (options.block) {
       std::ofstream(counter_dir_ / "started.flag") << name_;
       std::this_thread::sleep_for(std::chrono::seconds(60));

@@ -16,18 +16,21 @@ struct FakeOptions {
   int value = 1;          // written into out.txt: changes the result
   bool fail = false;      // throw a UserError in the middle of Run()
   bool block = false;     // write started.flag into the counter folder, then sleep for a minute
+  int min_value = 0;      // a threshold: a result whose value is below it fails (Run and CheckResult)
 
   template <class V>
   void Visit(V& v) {
     v("value", value, "the value written into out.txt");
     v("fail", fail, "fail in the middle of the run", "", OptionKind::kRuntime);
     v("block", block, "block in the middle of the run", "", OptionKind::kRuntime);
+    v("min_value", min_value, "the least value a result may have", "", OptionKind::kCheck);
   }
   void Check() const {}
 };
 
 // Three stages a -> b -> c; the registry holds a.*, b.*, c.* and run.threads (kRuntime). Stage "a" has one
-// external input: the file `counter_dir/input.txt` (labelled "file input.txt") when it exists. Stage b's
+// external input: the file `counter_dir/input.txt` (labelled "file input.txt") when it exists (a UserError
+// when it is not a regular file). Stage b's
 // format version is read from `counter_dir/b.version` (default 1), a stand-in for a code change.
 OptionRegistry FakeOptionsRegistry();
 Runner MakeFakeRunner(const std::filesystem::path& counter_dir);

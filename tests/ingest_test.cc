@@ -16,7 +16,7 @@
 #include "pipeline/file_util.h"
 #include "stages/dataset_import.h"
 #include "stages/ingest_stage.h"
-#include "stages/train_stage.h"
+#include "stages/training_data.h"
 #include "stages/stages.h"
 #include "tests/test_util.h"
 

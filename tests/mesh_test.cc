@@ -8,6 +8,9 @@
 #include <cmath>
 
 #include "nerf/mesh.h"
+#include "nerf/rays.h"
+#include "nerf/renderer.h"
+#include "nerf/synthetic_scene.h"
 
 namespace p2n::testing {
 namespace {
@@ -85,6 +88,40 @@ TEST_CASE("mesh: a surface cut by the box is closed by the box's faces, an empty
   CHECK_FALSE(CountEdges(Mesh{}).watertight());
   options.resolution = 4;
   CHECK_THROWS_AS(ExtractMesh(model, options), std::invalid_argument);
+}
+
+TEST_CASE("mesh: the threshold chosen from the field puts the surface where the views see it", "[mesh]") {
+  // The sphere's density ramps up from 0 at radius 0.6625 by 400 per unit inwards: no hard surface, so the
+  // rendered depth lies some way inside; the mesh must follow it, not a fixed density.
+  NerfModel model = SphereModel();
+  model.march_step = 2 * std::sqrt(3.0) / 512;
+  std::vector<Eigen::Vector3d> surface;
+  for (const Eigen::Vector3d& position : {Eigen::Vector3d(3, 0, 0.5), Eigen::Vector3d(-2, 2, 1), Eigen::Vector3d(0, -3, -1)}) {
+    const PinholeCamera camera = LookAtCamera(position, Eigen::Vector3d::Zero(), 40, 40, 40);
+    const RenderedView view = RenderView(model, camera, -1, -1, RenderOptions{});
+    for (int y = 0; y < camera.height; ++y) {
+      for (int x = 0; x < camera.width; ++x) {
+        const size_t i = size_t(y) * camera.width + x;
+        if (view.opacity.pixels[i] < 0.95f) continue;
+        const Ray ray = CameraRay(camera, x + 0.5, y + 0.5);
+        surface.push_back(ray.origin + view.depth.pixels[i] * ray.direction);
+      }
+    }
+  }
+  REQUIRE(surface.size() > 300);
+  const float threshold = SurfaceThreshold(model, surface);
+  CHECK(threshold > 5);
+  CHECK(threshold < 40);
+  MeshOptions options;
+  options.resolution = 48;
+  options.density_threshold = threshold;
+  const Mesh mesh = ExtractMesh(model, options);
+  REQUIRE(!mesh.positions.empty());
+  double mesh_radius = 0, depth_radius = 0;
+  for (const Eigen::Vector3f& p : mesh.positions) mesh_radius += p.norm() / mesh.positions.size();
+  for (const Eigen::Vector3d& p : surface) depth_radius += p.norm() / surface.size();
+  CHECK(std::abs(mesh_radius - depth_radius) < 2.0 / options.resolution);  // within a cell
+  CHECK(SurfaceThreshold(model, {}) == 0);
 }
 
 TEST_CASE("mesh: cells the occupancy grid marks empty are not evaluated", "[mesh]") {

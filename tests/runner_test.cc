@@ -75,7 +75,7 @@ TEST_CASE("an option change reruns its stage and everything downstream, nothing 
   f.config.Set("b.value", 2, "test");
   const auto statuses = f.Status();
   CHECK(States(statuses) == std::vector{kFresh, kStale, kStale});
-  CHECK(statuses[1].reasons == std::vector<std::string>{"option b.value changed (1 -> 2)"});
+  CHECK(statuses[1].reasons == std::vector<std::string>{"option b.value changed (default -> 2)"});
   CHECK(statuses[2].reasons == std::vector<std::string>{"upstream b changed"});
   f.Run();
   CHECK(f.Counts() == std::vector{1, 2, 2});
@@ -93,6 +93,48 @@ TEST_CASE("a runtime-only option reruns nothing", "[runner]") {
   f.config.Set("a.block", false, "test");
   CHECK(States(f.Status()) == std::vector{kFresh, kFresh, kFresh});
   f.Run();
+  CHECK(f.Counts() == std::vector{1, 1, 1});
+}
+
+TEST_CASE("an option added at its default, or set back to it, keeps results fresh", "[runner]") {
+  Fixture f;
+  f.Run();
+  OptionRegistry newer = FakeOptionsRegistry();
+  newer.Add({"b.added_later", 0.5, "an option of a newer version", "", OptionKind::kResult, {}});
+  Config config(newer);
+  CHECK(States(MakeFakeRunner(f.counters).Status(f.workspace, config)) == std::vector{kFresh, kFresh, kFresh});
+  config.Set("b.added_later", 0.25, "test");
+  const auto statuses = MakeFakeRunner(f.counters).Status(f.workspace, config);
+  CHECK(statuses[1].reasons == std::vector<std::string>{"option b.added_later changed (default -> 0.25)"});
+  f.config.Set("b.value", 1, "test");  // given, but at its default
+  f.Run();
+  CHECK(f.Counts() == std::vector{1, 1, 1});
+}
+
+TEST_CASE("a threshold is not in the key, and a fresh result must pass it", "[runner]") {
+  Fixture f;
+  f.config.Set("b.value", 3, "test");
+  f.Run();
+  f.config.Set("b.min_value", 5, "test");
+  CHECK(States(f.Status()) == std::vector{kFresh, kFresh, kFresh});
+  CHECK_THROWS_WITH(f.Run(), Catch::Contains("b=3 is below b.min_value 5"));
+  CHECK(f.Counts() == std::vector{1, 1, 1});
+  f.config.Set("b.min_value", 2, "test");
+  f.Run();
+  CHECK(f.Counts() == std::vector{1, 1, 1});
+  f.config.Set("b.value", 1, "test");  // a new result below the threshold: the stage itself refuses it
+  CHECK_THROWS_WITH(f.Run(), Catch::Contains("b=1 is below b.min_value 2"));
+  CHECK(States(f.Status()) == std::vector{kFresh, StageState::kIncomplete, kStale});
+}
+
+TEST_CASE("a stage whose outside input cannot be read is blocked, and the others still have a status", "[runner]") {
+  Fixture f;
+  f.Run();
+  fs::create_directories(f.counters / "input.txt");  // a folder where a file is expected
+  const auto statuses = f.Status();
+  CHECK(States(statuses) == std::vector{StageState::kBlocked, kStale, kStale});
+  CHECK_THAT(statuses[0].reasons.front(), Catch::Contains("input.txt is not a file"));
+  CHECK_THROWS_WITH(f.Run(), Catch::Contains("input.txt is not a file"));
   CHECK(f.Counts() == std::vector{1, 1, 1});
 }
 
@@ -194,7 +236,7 @@ TEST_CASE("run requests: from, until and force", "[runner]") {
     f.Run(From("b"));
     CHECK(f.Counts() == std::vector{1, 1, 1});
     f.config.Set("a.value", 3, "test");
-    CHECK_THROWS_WITH(f.Run(From("c")), Catch::Contains("option a.value changed (1 -> 3)"));
+    CHECK_THROWS_WITH(f.Run(From("c")), Catch::Contains("option a.value changed (default -> 3)"));
   }
   SECTION("unknown stage names are listed") {
     CHECK_THROWS_WITH(f.Run(From("x")), Catch::Contains("unknown stage 'x'; the stages are: a, b, c"));

@@ -11,6 +11,7 @@
 
 #include "nerf/appearance.h"
 #include "nerf/camera_refinement.h"
+#include "nerf/float_image.h"
 #include "nerf/ngp_field.h"
 #include "nerf/synthetic_scene.h"
 #include "nerf/trainer.h"
@@ -74,12 +75,6 @@ std::vector<float> Parameters(NerfModel& model) {
   Encoding<float>* grid = model.field->TrainableEncoding();
   values.insert(values.end(), grid->params(), grid->params() + grid->num_params());
   return values;
-}
-
-double Mean(const std::vector<double>& values) {
-  double sum = 0;
-  for (const double v : values) sum += v;
-  return sum / values.size();
 }
 
 // 300 steps take the held-out PSNR above 20 dB and 10 dB above the untrained field's.

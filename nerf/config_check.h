@@ -1,0 +1,48 @@
+#pragma once
+// Checks of the engine's option structs (TrainerOptions::Check() and the like): each names the field and the
+// rule it breaks, as the pipeline's options do, but with std::invalid_argument (nerf/ knows nothing of the
+// pipeline's error types; the stages turn it into a user error).
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <initializer_list>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace p2n {
+
+// Throws std::invalid_argument "WHAT.FIELD must RULE, not VALUE" unless `ok`.
+template <class Value>
+void CheckField(bool ok, const char* what, const char* field, const char* rule, const Value& value) {
+  if (ok) return;
+  std::ostringstream message;
+  message << what << "." << field << " must " << rule << ", not " << value;
+  throw std::invalid_argument(message.str());
+}
+
+// Throws std::invalid_argument naming the first key of the JSON object `json` that is not in `known`: a config's
+// FromJson() reads every key its ToJson() writes, and a misspelt one must not be ignored.
+inline void RejectUnknownKeys(const nlohmann::json& json, std::initializer_list<const char*> known,
+                              const std::string& what) {
+  if (!json.is_object()) throw std::invalid_argument(what + " is not a JSON object");
+  for (const auto& [key, value] : json.items()) {
+    const bool found = std::any_of(known.begin(), known.end(), [&key = key](const char* k) { return key == k; });
+    if (!found) throw std::invalid_argument(what + ": unknown key '" + key + "'");
+  }
+}
+
+// A config's ToJson() also writes keys derived from its fields, for the reader (a network's shape). FromJson()
+// accepts them only as ToJson() writes them: throws std::invalid_argument naming the first that differs.
+inline void CheckDerivedKeys(const nlohmann::json& json, const nlohmann::json& written,
+                             std::initializer_list<const char*> derived, const std::string& what) {
+  for (const char* key : derived) {
+    if (json.contains(key) && json.at(key) != written.at(key)) {
+      throw std::invalid_argument(what + ": '" + key + "' follows from the other fields (" + written.at(key).dump() +
+                                  ") and cannot be set");
+    }
+  }
+}
+
+}  // namespace p2n

@@ -1,0 +1,93 @@
+#include "stages/training_data.h"
+
+#include <OpenImageIO/imagebufalgo.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
+#include "nerf/image_io.h"
+#include "pipeline/errors.h"
+#include "pipeline/file_util.h"
+#include "pipeline/format.h"
+#include "pipeline/progress.h"
+
+namespace p2n {
+namespace fs = std::filesystem;
+
+TrainView LoadTrainView(const ImportedView& imported) {
+  TrainView view;
+  view.camera = imported.view.camera;
+  view.near = imported.view.near;
+  view.far = imported.view.far;
+  view.name = imported.source.filename().string();
+  const ReadImageResult read = ReadImage(imported.source);
+  if (!read.ok()) throw UserError(format("cannot read '{}': {}", imported.source.string(), read.error));
+  OIIO::ImageBuf image = read.image;
+  const int channels = image.spec().nchannels;
+  if (channels == 1 || channels == 2) {
+    const int order[] = {0, 0, 0, 1};
+    image = OIIO::ImageBufAlgo::channels(image, channels + 2, OIIO::cspan<int>(order, channels + 2));
+  } else if (channels > 4) {
+    image = OIIO::ImageBufAlgo::channels(image, 4, {});
+  }
+  const OIIO::ImageSpec& spec = image.spec();
+  if (spec.width != view.camera.width || spec.height != view.camera.height) {
+    throw UserError(format("'{}' is {}x{} but transforms.json says {}x{}; rerun the poses stage",
+                           imported.source.string(), spec.width, spec.height, view.camera.width, view.camera.height));
+  }
+  view.channels = spec.nchannels;
+  view.pixels.resize(size_t(spec.width) * spec.height * spec.nchannels);
+  if (!image.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::UINT8, view.pixels.data())) {
+    throw UserError(format("cannot convert '{}': {}", imported.source.string(), image.geterror()));
+  }
+  return view;
+}
+
+std::string HeldoutSplit(const ImportedDataset& dataset) {
+  const bool has_test = std::any_of(dataset.views.begin(), dataset.views.end(),
+                                    [](const ImportedView& v) { return v.view.split == "test"; });
+  return has_test ? "test" : "val";
+}
+
+TrainingData LoadTrainingData(const fs::path& transforms, const fs::path& workspace_root, std::string* heldout_split) {
+  const ImportedDataset dataset = LoadTransformsJson(transforms, workspace_root);
+  TrainingData data;
+  data.background = DatasetBackground(transforms);
+  *heldout_split = HeldoutSplit(dataset);
+  std::vector<const ImportedView*> train, heldout;
+  for (const ImportedView& view : dataset.views) {
+    if (view.view.split == "train") train.push_back(&view);
+    if (view.view.split == *heldout_split) heldout.push_back(&view);
+  }
+  if (train.empty()) throw UserError(format("'{}' has no training view (split \"train\")", transforms.string()));
+  data.train.resize(train.size());
+  data.heldout.resize(heldout.size());
+  Progress progress("train: loading images", static_cast<int64_t>(train.size() + heldout.size()), "images");
+  tbb::parallel_for(size_t{0}, train.size() + heldout.size(), [&](size_t i) {
+    if (i < train.size()) {
+      data.train[i] = LoadTrainView(*train[i]);
+    } else {
+      data.heldout[i - train.size()] = LoadTrainView(*heldout[i - train.size()]);
+    }
+    progress.Add();
+  });
+  return data;
+}
+
+std::array<float, 3> DatasetBackground(const fs::path& transforms) {
+  const nlohmann::json json = ReadJsonFile(transforms);
+  std::array<float, 3> background{1, 1, 1};
+  if (json.contains("background") && json["background"].is_array() && json["background"].size() == 3) {
+    for (int c = 0; c < 3; ++c) background[c] = json["background"][c].get<float>();
+  }
+  return background;
+}
+
+std::string SourceDatasetKind(const fs::path& transforms) {
+  const nlohmann::json json = ReadJsonFile(transforms);
+  const bool has = json.contains("dataset") && json["dataset"].is_object() && json["dataset"].contains("kind") &&
+                   json["dataset"]["kind"].is_string();
+  return has ? json["dataset"]["kind"].get<std::string>() : "";
+}
+
+}  // namespace p2n

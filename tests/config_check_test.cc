@@ -1,0 +1,89 @@
+// The engine's option structs: Check() names the field and its rule; configs round-trip exactly through JSON and
+// refuse keys they do not read (issue 18).
+
+#include <catch2/catch.hpp>
+
+#include "nerf/adam.h"
+#include "nerf/encoding.h"
+#include "nerf/mesh.h"
+#include "nerf/ngp_field.h"
+#include "nerf/radiance_field.h"
+#include "nerf/renderer.h"
+#include "nerf/trainer.h"
+#include "nerf/vanilla_field.h"
+
+namespace p2n::testing {
+
+TEST_CASE("engine option checks name the field, the rule and the value", "[config]") {
+  TrainerOptions trainer;
+  CHECK_NOTHROW(trainer.Check());
+  trainer.loss = "l1";
+  CHECK_THROWS_WITH(trainer.Check(), "trainer.loss must be mse or huber, not l1");
+  trainer = TrainerOptions{};
+  trainer.min_batch_rays = trainer.max_batch_rays + 1;
+  CHECK_THROWS_WITH(trainer.Check(), Catch::StartsWith("trainer.min_batch_rays must be 1..max_batch_rays"));
+  trainer = TrainerOptions{};
+  trainer.occupancy_decay = 0;
+  CHECK_THROWS_WITH(trainer.Check(), "trainer.occupancy_decay must be in (0, 1], not 0");
+
+  HashGridConfig grid;
+  CHECK_NOTHROW(grid.Check());
+  grid.levels = 0;
+  CHECK_THROWS_WITH(grid.Check(), "hash_grid.levels must be 1..64, not 0");
+  grid = HashGridConfig{};
+  grid.finest_resolution = grid.base_resolution - 1;
+  CHECK_THROWS_WITH(HashGridEncoding<float>(3, grid, 1), Catch::StartsWith("hash_grid.finest_resolution must be"));
+
+  AdamOptions adam;
+  adam.beta2 = 1;
+  CHECK_THROWS_WITH(adam.Check(), "adam.beta2 must be in [0, 1), not 1");
+  RenderOptions render;
+  render.max_samples = 0;
+  CHECK_THROWS_WITH(render.Check(), "render.max_samples must be at least 1, not 0");
+  MeshOptions mesh;
+  mesh.resolution = 4;
+  CHECK_THROWS_WITH(mesh.Check(), "mesh.resolution must be 8..1024, not 4");
+}
+
+TEST_CASE("every field type's config round-trips exactly through JSON and the field", "[config]") {
+  NgpFieldConfig ngp;
+  ngp.grid = {8, 4, 15, 12, 1000};
+  ngp.geometry_features = 7;
+  ngp.width = 32;
+  ngp.density_hidden_layers = 2;
+  ngp.colour_hidden_layers = 1;
+  VanillaFieldConfig vanilla;
+  vanilla.position_levels = 6;
+  vanilla.direction_levels = 2;
+  vanilla.width = 48;
+  vanilla.layers = 4;
+  vanilla.colour_width = 24;
+  CHECK(NgpFieldConfig::FromJson(ngp.ToJson()) == ngp);
+  CHECK(VanillaFieldConfig::FromJson(vanilla.ToJson()) == vanilla);
+  CHECK(HashGridConfig::FromJson(ngp.grid.ToJson()) == ngp.grid);
+  // The registry of field types (MakeField) gives back the config it was made from, key for key.
+  for (const nlohmann::json& config : {ngp.ToJson(), vanilla.ToJson()}) {
+    INFO(config.dump());
+    CHECK(MakeField<float>(config, 1)->Config() == config);
+    CHECK(MakeField<double>(config, 1)->Config() == config);
+  }
+}
+
+TEST_CASE("a config with an unknown key or a derived key that does not follow is refused", "[config][bad_input]") {
+  nlohmann::json grid = HashGridConfig{}.ToJson();
+  grid["levles"] = 4;
+  CHECK_THROWS_WITH(HashGridConfig::FromJson(grid), "hash grid config: unknown key 'levles'");
+  nlohmann::json ngp = NgpFieldConfig{}.ToJson();
+  ngp["density_activation"] = "softplus";
+  CHECK_THROWS_WITH(NgpFieldConfig::FromJson(ngp), Catch::Contains("'density_activation' follows from the other fields"));
+  ngp = NgpFieldConfig{}.ToJson();
+  ngp["widht"] = 128;
+  CHECK_THROWS_WITH(MakeField<float>(ngp, 1), "NgpField config: unknown key 'widht'");
+  nlohmann::json vanilla = VanillaFieldConfig{}.ToJson();
+  vanilla["skip_after"] = 1;
+  CHECK_THROWS_WITH(VanillaFieldConfig::FromJson(vanilla), Catch::Contains("'skip_after' follows from the other fields"));
+  // What a config leaves out keeps its default.
+  CHECK(NgpFieldConfig::FromJson({{"otype", "NgpField"}, {"width", 32}}).grid == HashGridConfig{});
+}
+
+}  // namespace p2n::testing
