@@ -102,7 +102,7 @@ class TrainStage : public Stage {
  public:
   std::string name() const override { return "train"; }
   std::string folder() const override { return "30_train"; }
-  int format_version() const override { return 1; }
+  int format_version() const override { return 2; }  // 2: unbounded scenes march with 128 samples by default
   std::vector<std::string> upstream() const override { return {"poses"}; }
   void Run(StageContext& context) const override;
 };
