@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <initializer_list>
+#include <utility>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -22,14 +23,25 @@ void CheckField(bool ok, const char* what, const char* field, const char* rule, 
   throw std::invalid_argument(message.str());
 }
 
-// Throws std::invalid_argument naming the first key of the JSON object `json` that is not in `known`: a config's
-// FromJson() reads every key its ToJson() writes, and a misspelt one must not be ignored.
-inline void RejectUnknownKeys(const nlohmann::json& json, std::initializer_list<const char*> known,
-                              const std::string& what) {
+// Reads a config's integer fields from the JSON object `json` (a field it lacks keeps its value). A key that is
+// neither a field nor in `other_keys` is refused, as is a value of the wrong type: std::invalid_argument
+// naming `what` and the key (a config's FromJson() reads every key its ToJson() writes; a misspelt one must not
+// be ignored).
+inline void ReadIntFields(const nlohmann::json& json, std::initializer_list<std::pair<const char*, int*>> fields,
+                          std::initializer_list<const char*> other_keys, const std::string& what) {
   if (!json.is_object()) throw std::invalid_argument(what + " is not a JSON object");
   for (const auto& [key, value] : json.items()) {
-    const bool found = std::any_of(known.begin(), known.end(), [&key = key](const char* k) { return key == k; });
-    if (!found) throw std::invalid_argument(what + ": unknown key '" + key + "'");
+    const auto is_key = [&key = key](const char* k) { return key == k; };
+    const auto field = std::find_if(fields.begin(), fields.end(), [&](const auto& f) { return is_key(f.first); });
+    if (field == fields.end()) {
+      if (std::none_of(other_keys.begin(), other_keys.end(), is_key)) {
+        throw std::invalid_argument(what + ": unknown key '" + key + "'");
+      }
+    } else if (!value.is_number_integer()) {
+      throw std::invalid_argument(what + ": '" + key + "' must be an integer, not " + value.dump());
+    } else {
+      *field->second = value.get<int>();
+    }
   }
 }
 

@@ -47,17 +47,13 @@ void HashGridConfig::Check() const {
 
 HashGridConfig HashGridConfig::FromJson(const nlohmann::json& json) {
   HashGridConfig config;
-  RejectUnknownKeys(json, {"otype", "levels", "features_per_level", "log2_table_size", "base_resolution",
-                           "finest_resolution"}, "hash grid config");
-  try {
-    config.levels = json.value("levels", config.levels);
-    config.features_per_level = json.value("features_per_level", config.features_per_level);
-    config.log2_table_size = json.value("log2_table_size", config.log2_table_size);
-    config.base_resolution = json.value("base_resolution", config.base_resolution);
-    config.finest_resolution = json.value("finest_resolution", config.finest_resolution);
-  } catch (const nlohmann::json::exception& error) {
-    throw std::invalid_argument("hash grid config: " + std::string(error.what()));
-  }
+  ReadIntFields(json,
+                {{"levels", &config.levels},
+                 {"features_per_level", &config.features_per_level},
+                 {"log2_table_size", &config.log2_table_size},
+                 {"base_resolution", &config.base_resolution},
+                 {"finest_resolution", &config.finest_resolution}},
+                {"otype"}, "hash grid config");
   return config;
 }
 

@@ -43,18 +43,14 @@ nlohmann::json NgpFieldConfig::ToJson() const {
 
 NgpFieldConfig NgpFieldConfig::FromJson(const nlohmann::json& json) {
   NgpFieldConfig config;
-  RejectUnknownKeys(json, {"otype", "encoding", "geometry_features", "width", "density_hidden_layers",
-                           "colour_hidden_layers", "direction_encoding", "density_network", "colour_network",
-                           "density_activation"}, "NgpField config");
-  try {
-    if (json.contains("encoding")) config.grid = HashGridConfig::FromJson(json.at("encoding"));
-    config.geometry_features = json.value("geometry_features", config.geometry_features);
-    config.width = json.value("width", config.width);
-    config.density_hidden_layers = json.value("density_hidden_layers", config.density_hidden_layers);
-    config.colour_hidden_layers = json.value("colour_hidden_layers", config.colour_hidden_layers);
-  } catch (const nlohmann::json::exception& error) {
-    throw std::invalid_argument("NgpField config: " + std::string(error.what()));
-  }
+  ReadIntFields(json,
+                {{"geometry_features", &config.geometry_features},
+                 {"width", &config.width},
+                 {"density_hidden_layers", &config.density_hidden_layers},
+                 {"colour_hidden_layers", &config.colour_hidden_layers}},
+                {"otype", "encoding", "direction_encoding", "density_network", "colour_network", "density_activation"},
+                "NgpField config");
+  if (json.contains("encoding")) config.grid = HashGridConfig::FromJson(json.at("encoding"));
   CheckDerivedKeys(json, config.ToJson(),
                    {"direction_encoding", "density_network", "colour_network", "density_activation"},
                    "NgpField config");

@@ -21,18 +21,14 @@ nlohmann::json VanillaFieldConfig::ToJson() const {
 
 VanillaFieldConfig VanillaFieldConfig::FromJson(const nlohmann::json& json) {
   VanillaFieldConfig config;
-  RejectUnknownKeys(json, {"otype", "position_encoding", "direction_encoding", "position_levels", "direction_levels",
-                           "width", "layers", "skip_after", "colour_width", "density_activation"},
-                    "VanillaField config");
-  try {
-    config.position_levels = json.value("position_levels", config.position_levels);
-    config.direction_levels = json.value("direction_levels", config.direction_levels);
-    config.width = json.value("width", config.width);
-    config.layers = json.value("layers", config.layers);
-    config.colour_width = json.value("colour_width", config.colour_width);
-  } catch (const nlohmann::json::exception& error) {
-    throw std::invalid_argument("VanillaField config: " + std::string(error.what()));
-  }
+  ReadIntFields(json,
+                {{"position_levels", &config.position_levels},
+                 {"direction_levels", &config.direction_levels},
+                 {"width", &config.width},
+                 {"layers", &config.layers},
+                 {"colour_width", &config.colour_width}},
+                {"otype", "position_encoding", "direction_encoding", "skip_after", "density_activation"},
+                "VanillaField config");
   if (config.layers < 2 || config.layers % 2 != 0) {
     throw std::invalid_argument("VanillaField config: layers must be even and at least 2");
   }

@@ -46,18 +46,14 @@ TEST_CASE("engine option checks name the field, the rule and the value", "[confi
 }
 
 TEST_CASE("every field type's config round-trips exactly through JSON and the field", "[config]") {
-  NgpFieldConfig ngp;
-  ngp.grid = {8, 4, 15, 12, 1000};
-  ngp.geometry_features = 7;
-  ngp.width = 32;
-  ngp.density_hidden_layers = 2;
-  ngp.colour_hidden_layers = 1;
-  VanillaFieldConfig vanilla;
-  vanilla.position_levels = 6;
-  vanilla.direction_levels = 2;
-  vanilla.width = 48;
-  vanilla.layers = 4;
-  vanilla.colour_width = 24;
+  // Every field away from its default.
+  const NgpFieldConfig ngp{.grid = {8, 4, 15, 12, 1000},
+                           .geometry_features = 7,
+                           .width = 32,
+                           .density_hidden_layers = 2,
+                           .colour_hidden_layers = 1};
+  const VanillaFieldConfig vanilla{
+      .position_levels = 6, .direction_levels = 2, .width = 48, .layers = 4, .colour_width = 24};
   CHECK(NgpFieldConfig::FromJson(ngp.ToJson()) == ngp);
   CHECK(VanillaFieldConfig::FromJson(vanilla.ToJson()) == vanilla);
   CHECK(HashGridConfig::FromJson(ngp.grid.ToJson()) == ngp.grid);
@@ -82,6 +78,8 @@ TEST_CASE("a config with an unknown key or a derived key that does not follow is
   nlohmann::json vanilla = VanillaFieldConfig{}.ToJson();
   vanilla["skip_after"] = 1;
   CHECK_THROWS_WITH(VanillaFieldConfig::FromJson(vanilla), Catch::Contains("'skip_after' follows from the other fields"));
+  CHECK_THROWS_WITH(NgpFieldConfig::FromJson({{"width", "wide"}}),
+                    "NgpField config: 'width' must be an integer, not \"wide\"");
   // What a config leaves out keeps its default.
   CHECK(NgpFieldConfig::FromJson({{"otype", "NgpField"}, {"width", 32}}).grid == HashGridConfig{});
 }
