@@ -47,11 +47,14 @@ template <int Width>
 double Chain(const Table<Width>& table, int threads, size_t gathers) {
   std::vector<float> sink(threads);
   const auto start = Clock::now();
-  tbb::parallel_for(0, threads, [&](int t) {
-    uint32_t entry = static_cast<uint32_t>(t * 7919 % table.entries());
-    for (size_t i = 0; i < gathers; ++i) entry = static_cast<uint32_t>(table.values[size_t(entry) * Width]);
-    sink[t] = static_cast<float>(entry);
-  }, tbb::static_partitioner());
+  tbb::parallel_for(
+      0, threads,
+      [&](int t) {
+        uint32_t entry = static_cast<uint32_t>(t * 7919 % table.entries());
+        for (size_t i = 0; i < gathers; ++i) entry = static_cast<uint32_t>(table.values[size_t(entry) * Width]);
+        sink[t] = static_cast<float>(entry);
+      },
+      tbb::static_partitioner());
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   if (sink[0] < 0) std::printf("%f", sink[0]);
   return seconds;
@@ -69,14 +72,17 @@ double Independent(const Table<Width>& table, int threads, size_t gathers, bool 
   }
   std::vector<float> sink(threads);
   const auto start = Clock::now();
-  tbb::parallel_for(0, threads, [&](int t) {
-    float sum[Width] = {};
-    for (const uint32_t entry : indices[t]) {
-      const float* value = table.values.data() + size_t(entry) * Width;
-      for (int f = 0; f < Width; ++f) sum[f] += value[f];
-    }
-    sink[t] = sum[0];
-  }, tbb::static_partitioner());
+  tbb::parallel_for(
+      0, threads,
+      [&](int t) {
+        float sum[Width] = {};
+        for (const uint32_t entry : indices[t]) {
+          const float* value = table.values.data() + size_t(entry) * Width;
+          for (int f = 0; f < Width; ++f) sum[f] += value[f];
+        }
+        sink[t] = sum[0];
+      },
+      tbb::static_partitioner());
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   if (sink[0] < 0) std::printf("%f", sink[0]);
   return seconds;

@@ -65,9 +65,9 @@ int main(int argc, char** argv) {
     const p2n::NerfModel* model;
     float min_transmittance;
   };
-  for (const Method& method : {Method{"occupancy + early termination", &model, 1e-4f},
-                               Method{"occupancy, no termination", &model, 0.0f},
-                               Method{"no occupancy, no termination", &dense, 0.0f}}) {
+  for (const Method& method :
+       {Method{"occupancy + early termination", &model, 1e-4f}, Method{"occupancy, no termination", &model, 0.0f},
+        Method{"no occupancy, no termination", &dense, 0.0f}}) {
     p2n::PlotSeries line{method.name, {}, {}};
     for (const double scale : {8.0, 4.0, 2.0, 1.0, 0.5, 0.25}) {
       p2n::RenderOptions options;
@@ -93,7 +93,7 @@ int main(int argc, char** argv) {
     }
     series.push_back(line);
   }
-  p2n::WriteLinePlot(out + ".png", {"rendering: error against time", "seconds per frame", "PSNR vs fine reference (dB)"},
-                     series);
+  p2n::WriteLinePlot(out + ".png",
+                     {"rendering: error against time", "seconds per frame", "PSNR vs fine reference (dB)"}, series);
   return 0;
 }

@@ -5,8 +5,8 @@
 // splitting N.
 // Usage: throughput_bench [SAMPLES [REPEATS]]
 
-#include <Eigen/Core>
 #include <tbb/parallel_for.h>
+#include <Eigen/Core>
 
 #include <algorithm>
 #include <chrono>
@@ -58,9 +58,8 @@ int main(int argc, char** argv) {
   // Dense GEMM of the MLP's shape, chunked over threads like the trainer.
   const Eigen::MatrixXf w = Eigen::MatrixXf::Random(64, 64);
   std::vector<Eigen::MatrixXf> inputs(chunks, Eigen::MatrixXf::Random(64, per_chunk)), outputs(chunks);
-  const double gemm_seconds = MedianSeconds(repeats, [&] {
-    tbb::parallel_for(0, chunks, [&](int c) { outputs[c].noalias() = w * inputs[c]; });
-  });
+  const double gemm_seconds = MedianSeconds(
+      repeats, [&] { tbb::parallel_for(0, chunks, [&](int c) { outputs[c].noalias() = w * inputs[c]; }); });
   const double gemm_gflops = 2.0 * 64 * 64 * per_chunk * chunks / gemm_seconds / 1e9;
   const Eigen::MatrixXf a = Eigen::MatrixXf::Random(2048, 2048), b = Eigen::MatrixXf::Random(2048, 2048);
   Eigen::MatrixXf product(2048, 2048);

@@ -35,15 +35,15 @@ void AddOptionFlags(CLI::App& app, const OptionRegistry& registry, std::map<std:
       type.clear();
       for (const std::string& choice : spec.choices) type += (type.empty() ? "" : "|") + choice;
     }
-    const std::string default_text = spec.default_value.is_string() ? spec.default_value.get<std::string>()
-                                                                     : spec.default_value.dump();
+    const std::string default_text =
+        spec.default_value.is_string() ? spec.default_value.get<std::string>() : spec.default_value.dump();
     app.add_option_function<std::string>(
            "--" + spec.key, [option_text, key = spec.key](const std::string& text) { (*option_text)[key] = text; },
            help)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast)  // the last value given wins
         ->type_name(type)
         ->default_str(default_text)
-        ->group(spec.kind == OptionKind::kResult ? "Options that change results (remembered by the workspace)"
+        ->group(spec.kind == OptionKind::kResult  ? "Options that change results (remembered by the workspace)"
                 : spec.kind == OptionKind::kCheck ? "Checks on results (remembered, not in any cache key)"
                                                   : "Runtime options (not remembered, not in any cache key)");
   }
@@ -63,8 +63,8 @@ std::optional<int> Parse(CLI::App& app, const OptionRegistry& registry, int argc
         message = format("unexpected argument '{}'", extra);
         break;
       }
-      const std::string key = extra.substr(2, extra.find('=') == std::string::npos ? std::string::npos
-                                                                                    : extra.find('=') - 2);
+      const std::string key =
+          extra.substr(2, extra.find('=') == std::string::npos ? std::string::npos : extra.find('=') - 2);
       message = format("unknown option '--{}'", key);
       const std::string suggestion = registry.Suggest(key);
       if (!suggestion.empty()) message += format("; did you mean '--{}'?", suggestion);

@@ -2,8 +2,8 @@
 // What the pipeline subcommands share: the workspace flag, dotted option flags generated from the option
 // registry, config resolution, and runtime settings (threads, logging, progress).
 
-#include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
+#include <CLI/CLI.hpp>
 
 #include <map>
 #include <memory>

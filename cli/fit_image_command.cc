@@ -29,9 +29,10 @@ void PrepareOutputFolder(const fs::path& folder) {
     throw UserError(format("output '{}' is a file; give a folder for the results", folder.string()));
   }
   if (fs::exists(folder) && !fs::is_empty(folder, error) && !fs::exists(folder / kReportName)) {
-    throw UserError(format("output folder '{}' is not empty and holds no earlier fit-image results; choose a new "
-                           "or empty folder so that nothing of yours is overwritten",
-                           folder.string()));
+    throw UserError(
+        format("output folder '{}' is not empty and holds no earlier fit-image results; choose a new "
+               "or empty folder so that nothing of yours is overwritten",
+               folder.string()));
   }
   fs::create_directories(folder, error);
   if (error) throw UserError(format("cannot create the output folder '{}': {}", folder.string(), error.message()));
@@ -39,7 +40,8 @@ void PrepareOutputFolder(const fs::path& folder) {
 
 void WriteCurve(const fs::path& path, const std::vector<FitCurvePoint>& curve) {
   std::string text = "wall_seconds,step,psnr\n";
-  for (const FitCurvePoint& point : curve) text += format("{:.3f},{},{:.4f}\n", point.wall_seconds, point.step, point.psnr);
+  for (const FitCurvePoint& point : curve)
+    text += format("{:.3f},{},{:.4f}\n", point.wall_seconds, point.step, point.psnr);
   WriteFileAtomic(path, text);
 }
 
@@ -77,16 +79,11 @@ ImageFitResult FitAndLog(const ImageFitOptions& options, const FloatImage& targe
 
 nlohmann::json Report(const fs::path& image, const FloatImage& target, const ImageFitOptions& options,
                       const ImageFitResult& result) {
-  return {{"image", image.string()},
-          {"width", target.width},
-          {"height", target.height},
-          {"channels", target.channels},
-          {"model", options.model},
-          {"model_config", result.model_config},
-          {"steps", result.steps},
-          {"train_seconds", result.train_seconds},
-          {"psnr", result.psnr},
-          {"psnr_at_seconds", PsnrAtTimes(result.curve)}};
+  return {{"image", image.string()}, {"width", target.width},
+          {"height", target.height}, {"channels", target.channels},
+          {"model", options.model},  {"model_config", result.model_config},
+          {"steps", result.steps},   {"train_seconds", result.train_seconds},
+          {"psnr", result.psnr},     {"psnr_at_seconds", PsnrAtTimes(result.curve)}};
 }
 
 void FitOnce(const fs::path& image, const FloatImage& target, const ImageFitOptions& options, const fs::path& out) {
@@ -94,8 +91,7 @@ void FitOnce(const fs::path& image, const FloatImage& target, const ImageFitOpti
   SaveFloatImage(result.reconstruction, out / "reconstruction.png");
   WriteCurve(out / "metrics.csv", result.curve);
   WriteLinePlot(out / "psnr.png",
-                {format("fit-image {} ({}x{}): PSNR against training time", options.model, target.width,
-                        target.height),
+                {format("fit-image {} ({}x{}): PSNR against training time", options.model, target.width, target.height),
                  "training time [s]", "PSNR [dB]"},
                 {CurveSeries(options.model, result.curve)});
   std::vector<CaptionedImage> strip;
@@ -153,9 +149,10 @@ int RunFitImage(int argc, char** argv) {
   OptionRegistry registry;
   RegisterOptions<RunOptions>(registry, "run");
   RegisterOptions<ImageFitOptions>(registry, "fit");
-  CLI::App app("Fit a neural field to one image: writes the reconstruction, PSNR against time (CSV and plot) and "
-               "snapshots. --sweep repeats the seed's study of L, depth and learning rate.",
-               "photo2nerf fit-image");
+  CLI::App app(
+      "Fit a neural field to one image: writes the reconstruction, PSNR against time (CSV and plot) and "
+      "snapshots. --sweep repeats the seed's study of L, depth and learning rate.",
+      "photo2nerf fit-image");
   std::string image, output, config_file;
   bool sweep = false;
   std::map<std::string, std::string> option_text;

@@ -31,7 +31,8 @@ std::vector<Command> Commands() {
       {"run", p2n::RunRun, "run every stage that is not fresh: photo2nerf run PHOTOS -w WORKSPACE"},
       {"status", p2n::RunStatus, "say which stages are fresh, and why the others are not"},
       {"clean", p2n::RunClean, "remove stage results from a workspace"},
-      {"fit-image", p2n::RunFitImage, "fit a neural field to one image (the 2D warm-up): photo2nerf fit-image IMG -o DIR"},
+      {"fit-image", p2n::RunFitImage,
+       "fit a neural field to one image (the 2D warm-up): photo2nerf fit-image IMG -o DIR"},
   };
   const p2n::Runner runner = p2n::MakeRunner();
   for (const auto& stage : runner.stages()) {
@@ -70,8 +71,7 @@ int main(int argc, char** argv) {
   if (command == nullptr) {
     std::string names;
     for (const Command& candidate : commands) names += (names.empty() ? "" : ", ") + candidate.name;
-    std::cerr << "error: unknown command '" << argv[1] << "'; the commands are: " << names
-              << " (photo2nerf --help)\n";
+    std::cerr << "error: unknown command '" << argv[1] << "'; the commands are: " << names << " (photo2nerf --help)\n";
     return p2n::kExitUserError;
   }
   p2n::InstallCancelHandlers();

@@ -22,7 +22,6 @@ namespace {
 
 constexpr size_t kMaxReasonsShown = 5;
 
-
 std::string CommandLine(int argc, char** argv) {
   std::string line = "photo2nerf";
   for (int i = 0; i < argc; ++i) line += std::string(" ") + argv[i];
@@ -37,8 +36,8 @@ void PrintRunSummary(const Workspace& workspace, const Runner& stages, const std
     ran += run.ran;
     seconds += run.wall_seconds;
   }
-  LogInfo(format("{} of {} stages ran ({:.1f} s), {} fresh; workspace {}", ran, runs.size(), seconds,
-                 runs.size() - ran, workspace.root().string()));
+  LogInfo(format("{} of {} stages ran ({:.1f} s), {} fresh; workspace {}", ran, runs.size(), seconds, runs.size() - ran,
+                 workspace.root().string()));
   for (const StageRun& run : runs) {
     LogInfo(format("  {:<8} {}", run.stage, run.ran ? format("ran in {:.1f} s", run.wall_seconds) : "fresh"));
   }
@@ -56,10 +55,10 @@ void PrintRunSummary(const Workspace& workspace, const Runner& stages, const std
     }
   }
   const std::array<std::array<const char*, 3>, 5> results = {{{"report", "report.html", "report"},
-                                                               {"render", "video.mp4", "video"},
-                                                               {"export", "mesh.ply", "mesh"},
-                                                               {"export", "points.ply", "point cloud"},
-                                                               {"train", "model.bin", "model"}}};
+                                                              {"render", "video.mp4", "video"},
+                                                              {"export", "mesh.ply", "mesh"},
+                                                              {"export", "points.ply", "point cloud"},
+                                                              {"train", "model.bin", "model"}}};
   for (const auto& [stage, file, what] : results) {
     const fs::path path = file_of(stage, file);
     if (fs::exists(path)) LogInfo(format("  {:<12} {}", what, path.string()));
@@ -134,8 +133,7 @@ int RunStage(int argc, char** argv) { return RunPipeline(argc, argv, argv[0]); }
 
 int RunStatus(int argc, char** argv) {
   const OptionRegistry registry = AllOptions();
-  CLI::App app("Say for each stage whether it is fresh, missing, incomplete or stale, and why.",
-               "photo2nerf status");
+  CLI::App app("Say for each stage whether it is fresh, missing, incomplete or stale, and why.", "photo2nerf status");
   CommonFlags flags;
   AddCommonFlags(app, registry, &flags);
   if (auto code = Parse(app, registry, argc, argv)) return *code;
@@ -157,7 +155,8 @@ int RunStatus(int argc, char** argv) {
     if (status.state == StageState::kFresh) {
       detail = format("key {}, {:.2f} s", status.expected_key.substr(0, 12), status.manifest->wall_seconds);
       for (const auto& [name, value] : status.manifest->summary.items()) {
-        detail += format(", {} {}", value.is_number_float() ? format("{:.4g}", value.get<double>()) : value.dump(), name);
+        detail +=
+            format(", {} {}", value.is_number_float() ? format("{:.4g}", value.get<double>()) : value.dump(), name);
       }
     }
     std::cout << format("{:<10} {:<11} {}\n", status.stage->name(), StageStateName(status.state), detail);
@@ -172,8 +171,7 @@ int RunStatus(int argc, char** argv) {
 }
 
 int RunClean(int argc, char** argv) {
-  CLI::App app("Remove stage results from a workspace (all stages unless --stage is given).",
-               "photo2nerf clean");
+  CLI::App app("Remove stage results from a workspace (all stages unless --stage is given).", "photo2nerf clean");
   std::string workspace_path;
   std::vector<std::string> stages;
   app.add_option("-w,--workspace", workspace_path, "workspace folder")->required();

@@ -61,8 +61,8 @@ void Update(const AdamOptions& options, T c1, T c2, size_t count, T* params, con
 // Update() of `count` values each at its own step (step_size: lr c1; correction: c2, 0 for a value that takes no
 // step and keeps its moments), zeroing the gradient; written without branches, so that it vectorises.
 template <typename T>
-void UpdateSome(const AdamOptions& options, const T* step_size, const T* correction, size_t count, T* params,
-                T* grads, T* m, T* v) {
+void UpdateSome(const AdamOptions& options, const T* step_size, const T* correction, size_t count, T* params, T* grads,
+                T* m, T* v) {
   const T beta1 = static_cast<T>(options.beta1), beta2 = static_cast<T>(options.beta2);
   const T epsilon = static_cast<T>(options.epsilon);
   for (size_t k = 0; k < count; ++k) {
@@ -93,31 +93,32 @@ void Adam<T>::StepSparse(T* params, T* grads, TouchMarks* marks) {
   GrowTables(++sparse_calls_);
   const size_t n = entry_size_, entries = entry_steps_.size(), group = TouchMarks::kGroupEntries;
   const T learning_rate = static_cast<T>(options_.learning_rate);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, (entries + group - 1) / group, 2048), [&](const tbb::blocked_range<size_t>& range) {
-    // Per value of a group: lr / (1 - beta1^t) and 1 / sqrt(1 - beta2^t) at its entry's step t (0 and 0 for an
-    // entry without a gradient, which takes no step).
-    std::vector<T> step_size(group * n), correction(group * n);
-    for (size_t g = range.begin(); g < range.end(); ++g) {
-      if (marks != nullptr) {
-        if (!marks->marked(g)) continue;
-        marks->Clear(g);
-      }
-      const size_t first = g * group, count = std::min(entries, first + group) - first;
-      bool any = false;
-      for (size_t e = 0; e < count; ++e) {
-        const T* gradient = grads + (first + e) * n;
-        const bool touched = std::any_of(gradient, gradient + n, [](T value) { return value != T(0); });
-        const uint32_t step = touched ? ++entry_steps_[first + e] : 0;
-        any |= touched;
-        std::fill_n(step_size.begin() + e * n, n, learning_rate * correction1_[step]);
-        std::fill_n(correction.begin() + e * n, n, correction2_[step]);
-      }
-      if (any) {
-        UpdateSome(options_, step_size.data(), correction.data(), count * n, params + first * n, grads + first * n,
-                   first_moment_.data() + first * n, second_moment_.data() + first * n);
-      }
-    }
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, (entries + group - 1) / group, 2048), [&](const tbb::blocked_range<size_t>& range) {
+        // Per value of a group: lr / (1 - beta1^t) and 1 / sqrt(1 - beta2^t) at its entry's step t (0 and 0 for an
+        // entry without a gradient, which takes no step).
+        std::vector<T> step_size(group * n), correction(group * n);
+        for (size_t g = range.begin(); g < range.end(); ++g) {
+          if (marks != nullptr) {
+            if (!marks->marked(g)) continue;
+            marks->Clear(g);
+          }
+          const size_t first = g * group, count = std::min(entries, first + group) - first;
+          bool any = false;
+          for (size_t e = 0; e < count; ++e) {
+            const T* gradient = grads + (first + e) * n;
+            const bool touched = std::any_of(gradient, gradient + n, [](T value) { return value != T(0); });
+            const uint32_t step = touched ? ++entry_steps_[first + e] : 0;
+            any |= touched;
+            std::fill_n(step_size.begin() + e * n, n, learning_rate * correction1_[step]);
+            std::fill_n(correction.begin() + e * n, n, correction2_[step]);
+          }
+          if (any) {
+            UpdateSome(options_, step_size.data(), correction.data(), count * n, params + first * n, grads + first * n,
+                       first_moment_.data() + first * n, second_moment_.data() + first * n);
+          }
+        }
+      });
 }
 
 template <typename T>

@@ -72,7 +72,8 @@ class BinaryReader {
   }
   // Throws unless the next bytes are `magic`.
   void ExpectMagic(const std::string& magic, const std::string& what) {
-    if (data_.size() - position_ < magic.size() || std::memcmp(data_.data() + position_, magic.data(), magic.size()) != 0) {
+    if (data_.size() - position_ < magic.size() ||
+        std::memcmp(data_.data() + position_, magic.data(), magic.size()) != 0) {
       throw std::runtime_error("'" + source_ + "' is not " + what);
     }
     position_ += magic.size();

@@ -13,7 +13,7 @@ namespace p2n {
 struct PinholeCamera {
   int width = 0;
   int height = 0;
-  double fx = 0, fy = 0, cx = 0, cy = 0;  // pixels
+  double fx = 0, fy = 0, cx = 0, cy = 0;                         // pixels
   Eigen::Matrix4d world_from_cam = Eigen::Matrix4d::Identity();  // OpenGL camera axes
 };
 

@@ -27,9 +27,9 @@ std::vector<PinholeCamera> OrbitPath(const PinholeCamera& reference, const Camer
   const double elevation = options.elevation_deg * kPi / 180;
   for (int i = 0; i < options.frames; ++i) {
     const double azimuth = 2 * kPi * i / options.frames;
-    const Eigen::Vector3d position = options.radius * Eigen::Vector3d(std::cos(elevation) * std::cos(azimuth),
-                                                                      std::cos(elevation) * std::sin(azimuth),
-                                                                      std::sin(elevation));
+    const Eigen::Vector3d position =
+        options.radius * Eigen::Vector3d(std::cos(elevation) * std::cos(azimuth),
+                                         std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
     path.push_back(WithPose(reference, LookAtPose(position, Eigen::Vector3d::Zero())));
   }
   return path;

@@ -7,10 +7,10 @@
 
 #include <algorithm>
 #include <initializer_list>
-#include <utility>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace p2n {
 

@@ -70,7 +70,7 @@ class PositionalEncoding : public Encoding<T> {
 };
 
 struct HashGridConfig {
-  int levels = 16;               // resolutions, from base to finest, growing geometrically
+  int levels = 16;  // resolutions, from base to finest, growing geometrically
   int features_per_level = 2;
   int log2_table_size = 19;      // entries per level (at most; coarse levels that fit are stored densely)
   int base_resolution = 16;      // cells per axis of the coarsest level
@@ -110,11 +110,11 @@ class HashGridEncoding : public Encoding<T> {
 
  private:
   struct Level {
-    double scale;        // a coordinate in [0, 1] maps to scale * x in grid units
-    uint32_t size;       // entries
-    uint32_t offset;     // first entry
-    bool dense;          // indexed directly rather than hashed
-    uint32_t vertices;   // vertices per axis (dense levels)
+    double scale;       // a coordinate in [0, 1] maps to scale * x in grid units
+    uint32_t size;      // entries
+    uint32_t offset;    // first entry
+    bool dense;         // indexed directly rather than hashed
+    uint32_t vertices;  // vertices per axis (dense levels)
   };
   // Entry of a grid vertex at `level`.
   uint32_t EntryIndex(const Level& level, const uint32_t* vertex) const;

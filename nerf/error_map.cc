@@ -59,9 +59,8 @@ void ErrorMap::Rebuild() {
 ErrorMap::Draw ErrorMap::Sample(std::mt19937_64* random) const {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double u = unit(*random) * cumulative_.back();
-  const uint32_t cell = static_cast<uint32_t>(
-      std::min<size_t>(std::upper_bound(cumulative_.begin(), cumulative_.end(), u) - cumulative_.begin(),
-                       cumulative_.size() - 1));
+  const uint32_t cell = static_cast<uint32_t>(std::min<size_t>(
+      std::upper_bound(cumulative_.begin(), cumulative_.end(), u) - cumulative_.begin(), cumulative_.size() - 1));
   const View& view = views_[cell_view_[cell]];
   const uint32_t local = cell - view.first_cell;
   Draw draw;

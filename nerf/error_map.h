@@ -61,7 +61,7 @@ class ErrorMap {
   std::vector<View> views_;
   std::vector<uint32_t> cell_view_;  // each cell's view
   std::vector<float> errors_;
-  std::vector<double> cumulative_;   // probability of cells [0, c] (the last is 1 but for rounding)
+  std::vector<double> cumulative_;  // probability of cells [0, c] (the last is 1 but for rounding)
   double total_pixels_ = 0;
 };
 

@@ -93,7 +93,8 @@ FloatImage ErrorHeatMap(const FloatImage& a, const FloatImage& b, float max_erro
   cv::Mat error8(a.height, a.width, CV_8UC1);
   for (int i = 0; i < a.width * a.height; ++i) {
     float sum = 0;
-    for (int c = 0; c < a.channels; ++c) sum += std::abs(a.pixels[size_t(i) * a.channels + c] - b.pixels[size_t(i) * a.channels + c]);
+    for (int c = 0; c < a.channels; ++c)
+      sum += std::abs(a.pixels[size_t(i) * a.channels + c] - b.pixels[size_t(i) * a.channels + c]);
     error8.data[i] = static_cast<uint8_t>(std::lround(255 * std::clamp(sum / a.channels / max_error, 0.0f, 1.0f)));
   }
   cv::Mat coloured;

@@ -34,7 +34,7 @@ Eigen::Matrix3d ForwardNdcJacobian(const ForwardFrame& frame, const Eigen::Vecto
   if (!(depth > 0)) return Eigen::Matrix3d::Zero();
   Eigen::Matrix3d by_camera_point;  // rows: x', y', z'; depth = -p.z
   by_camera_point << 1 / (depth * frame.tan_x), 0, p.x() / (frame.tan_x * depth * depth),  //
-      0, 1 / (depth * frame.tan_y), p.y() / (frame.tan_y * depth * depth),                  //
+      0, 1 / (depth * frame.tan_y), p.y() / (frame.tan_y * depth * depth),                 //
       0, 0, -2 * frame.near / (depth * depth);
   return by_camera_point * frame.cam_from_world;
 }

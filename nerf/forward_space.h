@@ -21,7 +21,7 @@ namespace p2n {
 struct ForwardFrame {
   Eigen::Matrix3d cam_from_world = Eigen::Matrix3d::Identity();  // the reference camera's axes (OpenGL)
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();              // the reference camera's centre
-  double near = 1;              // depth of the near plane, world units (> 0)
+  double near = 1;                                               // depth of the near plane, world units (> 0)
   double tan_x = 1, tan_y = 1;  // the cube's half-width and half-height as slopes x / d and y / d (> 0)
 };
 

@@ -41,8 +41,8 @@ void HashGridConfig::Check() const {
   CheckField(log2_table_size >= 4 && log2_table_size <= 24, "hash_grid", "log2_table_size", "be 4..24",
              log2_table_size);
   CheckField(base_resolution >= 1, "hash_grid", "base_resolution", "be at least 1", base_resolution);
-  CheckField(finest_resolution >= base_resolution && finest_resolution <= (1 << 20), "hash_grid",
-             "finest_resolution", "be base_resolution..2^20", finest_resolution);
+  CheckField(finest_resolution >= base_resolution && finest_resolution <= (1 << 20), "hash_grid", "finest_resolution",
+             "be base_resolution..2^20", finest_resolution);
 }
 
 HashGridConfig HashGridConfig::FromJson(const nlohmann::json& json) {
@@ -62,9 +62,10 @@ HashGridEncoding<T>::HashGridEncoding(int dims, const HashGridConfig& config, ui
     : dims_(dims), config_(config) {
   if (dims < 1 || dims > 3) throw std::invalid_argument("hash grid: " + std::to_string(dims) + " dimensions");
   config.Check();
-  const double growth = config.levels > 1 ? std::exp((std::log(config.finest_resolution) -
-                                                      std::log(config.base_resolution)) / (config.levels - 1))
-                                          : 1.0;
+  const double growth =
+      config.levels > 1
+          ? std::exp((std::log(config.finest_resolution) - std::log(config.base_resolution)) / (config.levels - 1))
+          : 1.0;
   const uint64_t max_size = uint64_t{1} << config.log2_table_size;
   uint64_t offset = 0;
   for (int l = 0; l < config.levels; ++l) {
@@ -79,7 +80,8 @@ HashGridEncoding<T>::HashGridEncoding(int dims, const HashGridConfig& config, ui
     levels_.push_back(level);
   }
   const size_t values = offset * config.features_per_level;
-  if (values > (size_t{1} << 27)) throw std::invalid_argument("hash grid: more than 2^27 parameters " + config.ToJson().dump());
+  if (values > (size_t{1} << 27))
+    throw std::invalid_argument("hash grid: more than 2^27 parameters " + config.ToJson().dump());
   params_.resize(values);
   std::mt19937_64 random(seed);
   std::uniform_real_distribution<double> uniform(-1e-4, 1e-4);
@@ -228,18 +230,24 @@ void HashGridEncoding<T>::Forward(const Matrix& input, Matrix* output) const {
     const int l = static_cast<int>(task / blocks);
     const Eigen::Index begin = task % blocks * kBlock, end = std::min(n, begin + kBlock);
     switch (config_.features_per_level) {
-      case 2: ForwardLevel<2>(l, input, begin, end, output); break;
-      case 4: ForwardLevel<4>(l, input, begin, end, output); break;
-      default: ForwardLevel<0>(l, input, begin, end, output);
+      case 2:
+        ForwardLevel<2>(l, input, begin, end, output);
+        break;
+      case 4:
+        ForwardLevel<4>(l, input, begin, end, output);
+        break;
+      default:
+        ForwardLevel<0>(l, input, begin, end, output);
     }
   });
 }
 
 template <typename T>
 void HashGridEncoding<T>::ZeroGrad() {
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, grads_.size(), size_t{1} << 16), [&](const tbb::blocked_range<size_t>& range) {
-    std::fill(grads_.begin() + range.begin(), grads_.begin() + range.end(), T(0));
-  });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grads_.size(), size_t{1} << 16),
+                    [&](const tbb::blocked_range<size_t>& range) {
+                      std::fill(grads_.begin() + range.begin(), grads_.begin() + range.end(), T(0));
+                    });
   touched_->ClearAll();
 }
 
@@ -271,9 +279,14 @@ void HashGridEncoding<T>::Backward(const Matrix& input, const Matrix& d_output) 
   tbb::parallel_for(0, config_.levels, [&](int l) {
     FlushDenormalsOnThisThread();
     switch (config_.features_per_level) {
-      case 2: BackwardLevel<2>(l, input, d_output); break;
-      case 4: BackwardLevel<4>(l, input, d_output); break;
-      default: BackwardLevel<0>(l, input, d_output);
+      case 2:
+        BackwardLevel<2>(l, input, d_output);
+        break;
+      case 4:
+        BackwardLevel<4>(l, input, d_output);
+        break;
+      default:
+        BackwardLevel<0>(l, input, d_output);
     }
   });
 }

@@ -21,7 +21,7 @@ namespace p2n {
 namespace {
 
 using Matrix = Eigen::MatrixXf;
-constexpr Eigen::Index kChunk = 512;          // samples per task: activations stay in L2
+constexpr Eigen::Index kChunk = 512;  // samples per task: activations stay in L2
 constexpr size_t kMaxEvalPixels = 65536;
 
 void Require(bool condition, const std::string& key, const std::string& rule) {
@@ -44,8 +44,8 @@ Model MakeModel(const ImageFitOptions& options, const FloatImage& target) {
     HashGridConfig grid;
     grid.levels = options.hash_levels;
     grid.log2_table_size = options.hash_log2_table_size;
-    grid.finest_resolution = options.hash_finest_resolution > 0 ? options.hash_finest_resolution
-                                                                : std::max(target.width, target.height);
+    grid.finest_resolution =
+        options.hash_finest_resolution > 0 ? options.hash_finest_resolution : std::max(target.width, target.height);
     grid.base_resolution = std::min(16, grid.finest_resolution);
     model.encoding = std::make_unique<HashGridEncoding<float>>(2, grid, options.seed + 1);
   }
@@ -56,13 +56,12 @@ Model MakeModel(const ImageFitOptions& options, const FloatImage& target) {
   network.hidden_layers = options.depth > 0 ? options.depth : (pe ? 3 : 2);
   network.output_activation = OutputActivation::kSigmoid;
   model.mlp = std::make_unique<Mlp<float>>(network, options.seed);
-  model.mlp_adam = std::make_unique<Adam<float>>(AdamOptions{options.learning_rate, 0.9, 0.999, 1e-8},
-                                                 model.mlp->num_params());
+  model.mlp_adam =
+      std::make_unique<Adam<float>>(AdamOptions{options.learning_rate, 0.9, 0.999, 1e-8}, model.mlp->num_params());
   if (model.encoding->num_params() > 0) {
     // The hash table: sparse updates with per-entry step counts, epsilon 1e-15 (tiny-cuda-nn).
     model.encoding_adam = std::make_unique<Adam<float>>(AdamOptions{options.learning_rate, 0.9, 0.99, 1e-15},
-                                                        model.encoding->num_params(),
-                                                        model.encoding->entry_size());
+                                                        model.encoding->num_params(), model.encoding->entry_size());
   }
   return model;
 }
@@ -204,7 +203,8 @@ FloatImage LoadImageForFit(const std::filesystem::path& path, const std::string&
   ReadImageResult read = ReadImage(path);
   if (!read.ok()) throw std::invalid_argument("cannot use '" + path.string() + "' as an image: " + read.error);
   const OIIO::ImageSpec& spec = read.image.spec();
-  const int alpha = spec.alpha_channel >= 0 ? spec.alpha_channel : (spec.nchannels == 2 || spec.nchannels == 4 ? spec.nchannels - 1 : -1);
+  const int alpha = spec.alpha_channel >= 0 ? spec.alpha_channel
+                                            : (spec.nchannels == 2 || spec.nchannels == 4 ? spec.nchannels - 1 : -1);
   const int colours = alpha >= 0 ? spec.nchannels - 1 : std::min(spec.nchannels, 3);
   FloatImage image{spec.width, spec.height, colours == 1 ? 1 : 3, {}};
   std::vector<float> all(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);

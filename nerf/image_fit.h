@@ -3,8 +3,8 @@
 // pixel batches (the 2D warm-up of the NeRF seed). Built from the 3D engine's components: an encoding
 // (positional or hash grid), the MLP and Adam.
 
-#include <functional>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -21,20 +21,20 @@ namespace p2n {
 FloatImage LoadImageForFit(const std::filesystem::path& path, const std::string& alpha_mode);
 
 struct ImageFitOptions {
-  std::string model = "pe";          // "pe": positional encoding + 256-wide MLP (the seed); "hashgrid"
-  double time_budget = 30;           // seconds of training (evaluation time not counted); 0: no limit
-  int max_steps = 0;                 // 0: no limit (then time_budget must be set)
-  int batch_size = 10000;            // random pixels per step
-  double learning_rate = 1e-2;       // Adam
-  int width = 0;                     // MLP width; 0: the model's default (pe 256, hashgrid 64)
-  int depth = 0;                     // hidden layers; 0: the model's default (pe 3, hashgrid 2)
-  int pe_levels = 10;                // L, frequencies of the positional encoding; 0: raw (x, y) only
+  std::string model = "pe";     // "pe": positional encoding + 256-wide MLP (the seed); "hashgrid"
+  double time_budget = 30;      // seconds of training (evaluation time not counted); 0: no limit
+  int max_steps = 0;            // 0: no limit (then time_budget must be set)
+  int batch_size = 10000;       // random pixels per step
+  double learning_rate = 1e-2;  // Adam
+  int width = 0;                // MLP width; 0: the model's default (pe 256, hashgrid 64)
+  int depth = 0;                // hidden layers; 0: the model's default (pe 3, hashgrid 2)
+  int pe_levels = 10;           // L, frequencies of the positional encoding; 0: raw (x, y) only
   int hash_levels = 16;
   int hash_log2_table_size = 19;
-  int hash_finest_resolution = 0;    // cells per axis of the finest level; 0: the image's longer side
-  double eval_interval = 1.0;        // seconds of training between PSNR evaluations
+  int hash_finest_resolution = 0;                  // cells per axis of the finest level; 0: the image's longer side
+  double eval_interval = 1.0;                      // seconds of training between PSNR evaluations
   std::string snapshot_steps = "25,100,500,2000";  // steps whose reconstruction is kept, comma-separated
-  std::string alpha = "composite";   // RGBA input: "composite" over white, or "ignore" the alpha
+  std::string alpha = "composite";                 // RGBA input: "composite" over white, or "ignore" the alpha
   int seed = 0;
 
   template <class V>
@@ -64,7 +64,7 @@ struct ImageFitOptions {
 struct FitCurvePoint {
   double wall_seconds;  // training time so far
   int step;
-  double psnr;          // on the evaluation pixels (all pixels up to 65536, else a fixed random subset)
+  double psnr;  // on the evaluation pixels (all pixels up to 65536, else a fixed random subset)
 };
 
 struct ImageFitResult {
@@ -73,8 +73,8 @@ struct ImageFitResult {
   FloatImage reconstruction;
   int steps = 0;
   double train_seconds = 0;
-  double psnr = 0;                 // of the whole reconstruction
-  nlohmann::json model_config;     // encoding and network, each with its "otype"
+  double psnr = 0;              // of the whole reconstruction
+  nlohmann::json model_config;  // encoding and network, each with its "otype"
 };
 
 // Called after every evaluation (for progress display).

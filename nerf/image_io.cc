@@ -61,7 +61,8 @@ std::string CheckPngChunks(const std::filesystem::path& path) {
   const uint64_t file_size = std::filesystem::file_size(path, error);
   unsigned char header[8];
   while (in.read(reinterpret_cast<char*>(header), 8)) {
-    const uint64_t length = uint64_t{header[0]} << 24 | uint64_t{header[1]} << 16 | uint64_t{header[2]} << 8 | header[3];
+    const uint64_t length =
+        uint64_t{header[0]} << 24 | uint64_t{header[1]} << 16 | uint64_t{header[2]} << 8 | header[3];
     std::string type(reinterpret_cast<const char*>(header + 4), 4);
     for (char& c : type) c = std::isalpha(static_cast<unsigned char>(c)) ? c : '?';
     if (static_cast<uint64_t>(in.tellg()) + length > file_size) {
@@ -117,7 +118,8 @@ ReadImageResult ReadImage(const std::filesystem::path& path) {
   const bool read_ok = input->read_image(0, 0, 0, spec.nchannels, spec.format, image.localpixels());
   const std::string decoder_message = input->geterror();
   if (!read_ok || !decoder_message.empty()) {
-    result.error = "cannot decode: " + (decoder_message.empty() ? std::string("unknown decoder error") : decoder_message);
+    result.error =
+        "cannot decode: " + (decoder_message.empty() ? std::string("unknown decoder error") : decoder_message);
     return result;
   }
   result.orientation = spec.get_int_attribute("Orientation", 1);
@@ -171,8 +173,8 @@ std::string WriteImage(const OIIO::ImageBuf& image, const std::filesystem::path&
   if (!output) return "cannot write '" + path.string() + "': " + OIIO::geterror();
   OIIO::ImageSpec spec = image.spec();
   spec.attribute("png:compressionLevel", 3);  // fast: ingest writes many large PNGs
-  if (!output->open(path.string(), spec) ||
-      !output->write_image(spec.format, image.localpixels()) || !output->close()) {
+  if (!output->open(path.string(), spec) || !output->write_image(spec.format, image.localpixels()) ||
+      !output->close()) {
     return "cannot write '" + path.string() + "': " + output->geterror();
   }
   return "";

@@ -14,10 +14,10 @@ inline constexpr int kMaxImageSide = 32768;
 inline constexpr int64_t kMaxImagePixels = int64_t{256} << 20;
 
 struct ReadImageResult {
-  OIIO::ImageBuf image;     // upright (EXIF orientation applied), in the file's pixel type, straight alpha
-  int orientation = 1;      // the EXIF orientation that was applied (1: none)
-  bool from_cmyk = false;   // the file stores CMYK (or YCCK) that the decoder turned into RGB
-  std::string error;        // empty on success; otherwise why the file is not a usable image
+  OIIO::ImageBuf image;    // upright (EXIF orientation applied), in the file's pixel type, straight alpha
+  int orientation = 1;     // the EXIF orientation that was applied (1: none)
+  bool from_cmyk = false;  // the file stores CMYK (or YCCK) that the decoder turned into RGB
+  std::string error;       // empty on success; otherwise why the file is not a usable image
   bool ok() const { return error.empty(); }
 };
 

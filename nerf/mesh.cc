@@ -138,7 +138,8 @@ void Shade(const NerfModel& model, double h, Mesh* mesh) {
     for (size_t i = 0; i < count; ++i) {
       const size_t v = first + i;
       Eigen::Vector3f gradient;
-      for (int axis = 0; axis < 3; ++axis) gradient[axis] = probe_density[6 * v + 2 * axis] - probe_density[6 * v + 2 * axis + 1];
+      for (int axis = 0; axis < 3; ++axis)
+        gradient[axis] = probe_density[6 * v + 2 * axis] - probe_density[6 * v + 2 * axis + 1];
       Eigen::Vector3f normal = -gradient;
       normal = normal.norm() > 0 && normal.allFinite() ? normal.normalized() : Eigen::Vector3f::UnitZ();
       mesh->normals[v] = normal;
@@ -156,7 +157,8 @@ void Shade(const NerfModel& model, double h, Mesh* mesh) {
 
 }  // namespace
 
-Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options, const std::function<void(size_t)>& on_slices_done) {
+Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options,
+                 const std::function<void(size_t)>& on_slices_done) {
   options.Check();
   const openvdb::FloatGrid::Ptr grid = SampleLevelSet(model, options, on_slices_done);
   Mesh mesh = Polygonize(*grid, options.resolution);

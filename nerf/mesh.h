@@ -21,7 +21,7 @@ struct Mesh {
 };
 
 struct MeshOptions {
-  int resolution = 256;           // density samples along each side of the box
+  int resolution = 256;          // density samples along each side of the box
   float density_threshold = 25;  // the surface: where the density (1 / world unit) crosses this
 
   // std::invalid_argument naming the field and its rule (ExtractMesh checks its options).

@@ -22,8 +22,10 @@ template <typename T>
 Mlp<T>::Mlp(const MlpConfig& config, uint64_t seed) : config_(config) {
   if (config.inputs <= 0 || config.outputs <= 0 || config.width <= 0 || config.hidden_layers < 0 ||
       config.inputs > 65536 || config.outputs > 65536 || config.width > 4096 || config.hidden_layers > 64) {
-    throw std::invalid_argument("MLP sizes must be positive and at most 65536 inputs and outputs, 4096 wide, 64 "
-                                "hidden layers: " + config.ToJson().dump());
+    throw std::invalid_argument(
+        "MLP sizes must be positive and at most 65536 inputs and outputs, 4096 wide, 64 "
+        "hidden layers: " +
+        config.ToJson().dump());
   }
   size_t offset = 0;
   int inputs = config.inputs;
@@ -33,7 +35,8 @@ Mlp<T>::Mlp(const MlpConfig& config, uint64_t seed) : config_(config) {
     offset += static_cast<size_t>(inputs) * outputs + outputs;
     inputs = outputs;
   }
-  if (offset > (size_t{1} << 27)) throw std::invalid_argument("MLP: more than 2^27 parameters " + config.ToJson().dump());
+  if (offset > (size_t{1} << 27))
+    throw std::invalid_argument("MLP: more than 2^27 parameters " + config.ToJson().dump());
   params_.assign(offset, T(0));
   std::mt19937_64 random(seed);
   for (const Layer& layer : layers_) {
@@ -52,8 +55,7 @@ void Mlp<T>::Forward(const Matrix& input, Matrix* output, Cache* cache) const {
   for (size_t i = 0; i < layers_.size(); ++i) {
     const Layer& layer = layers_[i];
     const Eigen::Map<const Matrix> weight(params_.data() + layer.weight_offset, layer.outputs, layer.inputs);
-    const Eigen::Map<const Eigen::Matrix<T, Eigen::Dynamic, 1>> bias(params_.data() + layer.bias_offset,
-                                                                     layer.outputs);
+    const Eigen::Map<const Eigen::Matrix<T, Eigen::Dynamic, 1>> bias(params_.data() + layer.bias_offset, layer.outputs);
     Matrix& out = cache->activations[i + 1];
     out.noalias() = weight * cache->activations[i];
     out.colwise() += bias;

@@ -18,8 +18,8 @@ enum class OutputActivation { kNone, kSigmoid, kRelu };
 struct MlpConfig {
   int inputs = 0;
   int outputs = 0;
-  int width = 64;          // neurons per hidden layer
-  int hidden_layers = 2;   // 0: a single linear layer
+  int width = 64;         // neurons per hidden layer
+  int hidden_layers = 2;  // 0: a single linear layer
   OutputActivation output_activation = OutputActivation::kNone;
 
   nlohmann::json ToJson() const;

@@ -20,9 +20,12 @@ std::runtime_error FileError(const std::filesystem::path& path, const std::strin
 
 const char* SceneSpaceName(SceneSpace space) {
   switch (space) {
-    case SceneSpace::kBounded: return "bounded";
-    case SceneSpace::kUnbounded: return "unbounded";
-    case SceneSpace::kForward: return "forward";
+    case SceneSpace::kBounded:
+      return "bounded";
+    case SceneSpace::kUnbounded:
+      return "unbounded";
+    case SceneSpace::kForward:
+      return "forward";
   }
   return "?";
 }
@@ -89,12 +92,13 @@ NerfModel ReadModel(BinaryReader* reader) {
     model.background = header.at("background").get<std::array<float, 3>>();
     model.march_step = header.at("march_step").get<double>();
     // Models written before forward-facing scenes say "contracted" instead of "space".
-    model.space = header.contains("space") ? SceneSpaceFromName(header.at("space").get<std::string>())
+    model.space = header.contains("space")            ? SceneSpaceFromName(header.at("space").get<std::string>())
                   : header.value("contracted", false) ? SceneSpace::kUnbounded
                                                       : SceneSpace::kBounded;
     if (model.space == SceneSpace::kForward) model.forward = ForwardFrameFromJson(header.at("forward_frame"));
     model.stratified_samples = header.value("stratified_samples", 0);
-    if (model.stratified_samples < 0 || model.stratified_samples > 65536) reader->Fail("stratified_samples must be 0..65536");
+    if (model.stratified_samples < 0 || model.stratified_samples > 65536)
+      reader->Fail("stratified_samples must be 0..65536");
     model.info = header.value("info", nlohmann::json::object());
     const int resolution = header.at("occupancy_resolution").get<int>();
     if (!(model.march_step > 0 && model.march_step < 4)) reader->Fail("march_step must be in (0, 4)");

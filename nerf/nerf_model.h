@@ -37,9 +37,9 @@ struct NerfModel {
   OccupancyGrid occupancy{128};
   std::array<float, 3> background{1, 1, 1};  // behind the scene when rendering (the training background)
   SceneSpace space = SceneSpace::kBounded;
-  ForwardFrame forward;                       // kForward's reference camera
-  double march_step = 0;                      // sample spacing along a ray (unbounded: near the centre)
-  int stratified_samples = 0;                 // > 0: samples per ray in equal bins instead (no occupancy grid)
+  ForwardFrame forward;                            // kForward's reference camera
+  double march_step = 0;                           // sample spacing along a ray (unbounded: near the centre)
+  int stratified_samples = 0;                      // > 0: samples per ray in equal bins instead (no occupancy grid)
   nlohmann::json info = nlohmann::json::object();  // kept with the model: normalisation, training summary
 };
 

@@ -23,7 +23,8 @@ MlpConfig ColourConfig(const NgpFieldConfig& config) {
 template <typename T, typename Matrix>
 void ExpDensity(const Matrix& raw, Matrix* density) {
   density->resize(1, raw.cols());
-  for (Eigen::Index i = 0; i < raw.cols(); ++i) (*density)(0, i) = std::exp(std::min(raw(0, i), NgpField<T>::kMaxLogDensity));
+  for (Eigen::Index i = 0; i < raw.cols(); ++i)
+    (*density)(0, i) = std::exp(std::min(raw(0, i), NgpField<T>::kMaxLogDensity));
 }
 
 }  // namespace

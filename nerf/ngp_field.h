@@ -37,8 +37,8 @@ class NgpField : public RadianceField<T> {
   nlohmann::json Config() const override { return config_.ToJson(); }
   void Forward(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb,
                Cache* cache) const override;
-  void ForwardEncoded(const Matrix& positions, Matrix encoded, const Matrix& directions, Matrix* density,
-                      Matrix* rgb, Cache* cache) const override;
+  void ForwardEncoded(const Matrix& positions, Matrix encoded, const Matrix& directions, Matrix* density, Matrix* rgb,
+                      Cache* cache) const override;
   void Density(const Matrix& positions, Matrix* density) const override;
   void Backward(const Cache& cache, const Matrix& d_density, const Matrix& d_rgb, T* d_dense,
                 Matrix* d_encoded) const override;

@@ -61,14 +61,14 @@ int OccupancyGrid::EmptyBlockSide(const int* cell) const {
   for (; level < static_cast<int>(blocks_.size()); ++level) {
     const int size = (resolution_ + (2 << level) - 1) >> (level + 1);  // blocks per axis at level + 1
     const int shift = level + 1;
-    const size_t index = (static_cast<size_t>(cell[2] >> shift) * size + (cell[1] >> shift)) * size + (cell[0] >> shift);
+    const size_t index =
+        (static_cast<size_t>(cell[2] >> shift) * size + (cell[1] >> shift)) * size + (cell[0] >> shift);
     if (blocks_[level][index]) break;
   }
   return 1 << level;
 }
 
-void OccupancyGrid::Update(const DensityFunction& density, float threshold, float decay, uint64_t seed,
-                           size_t cells) {
+void OccupancyGrid::Update(const DensityFunction& density, float threshold, float decay, uint64_t seed, size_t cells) {
   const size_t total = densities_.size();
   if (cells == 0 || cells > total) cells = total;
   for (float& value : densities_) {

@@ -51,18 +51,16 @@ class OccupancyGrid {
   const std::vector<uint8_t>& bits() const { return bits_; }
 
  private:
-  size_t CellIndex(int x, int y, int z) const {
-    return (static_cast<size_t>(z) * resolution_ + y) * resolution_ + x;
-  }
+  size_t CellIndex(int x, int y, int z) const { return (static_cast<size_t>(z) * resolution_ + y) * resolution_ + x; }
   // The blocks from the bits (after every change of them).
   void BuildBlocks();
   // The side, in cells, of the largest empty block that holds the empty cell `cell` (1: the cell alone).
   int EmptyBlockSide(const int* cell) const;
 
   int resolution_;
-  size_t cursor_ = 0;              // where the next partial update starts in the scattered order
-  std::vector<float> densities_;   // negative: never evaluated
-  std::vector<uint8_t> bits_;  // one bit per cell
+  size_t cursor_ = 0;             // where the next partial update starts in the scattered order
+  std::vector<float> densities_;  // negative: never evaluated
+  std::vector<uint8_t> bits_;     // one bit per cell
   // Coarser views of the bits, for leaping over empty space in few steps: blocks_[k - 1] has a flag per block of
   // 2^k x 2^k x 2^k cells (clipped at the far faces), set when a cell in it is occupied.
   std::vector<std::vector<uint8_t>> blocks_;

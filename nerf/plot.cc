@@ -16,8 +16,8 @@ namespace {
 
 constexpr int kWidth = 900, kHeight = 560;
 constexpr int kLeft = 80, kRight = 220, kTop = 50, kBottom = 60;
-const cv::Scalar kColours[] = {{200, 80, 30}, {40, 120, 230}, {60, 170, 60}, {180, 60, 180},
-                               {30, 180, 200}, {120, 120, 120}, {0, 0, 200}, {140, 90, 20}};
+const cv::Scalar kColours[] = {{200, 80, 30},  {40, 120, 230},  {60, 170, 60}, {180, 60, 180},
+                               {30, 180, 200}, {120, 120, 120}, {0, 0, 200},   {140, 90, 20}};
 
 // A "nice" tick spacing for a range: 1, 2 or 5 times a power of ten.
 double TickStep(double range) {
@@ -127,19 +127,20 @@ std::string SvgLinePlot(const PlotLabels& labels, const std::vector<PlotSeries>&
   svg.imbue(std::locale::classic());
   svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << width << " " << height << "\" width=\"" << width
       << "\" height=\"" << height << "\" font-family=\"sans-serif\" font-size=\"12\">\n";
-  svg << "<text x=\"" << kSvgLeft << "\" y=\"20\" font-size=\"14\" font-weight=\"bold\">" << escape(labels.title) << "</text>\n";
+  svg << "<text x=\"" << kSvgLeft << "\" y=\"20\" font-size=\"14\" font-weight=\"bold\">" << escape(labels.title)
+      << "</text>\n";
   for (double x = a.x_min; x <= a.x_max + 1e-9 * a.x_step; x += a.x_step) {
     svg << "<line x1=\"" << px(x) << "\" y1=\"" << kSvgTop << "\" x2=\"" << px(x) << "\" y2=\"" << kSvgTop + plot_height
         << "\" stroke=\"#e6e6e6\"/><text x=\"" << px(x) << "\" y=\"" << kSvgTop + plot_height + 16
         << "\" text-anchor=\"middle\">" << Number(x) << "</text>\n";
   }
   for (double y = a.y_min; y <= a.y_max + 1e-9 * a.y_step; y += a.y_step) {
-    svg << "<line x1=\"" << kSvgLeft << "\" y1=\"" << py(y) << "\" x2=\"" << kSvgLeft + plot_width << "\" y2=\"" << py(y)
-        << "\" stroke=\"#e6e6e6\"/><text x=\"" << kSvgLeft - 6 << "\" y=\"" << py(y) + 4 << "\" text-anchor=\"end\">"
-        << Number(y) << "</text>\n";
+    svg << "<line x1=\"" << kSvgLeft << "\" y1=\"" << py(y) << "\" x2=\"" << kSvgLeft + plot_width << "\" y2=\""
+        << py(y) << "\" stroke=\"#e6e6e6\"/><text x=\"" << kSvgLeft - 6 << "\" y=\"" << py(y) + 4
+        << "\" text-anchor=\"end\">" << Number(y) << "</text>\n";
   }
-  svg << "<rect x=\"" << kSvgLeft << "\" y=\"" << kSvgTop << "\" width=\"" << plot_width << "\" height=\"" << plot_height
-      << "\" fill=\"none\" stroke=\"#444\"/>\n";
+  svg << "<rect x=\"" << kSvgLeft << "\" y=\"" << kSvgTop << "\" width=\"" << plot_width << "\" height=\""
+      << plot_height << "\" fill=\"none\" stroke=\"#444\"/>\n";
   svg << "<text x=\"" << kSvgLeft + plot_width / 2 << "\" y=\"" << height - 8 << "\" text-anchor=\"middle\">"
       << escape(labels.x_axis) << "</text>\n";
   svg << "<text transform=\"translate(14," << kSvgTop + plot_height / 2 << ") rotate(-90)\" text-anchor=\"middle\">"
@@ -148,10 +149,11 @@ std::string SvgLinePlot(const PlotLabels& labels, const std::vector<PlotSeries>&
     const char* colour = kSvgColours[k % std::size(kSvgColours)];
     svg << "<polyline fill=\"none\" stroke=\"" << colour << "\" stroke-width=\"2\" points=\"";
     for (size_t i = 0; i < series[k].x.size() && i < series[k].y.size(); ++i) {
-      if (std::isfinite(series[k].x[i]) && std::isfinite(series[k].y[i])) svg << px(series[k].x[i]) << "," << py(series[k].y[i]) << " ";
+      if (std::isfinite(series[k].x[i]) && std::isfinite(series[k].y[i]))
+        svg << px(series[k].x[i]) << "," << py(series[k].y[i]) << " ";
     }
-    svg << "\"/>\n<text x=\"" << kSvgLeft + plot_width - 8 << "\" y=\"" << kSvgTop + 18 + 16 * k << "\" text-anchor=\"end\" fill=\""
-        << colour << "\">" << escape(series[k].name) << "</text>\n";
+    svg << "\"/>\n<text x=\"" << kSvgLeft + plot_width - 8 << "\" y=\"" << kSvgTop + 18 + 16 * k
+        << "\" text-anchor=\"end\" fill=\"" << colour << "\">" << escape(series[k].name) << "</text>\n";
   }
   svg << "</svg>\n";
   return svg.str();
@@ -168,7 +170,8 @@ void WriteImageStrip(const std::filesystem::path& path, const std::vector<Captio
     cv::Mat bytes, colour, scaled;
     floats.convertTo(bytes, CV_8U, 255.0);
     cv::cvtColor(bytes, colour, image.channels == 1 ? cv::COLOR_GRAY2BGR : cv::COLOR_RGB2BGR);
-    const int width = std::max(1, static_cast<int>(std::lround(static_cast<double>(image.width) * height / image.height)));
+    const int width =
+        std::max(1, static_cast<int>(std::lround(static_cast<double>(image.width) * height / image.height)));
     cv::resize(colour, scaled, {width, height}, 0, 0, cv::INTER_AREA);
     cv::Mat tile(height + kCaption, width + 6, CV_8UC3, cv::Scalar(255, 255, 255));
     scaled.copyTo(tile(cv::Rect(3, 0, width, height)));
@@ -190,7 +193,8 @@ PlotSeries CsvSeries(const std::string& name, const std::string& csv, int x_colu
     std::istringstream cells(row);
     for (std::string cell; std::getline(cells, cell, ',');) values.push_back(std::strtod(cell.c_str(), nullptr));
     const int needed = std::max(x_column, y_column);
-    if (static_cast<int>(values.size()) > needed && std::isfinite(values[x_column]) && std::isfinite(values[y_column])) {
+    if (static_cast<int>(values.size()) > needed && std::isfinite(values[x_column]) &&
+        std::isfinite(values[y_column])) {
       series.x.push_back(values[x_column]);
       series.y.push_back(values[y_column]);
     }

@@ -16,7 +16,7 @@ namespace p2n {
 namespace {
 
 constexpr size_t kChunkRays = 256;
-constexpr int kTileSide = 16;  // kTileSide^2 = kChunkRays: a chunk is one tile
+constexpr int kTileSide = 16;          // kTileSide^2 = kChunkRays: a chunk is one tile
 constexpr double kUnboundedFar = 1e3;  // world units: the contracted distance there is within 0.1% of the limit
 
 // Bounded and forward-facing scenes march through the occupancy grid along a straight ray in the field's cube,
@@ -59,7 +59,9 @@ std::vector<MarchSample> SampleForwardRay(const NerfModel& model, const Ray& ray
   const Ray field_ray{start, along / length};
   const double begin = near > forward.t0 ? length * forward.Fraction(near) : 0.0;
   return MarchInCube(model, field_ray, begin, kForwardEnd * length, step, max_samples, offset, jitter,
-                     [&](const MarchSample& s) { return MarchSample{forward.Distance(s.t / length), 2 * s.delta}; });
+                     [&](const MarchSample& s) {
+                       return MarchSample{forward.Distance(s.t / length), 2 * s.delta};
+                     });
 }
 
 }  // namespace
@@ -82,7 +84,8 @@ std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, doubl
     while (t < end && samples.size() < max_samples) {
       const double dt = std::min(step_at(t), end - t);
       const double middle = t + 0.5 * dt;
-      if (model.occupancy.Occupied(FieldPoint(model, ray.origin + middle * ray.direction))) samples.push_back({middle, dt});
+      if (model.occupancy.Occupied(FieldPoint(model, ray.origin + middle * ray.direction)))
+        samples.push_back({middle, dt});
       t += dt;
     }
     return samples;
@@ -91,15 +94,19 @@ std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, doubl
   const Ray field_ray{FieldPoint(model, ray.origin), ray.direction};
   return MarchInCube(model, field_ray, limited ? 0.5 * near : 0.0,
                      limited ? 0.5 * far : std::numeric_limits<double>::infinity(), step, max_samples, offset, jitter,
-                     [](const MarchSample& s) { return MarchSample{2 * s.t, 2 * s.delta}; });
+                     [](const MarchSample& s) {
+                       return MarchSample{2 * s.t, 2 * s.delta};
+                     });
 }
 
 double DefaultStepScale(const NerfModel& model) { return model.space == SceneSpace::kBounded ? 0.5 : 1.0; }
 
 double SamplingDistance(const NerfModel& model, const Ray& ray, double t) {
   switch (model.space) {
-    case SceneSpace::kBounded: return t;
-    case SceneSpace::kUnbounded: return t <= 2 ? t : 2 + 2 * std::log(0.5 * t);
+    case SceneSpace::kBounded:
+      return t;
+    case SceneSpace::kUnbounded:
+      return t <= 2 ? t : 2 + 2 * std::log(0.5 * t);
     case SceneSpace::kForward: {
       const ForwardRay forward = ToForward(model.forward, ray);
       return forward.valid ? forward.NdcDistance(t) : t;
@@ -147,7 +154,8 @@ void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std:
       directions.resize(3, round.size());
       for (size_t i = 0; i < round.size(); ++i) {
         const Ray& ray = rays[first + round[i].first];
-        positions.col(i) = FieldPoint(model, ray.origin + samples[round[i].first][round[i].second].t * ray.direction).cast<float>();
+        positions.col(i) =
+            FieldPoint(model, ray.origin + samples[round[i].first][round[i].second].t * ray.direction).cast<float>();
         directions.col(i) = ray.direction.cast<float>();
       }
       model.field->Forward(positions, directions, &density, &colour, &cache);

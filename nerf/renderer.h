@@ -19,7 +19,7 @@ struct RenderOptions {
   // Sample spacing = the model's march step x this; 0: DefaultStepScale(model).
   double step_scale = 0;
   float min_transmittance = 1e-4f;  // rays stop below it (0: never)
-  size_t max_samples = 4096;      // per ray
+  size_t max_samples = 4096;        // per ray
   // Called (from any worker thread) with the number of rays just finished; e.g. to advance a progress bar.
   std::function<void(size_t)> on_rays_done;
 

@@ -1,8 +1,8 @@
 #include "nerf/synthetic_scene.h"
 
+#include <tbb/parallel_for.h>
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
-#include <tbb/parallel_for.h>
 
 #include <cmath>
 #include <fstream>
@@ -61,8 +61,8 @@ double Fractal(const Vector3d& p, uint32_t channel) {
 }
 
 struct Material {
-  Vector3d base;    // mean colour
-  double scale;     // texture frequency
+  Vector3d base;  // mean colour
+  double scale;   // texture frequency
   uint32_t seed;
 };
 
@@ -176,8 +176,7 @@ Vector3d Shade(const Vector3d& origin, const Vector3d& direction) {
 
 }  // namespace
 
-PinholeCamera LookAtCamera(const Vector3d& position, const Vector3d& target, int width, int height,
-                           double fov_x_deg) {
+PinholeCamera LookAtCamera(const Vector3d& position, const Vector3d& target, int width, int height, double fov_x_deg) {
   PinholeCamera camera;
   camera.width = width;
   camera.height = height;
@@ -200,7 +199,8 @@ std::vector<PinholeCamera> SyntheticCameras(const SyntheticSceneOptions& options
   for (int i = 0; i < options.num_views; ++i) {
     const double t = options.num_views > 1 ? static_cast<double>(i) / (options.num_views - 1) : 0.0;
     double azimuth = 2 * kPi * i / options.num_views;
-    double elevation = (options.min_elevation_deg + t * (options.max_elevation_deg - options.min_elevation_deg)) * degree;
+    double elevation =
+        (options.min_elevation_deg + t * (options.max_elevation_deg - options.min_elevation_deg)) * degree;
     double radius = options.radius;
     Vector3d aim = target;
     double roll = 0;
@@ -268,8 +268,13 @@ void WriteSyntheticScene(const SyntheticSceneOptions& options, const std::filesy
   }
   const PinholeCamera& first = cameras.front();
   const nlohmann::json truth = {{"camera_angle_x", options.fov_x_deg * kPi / 180},
-                                {"fl_x", first.fx}, {"fl_y", first.fy}, {"cx", first.cx}, {"cy", first.cy},
-                                {"w", first.width}, {"h", first.height}, {"frames", frames}};
+                                {"fl_x", first.fx},
+                                {"fl_y", first.fy},
+                                {"cx", first.cx},
+                                {"cy", first.cy},
+                                {"w", first.width},
+                                {"h", first.height},
+                                {"frames", frames}};
   const std::filesystem::path path = folder / "ground_truth_cameras.json";
   std::ofstream out(path);
   out.precision(17);

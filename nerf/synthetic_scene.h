@@ -6,8 +6,8 @@
 // World: z up, ground at z = 0, objects around the origin. Cameras: OpenGL axes (x right, y up, looking down
 // -z), pixel (i, j)'s centre at (i + 0.5, j + 0.5), as in transforms.json.
 
-#include <Eigen/Core>
 #include <OpenImageIO/imagebuf.h>
+#include <Eigen/Core>
 
 #include <cstdint>
 #include <filesystem>
@@ -29,7 +29,7 @@ struct SyntheticSceneOptions {
   double radius = 4.5;         // distance of the cameras from the scene centre, scene units
   double min_elevation_deg = 20;
   double max_elevation_deg = 45;
-  int supersampling = 2;       // samples per pixel along each axis (anti-aliasing)
+  int supersampling = 2;  // samples per pixel along each axis (anti-aliasing)
 };
 
 // A camera at `position` looking at `target` with world +z as up.

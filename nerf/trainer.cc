@@ -86,8 +86,8 @@ void TrainerOptions::Check() const {
   CheckField(max_samples_per_ray >= 1, kWhat, "max_samples_per_ray", "be at least 1", max_samples_per_ray);
   CheckField(stratified_samples >= 0, kWhat, "stratified_samples", "be at least 0", stratified_samples);
   CheckField(batch_samples >= 1, kWhat, "batch_samples", "be at least 1", batch_samples);
-  CheckField(min_batch_rays >= 1 && min_batch_rays <= max_batch_rays, kWhat, "min_batch_rays",
-             "be 1..max_batch_rays", min_batch_rays);
+  CheckField(min_batch_rays >= 1 && min_batch_rays <= max_batch_rays, kWhat, "min_batch_rays", "be 1..max_batch_rays",
+             min_batch_rays);
   CheckField(learning_rate > 0, kWhat, "learning_rate", "be positive", learning_rate);
   CheckField(final_learning_rate > 0, kWhat, "final_learning_rate", "be positive", final_learning_rate);
   CheckField(loss == "mse" || loss == "huber", kWhat, "loss", "be mse or huber", loss);
@@ -194,8 +194,8 @@ RayBatch Trainer::SampleBatch(int rays) {
     batch.near_far[r] = Eigen::Vector2d(view.near, view.far);
     batch.views[r] = static_cast<int>(draw.view);
     for (int c = 0; c < 3; ++c) {
-      const float background = options_.random_background && view.channels == 4 ? static_cast<float>(unit(random))
-                                                                                : data_.background[c];
+      const float background =
+          options_.random_background && view.channels == 4 ? static_cast<float>(unit(random)) : data_.background[c];
       batch.background(c, r) = background;
       batch.target(c, r) = view.OnBackground(pixel, c, background);
     }
@@ -204,10 +204,11 @@ RayBatch Trainer::SampleBatch(int rays) {
 }
 
 StepResult Trainer::Step(double progress) {
-  if (options_.stratified_samples == 0 && step_ >= options_.occupancy_warmup && (step_ - options_.occupancy_warmup) % options_.occupancy_interval == 0) {
+  if (options_.stratified_samples == 0 && step_ >= options_.occupancy_warmup &&
+      (step_ - options_.occupancy_warmup) % options_.occupancy_interval == 0) {
     UpdateOccupancy();
   }
-  const double per_ray = samples_per_ray_ > 0           ? samples_per_ray_
+  const double per_ray = samples_per_ray_ > 0              ? samples_per_ray_
                          : options_.stratified_samples > 0 ? options_.stratified_samples
                                                            : 2.0 / options_.march_step;
   const int rays = static_cast<int>(std::clamp(static_cast<double>(options_.batch_samples) / std::max(per_ray, 1.0),
@@ -234,8 +235,8 @@ struct Trainer::Chunk {
   size_t first = 0, count = 0;            // the batch's rays [first, first + count)
   Eigen::MatrixXf positions, directions;  // of every sample marched
   std::vector<float> t, delta;
-  std::vector<size_t> offsets;            // the first sample of each ray, and one past the last
-  Eigen::Index first_sample = 0;          // in the whole batch
+  std::vector<size_t> offsets;    // the first sample of each ray, and one past the last
+  Eigen::Index first_sample = 0;  // in the whole batch
   std::vector<float> d_dense, d_appearance, d_poses;
   std::vector<Eigen::Index> used;             // the samples before early termination (the ones with gradients)
   Eigen::MatrixXf used_positions, d_encoded;  // of those

@@ -51,28 +51,28 @@ struct TrainingData {
 };
 
 struct TrainerOptions {
-  nlohmann::json field;                 // the field's config (MakeField)
-  int occupancy_resolution = 128;       // cells per axis
-  int occupancy_interval = 16;          // steps between occupancy updates
-  int occupancy_warmup = 16;            // steps before the first update (the field knows nothing before)
+  nlohmann::json field;            // the field's config (MakeField)
+  int occupancy_resolution = 128;  // cells per axis
+  int occupancy_interval = 16;     // steps between occupancy updates
+  int occupancy_warmup = 16;       // steps before the first update (the field knows nothing before)
   double occupancy_decay = 0.95;
-  double march_step = 3.4641016 / 256;  // world units: 256 samples across the scene box's diagonal
+  double march_step = 3.4641016 / 256;      // world units: 256 samples across the scene box's diagonal
   SceneSpace space = SceneSpace::kBounded;  // nerf_model.h; forward: the frame is fitted to the training views
   size_t max_samples_per_ray = 1024;
-  int stratified_samples = 0;           // > 0: that many stratified samples per ray, no occupancy grid (vanilla)
+  int stratified_samples = 0;              // > 0: that many stratified samples per ray, no occupancy grid (vanilla)
   size_t batch_samples = size_t{1} << 16;  // samples per step (the rays per step follow)
   int min_batch_rays = 256, max_batch_rays = 16384;
   double learning_rate = 1e-2;
-  double final_learning_rate = 1e-3;    // reached at the end (exponential decay)
-  std::string loss = "mse";             // "mse" or "huber" (delta 0.1)
+  double final_learning_rate = 1e-3;  // reached at the end (exponential decay)
+  std::string loss = "mse";           // "mse" or "huber" (delta 0.1)
   // Weight of mip-NeRF 360's distortion loss (distortion_loss.h) per ray, in the sampler's metric; 0: off.
   double distortion_weight = 0;
   float min_transmittance = 1e-4f;
-  bool random_background = false;       // RGBA images: a random background per ray (learns transparency)
-  bool appearance = false;              // a colour transform per training image (appearance.h)
-  bool refine_cameras = false;          // a pose correction per training image (camera_refinement.h)
-  int refine_warmup = 100;              // steps before the corrections learn (a younger field's gradients mislead)
-  bool error_sampling = false;          // pixels drawn by the error map (error_map.h), their losses weighted
+  bool random_background = false;  // RGBA images: a random background per ray (learns transparency)
+  bool appearance = false;         // a colour transform per training image (appearance.h)
+  bool refine_cameras = false;     // a pose correction per training image (camera_refinement.h)
+  int refine_warmup = 100;         // steps before the corrections learn (a younger field's gradients mislead)
+  bool error_sampling = false;     // pixels drawn by the error map (error_map.h), their losses weighted
   uint64_t seed = 0;
 
   // std::invalid_argument naming the field and its rule (the Trainer checks its options).
@@ -84,13 +84,13 @@ struct RayBatch {
   std::vector<Ray> rays;
   std::vector<Eigen::Vector2d> near_far;
   Eigen::Matrix3Xf target, background;
-  std::vector<int> views;  // each ray's training view, for its appearance (empty: none)
+  std::vector<int> views;       // each ray's training view, for its appearance (empty: none)
   std::vector<float> weights;   // each ray's loss weight (empty: all 1)
   std::vector<uint32_t> cells;  // each ray's error-map cell (empty: none), where its loss is recorded
 };
 
 struct StepResult {
-  double loss = 0;          // of the batch: the photometric loss, mean over rays
+  double loss = 0;  // of the batch: the photometric loss, mean over rays
   size_t rays = 0;
   size_t samples = 0;       // marched and evaluated
   size_t samples_used = 0;  // before early termination (the ones with gradients)
@@ -164,8 +164,8 @@ class Trainer {
   size_t dense_count_ = 0;
   int step_ = 0;
   int skipped_ = 0;
-  double samples_per_ray_ = 0;  // running mean, for the batch size
-  std::vector<size_t> pixel_offsets_;  // first global pixel index of each training view
+  double samples_per_ray_ = 0;           // running mean, for the batch size
+  std::vector<size_t> pixel_offsets_;    // first global pixel index of each training view
   std::unique_ptr<ErrorMap> error_map_;  // with options.error_sampling
 };
 

@@ -32,7 +32,8 @@ VanillaFieldConfig VanillaFieldConfig::FromJson(const nlohmann::json& json) {
   if (config.layers < 2 || config.layers % 2 != 0) {
     throw std::invalid_argument("VanillaField config: layers must be even and at least 2");
   }
-  CheckDerivedKeys(json, config.ToJson(), {"position_encoding", "direction_encoding", "skip_after", "density_activation"},
+  CheckDerivedKeys(json, config.ToJson(),
+                   {"position_encoding", "direction_encoding", "skip_after", "density_activation"},
                    "VanillaField config");
   return config;
 }
@@ -45,12 +46,11 @@ VanillaField<T>::VanillaField(const VanillaFieldConfig& config, uint64_t seed)
       first_half_({position_encoding_.output_dims(), config.width, config.width, config.layers / 2 - 1,
                    OutputActivation::kRelu},
                   seed),
-      second_half_({config.width + position_encoding_.output_dims(), config.width, config.width,
-                    config.layers / 2 - 1, OutputActivation::kRelu},
+      second_half_({config.width + position_encoding_.output_dims(), config.width, config.width, config.layers / 2 - 1,
+                    OutputActivation::kRelu},
                    seed + 1),
       head_({config.width, 1 + config.width, config.width, 0, OutputActivation::kNone}, seed + 2),
-      colour_({config.width + direction_encoding_.output_dims(), 3, config.colour_width, 1,
-               OutputActivation::kSigmoid},
+      colour_({config.width + direction_encoding_.output_dims(), 3, config.colour_width, 1, OutputActivation::kSigmoid},
               seed + 3) {}
 
 template <typename T>

@@ -15,7 +15,7 @@ struct VanillaFieldConfig {
   int position_levels = 10;
   int direction_levels = 4;
   int width = 256;
-  int layers = 8;        // of `width`, split in two halves with the skip connection between them
+  int layers = 8;  // of `width`, split in two halves with the skip connection between them
   int colour_width = 128;
 
   nlohmann::json ToJson() const;

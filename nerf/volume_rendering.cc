@@ -46,7 +46,8 @@ void CompositeBackward(const RaySegments<T>& ray, const T* background, const Com
   // Transmittance before each used sample from the running sums (never by division, which fails once the
   // transmittance underflows).
   std::vector<T> log_before(forward.used + 1, T(0));
-  for (size_t i = 0; i < forward.used; ++i) log_before[i + 1] = log_before[i] - OpticalDepth(ray.sigma[i], ray.delta[i]);
+  for (size_t i = 0; i < forward.used; ++i)
+    log_before[i + 1] = log_before[i] - OpticalDepth(ray.sigma[i], ray.delta[i]);
   for (size_t k = forward.used; k-- > 0;) {
     const T transmittance_before = std::exp(log_before[k]);
     const T transmittance_after = std::exp(log_before[k + 1]);
@@ -69,8 +70,8 @@ template class CompositeAccumulator<float>;
 template class CompositeAccumulator<double>;
 template CompositeResult<float> Composite(const RaySegments<float>&, const float*, float);
 template CompositeResult<double> Composite(const RaySegments<double>&, const double*, double);
-template void CompositeBackward(const RaySegments<float>&, const float*, const CompositeResult<float>&,
-                                const float*, float, float, float*, float*);
+template void CompositeBackward(const RaySegments<float>&, const float*, const CompositeResult<float>&, const float*,
+                                float, float, float*, float*);
 template void CompositeBackward(const RaySegments<double>&, const double*, const CompositeResult<double>&,
                                 const double*, double, double, double*, double*);
 

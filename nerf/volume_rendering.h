@@ -25,20 +25,20 @@ T OpticalDepth(T sigma, T delta) {
 
 template <typename T>
 struct RaySegments {
-  const T* sigma;     // density of each segment (>= 0; negative is treated as 0)
-  const T* rgb;       // colour of each segment, 3 values each
-  const T* t;         // distance of each sample along the ray (for depth)
-  const T* delta;     // length of each segment (>= 0)
+  const T* sigma;  // density of each segment (>= 0; negative is treated as 0)
+  const T* rgb;    // colour of each segment, 3 values each
+  const T* t;      // distance of each sample along the ray (for depth)
+  const T* delta;  // length of each segment (>= 0)
   size_t count;
 };
 
 template <typename T>
 struct CompositeResult {
   T rgb[3] = {0, 0, 0};
-  T opacity = 0;       // 1 - final transmittance
-  T depth = 0;         // expected distance of the samples, sum w_i t_i (not normalised by opacity)
-  size_t used = 0;     // samples before early termination
-  T transmittance = 1; // after the used samples
+  T opacity = 0;        // 1 - final transmittance
+  T depth = 0;          // expected distance of the samples, sum w_i t_i (not normalised by opacity)
+  size_t used = 0;      // samples before early termination
+  T transmittance = 1;  // after the used samples
 };
 
 // The running form of Composite(), for renderers that evaluate a ray's samples in rounds: Add() the segments

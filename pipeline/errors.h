@@ -45,10 +45,9 @@ inline constexpr int kExitInterrupted = 130;
 }  // namespace p2n
 
 // Checks an internal invariant; throws p2n::InternalError with file:line when it does not hold.
-#define P2N_CHECK(condition, message)                                                          \
-  do {                                                                                         \
-    if (!(condition)) {                                                                        \
-      ::p2n::ThrowInternalError(__FILE__, __LINE__,                                            \
-                                std::string("check failed: " #condition ": ") + (message));    \
-    }                                                                                          \
+#define P2N_CHECK(condition, message)                                                                           \
+  do {                                                                                                          \
+    if (!(condition)) {                                                                                         \
+      ::p2n::ThrowInternalError(__FILE__, __LINE__, std::string("check failed: " #condition ": ") + (message)); \
+    }                                                                                                           \
   } while (false)

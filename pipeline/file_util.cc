@@ -45,9 +45,7 @@ void WriteFileAtomic(const fs::path& path, std::string_view contents) {
   }
 }
 
-void WriteJsonAtomic(const fs::path& path, const nlohmann::json& value) {
-  WriteFileAtomic(path, value.dump(2) + "\n");
-}
+void WriteJsonAtomic(const fs::path& path, const nlohmann::json& value) { WriteFileAtomic(path, value.dump(2) + "\n"); }
 
 std::string ReadTextFile(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);

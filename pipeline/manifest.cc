@@ -62,22 +62,25 @@ std::vector<std::string> DescribeChanges(const KeyInputs& before, const KeyInput
     reasons.push_back(
         format("option {} changed ({} -> {})", key, value_text(before.options, key), value_text(now.options, key)));
   }
-  CompareMaps(before.upstream_keys, now.upstream_keys, "upstream",
-              [](const std::string& name, const std::string&, const std::string&) {
-                return format("upstream {} changed", name);
-              },
-              &reasons);
-  CompareMaps(before.inputs, now.inputs, "input",
-              [](const std::string& label, const std::string&, const std::string&) {
-                return format("input {} changed", label);
-              },
-              &reasons);
+  CompareMaps(
+      before.upstream_keys, now.upstream_keys, "upstream",
+      [](const std::string& name, const std::string&, const std::string&) {
+        return format("upstream {} changed", name);
+      },
+      &reasons);
+  CompareMaps(
+      before.inputs, now.inputs, "input",
+      [](const std::string& label, const std::string&, const std::string&) {
+        return format("input {} changed", label);
+      },
+      &reasons);
   return reasons;
 }
 
 nlohmann::json Manifest::ToJson() const {
   nlohmann::json files = nlohmann::json::array();
-  for (const OutputFile& file : outputs) files.push_back({{"path", file.path}, {"size", file.size}, {"sha1", file.sha1}});
+  for (const OutputFile& file : outputs)
+    files.push_back({{"path", file.path}, {"size", file.size}, {"sha1", file.sha1}});
   return {{"stage", inputs.stage},
           {"format_version", inputs.format_version},
           {"key", key},
@@ -112,7 +115,8 @@ Manifest Manifest::FromJson(const nlohmann::json& json, const std::string& sourc
     throw UserError(format("manifest '{}' is damaged ({}); rerun the stage with --force", source, e.what()));
   }
   if (!manifest.inputs.options.is_object()) {
-    throw UserError(format("manifest '{}' is damaged (options is not an object); rerun the stage with --force", source));
+    throw UserError(
+        format("manifest '{}' is damaged (options is not an object); rerun the stage with --force", source));
   }
   return manifest;
 }

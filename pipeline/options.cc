@@ -85,18 +85,16 @@ void Config::Set(std::string_view key, const nlohmann::json& value, std::string_
   const nlohmann::json& expected = spec->default_value;
   const bool type_ok = (expected.is_boolean() && value.is_boolean()) ||
                        (expected.is_number_integer() && value.is_number_integer()) ||
-                       (expected.is_number_float() && value.is_number()) ||
-                       (expected.is_string() && value.is_string());
+                       (expected.is_number_float() && value.is_number()) || (expected.is_string() && value.is_string());
   if (!type_ok) {
-    throw UserError(format("option '{}' (from {}) must be {}, not {}", key, origin, TypeName(expected),
-                           value.dump()));
+    throw UserError(format("option '{}' (from {}) must be {}, not {}", key, origin, TypeName(expected), value.dump()));
   }
   if (!spec->choices.empty() &&
       std::find(spec->choices.begin(), spec->choices.end(), value.get<std::string>()) == spec->choices.end()) {
     std::string allowed;
     for (const std::string& choice : spec->choices) allowed += (allowed.empty() ? "" : ", ") + choice;
-    throw UserError(format("option '{}' (from {}) must be one of: {}; got '{}'", key, origin, allowed,
-                           value.get<std::string>()));
+    throw UserError(
+        format("option '{}' (from {}) must be one of: {}; got '{}'", key, origin, allowed, value.get<std::string>()));
   }
   explicit_keys_.insert(std::string(key));
   values_[std::string(key)] = expected.is_number_float() ? nlohmann::json(value.get<double>()) : value;

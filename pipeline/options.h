@@ -32,10 +32,10 @@ namespace p2n {
 enum class OptionKind { kResult, kCheck, kRuntime };
 
 struct OptionSpec {
-  std::string key;                   // dotted: "section.name"
-  nlohmann::json default_value;      // its JSON type is the option's type (integer, number, boolean, string)
-  std::string help;                  // one line
-  std::string unit;                  // "px", "s", "images", or empty
+  std::string key;               // dotted: "section.name"
+  nlohmann::json default_value;  // its JSON type is the option's type (integer, number, boolean, string)
+  std::string help;              // one line
+  std::string unit;              // "px", "s", "images", or empty
   OptionKind kind = OptionKind::kResult;
   std::vector<std::string> choices;  // allowed values of a string option; empty means any
 };
@@ -96,8 +96,7 @@ struct RegisterVisitor {
   template <class T>
   void operator()(const char* name, const T& field, const char* help, const char* unit = "",
                   OptionKind kind = OptionKind::kResult, std::vector<std::string> choices = {}) {
-    registry.Add({std::string(section) + "." + name, nlohmann::json(field), help, unit, kind,
-                  std::move(choices)});
+    registry.Add({std::string(section) + "." + name, nlohmann::json(field), help, unit, kind, std::move(choices)});
   }
 };
 

@@ -30,11 +30,16 @@ struct ProgressPrefixScope {
 
 const char* StageStateName(StageState state) {
   switch (state) {
-    case StageState::kFresh: return "fresh";
-    case StageState::kMissing: return "missing";
-    case StageState::kIncomplete: return "incomplete";
-    case StageState::kStale: return "stale";
-    case StageState::kBlocked: return "blocked";
+    case StageState::kFresh:
+      return "fresh";
+    case StageState::kMissing:
+      return "missing";
+    case StageState::kIncomplete:
+      return "incomplete";
+    case StageState::kStale:
+      return "stale";
+    case StageState::kBlocked:
+      return "blocked";
   }
   return "?";
 }
@@ -175,7 +180,7 @@ std::vector<StageRun> Runner::Run(const Workspace& workspace, const Config& conf
       runs.push_back({name, false, 0});
       continue;
     }
-    const std::string why = forced[i] ? "forced"
+    const std::string why = forced[i]                ? "forced"
                             : status.reasons.empty() ? StageStateName(status.state)
                                                      : status.reasons.front();
     const std::string position = format("[{}/{}] ", i + 1, stages_.size());

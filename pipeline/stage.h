@@ -20,12 +20,12 @@ class Runner;
 
 // What a stage's Run() sees.
 struct StageContext {
-  std::filesystem::path output_dir;                             // the staging folder to write into
+  std::filesystem::path output_dir;  // the staging folder to write into
   const Workspace& workspace;
   const Config& config;
   std::map<std::string, std::filesystem::path> upstream_dirs;  // upstream name -> its complete result folder
   nlohmann::json summary = nlohmann::json::object();           // short facts kept in the manifest
-  std::string key;                                              // the cache key of the result being made
+  std::string key;                                             // the cache key of the result being made
   // Where the stage may keep state across a kill (checkpoints; tag them with `key`); removed on completion.
   std::filesystem::path resume_dir;
   const Runner* runner = nullptr;  // the stage table this stage runs in (for a report of every stage)
@@ -45,8 +45,7 @@ class Stage {
   virtual std::vector<std::string> option_sections() const { return {name()}; }
   // Inputs from outside the workspace, as label -> fingerprint ("image 0001.jpg" -> SHA-1,
   // "tool colmap" -> "3.8"). Labels appear in `status` messages ("input image 0001.jpg changed").
-  virtual std::map<std::string, std::string> ExternalInputs(const Workspace& workspace,
-                                                            const Config& config) const {
+  virtual std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const {
     (void)workspace;
     (void)config;
     return {};

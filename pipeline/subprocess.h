@@ -10,8 +10,8 @@
 namespace p2n {
 
 struct SubprocessResult {
-  int exit_code = 0;      // valid when signal == 0
-  int signal = 0;         // the signal that ended the child, or 0
+  int exit_code = 0;  // valid when signal == 0
+  int signal = 0;     // the signal that ended the child, or 0
   double wall_seconds = 0;
 };
 

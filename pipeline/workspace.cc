@@ -25,8 +25,8 @@ Workspace Workspace::Open(const fs::path& root_in, bool create) {
   std::error_code error;
   const fs::file_status status = fs::status(root, error);
   if (fs::exists(status) && !fs::is_directory(status)) {
-    throw UserError(format("workspace '{}' is a file, not a folder; choose a new folder for the workspace",
-                           root.string()));
+    throw UserError(
+        format("workspace '{}' is a file, not a folder; choose a new folder for the workspace", root.string()));
   }
   Workspace workspace(root);
   const fs::path marker = root / kMarker;
@@ -45,9 +45,10 @@ Workspace Workspace::Open(const fs::path& root_in, bool create) {
                            root.string(), kMarker, root.string()));
   }
   if (fs::exists(status) && !fs::is_empty(root, error)) {
-    throw UserError(format("'{}' is not empty and is not a photo2nerf workspace; to keep its files safe, choose "
-                           "a new or empty folder for the workspace",
-                           root.string()));
+    throw UserError(
+        format("'{}' is not empty and is not a photo2nerf workspace; to keep its files safe, choose "
+               "a new or empty folder for the workspace",
+               root.string()));
   }
   fs::create_directories(root, error);
   if (error) {

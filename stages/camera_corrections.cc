@@ -31,8 +31,9 @@ nlohmann::json CameraRefinementJson(const std::vector<std::string>& names, const
                         {"correction", std::vector<float>(correction, correction + kPoseParams)}});
   }
   return {{"enabled", true},
-          {"correction_is", "a rotation vector about the camera's centre (radians, world axes), then a shift of the "
-                            "centre; normalised units, the frame of 20_poses/transforms.json"},
+          {"correction_is",
+           "a rotation vector about the camera's centre (radians, world axes), then a shift of the "
+           "centre; normalised units, the frame of 20_poses/transforms.json"},
           {"rotation_degrees_median", Median(degrees)},
           {"rotation_degrees_max", *std::max_element(degrees.begin(), degrees.end())},
           {"shift_median", Median(shifts)},

@@ -41,12 +41,9 @@ ColmapFlags ColmapFlagsFor(const ColmapVersion& version) {
   const bool feature = version.AtLeast(3, 13);
   const std::string extraction = feature ? "--FeatureExtraction." : "--SiftExtraction.";
   const std::string matching = feature ? "--FeatureMatching." : "--SiftMatching.";
-  return {extraction + "use_gpu",
-          extraction + "num_threads",
-          extraction + "max_image_size",
-          "--SiftExtraction.max_num_features",
-          matching + "use_gpu",
-          matching + "num_threads"};
+  return {extraction + "use_gpu",        extraction + "num_threads",
+          extraction + "max_image_size", "--SiftExtraction.max_num_features",
+          matching + "use_gpu",          matching + "num_threads"};
 }
 
 }  // namespace p2n

@@ -20,10 +20,17 @@ struct CameraModelInfo {
 };
 
 constexpr CameraModelInfo kCameraModels[] = {
-    {0, "SIMPLE_PINHOLE", 3}, {1, "PINHOLE", 4},         {2, "SIMPLE_RADIAL", 4},
-    {3, "RADIAL", 5},         {4, "OPENCV", 8},          {5, "OPENCV_FISHEYE", 8},
-    {6, "FULL_OPENCV", 12},   {7, "FOV", 5},             {8, "SIMPLE_RADIAL_FISHEYE", 4},
-    {9, "RADIAL_FISHEYE", 5}, {10, "THIN_PRISM_FISHEYE", 12},
+    {0, "SIMPLE_PINHOLE", 3},
+    {1, "PINHOLE", 4},
+    {2, "SIMPLE_RADIAL", 4},
+    {3, "RADIAL", 5},
+    {4, "OPENCV", 8},
+    {5, "OPENCV_FISHEYE", 8},
+    {6, "FULL_OPENCV", 12},
+    {7, "FOV", 5},
+    {8, "SIMPLE_RADIAL_FISHEYE", 4},
+    {9, "RADIAL_FISHEYE", 5},
+    {10, "THIN_PRISM_FISHEYE", 12},
 };
 
 int ModelId(const std::string& name) {
@@ -90,8 +97,9 @@ void ValidateCamera(const ColmapCamera& camera, const fs::path& path) {
   const std::string record = format("camera {}", camera.id);
   if (ModelId(camera.model) < 0) Invalid(path, record, format("has an unknown camera model '{}'", camera.model));
   if (static_cast<int>(camera.params.size()) != ColmapModelParamCount(camera.model)) {
-    Invalid(path, record, format("has {} parameters; {} takes {}", camera.params.size(), camera.model,
-                                 ColmapModelParamCount(camera.model)));
+    Invalid(path, record,
+            format("has {} parameters; {} takes {}", camera.params.size(), camera.model,
+                   ColmapModelParamCount(camera.model)));
   }
   if (camera.width == 0 || camera.height == 0 || camera.width > kMaxImageSide || camera.height > kMaxImageSide) {
     Invalid(path, record, format("has an impossible size {}x{}", camera.width, camera.height));
@@ -252,7 +260,8 @@ ColmapModel ReadText(const fs::path& folder) {
     double q[4];
     for (double& v : q) v = Parse<double>(in, images_path, number, "quaternion");
     image.cam_from_world_rotation = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
-    for (int k = 0; k < 3; ++k) image.cam_from_world_translation[k] = Parse<double>(in, images_path, number, "translation");
+    for (int k = 0; k < 3; ++k)
+      image.cam_from_world_translation[k] = Parse<double>(in, images_path, number, "translation");
     image.camera_id = Parse<uint32_t>(in, images_path, number, "camera id");
     std::getline(in >> std::ws, image.name);
     if (i + 1 < image_lines.size()) {
@@ -329,9 +338,10 @@ PinholeCamera PinholeFromColmap(const ColmapCamera& camera, std::array<double, 4
     pinhole.fx = p[0], pinhole.fy = p[1], pinhole.cx = p[2], pinhole.cy = p[3];
     if (camera.model == "OPENCV") *distortion = {p[4], p[5], p[6], p[7]};
   } else {
-    throw UserError(format("camera {} is a {} camera, which photo2nerf does not undistort; give the photo folder "
-                           "instead and let photo2nerf run COLMAP",
-                           camera.id, camera.model));
+    throw UserError(
+        format("camera {} is a {} camera, which photo2nerf does not undistort; give the photo folder "
+               "instead and let photo2nerf run COLMAP",
+               camera.id, camera.model));
   }
   return pinhole;
 }
@@ -415,8 +425,8 @@ void WriteColmapModelText(const ColmapModel& model, const fs::path& folder) {
   for (const auto& [id, image] : model.images) {
     const Eigen::Quaterniond& q = image.cam_from_world_rotation;
     const Eigen::Vector3d& t = image.cam_from_world_translation;
-    images << id << ' ' << q.w() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << t.x() << ' ' << t.y()
-           << ' ' << t.z() << ' ' << image.camera_id << ' ' << image.name << '\n';
+    images << id << ' ' << q.w() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << t.x() << ' ' << t.y() << ' '
+           << t.z() << ' ' << image.camera_id << ' ' << image.name << '\n';
     for (size_t k = 0; k < image.points2d.size(); ++k) {
       images << (k ? " " : "") << image.points2d[k].x() << ' ' << image.points2d[k].y() << ' '
              << (image.point3d_ids[k] == kNoPoint3D ? int64_t{-1} : static_cast<int64_t>(image.point3d_ids[k]));
@@ -425,8 +435,8 @@ void WriteColmapModelText(const ColmapModel& model, const fs::path& folder) {
   }
   points << "# POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n";
   for (const auto& [id, point] : model.points) {
-    points << id << ' ' << point.xyz.x() << ' ' << point.xyz.y() << ' ' << point.xyz.z() << ' '
-           << int{point.rgb[0]} << ' ' << int{point.rgb[1]} << ' ' << int{point.rgb[2]} << ' ' << point.error;
+    points << id << ' ' << point.xyz.x() << ' ' << point.xyz.y() << ' ' << point.xyz.z() << ' ' << int{point.rgb[0]}
+           << ' ' << int{point.rgb[1]} << ' ' << int{point.rgb[2]} << ' ' << point.error;
     for (const auto& [image_id, index] : point.track) points << ' ' << image_id << ' ' << index;
     points << '\n';
   }

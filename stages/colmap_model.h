@@ -22,7 +22,7 @@ namespace p2n {
 
 struct ColmapCamera {
   uint32_t id = 0;
-  std::string model;           // SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV, OPENCV_FISHEYE, ...
+  std::string model;  // SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV, OPENCV_FISHEYE, ...
   uint64_t width = 0, height = 0;
   std::vector<double> params;  // in COLMAP's order for the model
 };

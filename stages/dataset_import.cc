@@ -81,7 +81,8 @@ void ReadTransforms(const fs::path& root, const fs::path& file, const std::strin
       return nullptr;
     };
     if (!frame.contains("file_path") || !frame["file_path"].is_string()) Bad(file, field + ".file_path", "is missing");
-    fs::path image = InsideDataset(root, file.parent_path(), file, frame["file_path"].get<std::string>(), field + ".file_path");
+    fs::path image =
+        InsideDataset(root, file.parent_path(), file, frame["file_path"].get<std::string>(), field + ".file_path");
     if (!image.has_extension() && fs::exists(image.string() + ".png")) image += ".png";  // Blender leaves it out
     if (!fs::exists(image)) {
       ++missing;  // instant-ngp's fox lists 17 frames whose images are not shipped
@@ -93,9 +94,11 @@ void ReadTransforms(const fs::path& root, const fs::path& file, const std::strin
     view.view.near = frame.value("near", -1.0);
     view.view.far = frame.value("far", -1.0);
     PinholeCamera& camera = view.view.camera;
-    camera.world_from_cam = Matrix(frame.value("transform_matrix", nlohmann::json()), file, field + ".transform_matrix");
-    const auto [width, height] = value("w") && value("h") ? std::pair<int, int>{value("w")->get<int>(), value("h")->get<int>()}
-                                                          : ImageSize(image);
+    camera.world_from_cam =
+        Matrix(frame.value("transform_matrix", nlohmann::json()), file, field + ".transform_matrix");
+    const auto [width, height] = value("w") && value("h")
+                                     ? std::pair<int, int>{value("w")->get<int>(), value("h")->get<int>()}
+                                     : ImageSize(image);
     camera.width = width;
     camera.height = height;
     if (value("fl_x")) {
@@ -109,13 +112,15 @@ void ReadTransforms(const fs::path& root, const fs::path& file, const std::strin
     camera.cx = value("cx") ? value("cx")->get<double>() : 0.5 * width;
     camera.cy = value("cy") ? value("cy")->get<double>() : 0.5 * height;
     const char* distortion_keys[] = {"k1", "k2", "p1", "p2"};
-    for (int k = 0; k < 4; ++k) view.distortion[k] = value(distortion_keys[k]) ? value(distortion_keys[k])->get<double>() : 0.0;
+    for (int k = 0; k < 4; ++k)
+      view.distortion[k] = value(distortion_keys[k]) ? value(distortion_keys[k])->get<double>() : 0.0;
     CheckCamera(camera, file, field);
     out->files.push_back(image);
     out->views.push_back(std::move(view));
   }
   if (missing > 0) {
-    out->warnings.push_back(format("{}: {} frames name images that are not there; they are left out", file.string(), missing));
+    out->warnings.push_back(
+        format("{}: {} frames name images that are not there; they are left out", file.string(), missing));
   }
 }
 
@@ -149,7 +154,8 @@ void LoadLlff(const fs::path& root, ImportedDataset* out) {
   }
   std::sort(files.begin(), files.end());
   if (files.size() != poses.shape[0]) {
-    Bad(file, "the array", format("has {} poses but {} holds {} images", poses.shape[0], images.string(), files.size()));
+    Bad(file, "the array",
+        format("has {} poses but {} holds {} images", poses.shape[0], images.string(), files.size()));
   }
   for (size_t i = 0; i < files.size(); ++i) {
     const double* row = poses.values.data() + 17 * i;
@@ -190,7 +196,8 @@ void LoadColmapProject(const fs::path& root, ImportedDataset* out) {
     const ColmapCamera& colmap = model.cameras.at(image.camera_id);
     ImportedView view;
     view.source = InsideDataset(root, root, sparse / "images", "images/" + image.name, format("image {}", id));
-    if (!fs::exists(view.source)) Bad(sparse, format("image {}", id), format("names '{}', which is not there", view.source.string()));
+    if (!fs::exists(view.source))
+      Bad(sparse, format("image {}", id), format("names '{}', which is not there", view.source.string()));
     PinholeCamera& camera = view.view.camera;
     camera = PinholeFromColmap(colmap, &view.distortion);
     camera.world_from_cam = WorldFromOpenGlCamera(image.cam_from_world_rotation, image.cam_from_world_translation);

@@ -17,17 +17,17 @@
 namespace p2n {
 
 struct ImportedView {
-  CameraView view;                       // world_from_cam and intrinsics in the dataset's world
-  std::string name;                      // the image's file name in the stage's images/
-  std::filesystem::path source;          // the image file, or empty when `pixels` holds the image
-  OIIO::ImageBuf pixels;                 // the image, for datasets that store pixels (.npz)
-  std::array<double, 4> distortion{};    // OpenCV k1, k2, p1, p2 of the image (zero: none)
+  CameraView view;                     // world_from_cam and intrinsics in the dataset's world
+  std::string name;                    // the image's file name in the stage's images/
+  std::filesystem::path source;        // the image file, or empty when `pixels` holds the image
+  OIIO::ImageBuf pixels;               // the image, for datasets that store pixels (.npz)
+  std::array<double, 4> distortion{};  // OpenCV k1, k2, p1, p2 of the image (zero: none)
 };
 
 struct ImportedDataset {
-  std::string kind;                      // "transforms.json", "blender", "llff", "colmap", "npz"
+  std::string kind;  // "transforms.json", "blender", "llff", "colmap", "npz"
   std::vector<ImportedView> views;
-  std::vector<Eigen::Vector3d> points;   // sparse points, when the dataset has them
+  std::vector<Eigen::Vector3d> points;  // sparse points, when the dataset has them
   std::vector<std::array<uint8_t, 3>> colours;
   std::vector<std::filesystem::path> files;  // every file the result depends on (for the cache key)
   std::vector<std::string> warnings;

@@ -34,15 +34,21 @@ struct OutputFrame {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
   std::string description;
 
-  Eigen::Vector3f Point(const Eigen::Vector3f& p) const { return (rotation * p.cast<double>() + translation).cast<float>(); }
-  Eigen::Vector3f Direction(const Eigen::Vector3f& d) const { return (rotation * d.cast<double>()).normalized().cast<float>(); }
+  Eigen::Vector3f Point(const Eigen::Vector3f& p) const {
+    return (rotation * p.cast<double>() + translation).cast<float>();
+  }
+  Eigen::Vector3f Direction(const Eigen::Vector3f& d) const {
+    return (rotation * d.cast<double>()).normalized().cast<float>();
+  }
   double Scale() const { return std::cbrt(rotation.determinant()); }
   // A camera in this frame: its centre mapped, its axes turned, its near and far scaled.
   CameraView Camera(const CameraView& view) const {
     CameraView out = view;
     const double scale = Scale();
-    out.camera.world_from_cam.topLeftCorner<3, 3>() = rotation / scale * view.camera.world_from_cam.topLeftCorner<3, 3>();
-    out.camera.world_from_cam.topRightCorner<3, 1>() = rotation * view.camera.world_from_cam.topRightCorner<3, 1>() + translation;
+    out.camera.world_from_cam.topLeftCorner<3, 3>() =
+        rotation / scale * view.camera.world_from_cam.topLeftCorner<3, 3>();
+    out.camera.world_from_cam.topRightCorner<3, 1>() =
+        rotation * view.camera.world_from_cam.topRightCorner<3, 1>() + translation;
     if (view.near > 0) out.near = view.near * scale;
     if (view.far > 0) out.far = view.far * scale;
     return out;
@@ -70,7 +76,8 @@ OutputFrame MakeOutputFrame(const std::string& frame, const fs::path& transforms
   }
   out.rotation = source_from_normalized.topLeftCorner<3, 3>();
   out.translation = source_from_normalized.topRightCorner<3, 1>();
-  out.description = "frame: source (COLMAP's world, or the dataset's: the inverse of applied_transform in 20_poses/transforms.json)";
+  out.description =
+      "frame: source (COLMAP's world, or the dataset's: the inverse of applied_transform in 20_poses/transforms.json)";
   return out;
 }
 
@@ -95,7 +102,8 @@ void WriteCameras(const fs::path& path, const ImportedDataset& dataset, const Ou
   WriteTransformsJson(path, views, Normalization{}, {{"frame", frame.description}, {"cameras_refined", refined}});
 }
 
-std::vector<ColouredPoint> DepthPoints(const NerfModel& model, const ImportedDataset& dataset, const ExportOptions& options) {
+std::vector<ColouredPoint> DepthPoints(const NerfModel& model, const ImportedDataset& dataset,
+                                       const ExportOptions& options) {
   std::vector<const ImportedView*> views;
   size_t pixels = 0;
   for (const ImportedView& view : dataset.views) {
@@ -128,7 +136,8 @@ std::vector<ColouredPoint> DepthPoints(const NerfModel& model, const ImportedDat
         ColouredPoint point;
         point.position = p.cast<float>();
         for (int c = 0; c < 3; ++c) {
-          point.rgb[c] = static_cast<uint8_t>(std::lround(255 * std::clamp(rendered.rgb.pixels[3 * i + c], 0.0f, 1.0f)));
+          point.rgb[c] =
+              static_cast<uint8_t>(std::lround(255 * std::clamp(rendered.rgb.pixels[3 * i + c], 0.0f, 1.0f)));
         }
         points.push_back(point);
       }
@@ -191,33 +200,38 @@ void ExportStage::Run(StageContext& context) const {
     for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
   }
   const std::vector<std::string> comments = {
-      frame.description, format("marching cubes at {}^3 samples of the box [-1, 1]^3 (normalised), density threshold "
-                                "{:.4g}{}", options.resolution, mesh_options.density_threshold,
-                                auto_threshold ? " (from the field)" : "")};
+      frame.description,
+      format("marching cubes at {}^3 samples of the box [-1, 1]^3 (normalised), density threshold "
+             "{:.4g}{}",
+             options.resolution, mesh_options.density_threshold, auto_threshold ? " (from the field)" : "")};
   WriteMeshPly(context.output_dir / "mesh.ply", mesh, comments);
   if (options.obj) WriteMeshObj(context.output_dir / "mesh.obj", mesh, comments);
   if (mesh.triangles.empty()) {
-    LogWarning(format("export: the density never reaches {:.4g} inside the scene box: the mesh is empty; lower "
-                      "--export.threshold", mesh_options.density_threshold));
+    LogWarning(
+        format("export: the density never reaches {:.4g} inside the scene box: the mesh is empty; lower "
+               "--export.threshold",
+               mesh_options.density_threshold));
   }
 
-  nlohmann::json report = {{"mesh", {{"file", "mesh.ply"},
-                                     {"vertices", mesh.positions.size()},
-                                     {"triangles", mesh.triangles.size()},
-                                     {"watertight", watertight},
-                                     {"border_edges", edges.border},
-                                     {"non_manifold_edges", edges.non_manifold},
-                                     {"misoriented_edges", edges.misoriented},
-                                     {"resolution", options.resolution},
-                                     {"threshold", mesh_options.density_threshold},
-                                     {"threshold_from_field", auto_threshold}}},
+  nlohmann::json report = {{"mesh",
+                            {{"file", "mesh.ply"},
+                             {"vertices", mesh.positions.size()},
+                             {"triangles", mesh.triangles.size()},
+                             {"watertight", watertight},
+                             {"border_edges", edges.border},
+                             {"non_manifold_edges", edges.non_manifold},
+                             {"misoriented_edges", edges.misoriented},
+                             {"resolution", options.resolution},
+                             {"threshold", mesh_options.density_threshold},
+                             {"threshold_from_field", auto_threshold}}},
                            {"frame", options.frame}};
   WriteCameras(context.output_dir / "transforms.json", dataset, frame, !corrections.empty());
   report["cameras"] = {{"file", "transforms.json"}, {"views", dataset.views.size()}, {"refined", !corrections.empty()}};
   if (options.points) {
     for (ColouredPoint& point : points) point.position = frame.Point(point.position);
     WritePly(context.output_dir / "points.ply", points,
-             {frame.description, format("points where the rendered opacity of a training view is at least {}", options.points_opacity)});
+             {frame.description,
+              format("points where the rendered opacity of a training view is at least {}", options.points_opacity)});
     report["points"] = {{"file", "points.ply"}, {"count", points.size()}};
   }
   WriteJsonAtomic(context.output_dir / "export_report.json", report);

@@ -11,22 +11,26 @@
 namespace p2n {
 
 struct ExportOptions {
-  int resolution = 256;       // density samples along each side of the scene box
-  double threshold = 0;       // surface density (1 / normalised unit); 0: from the field (SurfaceThreshold)
+  int resolution = 256;          // density samples along each side of the scene box
+  double threshold = 0;          // surface density (1 / normalised unit); 0: from the field (SurfaceThreshold)
   std::string frame = "source";  // source: COLMAP's world (or the dataset's); normalized: the training frame
-  bool obj = false;           // also write mesh.obj
-  bool points = true;         // write points.ply
-  int points_width = 200;     // the training views are rendered this wide for the point cloud
+  bool obj = false;              // also write mesh.obj
+  bool points = true;            // write points.ply
+  int points_width = 200;        // the training views are rendered this wide for the point cloud
   double points_opacity = 0.95;  // pixels at least this opaque give points
 
   template <class V>
   void Visit(V& v) {
     v("resolution", resolution, "density samples along each side of the scene box (memory and time grow as its cube)",
       "samples");
-    v("threshold", threshold, "the surface's density, per normalised unit; 0: half the median density where the "
-      "training views' rays end (nerf/mesh.h)", "1/unit");
-    v("frame", frame, "coordinates of the files: source (COLMAP's world, or the dataset's) or normalized (the "
-      "training frame)", "", OptionKind::kResult, {"source", "normalized"});
+    v("threshold", threshold,
+      "the surface's density, per normalised unit; 0: half the median density where the "
+      "training views' rays end (nerf/mesh.h)",
+      "1/unit");
+    v("frame", frame,
+      "coordinates of the files: source (COLMAP's world, or the dataset's) or normalized (the "
+      "training frame)",
+      "", OptionKind::kResult, {"source", "normalized"});
     v("obj", obj, "also write the mesh as mesh.obj");
     v("points", points, "write points.ply, a coloured point cloud from the rendered depth of the training views");
     v("points_width", points_width, "width the training views are rendered at for the point cloud", "pixels");

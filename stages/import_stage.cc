@@ -1,9 +1,9 @@
 #include "stages/import_stage.h"
 
 #include <OpenImageIO/imagebufalgo.h>
+#include <tbb/parallel_for.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
-#include <tbb/parallel_for.h>
 
 #include "nerf/image_io.h"
 #include "pipeline/errors.h"
@@ -28,15 +28,18 @@ fs::path Input(const Workspace& workspace) {
 // Undistorts to the same pinhole intrinsics (OpenCV's k1, k2, p1, p2 model, as COLMAP's OPENCV).
 OIIO::ImageBuf Undistort(const OIIO::ImageBuf& image, const PinholeCamera& camera, const std::array<double, 4>& d) {
   const OIIO::ImageSpec& spec = image.spec();
-  const int depth = spec.format == OIIO::TypeDesc::UINT8 ? CV_8U : spec.format == OIIO::TypeDesc::UINT16 ? CV_16U : CV_32F;
-  const cv::Mat source(spec.height, spec.width, CV_MAKETYPE(depth, spec.nchannels), const_cast<void*>(image.localpixels()));
+  const int depth = spec.format == OIIO::TypeDesc::UINT8    ? CV_8U
+                    : spec.format == OIIO::TypeDesc::UINT16 ? CV_16U
+                                                            : CV_32F;
+  const cv::Mat source(spec.height, spec.width, CV_MAKETYPE(depth, spec.nchannels),
+                       const_cast<void*>(image.localpixels()));
   OIIO::ImageBuf out(spec);
   cv::Mat target(spec.height, spec.width, CV_MAKETYPE(depth, spec.nchannels), out.localpixels());
   // Pixel centres: OpenCV puts pixel (0, 0)'s centre at (0, 0), we at (0.5, 0.5); shift the principal point.
   const cv::Matx33d k_opencv(camera.fx, 0, camera.cx - 0.5, 0, camera.fy, camera.cy - 0.5, 0, 0, 1);
   cv::Mat map_x, map_y;
-  cv::initUndistortRectifyMap(k_opencv, cv::Vec4d(d[0], d[1], d[2], d[3]), cv::Mat(), k_opencv, target.size(),
-                              CV_32FC1, map_x, map_y);
+  cv::initUndistortRectifyMap(k_opencv, cv::Vec4d(d[0], d[1], d[2], d[3]), cv::Mat(), k_opencv, target.size(), CV_32FC1,
+                              map_x, map_y);
   cv::remap(source, target, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
   return out;
 }
@@ -71,7 +74,8 @@ std::map<std::string, std::string> ImportStage::ExternalInputs(const Workspace& 
   }
   const std::vector<std::string> digests = Sha1OfFiles(files);
   std::map<std::string, std::string> inputs;
-  for (size_t i = 0; i < files.size(); ++i) inputs["file " + fs::relative(files[i], input.has_extension() ? input.parent_path() : input).string()] = digests[i];
+  for (size_t i = 0; i < files.size(); ++i)
+    inputs["file " + fs::relative(files[i], input.has_extension() ? input.parent_path() : input).string()] = digests[i];
   return inputs;
 }
 
@@ -100,8 +104,8 @@ void ImportStage::Run(StageContext& context) const {
         image = std::move(read.image);
       }
       if (image.spec().width != camera.width || image.spec().height != camera.height) {
-        throw UserError(format("'{}' is {}x{} but the dataset declares {}x{}", view.source.string(),
-                               image.spec().width, image.spec().height, camera.width, camera.height));
+        throw UserError(format("'{}' is {}x{} but the dataset declares {}x{}", view.source.string(), image.spec().width,
+                               image.spec().height, camera.width, camera.height));
       }
       bool changed = view.source.empty();
       if (view.distortion != std::array<double, 4>{}) {
@@ -118,7 +122,8 @@ void ImportStage::Run(StageContext& context) const {
                        LowerExtension(view.source) == "jpeg")) {
         fs::copy_file(view.source, images / view.name, fs::copy_options::overwrite_existing);
       } else {
-        if (fs::path(view.name).extension() != ".png") view.name = fs::path(view.name).replace_extension(".png").string();
+        if (fs::path(view.name).extension() != ".png")
+          view.name = fs::path(view.name).replace_extension(".png").string();
         view.view.file_path = "images/" + view.name;
         const std::string error = WriteImage(image, images / view.name);
         if (!error.empty()) throw UserError(error);
@@ -129,7 +134,8 @@ void ImportStage::Run(StageContext& context) const {
 
   std::vector<CameraView> views;
   for (const ImportedView& view : dataset.views) views.push_back(view.view);
-  const bool has_split = std::any_of(views.begin(), views.end(), [](const CameraView& v) { return v.split != "train"; });
+  const bool has_split =
+      std::any_of(views.begin(), views.end(), [](const CameraView& v) { return v.split != "train"; });
   if (!has_split) AssignHoldout(&views, poses.holdout_every);
   Normalization normalization;
   if (poses.normalize) {
@@ -138,7 +144,7 @@ void ImportStage::Run(StageContext& context) const {
     normalization = NormalizeScene(centres, ups, axes, dataset.points);
     for (const std::string& warning : normalization.warnings) LogWarning("import: " + warning);
   }
-  const nlohmann::json background = options.background == "white" ? nlohmann::json{1, 1, 1}
+  const nlohmann::json background = options.background == "white"   ? nlohmann::json{1, 1, 1}
                                     : options.background == "black" ? nlohmann::json{0, 0, 0}
                                                                     : nlohmann::json(nullptr);
   WriteTransformsJson(context.output_dir / "transforms.json", views, normalization,

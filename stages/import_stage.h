@@ -14,8 +14,8 @@ struct ImportOptions {
 
   template <class V>
   void Visit(V& v) {
-    v("background", background, "background that transparent (RGBA) images are composited on", "",
-      OptionKind::kResult, {"white", "black", "keep"});
+    v("background", background, "background that transparent (RGBA) images are composited on", "", OptionKind::kResult,
+      {"white", "black", "keep"});
   }
   void Check() const {}
 };

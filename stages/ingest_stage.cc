@@ -82,8 +82,8 @@ std::variant<IngestedImage, Skipped> IngestOne(const fs::path& source, const fs:
   out.name = source.stem().string() + (original_extension == "png" ? "" : "_" + original_extension) + ".png";
   if (image.spec().format == OIIO::TypeDesc::FLOAT) image = OIIO::ImageBufAlgo::colorconvert(image, "linear", "sRGB");
   if (!eight_bit) {
-    OIIO::ImageBuf eight(OIIO::ImageSpec(image.spec().width, image.spec().height, image.spec().nchannels,
-                                         OIIO::TypeDesc::UINT8));
+    OIIO::ImageBuf eight(
+        OIIO::ImageSpec(image.spec().width, image.spec().height, image.spec().nchannels, OIIO::TypeDesc::UINT8));
     eight.copy_pixels(image);
     image = std::move(eight);
   }
@@ -100,10 +100,11 @@ void CheckImageCount(const nlohmann::json& report, int min_images) {
   for (const nlohmann::json& skip : report.at("skipped")) {
     duplicates += skip.at("reason").get<std::string>().rfind(kDuplicateReason, 0) == 0;
   }
-  throw UserError(format("only {} usable images in '{}' ({} skipped{}, see the warnings above); photo2nerf needs at "
-                         "least {} (ingest.min_images): add more photos of the scene, taken from different places",
-                         count, report.at("input_folder").get<std::string>(), report.at("skipped").size(),
-                         duplicates ? format(", {} of them copies of another photo", duplicates) : "", min_images));
+  throw UserError(
+      format("only {} usable images in '{}' ({} skipped{}, see the warnings above); photo2nerf needs at "
+             "least {} (ingest.min_images): add more photos of the scene, taken from different places",
+             count, report.at("input_folder").get<std::string>(), report.at("skipped").size(),
+             duplicates ? format(", {} of them copies of another photo", duplicates) : "", min_images));
 }
 
 }  // namespace
@@ -118,8 +119,8 @@ std::vector<fs::path> ListPhotos(const fs::path& folder) {
   std::error_code error;
   const fs::file_status status = fs::status(folder, error);
   if (!fs::exists(status)) {
-    throw UserError(format("photo folder '{}' does not exist; give the folder that holds your photos",
-                           folder.string()));
+    throw UserError(
+        format("photo folder '{}' does not exist; give the folder that holds your photos", folder.string()));
   }
   if (!fs::is_directory(status)) {
     throw UserError(format("'{}' is a file, not a folder; give the folder that holds your photos", folder.string()));
@@ -193,8 +194,8 @@ void IngestStage::Run(StageContext& context) const {
     }
     const IngestedImage& image = std::get<IngestedImage>(result);
     if (!names.insert(image.name).second) {
-      throw UserError(format("two photos in '{}' map to the image name {}; rename one of them", folder.string(),
-                             image.name));
+      throw UserError(
+          format("two photos in '{}' map to the image name {}; rename one of them", folder.string(), image.name));
     }
     // A copy adds nothing to the reconstruction, and one copy held out while another is trained on would make
     // the held-out error a lie: only the first (by name) is kept.
@@ -207,10 +208,15 @@ void IngestStage::Run(StageContext& context) const {
       continue;
     }
     sizes.insert({image.width, image.height});
-    images.push_back({{"name", image.name}, {"source", image.source}, {"width", image.width},
-                      {"height", image.height}, {"channels", image.channels},
-                      {"source_width", image.source_width}, {"source_height", image.source_height},
-                      {"exif_orientation", image.orientation}, {"from_cmyk", image.from_cmyk},
+    images.push_back({{"name", image.name},
+                      {"source", image.source},
+                      {"width", image.width},
+                      {"height", image.height},
+                      {"channels", image.channels},
+                      {"source_width", image.source_width},
+                      {"source_height", image.source_height},
+                      {"exif_orientation", image.orientation},
+                      {"from_cmyk", image.from_cmyk},
                       {"fingerprint", image.fingerprint}});
   }
   if (sizes.size() > 1) {

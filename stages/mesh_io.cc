@@ -43,7 +43,8 @@ void WriteMeshObj(const std::filesystem::path& path, const Mesh& mesh, const std
   for (size_t v = 0; v < mesh.positions.size(); ++v) {
     const Eigen::Vector3f& p = mesh.positions[v];
     const auto& c = mesh.colours[v];
-    text += format("v {:.7g} {:.7g} {:.7g} {:.4g} {:.4g} {:.4g}\n", p.x(), p.y(), p.z(), c[0] / 255.0, c[1] / 255.0, c[2] / 255.0);
+    text += format("v {:.7g} {:.7g} {:.7g} {:.4g} {:.4g} {:.4g}\n", p.x(), p.y(), p.z(), c[0] / 255.0, c[1] / 255.0,
+                   c[2] / 255.0);
   }
   for (const Eigen::Vector3f& n : mesh.normals) text += format("vn {:.6g} {:.6g} {:.6g}\n", n.x(), n.y(), n.z());
   for (const auto& t : mesh.triangles) {

@@ -27,7 +27,8 @@ std::string PlyComments(const std::vector<std::string>& comments) {
   for (const std::string& comment : comments) {
     std::string line = comment;
     // One line each, whatever it holds: other readers end a line at '\r' too.
-    std::replace_if(line.begin(), line.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
+    std::replace_if(
+        line.begin(), line.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
     text += "comment " + line + "\n";
   }
   return text;

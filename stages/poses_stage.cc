@@ -58,7 +58,8 @@ void PosesStage::Run(StageContext& context) const {
     CameraView view;
     view.file_path = images_from_poses + image->name;
     view.camera = Intrinsics(model.cameras.at(image->camera_id));
-    view.camera.world_from_cam = WorldFromOpenGlCamera(image->cam_from_world_rotation, image->cam_from_world_translation);
+    view.camera.world_from_cam =
+        WorldFromOpenGlCamera(image->cam_from_world_rotation, image->cam_from_world_translation);
     std::vector<double> depths;
     const Eigen::Matrix3d cv_from_world = image->cam_from_world_rotation.toRotationMatrix();
     for (const uint64_t id : image->point3d_ids) {
@@ -89,10 +90,12 @@ void PosesStage::Run(StageContext& context) const {
 
   std::vector<ColouredPoint> cloud;
   for (const auto& [id, point] : model.points) {
-    cloud.push_back({(normalization.normalized_from_world * point.xyz.homogeneous()).head<3>().cast<float>(), point.rgb});
+    cloud.push_back(
+        {(normalization.normalized_from_world * point.xyz.homogeneous()).head<3>().cast<float>(), point.rgb});
   }
   WritePly(context.output_dir / "sparse_points.ply", cloud);
-  const size_t held_out = std::count_if(views.begin(), views.end(), [](const CameraView& v) { return v.split != "train"; });
+  const size_t held_out =
+      std::count_if(views.begin(), views.end(), [](const CameraView& v) { return v.split != "train"; });
   context.summary = {{"views", views.size()}, {"held_out", held_out}, {"points", cloud.size()}};
   LogInfo(format("poses: {} views ({} held out), scene scale {:.4g} (centre from {}, up from {})", views.size(),
                  held_out, normalization.scale, normalization.centre_from, normalization.up_from));

@@ -42,7 +42,8 @@ Eigen::Matrix4d MatrixField(const nlohmann::json& value, const std::string& wher
   if (!value.is_array() || value.size() < 3) throw UserError(where + " must be a 4x4 (or 3x4) matrix");
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
   for (int r = 0; r < std::min<int>(4, value.size()); ++r) {
-    if (!value[r].is_array() || value[r].size() != 4) throw UserError(format("{} row {} must have 4 numbers", where, r));
+    if (!value[r].is_array() || value[r].size() != 4)
+      throw UserError(format("{} row {} must have 4 numbers", where, r));
     for (int c = 0; c < 4; ++c) {
       if (!value[r][c].is_number() || !std::isfinite(value[r][c].get<double>())) {
         throw UserError(format("{} [{}][{}] must be a finite number", where, r, c));
@@ -186,7 +187,8 @@ nlohmann::json RenderPath(const NerfModel& model, const ImportedDataset& dataset
   WriteCameraPath(out / "path.json", cameras);
   // Depth PNGs share one scale (16 bits over 0..depth_max) so that the frames of a video match.
   double depth_max = 0;
-  for (const PinholeCamera& camera : cameras) depth_max = std::max(depth_max, camera.world_from_cam.block<3, 1>(0, 3).norm());
+  for (const PinholeCamera& camera : cameras)
+    depth_max = std::max(depth_max, camera.world_from_cam.block<3, 1>(0, 3).norm());
   depth_max = (depth_max + std::sqrt(3.0)) * (model.space == SceneSpace::kBounded ? 1 : 2);
 
   size_t pixels = 0;
@@ -198,7 +200,8 @@ nlohmann::json RenderPath(const NerfModel& model, const ImportedDataset& dataset
     ThrowIfCancelled();  // Ctrl-C stops within a tile
   };
   std::unique_ptr<VideoWriter> video;
-  if (options.video) video = std::make_unique<VideoWriter>(out / "video.mp4", cameras[0].width, cameras[0].height, options.fps);
+  if (options.video)
+    video = std::make_unique<VideoWriter>(out / "video.mp4", cameras[0].width, cameras[0].height, options.fps);
   const PathRange path_range(dataset);
   double seconds = 0;
   size_t samples = 0, rays = 0;
@@ -284,8 +287,13 @@ void WriteCameraPath(const fs::path& file, const std::vector<PinholeCamera>& cam
       matrix.push_back({camera.world_from_cam(r, 0), camera.world_from_cam(r, 1), camera.world_from_cam(r, 2),
                         camera.world_from_cam(r, 3)});
     }
-    frames.push_back({{"w", camera.width}, {"h", camera.height}, {"fl_x", camera.fx}, {"fl_y", camera.fy},
-                      {"cx", camera.cx}, {"cy", camera.cy}, {"transform_matrix", matrix}});
+    frames.push_back({{"w", camera.width},
+                      {"h", camera.height},
+                      {"fl_x", camera.fx},
+                      {"fl_y", camera.fy},
+                      {"cx", camera.cx},
+                      {"cy", camera.cy},
+                      {"transform_matrix", matrix}});
   }
   WriteJsonAtomic(file, {{"frames", frames}});
 }

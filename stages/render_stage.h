@@ -16,32 +16,36 @@ namespace p2n {
 inline constexpr int kDefaultMaxPathWidth = 320;
 
 struct RenderStageOptions {
-  bool heldout = true;              // render and evaluate the held-out views
-  std::string path = "auto";        // orbit | spiral | file | none; auto: spiral for LLFF captures, else orbit
-  std::string path_file;            // cameras of the path (transforms.json layout) when path = file
-  int frames = 60;                  // frames of an orbit or spiral
-  int width = 0;                    // path frames' width in pixels (height by the aspect); 0: the photos',
-                                    // at most kDefaultMaxPathWidth
-  std::string elevation = "auto";   // orbit: degrees above the horizontal; auto: the cameras' mean
-  double radius = 0;                // orbit: distance from the centre (normalised units); spiral: amplitude
-                                    // (times the cameras' spread); 0: the cameras' mean distance, or 1
-  double fps = 24;                  // video frames per second
-  bool video = true;                // write video.mp4 of the path
-  bool depth = true;                // write depth and opacity images of the path
-  bool exr = false;                 // also write linear float EXR images (RGB and depth)
-  double step_scale = 0;            // sample spacing as a multiple of the model's (training) step; 0: by the scene
+  bool heldout = true;             // render and evaluate the held-out views
+  std::string path = "auto";       // orbit | spiral | file | none; auto: spiral for LLFF captures, else orbit
+  std::string path_file;           // cameras of the path (transforms.json layout) when path = file
+  int frames = 60;                 // frames of an orbit or spiral
+  int width = 0;                   // path frames' width in pixels (height by the aspect); 0: the photos',
+                                   // at most kDefaultMaxPathWidth
+  std::string elevation = "auto";  // orbit: degrees above the horizontal; auto: the cameras' mean
+  double radius = 0;               // orbit: distance from the centre (normalised units); spiral: amplitude
+                                   // (times the cameras' spread); 0: the cameras' mean distance, or 1
+  double fps = 24;                 // video frames per second
+  bool video = true;               // write video.mp4 of the path
+  bool depth = true;               // write depth and opacity images of the path
+  bool exr = false;                // also write linear float EXR images (RGB and depth)
+  double step_scale = 0;           // sample spacing as a multiple of the model's (training) step; 0: by the scene
 
   template <class V>
   void Visit(V& v) {
     v("heldout", heldout, "render the held-out views and compare them with their photos (PSNR, SSIM)");
-    v("path", path, "camera path: orbit, spiral (in front of the capture), file, none; auto: spiral for LLFF "
-      "captures, else orbit", "", OptionKind::kResult, {"auto", "orbit", "spiral", "file", "none"});
-    v("path_file", path_file, "cameras of the path when render.path is file (transforms.json layout, e.g. an "
+    v("path", path,
+      "camera path: orbit, spiral (in front of the capture), file, none; auto: spiral for LLFF "
+      "captures, else orbit",
+      "", OptionKind::kResult, {"auto", "orbit", "spiral", "file", "none"});
+    v("path_file", path_file,
+      "cameras of the path when render.path is file (transforms.json layout, e.g. an "
       "edited path.json)");
     v("frames", frames, "frames of an orbit or spiral", "frames");
     v("width", width, "width of the path frames; 0: the photos' width, at most 320", "pixels");
     v("elevation", elevation, "orbit: height above the horizontal; auto: the cameras' mean", "degrees");
-    v("radius", radius, "orbit: distance from the centre (normalised units); spiral: amplitude in the cameras' "
+    v("radius", radius,
+      "orbit: distance from the centre (normalised units); spiral: amplitude in the cameras' "
       "spread; 0: the cameras' mean distance (orbit) or 1 (spiral)");
     v("fps", fps, "video frames per second", "frames/s");
     v("video", video, "write video.mp4 of the path (H.264)");

@@ -100,11 +100,20 @@ std::string HtmlEscape(const std::string& text) {
   out.reserve(text.size());
   for (char c : text) {
     switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -127,7 +136,8 @@ std::string ImageDataUri(const std::filesystem::path& image, int max_width, cons
     pixels = composited;
   }
   if (pixels.cols > max_width) {
-    cv::resize(pixels, pixels, cv::Size(max_width, std::max(1, pixels.rows * max_width / pixels.cols)), 0, 0, cv::INTER_AREA);
+    cv::resize(pixels, pixels, cv::Size(max_width, std::max(1, pixels.rows * max_width / pixels.cols)), 0, 0,
+               cv::INTER_AREA);
   }
   std::vector<uint8_t> jpeg;
   if (!cv::imencode(".jpg", pixels, jpeg, {cv::IMWRITE_JPEG_QUALITY, 90})) return "";
@@ -141,8 +151,8 @@ std::string FileDataUri(const std::filesystem::path& file, const std::string& mi
 
 std::string SceneViewerHtml(const std::vector<ViewerCamera>& cameras, const std::vector<ColouredPoint>& points,
                             size_t max_points) {
-  nlohmann::json data = {{"cameras", nlohmann::json::array()}, {"points", nlohmann::json::array()},
-                         {"colours", nlohmann::json::array()}};
+  nlohmann::json data = {
+      {"cameras", nlohmann::json::array()}, {"points", nlohmann::json::array()}, {"colours", nlohmann::json::array()}};
   double extent = 1;
   for (const ViewerCamera& view : cameras) {
     const Eigen::Matrix4d& pose = view.camera.world_from_cam;
@@ -150,8 +160,12 @@ std::string SceneViewerHtml(const std::vector<ViewerCamera>& cameras, const std:
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) rotation.push_back(pose(r, c));
     }
-    data["cameras"].push_back({{"c", {pose(0, 3), pose(1, 3), pose(2, 3)}}, {"r", rotation}, {"w", view.camera.width},
-                               {"h", view.camera.height}, {"fx", view.camera.fx}, {"fy", view.camera.fy},
+    data["cameras"].push_back({{"c", {pose(0, 3), pose(1, 3), pose(2, 3)}},
+                               {"r", rotation},
+                               {"w", view.camera.width},
+                               {"h", view.camera.height},
+                               {"fx", view.camera.fx},
+                               {"fy", view.camera.fy},
                                {"heldout", view.heldout}});
     extent = std::max(extent, pose.block<3, 1>(0, 3).norm());
   }
@@ -169,8 +183,8 @@ std::string SceneViewerHtml(const std::vector<ViewerCamera>& cameras, const std:
   for (size_t at = json.find("</"); at != std::string::npos; at = json.find("</", at)) json.replace(at, 2, "<\\/");
   return "<canvas id=\"scene-view\" width=\"900\" height=\"560\"></canvas>\n"
          "<p class=\"muted\">Drag to turn, wheel to zoom. Blue: training cameras; orange: held-out cameras.</p>\n"
-         "<script type=\"application/json\" id=\"scene-data\">" + json + "</script>\n<script>" + kViewerScript +
-         "</script>\n";
+         "<script type=\"application/json\" id=\"scene-data\">" +
+         json + "</script>\n<script>" + kViewerScript + "</script>\n";
 }
 
 std::string HtmlPage(const std::string& title, const std::string& body) {

@@ -42,75 +42,85 @@ std::string TrainingSection(const fs::path& train_dir) {
   const nlohmann::json report = ReadIfExists(train_dir / "train_report.json");
   html += "</div>\n";
   if (!report.empty()) {
-    html += format("<p>{} steps in {:.1f} s of training; final held-out PSNR {} dB over {} {} views ({} pixels each); "
-                   "{} samples per ray when rendering; {:.1f}% of the occupancy grid occupied.</p>\n",
-                   report["steps"].get<int>(), report["wall_seconds"].get<double>(), Number(report["heldout_psnr"]),
-                   report["heldout_views"].get<int>(), HtmlEscape(report.value("heldout_split", "")),
-                   Number(report["heldout_pixels_per_view"]), Number(report["samples_per_ray_rendered"], 3),
-                   100 * report.value("occupied_fraction", 0.0));
+    html += format(
+        "<p>{} steps in {:.1f} s of training; final held-out PSNR {} dB over {} {} views ({} pixels each); "
+        "{} samples per ray when rendering; {:.1f}% of the occupancy grid occupied.</p>\n",
+        report["steps"].get<int>(), report["wall_seconds"].get<double>(), Number(report["heldout_psnr"]),
+        report["heldout_views"].get<int>(), HtmlEscape(report.value("heldout_split", "")),
+        Number(report["heldout_pixels_per_view"]), Number(report["samples_per_ray_rendered"], 3),
+        100 * report.value("occupied_fraction", 0.0));
     const nlohmann::json evals = report.value("evaluations_during_training", nlohmann::json::object());
     const nlohmann::json trainer = report.value("trainer", nlohmann::json::object());
-    html += format("<p>Distortion loss weight {}; {} held-out evaluations during training ({} pixels per view) took "
-                   "{:.1f} s.</p>\n",
-                   Number(trainer.value("distortion_weight", nlohmann::json(0))), evals.value("count", 0),
-                   Number(evals.value("pixels_per_view", nlohmann::json(nullptr))), evals.value("seconds", 0.0));
+    html += format(
+        "<p>Distortion loss weight {}; {} held-out evaluations during training ({} pixels per view) took "
+        "{:.1f} s.</p>\n",
+        Number(trainer.value("distortion_weight", nlohmann::json(0))), evals.value("count", 0),
+        Number(evals.value("pixels_per_view", nlohmann::json(nullptr))), evals.value("seconds", 0.0));
     const nlohmann::json appearance = report.value("appearance", nlohmann::json::object());
     if (appearance.value("enabled", false)) {
-      html += format("<p>Each training photo has its own colour transform (exposure, white balance): it makes white "
-                     "{} to {} of itself. Novel views show the average photo; a held-out photo given its own, "
-                     "fitted on its left half, scores {} dB on its right half.</p>\n",
-                     Number(appearance["gain_min"], 3), Number(appearance["gain_max"], 3),
-                     Number(report.value("heldout_psnr_fitted", nlohmann::json(nullptr))));
+      html += format(
+          "<p>Each training photo has its own colour transform (exposure, white balance): it makes white "
+          "{} to {} of itself. Novel views show the average photo; a held-out photo given its own, "
+          "fitted on its left half, scores {} dB on its right half.</p>\n",
+          Number(appearance["gain_min"], 3), Number(appearance["gain_max"], 3),
+          Number(report.value("heldout_psnr_fitted", nlohmann::json(nullptr))));
     }
     const nlohmann::json cameras = report.value("camera_refinement", nlohmann::json::object());
     if (cameras.value("enabled", false)) {
-      html += format("<p>Camera refinement turned the training cameras by {}&deg; (median; at most {}&deg;) and "
-                     "moved them by {} (median; at most {}) normalised units; the export stage writes the refined "
-                     "cameras (transforms.json).</p>\n",
-                     Number(cameras["rotation_degrees_median"], 3), Number(cameras["rotation_degrees_max"], 3),
-                     Number(cameras["shift_median"], 3), Number(cameras["shift_max"], 3));
+      html += format(
+          "<p>Camera refinement turned the training cameras by {}&deg; (median; at most {}&deg;) and "
+          "moved them by {} (median; at most {}) normalised units; the export stage writes the refined "
+          "cameras (transforms.json).</p>\n",
+          Number(cameras["rotation_degrees_median"], 3), Number(cameras["rotation_degrees_max"], 3),
+          Number(cameras["shift_median"], 3), Number(cameras["shift_max"], 3));
     }
   }
   return html;
 }
 
 std::string StagesSection(const StageContext& context) {
-  std::string html = "<h2>Stages</h2>\n<table>\n<tr><th>stage</th><th>state</th><th>wall time</th><th>finished (UTC)"
-                     "</th><th>key</th><th>summary</th><th>options set (the others at their defaults)</th></tr>\n";
+  std::string html =
+      "<h2>Stages</h2>\n<table>\n<tr><th>stage</th><th>state</th><th>wall time</th><th>finished (UTC)"
+      "</th><th>key</th><th>summary</th><th>options set (the others at their defaults)</th></tr>\n";
   for (const StageStatus& status : context.runner->Status(context.workspace, context.config)) {
     const std::string name = status.stage->name();
     if (name == "report") continue;
     std::string summary, options;
     if (status.manifest) {
       for (const auto& [key, value] : status.manifest->summary.items()) summary += key + " " + Number(value) + "; ";
-      for (const auto& [key, value] : status.manifest->inputs.options.items()) options += key + " = " + Number(value) + "; ";
+      for (const auto& [key, value] : status.manifest->inputs.options.items())
+        options += key + " = " + Number(value) + "; ";
       if (options.empty()) options = "(defaults)";
     }
-    html += format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td></tr>\n",
-                   name, StageStateName(status.state),
-                   status.manifest ? format("{:.1f} s", status.manifest->wall_seconds) : "-",
-                   status.manifest ? status.manifest->finished_utc : "-", status.expected_key.substr(0, 12),
-                   HtmlEscape(summary), HtmlEscape(options));
+    html += format(
+        "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td></tr>\n", name,
+        StageStateName(status.state), status.manifest ? format("{:.1f} s", status.manifest->wall_seconds) : "-",
+        status.manifest ? status.manifest->finished_utc : "-", status.expected_key.substr(0, 12), HtmlEscape(summary),
+        HtmlEscape(options));
   }
   return html + "</table>\n";
 }
 
-std::string CamerasSection(const StageContext& context, const ImportedDataset& dataset, const std::string& heldout_split) {
+std::string CamerasSection(const StageContext& context, const ImportedDataset& dataset,
+                           const std::string& heldout_split) {
   std::string html = "<h2>Cameras</h2>\n";
   const Stage* sfm_stage = context.runner->Find("sfm");
-  const nlohmann::json sfm =
-      sfm_stage ? ReadIfExists(context.workspace.StageDir(sfm_stage->folder()) / "sfm_report.json") : nlohmann::json::object();
+  const nlohmann::json sfm = sfm_stage
+                                 ? ReadIfExists(context.workspace.StageDir(sfm_stage->folder()) / "sfm_report.json")
+                                 : nlohmann::json::object();
   const std::string dataset_kind = SourceDatasetKind(context.upstream_dirs.at("poses") / "transforms.json");
   if (!sfm.empty() && dataset_kind.empty()) {
-    html += format("<p>COLMAP {}: {} of {} images registered ({}), mean reprojection error {} px, {} sparse points, "
-                   "mean track length {}, {} matching.</p>\n",
-                   HtmlEscape(sfm.value("colmap_version", "")), Number(sfm["registered"]), Number(sfm["images_given"]),
-                   format("{:.0f}%", sfm.value("registered_percent", 0.0)), Number(sfm["mean_reprojection_error_px"], 3),
-                   Number(sfm["points"]), Number(sfm["mean_track_length"], 3), HtmlEscape(sfm.value("matcher", "")));
+    html += format(
+        "<p>COLMAP {}: {} of {} images registered ({}), mean reprojection error {} px, {} sparse points, "
+        "mean track length {}, {} matching.</p>\n",
+        HtmlEscape(sfm.value("colmap_version", "")), Number(sfm["registered"]), Number(sfm["images_given"]),
+        format("{:.0f}%", sfm.value("registered_percent", 0.0)), Number(sfm["mean_reprojection_error_px"], 3),
+        Number(sfm["points"]), Number(sfm["mean_track_length"], 3), HtmlEscape(sfm.value("matcher", "")));
     if (sfm.contains("steps")) {
       html += "<table><tr><th>COLMAP step</th><th>wall time</th></tr>\n";
       for (const nlohmann::json& step : sfm["steps"]) {
-        html += format("<tr><td>{}</td><td>{:.1f} s</td></tr>\n", HtmlEscape(step.value("step", "")), step.value("wall_seconds", 0.0));
+        html += format("<tr><td>{}</td><td>{:.1f} s</td></tr>\n", HtmlEscape(step.value("step", "")),
+                       step.value("wall_seconds", 0.0));
       }
       html += "</table>\n";
     }
@@ -119,7 +129,8 @@ std::string CamerasSection(const StageContext& context, const ImportedDataset& d
                    HtmlEscape(dataset_kind));
   }
   std::vector<ViewerCamera> cameras;
-  for (const ImportedView& view : dataset.views) cameras.push_back({view.view.camera, view.view.split == heldout_split});
+  for (const ImportedView& view : dataset.views)
+    cameras.push_back({view.view.camera, view.view.split == heldout_split});
   std::vector<ColouredPoint> points;
   const fs::path sparse = context.upstream_dirs.at("poses") / "sparse_points.ply";
   if (fs::exists(sparse)) points = ReadPly(sparse);
@@ -128,13 +139,15 @@ std::string CamerasSection(const StageContext& context, const ImportedDataset& d
   return html + SceneViewerHtml(cameras, points);
 }
 
-std::string HeldoutSection(const fs::path& render_dir, const nlohmann::json& eval, const std::array<float, 3>& background,
-                           int image_width) {
-  if (!eval.contains("views") || eval["views"].empty()) return "<h2>Held-out views</h2>\n<p>None rendered: no view was held out, or render.heldout is false.</p>\n";
-  std::string html = format("<h2>Held-out views</h2>\n<p>{} views of the {} split, never trained on: PSNR {} dB, SSIM {} "
-                            "on average. Error maps: mean absolute RGB error, black 0 to yellow {} and above.</p>\n",
-                            eval["views"].size(), HtmlEscape(eval.value("split", "")), Number(eval["psnr"], 4),
-                            Number(eval["ssim"], 3), Number(eval["heat_map_max_error"], 2));
+std::string HeldoutSection(const fs::path& render_dir, const nlohmann::json& eval,
+                           const std::array<float, 3>& background, int image_width) {
+  if (!eval.contains("views") || eval["views"].empty())
+    return "<h2>Held-out views</h2>\n<p>None rendered: no view was held out, or render.heldout is false.</p>\n";
+  std::string html = format(
+      "<h2>Held-out views</h2>\n<p>{} views of the {} split, never trained on: PSNR {} dB, SSIM {} "
+      "on average. Error maps: mean absolute RGB error, black 0 to yellow {} and above.</p>\n",
+      eval["views"].size(), HtmlEscape(eval.value("split", "")), Number(eval["psnr"], 4), Number(eval["ssim"], 3),
+      Number(eval["heat_map_max_error"], 2));
   for (const nlohmann::json& view : eval["views"]) {
     const auto figure = [&](const std::string& uri, const std::string& caption) {
       return format("<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>", uri, HtmlEscape(caption),
@@ -143,7 +156,8 @@ std::string HeldoutSection(const fs::path& render_dir, const nlohmann::json& eva
     const std::string name = view.value("view", "");
     html += "<div class=\"triple\">" +
             figure(ImageDataUri(view.value("photo", ""), image_width, background), "photo " + name) +
-            figure(ImageDataUri(render_dir / view.value("render", ""), image_width), format("render: {:.2f} dB, SSIM {:.3f}", view["psnr"].get<double>(), view["ssim"].get<double>())) +
+            figure(ImageDataUri(render_dir / view.value("render", ""), image_width),
+                   format("render: {:.2f} dB, SSIM {:.3f}", view["psnr"].get<double>(), view["ssim"].get<double>())) +
             figure(ImageDataUri(render_dir / view.value("error_map", ""), image_width), "error map") + "</div>\n";
   }
   return html;
@@ -168,15 +182,18 @@ void ReportStage::Run(StageContext& context) const {
   const std::array<float, 3> background = DatasetBackground(transforms);
 
   std::string body = "<h1>photo2nerf report</h1>\n";
-  body += format("<p class=\"muted\">Workspace <code>{}</code>; input <code>{}</code>; photo2nerf {}; made {} UTC.</p>\n",
-                 HtmlEscape(context.workspace.root().string()),
-                 HtmlEscape(context.workspace.input() ? context.workspace.input()->string() : "-"), kVersion, UtcTimestamp());
+  body += format(
+      "<p class=\"muted\">Workspace <code>{}</code>; input <code>{}</code>; photo2nerf {}; made {} UTC.</p>\n",
+      HtmlEscape(context.workspace.root().string()),
+      HtmlEscape(context.workspace.input() ? context.workspace.input()->string() : "-"), kVersion, UtcTimestamp());
   body += "<div class=\"cards\">\n";
   body += Card(eval.contains("psnr") ? format("{:.2f} dB", eval["psnr"].get<double>()) : "-", "held-out PSNR");
   body += Card(eval.contains("ssim") ? format("{:.3f}", eval["ssim"].get<double>()) : "-", "held-out SSIM");
-  body += Card(train.contains("wall_seconds") ? format("{:.0f} s", train["wall_seconds"].get<double>()) : "-", "training time");
+  body += Card(train.contains("wall_seconds") ? format("{:.0f} s", train["wall_seconds"].get<double>()) : "-",
+               "training time");
   body += Card(format("{}", dataset.views.size()), "cameras");
-  if (exported.contains("mesh")) body += Card(format("{}", exported["mesh"]["triangles"].get<size_t>()), "mesh triangles");
+  if (exported.contains("mesh"))
+    body += Card(format("{}", exported["mesh"]["triangles"].get<size_t>()), "mesh triangles");
   body += "</div>\n";
   body += TrainingSection(context.upstream_dirs.at("train"));
   body += StagesSection(context);
@@ -184,26 +201,32 @@ void ReportStage::Run(StageContext& context) const {
   body += HeldoutSection(render_dir, eval, background, options.image_width);
   if (render.contains("path")) {
     const nlohmann::json& path = render["path"];
-    body += format("<h2>New views</h2>\n<p>{} path, {} frames of {}x{} at {:.2f} frames per second ({:.1f} samples per ray).</p>\n",
-                   HtmlEscape(path.value("kind", "")), Number(path["frames"]), Number(path["width"]), Number(path["height"]),
-                   path.value("frames_per_second", 0.0), path.value("samples_per_ray", 0.0));
+    body += format(
+        "<h2>New views</h2>\n<p>{} path, {} frames of {}x{} at {:.2f} frames per second ({:.1f} samples per "
+        "ray).</p>\n",
+        HtmlEscape(path.value("kind", "")), Number(path["frames"]), Number(path["width"]), Number(path["height"]),
+        path.value("frames_per_second", 0.0), path.value("samples_per_ray", 0.0));
     const fs::path video = render_dir / "video.mp4";
     if (fs::exists(video)) {
       const std::string source = options.embed_video ? FileDataUri(video, "video/mp4") : "../40_render/video.mp4";
-      body += format("<video id=\"path-video\" controls loop muted autoplay playsinline src=\"{}\" width=\"{}\"></video>\n",
-                     source, options.image_width);
+      body +=
+          format("<video id=\"path-video\" controls loop muted autoplay playsinline src=\"{}\" width=\"{}\"></video>\n",
+                 source, options.image_width);
     } else {
-      body += format("<img src=\"{}\" alt=\"first frame\">\n", ImageDataUri(render_dir / "frames" / "0000.png", options.image_width));
+      body += format("<img src=\"{}\" alt=\"first frame\">\n",
+                     ImageDataUri(render_dir / "frames" / "0000.png", options.image_width));
     }
   }
   if (exported.contains("mesh")) {
     const nlohmann::json& mesh = exported["mesh"];
-    body += format("<h2>Exports</h2>\n<p>Mesh <a href=\"../50_export/mesh.ply\">mesh.ply</a>: {} vertices, {} triangles, "
-                   "{}watertight (marching cubes at {}^3, density threshold {}), in the {} frame.",
-                   Number(mesh["vertices"]), Number(mesh["triangles"]), mesh.value("watertight", false) ? "" : "not ",
-                   Number(mesh["resolution"]), Number(mesh["threshold"]), HtmlEscape(exported.value("frame", "")));
+    body += format(
+        "<h2>Exports</h2>\n<p>Mesh <a href=\"../50_export/mesh.ply\">mesh.ply</a>: {} vertices, {} triangles, "
+        "{}watertight (marching cubes at {}^3, density threshold {}), in the {} frame.",
+        Number(mesh["vertices"]), Number(mesh["triangles"]), mesh.value("watertight", false) ? "" : "not ",
+        Number(mesh["resolution"]), Number(mesh["threshold"]), HtmlEscape(exported.value("frame", "")));
     if (exported.contains("points")) {
-      body += format(" Point cloud <a href=\"../50_export/points.ply\">points.ply</a>: {} points.", Number(exported["points"]["count"]));
+      body += format(" Point cloud <a href=\"../50_export/points.ply\">points.ply</a>: {} points.",
+                     Number(exported["points"]["count"]));
     }
     body += "</p>\n";
   }

@@ -9,8 +9,8 @@
 namespace p2n {
 
 struct ReportOptions {
-  int image_width = 480;     // images are embedded at most this wide
-  bool embed_video = true;   // embed video.mp4 in the page (else link to it)
+  int image_width = 480;    // images are embedded at most this wide
+  bool embed_video = true;  // embed video.mp4 in the page (else link to it)
 
   template <class V>
   void Visit(V& v) {

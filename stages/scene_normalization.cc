@@ -95,8 +95,9 @@ Normalization NormalizeScene(const std::vector<Eigen::Vector3d>& centres, const 
     }
   }
   if (!(extent >= kTiny) || !std::isfinite(extent)) {
-    throw UserError("every camera and point of the reconstruction is at one place; photo2nerf needs photos taken "
-                    "from different positions");
+    throw UserError(
+        "every camera and point of the reconstruction is at one place; photo2nerf needs photos taken "
+        "from different positions");
   }
   result.scale = 1 / extent;
   result.normalized_from_world.topLeftCorner<3, 3>() = result.scale * rotation;

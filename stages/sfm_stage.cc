@@ -21,8 +21,9 @@ namespace {
 
 constexpr double kSuspiciousFocusAngleDeg = 20;  // correct orbit models stay near 8 (DESIGN.md §7)
 constexpr size_t kMaxNamesListed = 20;
-constexpr const char* kAdvice = "try --sfm.matcher exhaustive, more features (--sfm.max_num_features), a larger "
-                                "--sfm.max_image_size, or photos with more overlap";
+constexpr const char* kAdvice =
+    "try --sfm.matcher exhaustive, more features (--sfm.max_num_features), a larger "
+    "--sfm.max_image_size, or photos with more overlap";
 
 // Runs the COLMAP steps in order with their own logs and timings.
 class StepRunner {
@@ -36,10 +37,11 @@ class StepRunner {
     std::string file = step;
     std::replace(file.begin(), file.end(), ' ', '_');
     const fs::path log = log_dir_ / (file + ".log");
-    const SubprocessResult result =
-        allow_failure ? RunSubprocess(argv, log, step) : CheckSubprocess(argv, log, step);
+    const SubprocessResult result = allow_failure ? RunSubprocess(argv, log, step) : CheckSubprocess(argv, log, step);
     last_ok_ = result.signal == 0 && result.exit_code == 0;
-    timings_.push_back({{"step", step}, {"wall_seconds", result.wall_seconds}, {"log", fs::relative(log, log_dir_.parent_path()).string()}});
+    timings_.push_back({{"step", step},
+                        {"wall_seconds", result.wall_seconds},
+                        {"log", fs::relative(log, log_dir_.parent_path()).string()}});
     ThrowIfCancelled();
     return log;
   }
@@ -85,12 +87,26 @@ struct ColmapRun {
 
   // One extraction for every photo, or one per image size when `groups` (size -> names) is not empty.
   void ExtractFeatures(const std::map<std::pair<int, int>, std::vector<std::string>>& groups) const {
-    const std::vector<std::string> extract = {
-        options.colmap, "feature_extractor", "--database_path", database().string(), "--image_path", images.string(),
-        "--random_seed", seed, "--ImageReader.camera_model", options.camera_model, "--ImageReader.single_camera",
-        options.single_camera ? "1" : "0", flags.extraction_use_gpu, "0", flags.extraction_num_threads, threads,
-        flags.extraction_max_image_size, std::to_string(options.max_image_size), flags.extraction_max_num_features,
-        std::to_string(options.max_num_features)};
+    const std::vector<std::string> extract = {options.colmap,
+                                              "feature_extractor",
+                                              "--database_path",
+                                              database().string(),
+                                              "--image_path",
+                                              images.string(),
+                                              "--random_seed",
+                                              seed,
+                                              "--ImageReader.camera_model",
+                                              options.camera_model,
+                                              "--ImageReader.single_camera",
+                                              options.single_camera ? "1" : "0",
+                                              flags.extraction_use_gpu,
+                                              "0",
+                                              flags.extraction_num_threads,
+                                              threads,
+                                              flags.extraction_max_image_size,
+                                              std::to_string(options.max_image_size),
+                                              flags.extraction_max_num_features,
+                                              std::to_string(options.max_num_features)};
     if (groups.empty()) {
       steps->Run("feature extraction", extract);
       return;
@@ -107,8 +123,15 @@ struct ColmapRun {
   }
 
   void Match(const std::string& matcher) const {
-    std::vector<std::string> match = {options.colmap, matcher + "_matcher", "--database_path", database().string(),
-                                      "--random_seed", seed, flags.matching_use_gpu, "0", flags.matching_num_threads,
+    std::vector<std::string> match = {options.colmap,
+                                      matcher + "_matcher",
+                                      "--database_path",
+                                      database().string(),
+                                      "--random_seed",
+                                      seed,
+                                      flags.matching_use_gpu,
+                                      "0",
+                                      flags.matching_num_threads,
                                       threads};
     if (matcher == "sequential") {
       match.insert(match.end(), {"--SequentialMatching.overlap", std::to_string(options.sequential_overlap),
@@ -120,17 +143,17 @@ struct ColmapRun {
   // Runs the mapper; returns the folder of the model with the most registered images (COLMAP's exit code says
   // nothing about that) and lists every model in `models`. UserError when there is none.
   fs::path MapLargestModel(size_t photos, nlohmann::json* models) const {
-    const fs::path log = steps->Run(
-        "mapping",
-        {options.colmap, "mapper", "--database_path", database().string(), "--image_path", images.string(),
-         "--output_path", (out / "sparse").string(), "--random_seed", seed, "--Mapper.num_threads", threads,
-         "--Mapper.min_model_size", "3"},
-        /*allow_failure=*/true);
+    const fs::path log = steps->Run("mapping",
+                                    {options.colmap, "mapper", "--database_path", database().string(), "--image_path",
+                                     images.string(), "--output_path", (out / "sparse").string(), "--random_seed", seed,
+                                     "--Mapper.num_threads", threads, "--Mapper.min_model_size", "3"},
+                                    /*allow_failure=*/true);
     if (!steps->last_ok()) {
       if (ReadTextFile(log).find("No good initial image pair found") != std::string::npos) {
-        throw UserError(format("COLMAP found no pair of photos to start the reconstruction from (log: {}): the "
-                               "photos overlap too little or show too little texture; {}",
-                               log.string(), kAdvice));
+        throw UserError(
+            format("COLMAP found no pair of photos to start the reconstruction from (log: {}): the "
+                   "photos overlap too little or show too little texture; {}",
+                   log.string(), kAdvice));
       }
       throw ExternalToolError(format("COLMAP's mapper failed; log: {}", log.string()));
     }
@@ -198,20 +221,20 @@ nlohmann::json ModelReport(const ColmapModel& model, const std::vector<std::stri
     error_sum += point.error * point.track.size();
     observations += point.track.size();
   }
-  nlohmann::json report = {
-      {"images_given", names.size()},
-      {"registered", model.images.size()},
-      {"registered_percent", 100.0 * model.images.size() / names.size()},
-      {"left_out", left_out},
-      {"points", model.points.size()},
-      {"mean_reprojection_error_px", observations > 0 ? error_sum / observations : 0.0},
-      {"mean_track_length", model.points.empty() ? 0.0 : observations / model.points.size()}};
+  nlohmann::json report = {{"images_given", names.size()},
+                           {"registered", model.images.size()},
+                           {"registered_percent", 100.0 * model.images.size() / names.size()},
+                           {"left_out", left_out},
+                           {"points", model.points.size()},
+                           {"mean_reprojection_error_px", observations > 0 ? error_sum / observations : 0.0},
+                           {"mean_track_length", model.points.empty() ? 0.0 : observations / model.points.size()}};
   if (const auto focus = FindFocusPoint(centres, axes)) {
     report["median_axis_to_focus_angle_deg"] = focus->median_angle_deg;
     if (focus->median_angle_deg > kSuspiciousFocusAngleDeg) {
-      LogWarning(format("sfm: the cameras' optical axes miss their common focus point by a median {:.1f} degrees; "
-                        "for photos taken around an object this suggests a wrong reconstruction; {}",
-                        focus->median_angle_deg, kAdvice));
+      LogWarning(
+          format("sfm: the cameras' optical axes miss their common focus point by a median {:.1f} degrees; "
+                 "for photos taken around an object this suggests a wrong reconstruction; {}",
+                 focus->median_angle_deg, kAdvice));
     }
   }
   return report;
@@ -225,10 +248,11 @@ void CheckRegistered(const nlohmann::json& report, double min_registered) {
   std::string listed;
   for (size_t i = 0; i < left_out.size() && i < kMaxNamesListed; ++i) listed += (i ? ", " : "") + left_out[i];
   if (left_out.size() > kMaxNamesListed) listed += format(" and {} more", left_out.size() - kMaxNamesListed);
-  throw UserError(format("COLMAP registered only {} of {} photos ({:.0f}%, sfm.min_registered is {:.0f}%); left out: "
-                         "{}; {}",
-                         report.at("registered").get<size_t>(), report.at("images_given").get<size_t>(),
-                         100 * fraction, 100 * min_registered, listed, kAdvice));
+  throw UserError(
+      format("COLMAP registered only {} of {} photos ({:.0f}%, sfm.min_registered is {:.0f}%); left out: "
+             "{}; {}",
+             report.at("registered").get<size_t>(), report.at("images_given").get<size_t>(), 100 * fraction,
+             100 * min_registered, listed, kAdvice));
 }
 
 }  // namespace
@@ -236,7 +260,8 @@ void CheckRegistered(const nlohmann::json& report, double min_registered) {
 void SfmOptions::Check() const {
   CheckOption(exhaustive_max_images >= 2, "sfm.exhaustive_max_images", "must be at least 2");
   CheckOption(sequential_overlap >= 1, "sfm.sequential_overlap", "must be at least 1");
-  CheckOption(max_image_size >= 100, "sfm.max_image_size", format("must be at least 100 pixels, not {}", max_image_size));
+  CheckOption(max_image_size >= 100, "sfm.max_image_size",
+              format("must be at least 100 pixels, not {}", max_image_size));
   CheckOption(max_num_features >= 100, "sfm.max_num_features", "must be at least 100");
   CheckOption(min_registered > 0 && min_registered <= 1, "sfm.min_registered", "must be in (0, 1]");
   CheckOption(!colmap.empty(), "sfm.colmap", "must name the COLMAP program");
@@ -269,14 +294,14 @@ void SfmStage::Run(StageContext& context) const {
   const auto groups = ImagesBySize(context.upstream_dirs.at("ingest"));
   const bool camera_per_size = options.single_camera && groups.size() > 1;
   if (camera_per_size) LogInfo(format("sfm: the photos have {} sizes: one camera for each size", groups.size()));
-  const std::string matcher = options.matcher != "auto" ? options.matcher
+  const std::string matcher = options.matcher != "auto"                                         ? options.matcher
                               : static_cast<int>(names.size()) <= options.exhaustive_max_images ? "exhaustive"
                                                                                                 : "sequential";
-  LogInfo(format("sfm: COLMAP {}, {} photos, {} matching, features at {} px", version.ToString(), names.size(),
-                 matcher, options.max_image_size));
+  LogInfo(format("sfm: COLMAP {}, {} photos, {} matching, features at {} px", version.ToString(), names.size(), matcher,
+                 options.max_image_size));
   StepRunner steps(out / "logs", (options.refine_principal_point ? 5 : 4) + (camera_per_size ? groups.size() - 1 : 0));
-  const ColmapRun colmap{options, ColmapFlagsFor(version), images, out, std::to_string(options.seed),
-                         std::to_string(threads), &steps};
+  const ColmapRun colmap{
+      options, ColmapFlagsFor(version), images, out, std::to_string(options.seed), std::to_string(threads), &steps};
 
   colmap.ExtractFeatures(camera_per_size ? groups : decltype(groups){});
   colmap.Match(matcher);
@@ -292,9 +317,8 @@ void SfmStage::Run(StageContext& context) const {
                  {"steps", steps.timings()}});
   WriteJsonAtomic(out / "sfm_report.json", report);  // also for a run that fails the check below
   context.summary = {{"registered", model.images.size()}, {"images", names.size()}, {"points", model.points.size()}};
-  LogInfo(format("sfm: {}/{} photos registered, {} points, mean reprojection error {:.2f} px",
-                 model.images.size(), names.size(), model.points.size(),
-                 report["mean_reprojection_error_px"].get<double>()));
+  LogInfo(format("sfm: {}/{} photos registered, {} points, mean reprojection error {:.2f} px", model.images.size(),
+                 names.size(), model.points.size(), report["mean_reprojection_error_px"].get<double>()));
   CheckRegistered(report, options.min_registered);
   colmap.Undistort(model_dir);
   report["steps"] = steps.timings();

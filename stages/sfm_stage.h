@@ -26,10 +26,12 @@ struct SfmOptions {
   void Visit(V& v) {
     v("camera_model", camera_model, "COLMAP camera model", "", OptionKind::kResult,
       {"SIMPLE_PINHOLE", "PINHOLE", "SIMPLE_RADIAL", "RADIAL", "OPENCV", "OPENCV_FISHEYE", "FULL_OPENCV"});
-    v("single_camera", single_camera, "one camera shared by every photo (by every photo of one size, when they have several)");
-    v("matcher", matcher, "feature matching: auto (exhaustive for small sets, else sequential), exhaustive, or "
-      "sequential (photos in file-name order, as video frames)", "", OptionKind::kResult,
-      {"auto", "exhaustive", "sequential"});
+    v("single_camera", single_camera,
+      "one camera shared by every photo (by every photo of one size, when they have several)");
+    v("matcher", matcher,
+      "feature matching: auto (exhaustive for small sets, else sequential), exhaustive, or "
+      "sequential (photos in file-name order, as video frames)",
+      "", OptionKind::kResult, {"auto", "exhaustive", "sequential"});
     v("exhaustive_max_images", exhaustive_max_images, "photos above which auto matching is sequential", "images");
     v("sequential_overlap", sequential_overlap, "neighbours each photo is matched with (sequential)", "images");
     v("max_image_size", max_image_size, "longest image side for feature extraction", "px");

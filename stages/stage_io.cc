@@ -11,9 +11,10 @@ void WriteOrExplain(const std::function<void()>& write) {
   } catch (const UserError&) {
     throw;
   } catch (const std::runtime_error& error) {
-    throw UserError(format("{}; check the free space, file-size limit (ulimit -f) and permissions of the workspace, "
-                           "then run again (finished stages are kept)",
-                           error.what()));
+    throw UserError(
+        format("{}; check the free space, file-size limit (ulimit -f) and permissions of the workspace, "
+               "then run again (finished stages are kept)",
+               error.what()));
   }
 }
 

@@ -12,17 +12,16 @@ namespace p2n {
 
 // Options that change no result: not in any cache key, not remembered in the workspace.
 struct RunOptions {
-  int threads = 0;                  // Worker threads; 0 uses every core.
-  std::string log_level = "info";   // Console log level.
-  std::string progress = "auto";    // Progress display.
+  int threads = 0;                 // Worker threads; 0 uses every core.
+  std::string log_level = "info";  // Console log level.
+  std::string progress = "auto";   // Progress display.
 
   template <class V>
   void Visit(V& v) {
     v("threads", threads, "worker threads; 0 uses every core", "threads", OptionKind::kRuntime);
-    v("log_level", log_level, "console log level", "", OptionKind::kRuntime,
-      {"debug", "info", "warning", "error"});
-    v("progress", progress, "progress display: a live bar, plain lines (files, CI), or none", "",
-      OptionKind::kRuntime, {"auto", "bar", "plain", "none"});
+    v("log_level", log_level, "console log level", "", OptionKind::kRuntime, {"debug", "info", "warning", "error"});
+    v("progress", progress, "progress display: a live bar, plain lines (files, CI), or none", "", OptionKind::kRuntime,
+      {"auto", "bar", "plain", "none"});
   }
   void Check() const;
 };

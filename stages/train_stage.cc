@@ -33,7 +33,7 @@ struct Preset {
   double time_budget;
   int march_samples;  // across the box's diagonal, bounded scenes (unbounded and forward: kUnboundedMarchSamples)
   int batch_samples, occupancy_resolution;
-  HashGridConfig grid;  // levels, features per level, log2 table size, base and finest resolution
+  HashGridConfig grid;         // levels, features per level, log2 table size, base and finest resolution
   double final_learning_rate;  // of ngp, as a fraction of the first
 };
 
@@ -140,39 +140,41 @@ nlohmann::json AppearanceReport(const Trainer& trainer, const TrainingData& data
 }
 
 nlohmann::json TrainReport(Trainer& trainer, const TrainerOptions& trainer_options, const TrainOptions& options,
-                           const TrainingData& data, const std::string& heldout_split,
-                           const std::vector<double>& psnrs, const RenderStats& eval_stats, double train_seconds,
-                           int resumed_from, const EvalLog& eval_log) {
+                           const TrainingData& data, const std::string& heldout_split, const std::vector<double>& psnrs,
+                           const RenderStats& eval_stats, double train_seconds, int resumed_from,
+                           const EvalLog& eval_log) {
   nlohmann::json per_view = nlohmann::json::array();
   for (size_t v = 0; v < psnrs.size(); ++v) per_view.push_back({{"view", data.heldout[v].name}, {"psnr", psnrs[v]}});
   NerfModel& model = trainer.model();
-  return {{"steps", trainer.step()},
-          {"wall_seconds", train_seconds},
-          {"heldout_psnr", psnrs.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(psnrs))},
-          {"heldout_views", data.heldout.size()},
-          {"heldout_split", heldout_split},
-          {"heldout_pixels_per_view", PixelsPerView(options.final_eval_pixels)},
-          {"heldout_per_view", per_view},
-          {"evaluations_during_training",
-           {{"count", eval_log.count},
-            {"seconds", eval_log.seconds},
-            {"pixels_per_view", PixelsPerView(options.eval_pixels)}}},
-          {"skipped_steps", trainer.skipped_steps()},
-          {"resumed_from_step", resumed_from},
-          {"training_views", data.train.size()},
-          {"samples_per_ray_rendered", eval_stats.rays > 0 ? double(eval_stats.samples_evaluated) / eval_stats.rays : 0.0},
-          {"render_seconds_per_view", psnrs.empty() ? 0.0 : eval_stats.seconds / psnrs.size()},
-          {"occupied_fraction", model.occupancy.OccupiedFraction()},
-          {"field", model.field->Config()},
-          {"trainer", {{"march_step", trainer_options.march_step},
-                       {"batch_samples", trainer_options.batch_samples},
-                       {"scene", SceneSpaceName(trainer_options.space)},
-                       {"learning_rate", trainer_options.learning_rate},
-                       {"distortion_weight", trainer_options.distortion_weight},
-                       {"appearance", trainer_options.appearance},
-                       {"refine_cameras", trainer_options.refine_cameras},
-                       {"error_sampling", trainer_options.error_sampling},
-                       {"random_background", trainer_options.random_background}}}};
+  return {
+      {"steps", trainer.step()},
+      {"wall_seconds", train_seconds},
+      {"heldout_psnr", psnrs.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(psnrs))},
+      {"heldout_views", data.heldout.size()},
+      {"heldout_split", heldout_split},
+      {"heldout_pixels_per_view", PixelsPerView(options.final_eval_pixels)},
+      {"heldout_per_view", per_view},
+      {"evaluations_during_training",
+       {{"count", eval_log.count},
+        {"seconds", eval_log.seconds},
+        {"pixels_per_view", PixelsPerView(options.eval_pixels)}}},
+      {"skipped_steps", trainer.skipped_steps()},
+      {"resumed_from_step", resumed_from},
+      {"training_views", data.train.size()},
+      {"samples_per_ray_rendered", eval_stats.rays > 0 ? double(eval_stats.samples_evaluated) / eval_stats.rays : 0.0},
+      {"render_seconds_per_view", psnrs.empty() ? 0.0 : eval_stats.seconds / psnrs.size()},
+      {"occupied_fraction", model.occupancy.OccupiedFraction()},
+      {"field", model.field->Config()},
+      {"trainer",
+       {{"march_step", trainer_options.march_step},
+        {"batch_samples", trainer_options.batch_samples},
+        {"scene", SceneSpaceName(trainer_options.space)},
+        {"learning_rate", trainer_options.learning_rate},
+        {"distortion_weight", trainer_options.distortion_weight},
+        {"appearance", trainer_options.appearance},
+        {"refine_cameras", trainer_options.refine_cameras},
+        {"error_sampling", trainer_options.error_sampling},
+        {"random_background", trainer_options.random_background}}}};
 }
 
 bool ModelIsFinite(NerfModel& model) {
@@ -311,8 +313,8 @@ void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptio
     if (step.skipped) {
       LogWarning(format("train: step {} skipped: {}", trainer.step(), step.problem));
       if (++consecutive_skips >= kMaxConsecutiveSkips) {
-        throw InternalError(format("training failed: {} steps in a row were not finite (last: {})", consecutive_skips,
-                                   step.problem));
+        throw InternalError(
+            format("training failed: {} steps in a row were not finite (last: {})", consecutive_skips, step.problem));
       }
       continue;
     }
@@ -370,13 +372,15 @@ void TrainStage::Run(StageContext& context) const {
   setup.data = LoadTrainingData(transforms, context.workspace.root(), &setup.heldout_split);
   const TrainingData& data = setup.data;
   setup.trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, transforms));
-  const bool has_alpha = std::any_of(data.train.begin(), data.train.end(), [](const TrainView& v) { return v.channels == 4; });
+  const bool has_alpha =
+      std::any_of(data.train.begin(), data.train.end(), [](const TrainView& v) { return v.channels == 4; });
   setup.trainer.random_background = options.background == "random" || (options.background == "auto" && has_alpha);
   Trainer trainer(setup.trainer, data);
   const double budget = ResolvedTimeBudget(options);
   LogInfo(format("train: {} field, {} scene, preset {}, {} training and {} held-out ({}) views, {}", options.field,
                  SceneSpaceName(setup.trainer.space), options.preset, data.train.size(), data.heldout.size(),
-                 setup.heldout_split, budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
+                 setup.heldout_split,
+                 budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
 
   RunState state;
   const fs::path checkpoint = context.resume_dir / "checkpoint.bin";
@@ -401,11 +405,10 @@ void TrainStage::Run(StageContext& context) const {
                 {"appearance", setup.trainer.appearance},
                 {"refine_cameras", setup.trainer.refine_cameras}};
   WriteOrExplain([&] { SaveModel(model, context.output_dir / "model.bin"); });
-  const nlohmann::json report = WriteTrainReport(context.output_dir, trainer, setup, psnrs, fitted, eval_stats, state,
-                                                 resumed_from, eval_log);
-  context.summary = {{"steps", trainer.step()},
-                     {"train_seconds", state.train_seconds},
-                     {"heldout_psnr", report["heldout_psnr"]}};
+  const nlohmann::json report =
+      WriteTrainReport(context.output_dir, trainer, setup, psnrs, fitted, eval_stats, state, resumed_from, eval_log);
+  context.summary = {
+      {"steps", trainer.step()}, {"train_seconds", state.train_seconds}, {"heldout_psnr", report["heldout_psnr"]}};
   LogInfo(format("train: {} steps in {:.1f} s; held-out PSNR {:.2f} dB over {} views ({:.1f} samples per ray)",
                  trainer.step(), state.train_seconds, Mean(psnrs), psnrs.size(),
                  report["samples_per_ray_rendered"].get<double>()));

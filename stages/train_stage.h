@@ -24,16 +24,16 @@ struct TrainOptions {
   int hash_table_log2 = 0;         // log2 of the hash-grid entries per level (ngp); 0: the preset's
   double learning_rate = 0;        // 0: the field's (ngp 1e-2, vanilla 5e-4)
   std::string loss = "mse";
-  std::string background = "auto";  // auto: random for images with alpha, else the dataset's colour
-  std::string distortion = "auto";  // weight of the distortion loss; auto: by the scene (train_stage.cc)
-  std::string appearance = "off";   // a colour transform per training photo (on, off)
+  std::string background = "auto";     // auto: random for images with alpha, else the dataset's colour
+  std::string distortion = "auto";     // weight of the distortion loss; auto: by the scene (train_stage.cc)
+  std::string appearance = "off";      // a colour transform per training photo (on, off)
   std::string refine_cameras = "off";  // a pose correction per training photo (on, off; ngp only)
   std::string error_sampling = "off";  // pixels drawn where the error is (on, off)
-  double eval_interval = 10;       // seconds of training between held-out evaluations
-  double eval_share = 0.1;         // held-out evaluations during training take at most this share of wall time
-  int eval_pixels = 4096;          // held-out pixels per view in each evaluation during training (0: all)
-  int final_eval_pixels = 65536;   // held-out pixels per view in the final evaluation (0: all)
-  double checkpoint_interval = 60;  // seconds between checkpoints (0: none)
+  double eval_interval = 10;           // seconds of training between held-out evaluations
+  double eval_share = 0.1;             // held-out evaluations during training take at most this share of wall time
+  int eval_pixels = 4096;              // held-out pixels per view in each evaluation during training (0: all)
+  int final_eval_pixels = 65536;       // held-out pixels per view in the final evaluation (0: all)
+  double checkpoint_interval = 60;     // seconds between checkpoints (0: none)
   int seed = 0;
 
   template <class V>

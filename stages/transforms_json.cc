@@ -20,8 +20,13 @@ nlohmann::json MatrixJson(const Eigen::MatrixXd& m) {
 }
 
 nlohmann::json Intrinsics(const PinholeCamera& camera) {
-  return {{"camera_model", "PINHOLE"}, {"fl_x", camera.fx}, {"fl_y", camera.fy}, {"cx", camera.cx},
-          {"cy", camera.cy}, {"w", camera.width}, {"h", camera.height},
+  return {{"camera_model", "PINHOLE"},
+          {"fl_x", camera.fx},
+          {"fl_y", camera.fy},
+          {"cx", camera.cx},
+          {"cy", camera.cy},
+          {"w", camera.width},
+          {"h", camera.height},
           {"camera_angle_x", 2 * std::atan(camera.width / (2 * camera.fx))},
           {"camera_angle_y", 2 * std::atan(camera.height / (2 * camera.fy))}};
 }
@@ -53,8 +58,8 @@ void WriteTransformsJson(const std::filesystem::path& path, const std::vector<Ca
   for (const CameraView& view : views) {
     const PinholeCamera& a = view.camera;
     const PinholeCamera& b = views.front().camera;
-    shared = shared && a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy &&
-             a.cx == b.cx && a.cy == b.cy;
+    shared = shared && a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx &&
+             a.cy == b.cy;
   }
   nlohmann::json transforms = shared ? Intrinsics(views.front().camera) : nlohmann::json::object();
   nlohmann::json frames = nlohmann::json::array();

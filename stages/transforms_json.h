@@ -17,8 +17,8 @@
 namespace p2n {
 
 struct CameraView {
-  std::string file_path;   // as written in transforms.json, relative to it
-  PinholeCamera camera;    // intrinsics and world_from_cam (OpenGL axes) in the source world
+  std::string file_path;  // as written in transforms.json, relative to it
+  PinholeCamera camera;   // intrinsics and world_from_cam (OpenGL axes) in the source world
   std::string split = "train";
   double near = -1, far = -1;  // in source-world units along the view; negative: unknown
 };

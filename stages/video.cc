@@ -31,11 +31,13 @@ VideoWriter::VideoWriter(const std::filesystem::path& path, int width, int heigh
     }
   }
   if (!impl_->writer.isOpened()) {
-    throw UserError(format("cannot write the video '{}': OpenCV's FFmpeg back end has no H.264 or MPEG-4 encoder "
-                           "(install Debian's libopencv-videoio406 with FFmpeg), or the folder is not writable",
-                           path.string()));
+    throw UserError(
+        format("cannot write the video '{}': OpenCV's FFmpeg back end has no H.264 or MPEG-4 encoder "
+               "(install Debian's libopencv-videoio406 with FFmpeg), or the folder is not writable",
+               path.string()));
   }
-  if (codec_ != "avc1") LogWarning(format("{}: no H.264 encoder; written as MPEG-4 part 2, which browsers may not play", path.string()));
+  if (codec_ != "avc1")
+    LogWarning(format("{}: no H.264 encoder; written as MPEG-4 part 2, which browsers may not play", path.string()));
 }
 
 VideoWriter::~VideoWriter() = default;

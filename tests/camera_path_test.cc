@@ -36,7 +36,8 @@ TEST_CASE("camera paths: an orbit circles the centre at its radius and elevation
 
 TEST_CASE("camera paths: a spiral stays near the capture and looks at its focus", "[path]") {
   std::vector<PinholeCamera> capture;
-  for (int i = 0; i < 9; ++i) capture.push_back(LookAtCamera({0.1 * (i % 3 - 1), 0.1 * (i / 3 - 1) - 3, 0}, {0, 0, 0}, 64, 48, 60));
+  for (int i = 0; i < 9; ++i)
+    capture.push_back(LookAtCamera({0.1 * (i % 3 - 1), 0.1 * (i / 3 - 1) - 3, 0}, {0, 0, 0}, 64, 48, 60));
   CameraPathOptions options;
   options.frames = 20;
   options.radius = 1;

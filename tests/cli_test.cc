@@ -1,8 +1,8 @@
 // The photo2nerf program: exit codes and messages of the error cases, help, and a real run.
 
-#include <catch2/catch.hpp>
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
+#include <catch2/catch.hpp>
 
 #include "pipeline/file_util.h"
 #include "pipeline/workspace.h"
@@ -46,8 +46,8 @@ TEST_CASE("cli: help, version and unknown commands", "[cli]") {
   CHECK_THAT(unknown.output, Catch::Contains("unknown command 'trian'") && Catch::Contains("run, status, clean"));
   const Result help = Photo2Nerf({"run", "--help"});
   CHECK(help.code == 0);
-  CHECK_THAT(help.output, Catch::Contains("--ingest.max_image_size") && Catch::Contains("[px]") &&
-                              Catch::Contains("--force"));
+  CHECK_THAT(help.output,
+             Catch::Contains("--ingest.max_image_size") && Catch::Contains("[px]") && Catch::Contains("--force"));
 }
 
 TEST_CASE("cli: a run, a fresh rerun, status and clean", "[cli]") {
@@ -65,7 +65,8 @@ TEST_CASE("cli: a run, a fresh rerun, status and clean", "[cli]") {
   CHECK_THAT(Photo2Nerf({"status", "-w", ws}).output,
              Catch::Contains("fresh") && Catch::Contains("options   ingest.max_image_size 16 (remembered"));
   Result status = Photo2Nerf({"status", "-w", ws, "--ingest.max_image_size", "20"});
-  CHECK_THAT(status.output, Catch::Contains("stale") && Catch::Contains("option ingest.max_image_size changed (16 -> 20)"));
+  CHECK_THAT(status.output,
+             Catch::Contains("stale") && Catch::Contains("option ingest.max_image_size changed (16 -> 20)"));
   // An option given twice: the last value wins (as with most tools).
   Result twice = Photo2Nerf({"status", "-w", ws, "--ingest.max_image_size", "30", "--ingest.max_image_size", "20"});
   CHECK_THAT(twice.output, Catch::Contains("(16 -> 20)"));
@@ -101,7 +102,8 @@ TEST_CASE("cli: user errors exit 1 with a message naming what is wrong", "[cli]"
   expect(Photo2Nerf({"run", photos, "-w", ws, "--ingest.max_image_siz", "100"}),
          "unknown option '--ingest.max_image_siz'; did you mean '--ingest.max_image_size'?");
   expect(Photo2Nerf({"run", photos, "-w", ws, "--ingest.max_image_size", "big"}), "must be an integer");
-  expect(Photo2Nerf({"run", photos, "-w", ws, "--ingest.max_image_size", "-3"}), "option ingest.max_image_size must be");
+  expect(Photo2Nerf({"run", photos, "-w", ws, "--ingest.max_image_size", "-3"}),
+         "option ingest.max_image_size must be");
   WriteText(dir / "config.json", R"({"ingest": {"max_size": 3}})");
   expect(Photo2Nerf({"run", photos, "-w", ws, "--config", (dir / "config.json").string()}),
          "unknown option 'ingest.max_size'");
@@ -139,8 +141,9 @@ TEST_CASE("cli: fit-image writes the reconstruction, the curve, the plot and the
   CHECK_THAT(csv, Catch::Contains(",30,"));
   CHECK_THAT(ReadText(fs::path(out) / "fit_report.json"), Catch::Contains("\"steps\": 30"));
   // The same folder can take another fit (it holds fit-image results).
-  CHECK(Photo2Nerf({"fit-image", image, "-o", out, "--fit.max_steps", "2", "--fit.time_budget", "0",
-                    "--fit.width", "8"}).code == 0);
+  CHECK(
+      Photo2Nerf({"fit-image", image, "-o", out, "--fit.max_steps", "2", "--fit.time_budget", "0", "--fit.width", "8"})
+          .code == 0);
 
   const std::string sweep = (dir / "sweep").string();
   const Result swept = Photo2Nerf({"fit-image", image, "-o", sweep, "--sweep", "--fit.max_steps", "3",
@@ -194,12 +197,12 @@ TEST_CASE("cli: a missing, crashing or failing COLMAP gives a clear error and th
   CHECK(missing.code == 2);
   CHECK_THAT(missing.output, Catch::Contains("cannot start") && Catch::Contains("no_colmap"));
 
-  Result killed = Photo2Nerf({"run", photos, "-w", (dir / "ws2").string(), "--colmap",
-                              fake_colmap("crashing", "kill -9 $$")});
+  Result killed =
+      Photo2Nerf({"run", photos, "-w", (dir / "ws2").string(), "--colmap", fake_colmap("crashing", "kill -9 $$")});
   INFO(killed.output);
   CHECK(killed.code == 2);
-  CHECK_THAT(killed.output, Catch::Contains("feature extraction was killed by signal 9") &&
-                                Catch::Contains("feature_extraction.log"));
+  CHECK_THAT(killed.output,
+             Catch::Contains("feature extraction was killed by signal 9") && Catch::Contains("feature_extraction.log"));
 
   const std::string no_pair = fake_colmap(
       "no_pair", "if [ \"$1\" = mapper ]; then echo 'No good initial image pair found.'; exit 1; fi\nexit 0");
@@ -224,11 +227,12 @@ TEST_CASE("cli: a missing, crashing or failing COLMAP gives a clear error and th
   const std::string partial = fake_colmap(
       "partial", "if [ \"$1\" = mapper ]; then while [ $# -gt 0 ]; do if [ \"$1\" = --output_path ]; then cp -r '" +
                      (dir / "prepared" / "0").string() + "' \"$2\"/0; fi; shift; done; fi\nexit 0");
-  Result few = Photo2Nerf({"run", photos, "-w", (dir / "ws4").string(), "--colmap", partial,
-                           "--sfm.refine_principal_point", "false"});
+  Result few = Photo2Nerf(
+      {"run", photos, "-w", (dir / "ws4").string(), "--colmap", partial, "--sfm.refine_principal_point", "false"});
   INFO(few.output);
   CHECK(few.code == 1);
-  CHECK_THAT(few.output, Catch::Contains("registered only 1 of 3 photos") && Catch::Contains("photo 0.png, photo 2.png") &&
+  CHECK_THAT(few.output, Catch::Contains("registered only 1 of 3 photos") &&
+                             Catch::Contains("photo 0.png, photo 2.png") &&
                              Catch::Contains("--sfm.matcher exhaustive"));
   const nlohmann::json report = ReadJsonFile(dir / "ws4" / "10_sfm.partial" / "sfm_report.json");
   CHECK(report["left_out"] == nlohmann::json{"photo 0.png", "photo 2.png"});

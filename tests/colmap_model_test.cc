@@ -22,7 +22,8 @@ ColmapModel SmallModel() {
   for (uint32_t i = 1; i <= 3; ++i) {
     ColmapImage image;
     image.id = i;
-    image.cam_from_world_rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3 * i, Eigen::Vector3d(1, 2, 3).normalized()));
+    image.cam_from_world_rotation =
+        Eigen::Quaterniond(Eigen::AngleAxisd(0.3 * i, Eigen::Vector3d(1, 2, 3).normalized()));
     image.cam_from_world_translation = Eigen::Vector3d(0.1 * i, -0.2, 1.5);
     image.camera_id = i == 3 ? 2 : 1;
     image.name = "img " + std::to_string(i) + ".jpg";
@@ -31,7 +32,10 @@ ColmapModel SmallModel() {
     model.images[i] = image;
   }
   for (uint64_t p = 1; p <= 3; ++p) {
-    model.points[p] = {p, Eigen::Vector3d(0.5 * p, -1.0, 2.0 + p), {10, 200, static_cast<uint8_t>(30 * p)}, 0.75,
+    model.points[p] = {p,
+                       Eigen::Vector3d(0.5 * p, -1.0, 2.0 + p),
+                       {10, 200, static_cast<uint8_t>(30 * p)},
+                       0.75,
                        {{static_cast<uint32_t>(p), 0}}};
   }
   return model;
@@ -147,7 +151,8 @@ TEST_CASE("an .npz that declares gigabytes from a few bytes is refused before al
 
 TEST_CASE("COLMAP flags are built from the version the program reports", "[colmap]") {
   CHECK(ParseColmapVersion("COLMAP 3.8 -- Structure-from-Motion and Multi-View Stereo\n(Commit Unknown on Unknown "
-                           "without CUDA)").ToString() == "3.8");
+                           "without CUDA)")
+            .ToString() == "3.8");
   CHECK(ParseColmapVersion("COLMAP 3.14.0.dev0 -- Structure-from-Motion").ToString() == "3.14");
   CHECK_THROWS_WITH(ParseColmapVersion("bash: colmap: command not found"), Catch::Contains("is this COLMAP?"));
   const ColmapFlags v38 = ColmapFlagsFor({3, 8});

@@ -71,13 +71,15 @@ TEST_CASE("a config with an unknown key or a derived key that does not follow is
   CHECK_THROWS_WITH(HashGridConfig::FromJson(grid), "hash grid config: unknown key 'levles'");
   nlohmann::json ngp = NgpFieldConfig{}.ToJson();
   ngp["density_activation"] = "softplus";
-  CHECK_THROWS_WITH(NgpFieldConfig::FromJson(ngp), Catch::Contains("'density_activation' follows from the other fields"));
+  CHECK_THROWS_WITH(NgpFieldConfig::FromJson(ngp),
+                    Catch::Contains("'density_activation' follows from the other fields"));
   ngp = NgpFieldConfig{}.ToJson();
   ngp["widht"] = 128;
   CHECK_THROWS_WITH(MakeField<float>(ngp, 1), "NgpField config: unknown key 'widht'");
   nlohmann::json vanilla = VanillaFieldConfig{}.ToJson();
   vanilla["skip_after"] = 1;
-  CHECK_THROWS_WITH(VanillaFieldConfig::FromJson(vanilla), Catch::Contains("'skip_after' follows from the other fields"));
+  CHECK_THROWS_WITH(VanillaFieldConfig::FromJson(vanilla),
+                    Catch::Contains("'skip_after' follows from the other fields"));
   CHECK_THROWS_WITH(NgpFieldConfig::FromJson({{"width", "wide"}}),
                     "NgpField config: 'width' must be an integer, not \"wide\"");
   // What a config leaves out keeps its default.

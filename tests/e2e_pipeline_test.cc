@@ -4,8 +4,8 @@
 
 #include <catch2/catch.hpp>
 
-#include <assimp/Importer.hpp>
 #include <assimp/scene.h>
+#include <assimp/Importer.hpp>
 
 #include <cstdlib>
 
@@ -24,10 +24,29 @@ TEST_CASE("photo2nerf run: photos to report with real COLMAP, then everything fr
   TempDir dir;
   SyntheticSceneOptions scene;  // 24 views of 320 x 240
   WriteSyntheticScene(scene, dir / "photos");
-  const std::vector<std::string> command = {P2N_BINARY, "run", (dir / "photos").string(), "-w", (dir / "ws").string(),
-                                            "--run.progress", "plain", "--train.preset", "fast",
-                                            "--train.steps", "200", "--train.time_budget", "600", "--render.frames", "8", "--render.width", "160",
-                                            "--export.resolution", "96", "--export.threshold", "5", "--export.points_width", "64"};
+  const std::vector<std::string> command = {P2N_BINARY,
+                                            "run",
+                                            (dir / "photos").string(),
+                                            "-w",
+                                            (dir / "ws").string(),
+                                            "--run.progress",
+                                            "plain",
+                                            "--train.preset",
+                                            "fast",
+                                            "--train.steps",
+                                            "200",
+                                            "--train.time_budget",
+                                            "600",
+                                            "--render.frames",
+                                            "8",
+                                            "--render.width",
+                                            "160",
+                                            "--export.resolution",
+                                            "96",
+                                            "--export.threshold",
+                                            "5",
+                                            "--export.points_width",
+                                            "64"};
   std::string output;
   REQUIRE(RunCommand(command, &output) == 0);
   INFO(output);
@@ -45,7 +64,8 @@ TEST_CASE("photo2nerf run: photos to report with real COLMAP, then everything fr
   const aiMesh* mesh = mesh_scene->mMeshes[0];
   CHECK(mesh->mNumFaces > 100);
   for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
-    REQUIRE((std::isfinite(mesh->mVertices[v].x) && std::isfinite(mesh->mVertices[v].y) && std::isfinite(mesh->mVertices[v].z)));
+    REQUIRE((std::isfinite(mesh->mVertices[v].x) && std::isfinite(mesh->mVertices[v].y) &&
+             std::isfinite(mesh->mVertices[v].z)));
   }
 
   const std::string report = ReadText(dir / "ws" / "60_report" / "report.html");
@@ -65,7 +85,8 @@ TEST_CASE("photo2nerf run: photos to report with real COLMAP, then everything fr
   REQUIRE(RunCommand(command, &output) == 0);
   CHECK_THAT(output, Catch::Contains("0 of 7 stages ran"));
   for (const std::string& stage : stages) CHECK_THAT(output, Catch::Contains(stage + ": fresh, skipped"));
-  for (const auto& [folder, time] : finished) CHECK(ReadJsonFile(dir / "ws" / folder / "manifest.json")["finished_utc"] == time);
+  for (const auto& [folder, time] : finished)
+    CHECK(ReadJsonFile(dir / "ws" / folder / "manifest.json")["finished_utc"] == time);
 }
 
 }  // namespace p2n::testing

@@ -19,7 +19,9 @@ std::string ReadText(const fs::path& path) { return ReadTextFile(path); }
 class FakeStage : public Stage {
  public:
   FakeStage(std::string name, std::vector<std::string> upstream, fs::path counter_dir, int format_version)
-      : name_(std::move(name)), upstream_(std::move(upstream)), counter_dir_(std::move(counter_dir)),
+      : name_(std::move(name)),
+        upstream_(std::move(upstream)),
+        counter_dir_(std::move(counter_dir)),
         format_version_(format_version) {}
 
   std::string name() const override { return name_; }

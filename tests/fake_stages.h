@@ -13,10 +13,10 @@
 namespace p2n::testing {
 
 struct FakeOptions {
-  int value = 1;          // written into out.txt: changes the result
-  bool fail = false;      // throw a UserError in the middle of Run()
-  bool block = false;     // write started.flag into the counter folder, then sleep for a minute
-  int min_value = 0;      // a threshold: a result whose value is below it fails (Run and CheckResult)
+  int value = 1;       // written into out.txt: changes the result
+  bool fail = false;   // throw a UserError in the middle of Run()
+  bool block = false;  // write started.flag into the counter folder, then sleep for a minute
+  int min_value = 0;   // a threshold: a result whose value is below it fails (Run and CheckResult)
 
   template <class V>
   void Visit(V& v) {

@@ -28,10 +28,31 @@ using Clock = std::chrono::steady_clock;
 // `photo2nerf run` on the small dataset with short stages (about 10 s in all), frequent checkpoints and
 // evaluations on few pixels.
 std::vector<std::string> RunArgs(const fs::path& data, const fs::path& workspace) {
-  return {P2N_BINARY, "run", data.string(), "-w", workspace.string(), "--run.progress", "plain",
-          "--train.preset", "fast", "--train.steps", "120", "--train.checkpoint_interval", "0.2",
-          "--train.eval_interval", "1", "--train.eval_pixels", "512", "--render.frames", "4",
-          "--export.resolution", "32", "--export.points_width", "32", "--export.threshold", "5"};
+  return {P2N_BINARY,
+          "run",
+          data.string(),
+          "-w",
+          workspace.string(),
+          "--run.progress",
+          "plain",
+          "--train.preset",
+          "fast",
+          "--train.steps",
+          "120",
+          "--train.checkpoint_interval",
+          "0.2",
+          "--train.eval_interval",
+          "1",
+          "--train.eval_pixels",
+          "512",
+          "--render.frames",
+          "4",
+          "--export.resolution",
+          "32",
+          "--export.points_width",
+          "32",
+          "--export.threshold",
+          "5"};
 }
 
 // Starts a command with its output in `log`.
@@ -119,12 +140,19 @@ TEST_CASE("faults: SIGKILL at many moments, then a rerun, gives the uninterrupte
   // checkpoint being written, results half written, manifests written but not yet moved into place. Each
   // next run goes on from what the last one left.
   const fs::path workspace = dir / "ws";
-  const std::vector<std::string> moments = {
-      "20_poses.partial",         "20_poses.partial/manifest.json",  "30_train.partial",
-      "30_train.resume/checkpoint.bin.tmp", "30_train.resume/checkpoint.bin", "30_train.partial/model.bin.tmp",
-      "30_train.partial/metrics.csv", "40_render.partial",        "40_render.partial/video.mp4",
-      "50_export.partial",        "50_export.partial/mesh.ply",      "60_report.partial",
-      "60_report.partial/manifest.json"};
+  const std::vector<std::string> moments = {"20_poses.partial",
+                                            "20_poses.partial/manifest.json",
+                                            "30_train.partial",
+                                            "30_train.resume/checkpoint.bin.tmp",
+                                            "30_train.resume/checkpoint.bin",
+                                            "30_train.partial/model.bin.tmp",
+                                            "30_train.partial/metrics.csv",
+                                            "40_render.partial",
+                                            "40_render.partial/video.mp4",
+                                            "50_export.partial",
+                                            "50_export.partial/mesh.ply",
+                                            "60_report.partial",
+                                            "60_report.partial/manifest.json"};
   const std::vector<std::string> stages = {"poses", "train", "render", "export", "report"};
   std::vector<std::string> hit;
   for (const std::string& moment : moments) {
@@ -174,8 +202,7 @@ TEST_CASE("faults: a file-size limit gives a clear error naming the file and kee
   std::string output;
   CHECK(RunCommand(limited, &output) == 1);  // a user error: the environment, not a bug
   INFO(output);
-  CHECK_THAT(output, Catch::Contains("30_train") && Catch::Contains("File too large") &&
-                         Catch::Contains("free space"));
+  CHECK_THAT(output, Catch::Contains("30_train") && Catch::Contains("File too large") && Catch::Contains("free space"));
   std::string status;
   REQUIRE(RunCommand({P2N_BINARY, "status", "-w", workspace.string()}, &status) == 0);
   CHECK_THAT(status, Catch::Matches("(.|\n)*poses +fresh(.|\n)*"));

@@ -95,8 +95,8 @@ TEST_CASE("sigmoid output stays finite and saturates for huge inputs", "[gradien
 TEST_CASE("hash-grid gradients match finite differences, in 2D and 3D, dense and hashed levels, 1 to 4 features",
           "[gradients]") {
   // 70 points: more than one group of points whose entries are found before they are read (hash_grid.cc).
-  for (const auto& [dims, features] : {std::pair(2, 2), std::pair(3, 1), std::pair(3, 2), std::pair(3, 3),
-                                       std::pair(3, 4)}) {
+  for (const auto& [dims, features] :
+       {std::pair(2, 2), std::pair(3, 1), std::pair(3, 2), std::pair(3, 3), std::pair(3, 4)}) {
     CAPTURE(dims, features);
     HashGridConfig config = SmallGridConfig();
     config.features_per_level = features;
@@ -196,9 +196,9 @@ TEST_CASE("positional encoding: raw input, then sin and cos of 2^k pi x", "[enco
   encoding.Forward(point, &out);
   CHECK(out(0, 0) == 0.25);
   CHECK(out(1, 0) == 0.5);
-  CHECK(out(2, 0) == Approx(std::sin(M_PI * 0.25)));      // k = 0, sin, x
+  CHECK(out(2, 0) == Approx(std::sin(M_PI * 0.25)));               // k = 0, sin, x
   CHECK(out(5, 0) == Approx(std::cos(M_PI * 0.5)).margin(1e-12));  // k = 0, cos, y
-  CHECK(out(6, 0) == Approx(std::sin(2 * M_PI * 0.25)));  // k = 1, sin, x: sin(pi / 2) = 1
+  CHECK(out(6, 0) == Approx(std::sin(2 * M_PI * 0.25)));           // k = 1, sin, x: sin(pi / 2) = 1
   CHECK(out(6, 0) == Approx(1.0));
   CHECK(PositionalEncoding<double>(2, 10).output_dims() == 42);  // the seed's 2D encoding
 }

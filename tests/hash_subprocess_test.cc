@@ -32,14 +32,14 @@ TEST_CASE("atomic writes leave the old file or the new one, and name the file on
   WriteFileAtomic(dir / "a.json", "two");
   CHECK(ReadText(dir / "a.json") == "two");
   CHECK_FALSE(std::filesystem::exists(dir / "a.json.tmp"));
-  CHECK_THROWS_WITH(WriteFileAtomic(dir / "no_such_folder" / "a.json", "x"),
-                    Catch::Contains("no_such_folder/a.json"));
+  CHECK_THROWS_WITH(WriteFileAtomic(dir / "no_such_folder" / "a.json", "x"), Catch::Contains("no_such_folder/a.json"));
 }
 
 TEST_CASE("subprocess: argv, log file, exit status", "[subprocess]") {
   TempDir dir;
   const auto log = dir / "logs" / "step.log";
-  SubprocessResult result = RunSubprocess({"sh", "-c", "echo hello; echo oops >&2; exit 3", "name with space"}, log, "test step");
+  SubprocessResult result =
+      RunSubprocess({"sh", "-c", "echo hello; echo oops >&2; exit 3", "name with space"}, log, "test step");
   CHECK(result.exit_code == 3);
   const std::string text = ReadText(log);
   CHECK_THAT(text, Catch::Contains("$ sh -c 'echo hello; echo oops >&2; exit 3' 'name with space'"));

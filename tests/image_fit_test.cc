@@ -1,8 +1,8 @@
 // Fitting one image (issue 6): a smooth image is learnt to a high PSNR in a few hundred steps; a pattern of
 // high frequency needs the positional encoding.
 
-#include <catch2/catch.hpp>
 #include <OpenImageIO/imagebuf.h>
+#include <catch2/catch.hpp>
 
 #include "nerf/image_fit.h"
 #include "tests/test_util.h"
@@ -63,7 +63,7 @@ TEST_CASE("the positional encoding is what lets the MLP fit fine detail", "[fit]
   const ImageFitResult raw = FitImage(SmallPe(0, 300), checker);
   const ImageFitResult encoded = FitImage(SmallPe(10, 300), checker);
   INFO("raw " << raw.psnr << " dB, encoded " << encoded.psnr << " dB");
-  CHECK(raw.psnr < 10);      // about the 6 dB of a flat grey
+  CHECK(raw.psnr < 10);  // about the 6 dB of a flat grey
   CHECK(encoded.psnr > 30);
 }
 

@@ -3,9 +3,9 @@
 
 #include <catch2/catch.hpp>
 
+#include <OpenImageIO/imagebuf.h>
 #include <Eigen/Geometry>
 #include <Eigen/LU>
-#include <OpenImageIO/imagebuf.h>
 
 #include "nerf/synthetic_scene.h"
 #include "pipeline/errors.h"
@@ -50,7 +50,8 @@ double WorstRotationAfterAlignment(const std::vector<Eigen::Matrix4d>& a, const 
     pb.col(i) = b[i].topRightCorner<3, 1>();
   }
   const Eigen::Matrix4d alignment = Eigen::umeyama(pa, pb, true);
-  const Eigen::Matrix3d rotation = alignment.topLeftCorner<3, 3>() / std::cbrt(alignment.topLeftCorner<3, 3>().determinant());
+  const Eigen::Matrix3d rotation =
+      alignment.topLeftCorner<3, 3>() / std::cbrt(alignment.topLeftCorner<3, 3>().determinant());
   double worst = 0;
   for (size_t i = 0; i < a.size(); ++i) {
     const Eigen::Matrix3d d = b[i].topLeftCorner<3, 3>().transpose() * rotation * a[i].topLeftCorner<3, 3>();
@@ -125,13 +126,14 @@ TEST_CASE("import: broken and hostile datasets are refused, naming the file and 
   OIIO::ImageBuf image(OIIO::ImageSpec(8, 6, 3, OIIO::TypeDesc::UINT8));
   REQUIRE(image.write((dir / "data" / "a.png").string()));
   const auto write = [&](const std::string& matrix, const std::string& path, const std::string& focal = "10") {
-    WriteText(dir / "data" / "transforms.json",
-              R"({"fl_x": )" + focal + R"(, "w": 8, "h": 6, "frames": [{"file_path": ")" + path +
-                  R"(", "transform_matrix": )" + matrix + "}]}");
+    WriteText(dir / "data" / "transforms.json", R"({"fl_x": )" + focal +
+                                                    R"(, "w": 8, "h": 6, "frames": [{"file_path": ")" + path +
+                                                    R"(", "transform_matrix": )" + matrix + "}]}");
   };
   const std::string identity = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
   write(identity, "../../etc/passwd");
-  CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("frames[0].file_path") && Catch::Contains("outside the dataset"));
+  CHECK_THROWS_WITH(LoadDataset(dir / "data"),
+                    Catch::Contains("frames[0].file_path") && Catch::Contains("outside the dataset"));
   write(identity, "/etc/passwd");
   CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("outside the dataset"));
   write("[[2,0,0,0],[0,2,0,0],[0,0,2,0],[0,0,0,1]]", "a.png");
@@ -146,8 +148,9 @@ TEST_CASE("import: broken and hostile datasets are refused, naming the file and 
   write(identity, "missing.png");
   CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("no usable view"));
   // Declared 8x6, but the image is 8x6... declare another size: refused when the images are read.
-  WriteText(dir / "data" / "transforms.json",
-            R"({"fl_x": 10, "w": 16, "h": 6, "frames": [{"file_path": "a.png", "transform_matrix": )" + identity + "}]}");
+  WriteText(
+      dir / "data" / "transforms.json",
+      R"({"fl_x": 10, "w": 16, "h": 6, "frames": [{"file_path": "a.png", "transform_matrix": )" + identity + "}]}");
   CHECK_THROWS_WITH(Import(dir / "data", dir / "ws"), Catch::Contains("a.png' is 8x6 but the dataset declares 16x6"));
 
   // A COLMAP project whose image name climbs out of the project.
@@ -160,8 +163,8 @@ TEST_CASE("import: broken and hostile datasets are refused, naming the file and 
   model.images[1] = outside;
   WriteColmapModelBinary(model, dir / "data" / "sparse" / "0");
   fs::create_directories(dir / "data" / "images");
-  CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("images/../../secret.png") &&
-                                                   Catch::Contains("outside the dataset"));
+  CHECK_THROWS_WITH(LoadDataset(dir / "data"),
+                    Catch::Contains("images/../../secret.png") && Catch::Contains("outside the dataset"));
 }
 
 TEST_CASE("import: the shared datasets (fox, lego, lego_200, fern)", "[import][data]") {

@@ -1,9 +1,9 @@
 // The ingest stage on small images made here: the table of unusual and bad photos (16-bit, grey, alpha, CMYK,
 // HDR, EXIF-rotated, non-ASCII names, copies, broken and absurd files), fingerprints, downsizing, too few photos.
 
-#include <catch2/catch.hpp>
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
+#include <catch2/catch.hpp>
 
 #include <cstdio>
 #include <fstream>
@@ -16,8 +16,8 @@
 #include "pipeline/file_util.h"
 #include "stages/dataset_import.h"
 #include "stages/ingest_stage.h"
-#include "stages/training_data.h"
 #include "stages/stages.h"
+#include "stages/training_data.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {
@@ -63,9 +63,10 @@ struct IngestFixture {
 
 // A PNG that declares 100000 x 100000 pixels (IHDR) and has an empty IDAT.
 void WriteHugePng(const fs::path& path) {
-  const unsigned char header[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R',
-                                  0, 1, 0x86, 0xa0, 0, 1, 0x86, 0xa0, 8, 2, 0, 0, 0, 0x27, 0x30, 0x9c, 0x9f,
-                                  0, 0, 0, 0, 'I', 'D', 'A', 'T', 0x35, 0xaf, 0x06, 0x1e};
+  const unsigned char header[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0,    0, 0,    13,
+                                  'I',  'H', 'D', 'R', 0,    1,    0x86, 0xa0, 0,    1, 0x86, 0xa0,
+                                  8,    2,   0,   0,   0,    0x27, 0x30, 0x9c, 0x9f, 0, 0,    0,
+                                  0,    'I', 'D', 'A', 'T',  0x35, 0xaf, 0x06, 0x1e};
   std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(header), sizeof(header));
 }
 
@@ -109,9 +110,9 @@ std::string SkipReason(const nlohmann::json& report, const std::string& file) {
 TEST_CASE("ingest: a table of unusual and bad photos, each kept as training expects or skipped with its reason",
           "[ingest][bad_input]") {
   struct Row {
-    std::string file;                              // its name in the photo folder
-    std::function<void(const fs::path&)> make;     // writes it
-    std::string skip_reason;                       // empty: kept
+    std::string file;                                                               // its name in the photo folder
+    std::function<void(const fs::path&)> make;                                      // writes it
+    std::string skip_reason;                                                        // empty: kept
     std::function<void(const nlohmann::json& entry, const TrainView& view)> check;  // for kept files
   };
   const auto image = [](int seed) { return [seed](const fs::path& path) { Write(MakeImage(40, 20, seed), path); }; };
@@ -230,8 +231,8 @@ TEST_CASE("ingest: a table of unusual and bad photos, each kept as training expe
   IngestFixture f;
   for (int i = 0; i < 3; ++i) image(i)(f.photos / ("base" + std::to_string(i) + ".png"));
   for (const Row& row : rows) row.make(f.photos / row.file);
-  fs::create_directories(f.photos / "folder.jpg");            // not a file: ignored
-  image(9)(f.photos / ".hidden.png");                         // hidden: ignored
+  fs::create_directories(f.photos / "folder.jpg");  // not a file: ignored
+  image(9)(f.photos / ".hidden.png");               // hidden: ignored
   const nlohmann::json report = f.Run();
 
   size_t kept = 3;

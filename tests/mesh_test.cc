@@ -96,7 +96,8 @@ TEST_CASE("mesh: the threshold chosen from the field puts the surface where the 
   NerfModel model = SphereModel();
   model.march_step = 2 * std::sqrt(3.0) / 512;
   std::vector<Eigen::Vector3d> surface;
-  for (const Eigen::Vector3d& position : {Eigen::Vector3d(3, 0, 0.5), Eigen::Vector3d(-2, 2, 1), Eigen::Vector3d(0, -3, -1)}) {
+  for (const Eigen::Vector3d& position :
+       {Eigen::Vector3d(3, 0, 0.5), Eigen::Vector3d(-2, 2, 1), Eigen::Vector3d(0, -3, -1)}) {
     const PinholeCamera camera = LookAtCamera(position, Eigen::Vector3d::Zero(), 40, 40, 40);
     const RenderedView view = RenderView(model, camera, -1, -1, RenderOptions{});
     for (int y = 0; y < camera.height; ++y) {
@@ -127,7 +128,8 @@ TEST_CASE("mesh: the threshold chosen from the field puts the surface where the 
 TEST_CASE("mesh: cells the occupancy grid marks empty are not evaluated", "[mesh]") {
   NerfModel model = SphereModel();
   model.occupancy = OccupancyGrid(16);
-  model.occupancy.Update([](const Eigen::Matrix3Xf& p) { return Eigen::VectorXf::Zero(p.cols()).eval(); }, 1.0f, 0.0f, 0);  // every cell empty
+  model.occupancy.Update([](const Eigen::Matrix3Xf& p) { return Eigen::VectorXf::Zero(p.cols()).eval(); }, 1.0f, 0.0f,
+                         0);  // every cell empty
   MeshOptions options;
   options.resolution = 32;
   CHECK(ExtractMesh(model, options).triangles.empty());

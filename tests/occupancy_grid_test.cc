@@ -13,7 +13,9 @@ namespace {
 
 // Density 1 inside a ball of radius 0.25 around the cube's centre, 0 outside.
 Eigen::VectorXf Ball(const Eigen::Matrix3Xf& points) {
-  return ((points.colwise() - Eigen::Vector3f::Constant(0.5f)).colwise().norm().array() < 0.25f).cast<float>().transpose();
+  return ((points.colwise() - Eigen::Vector3f::Constant(0.5f)).colwise().norm().array() < 0.25f)
+      .cast<float>()
+      .transpose();
 }
 
 }  // namespace
@@ -89,11 +91,14 @@ TEST_CASE("occupancy grid: leaping over empty blocks keeps every sample the latt
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   Eigen::Matrix3Xf centres(3, 12);
   for (int c = 0; c < 12; ++c) centres.col(c) = Eigen::Vector3f(unit(random), unit(random), unit(random));
-  grid.Update([&](const Eigen::Matrix3Xf& p) {
-    Eigen::VectorXf density = Eigen::VectorXf::Zero(p.cols());
-    for (Eigen::Index i = 0; i < p.cols(); ++i) density[i] = (centres.colwise() - p.col(i)).colwise().norm().minCoeff() < 0.06f;
-    return density;
-  }, 0.5f, 0.9f, 1);
+  grid.Update(
+      [&](const Eigen::Matrix3Xf& p) {
+        Eigen::VectorXf density = Eigen::VectorXf::Zero(p.cols());
+        for (Eigen::Index i = 0; i < p.cols(); ++i)
+          density[i] = (centres.colwise() - p.col(i)).colwise().norm().minCoeff() < 0.06f;
+        return density;
+      },
+      0.5f, 0.9f, 1);
   REQUIRE(grid.OccupiedFraction() > 0.005);
   REQUIRE(grid.OccupiedFraction() < 0.2);
   size_t marched = 0;

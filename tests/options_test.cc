@@ -10,7 +10,7 @@ namespace p2n::testing {
 namespace {
 
 struct ExampleOptions {
-  int steps = 100;            // an integer
+  int steps = 100;  // an integer
   double learning_rate = 0.01;
   bool verbose = false;
   std::string mode = "fast";

@@ -30,8 +30,8 @@ TEST_CASE("COLMAP cam_from_world and OpenGL world_from_cam: round trip and the s
   std::mt19937_64 random(5);
   std::uniform_real_distribution<double> uniform(-1, 1);
   for (int trial = 0; trial < 50; ++trial) {
-    const Eigen::Quaterniond q = Eigen::Quaterniond(uniform(random), uniform(random), uniform(random),
-                                                    uniform(random)).normalized();
+    const Eigen::Quaterniond q =
+        Eigen::Quaterniond(uniform(random), uniform(random), uniform(random), uniform(random)).normalized();
     const Eigen::Vector3d t(uniform(random), uniform(random), uniform(random) + 4);
     PinholeCamera camera{640, 480, 500 + 100 * uniform(random), 510, 321.5, 238.25, WorldFromOpenGlCamera(q, t)};
     Eigen::Quaterniond q2;
@@ -76,7 +76,8 @@ TEST_CASE("normalisation: an orbit is centred, turned upright, scaled, and inver
   CHECK(up.z() > 0.99);
   // 95% of the points within the unit cube.
   int inside = 0;
-  for (const auto& p : points) inside += (n.normalized_from_world * p.homogeneous()).head<3>().cwiseAbs().maxCoeff() <= 1.0 + 1e-9;
+  for (const auto& p : points)
+    inside += (n.normalized_from_world * p.homogeneous()).head<3>().cwiseAbs().maxCoeff() <= 1.0 + 1e-9;
   CHECK(inside >= 190);
   CHECK((n.normalized_from_world.inverse() * n.normalized_from_world - Eigen::Matrix4d::Identity()).norm() < 1e-12);
 }
@@ -91,8 +92,9 @@ TEST_CASE("normalisation of degenerate inputs: a fallback or a clear error, neve
     CHECK_THROWS_AS(NormalizeScene({{1, 1, 1}, {1, 1, 1}, {1, 1, 1}}, {z, z, z}, {x, -x, x}, {}), UserError);
   }
   SECTION("collinear cameras with parallel axes (forward-facing): centre and scale from the cameras") {
-    const Normalization n = NormalizeScene({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}, {z, z, z}, {-Eigen::Vector3d::UnitY(),
-                                           -Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitY()}, {});
+    const Normalization n =
+        NormalizeScene({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}, {z, z, z},
+                       {-Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitY()}, {});
     CHECK(AllFinite(n));
     CHECK(n.centre_from == "cameras");
     CHECK(n.scale == Approx(2.0));  // centre (1, 0, 0); half the largest camera distance is 0.5

@@ -12,7 +12,8 @@ namespace p2n::testing {
 
 TEST_CASE("a camera ray projects back to its pixel, the principal point looks down the optical axis", "[rays]") {
   const PinholeCamera camera = LookAtCamera({3, -2, 1.5}, {0, 0, 0.4}, 320, 240, 60);
-  for (const auto& [u, v] : {std::pair{0.5, 0.5}, std::pair{319.5, 0.5}, std::pair{160.0, 120.0}, std::pair{17.25, 203.75}}) {
+  for (const auto& [u, v] :
+       {std::pair{0.5, 0.5}, std::pair{319.5, 0.5}, std::pair{160.0, 120.0}, std::pair{17.25, 203.75}}) {
     const Ray ray = CameraRay(camera, u, v);
     CHECK(ray.direction.norm() == Approx(1.0));
     double depth = 0;
@@ -38,18 +39,18 @@ TEST_CASE("ray-box intersection: hits, misses, axis-parallel, behind, grazing an
   REQUIRE(inside);
   CHECK(inside->first == 0.0);
   CHECK(inside->second == 1.0);
-  CHECK_FALSE(hit({-3, 2, 0}, {1, 0, 0}));       // parallel, outside the slab
-  CHECK_FALSE(hit({3, 0, 0}, {1, 0, 0}));        // the box is behind
-  CHECK_FALSE(hit({-3, 0, 0}, {1, 1.5, 0}));     // passes beside it
-  CHECK_FALSE(hit({-3, 1, 1}, {1, 0, 0}));       // along an edge: it only touches the box
-  CHECK_FALSE(hit({-3, 1, 0}, {1, 0, 0}));       // in a face: the same
+  CHECK_FALSE(hit({-3, 2, 0}, {1, 0, 0}));    // parallel, outside the slab
+  CHECK_FALSE(hit({3, 0, 0}, {1, 0, 0}));     // the box is behind
+  CHECK_FALSE(hit({-3, 0, 0}, {1, 1.5, 0}));  // passes beside it
+  CHECK_FALSE(hit({-3, 1, 1}, {1, 0, 0}));    // along an edge: it only touches the box
+  CHECK_FALSE(hit({-3, 1, 0}, {1, 0, 0}));    // in a face: the same
   auto diagonal = hit({-2, -2, -2}, {1, 1, 1});
   REQUIRE(diagonal);
   CHECK(diagonal->second - diagonal->first == Approx(2 * std::sqrt(3.0)));
   auto far_away = hit({1e8, 0.5, 0.5}, {-1, 0, 0});
   REQUIRE(far_away);
   CHECK(far_away->second - far_away->first == Approx(2.0).epsilon(1e-6));
-  auto tiny = hit({0, 0, -5}, {1e-300, 0, 1});   // a nearly axis-parallel direction
+  auto tiny = hit({0, 0, -5}, {1e-300, 0, 1});  // a nearly axis-parallel direction
   REQUIRE(tiny);
   CHECK(std::isfinite(tiny->first));
   CHECK(tiny->second == Approx(6.0));

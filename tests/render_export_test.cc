@@ -4,20 +4,20 @@
 
 #include <catch2/catch.hpp>
 
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/Importer.hpp>
 #include <opencv2/videoio.hpp>
 
 #include <cmath>
 #include <map>
 
+#include "nerf/camera_refinement.h"
 #include "nerf/float_image.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/hash.h"
 #include "stage_fixtures.h"
-#include "nerf/camera_refinement.h"
 #include "stages/camera_corrections.h"
 #include "stages/render_stage.h"
 
@@ -103,8 +103,10 @@ TEST_CASE("render stage: a camera path file is read back as written, bad ones ar
   CHECK(read[1].world_from_cam.isApprox(camera.world_from_cam));
 
   WriteText(dir / "bad.json", R"({"frames": [{"transform_matrix": [[1, 0, 0, 0], [0, 2, 0, 0], [0, 0, 1, 0]]}]})");
-  CHECK_THROWS_WITH(ReadCameraPath(dir / "bad.json", camera), Catch::Contains("bad.json") && Catch::Contains("orthonormal"));
-  WriteText(dir / "bad.json", R"({"w": -3, "frames": [{"transform_matrix": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]]}]})");
+  CHECK_THROWS_WITH(ReadCameraPath(dir / "bad.json", camera),
+                    Catch::Contains("bad.json") && Catch::Contains("orthonormal"));
+  WriteText(dir / "bad.json",
+            R"({"w": -3, "frames": [{"transform_matrix": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]]}]})");
   CHECK_THROWS_WITH(ReadCameraPath(dir / "bad.json", camera), Catch::Contains("\"w\""));
   WriteText(dir / "bad.json", R"({"cameras": []})");
   CHECK_THROWS_WITH(ReadCameraPath(dir / "bad.json", camera), Catch::Contains("frames"));

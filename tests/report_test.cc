@@ -50,7 +50,8 @@ TEST_CASE("report stage: a self-contained page with every section, drawn by head
 
   CHECK_THAT(html, Catch::Contains("held-out PSNR against training time") && Catch::Contains("<svg"));
   CHECK_THAT(html, Catch::Contains("training loss against training time"));
-  for (const char* stage : {"poses", "train", "render", "export"}) CHECK_THAT(html, Catch::Contains(format("<td>{}</td>", stage)));
+  for (const char* stage : {"poses", "train", "render", "export"})
+    CHECK_THAT(html, Catch::Contains(format("<td>{}</td>", stage)));
   CHECK(Count(html, "data:image/jpeg;base64,") >= 6);  // 2 held-out views: photo, render, error map
   CHECK(Count(html, "data:video/mp4;base64,") == 1);
   CHECK_THAT(html, Catch::Contains("12 cameras in the normalised frame"));
@@ -62,8 +63,9 @@ TEST_CASE("report stage: a self-contained page with every section, drawn by head
   const std::string chromium = Chromium();
   INFO("Chromium is needed for this test: bash scripts/install_deps.sh installs it");
   REQUIRE_FALSE(chromium.empty());
-  const std::vector<std::string> browser = {chromium, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
-                                            "--user-data-dir=" + (setup.dir / "chromium").string()};
+  const std::vector<std::string> browser = {
+      chromium,        "--headless",        "--no-sandbox",
+      "--disable-gpu", "--hide-scrollbars", "--user-data-dir=" + (setup.dir / "chromium").string()};
   std::string dom;
   std::vector<std::string> dump = browser;
   dump.insert(dump.end(), {"--virtual-time-budget=3000", "--dump-dom", "file://" + page.string()});
@@ -74,14 +76,16 @@ TEST_CASE("report stage: a self-contained page with every section, drawn by head
   fs::create_directories(screenshot.parent_path());
   fs::remove(screenshot);
   std::vector<std::string> shot = browser;
-  shot.insert(shot.end(), {"--window-size=1280,3600", "--screenshot=" + screenshot.string(), "file://" + page.string()});
+  shot.insert(shot.end(),
+              {"--window-size=1280,3600", "--screenshot=" + screenshot.string(), "file://" + page.string()});
   std::string output;
   REQUIRE(RunCommand(shot, &output) == 0);
   OIIO::ImageBuf image(screenshot.string());
   REQUIRE(image.read());
   CHECK(image.spec().width == 1280);
   std::vector<uint8_t> rgb(size_t(image.spec().width) * image.spec().height * 3);
-  REQUIRE(image.get_pixels(OIIO::ROI(0, image.spec().width, 0, image.spec().height, 0, 1, 0, 3), OIIO::TypeDesc::UINT8, rgb.data()));
+  REQUIRE(image.get_pixels(OIIO::ROI(0, image.spec().width, 0, image.spec().height, 0, 1, 0, 3), OIIO::TypeDesc::UINT8,
+                           rgb.data()));
   CHECK(PixelsNear(rgb, 0x1f, 0x77, 0xb4) > 300);  // the PSNR curve
   CHECK(PixelsNear(rgb, 0x1f, 0x5f, 0xbf) > 100);  // training cameras in the 3D view
   CHECK(PixelsNear(rgb, 0xe0, 0x70, 0x00) > 20);   // held-out cameras

@@ -1,9 +1,9 @@
 // The stage framework with fake stages that count their runs (issue 2).
 
-#include <catch2/catch.hpp>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
+#include <catch2/catch.hpp>
 
 #include <chrono>
 #include <thread>
@@ -25,7 +25,9 @@ struct Fixture {
   Workspace workspace = Workspace::Open(dir / "ws", true);
 
   Fixture() { fs::create_directories(counters); }
-  std::vector<StageRun> Run(const RunRequest& request = {}) { return MakeFakeRunner(counters).Run(workspace, config, request); }
+  std::vector<StageRun> Run(const RunRequest& request = {}) {
+    return MakeFakeRunner(counters).Run(workspace, config, request);
+  }
   std::vector<StageStatus> Status() { return MakeFakeRunner(counters).Status(workspace, config); }
   std::vector<int> Counts() { return {RunCount(counters, "a"), RunCount(counters, "b"), RunCount(counters, "c")}; }
 };

@@ -147,9 +147,15 @@ TEST_CASE("sfm + poses on a messy folder: every encoding registered, the copy sk
     std::string file;
     OIIO::ImageBuf out;
     switch (i % 8) {
-      case 0: file = format("vue n°{} été.png", i), out.copy(view); break;
-      case 1: file = stem + "_16bit.png", out.copy(view, OIIO::TypeDesc::UINT16); break;
-      case 2: file = stem + ".jpg", out.copy(view); break;
+      case 0:
+        file = format("vue n°{} été.png", i), out.copy(view);
+        break;
+      case 1:
+        file = stem + "_16bit.png", out.copy(view, OIIO::TypeDesc::UINT16);
+        break;
+      case 2:
+        file = stem + ".jpg", out.copy(view);
+        break;
       case 3:  // stored turned 90 degrees counterclockwise, with the EXIF tag that turns it back
         file = stem + "_rotated.jpg", out = OIIO::ImageBufAlgo::rotate270(view);
         out.specmod().attribute("Orientation", 6);
@@ -158,7 +164,9 @@ TEST_CASE("sfm + poses on a messy folder: every encoding registered, the copy sk
         file = stem + "_alpha.png";
         out = OIIO::ImageBufAlgo::channels(view, 4, {0, 1, 2, -1}, {0.0f, 0.0f, 0.0f, 1.0f}, {"R", "G", "B", "A"});
         break;
-      case 5: file = stem + "_grey.jpg", out = OIIO::ImageBufAlgo::channels(view, 1, {1}); break;
+      case 5:
+        file = stem + "_grey.jpg", out = OIIO::ImageBufAlgo::channels(view, 1, {1});
+        break;
       case 6: {
         file = stem + "_cmyk.tif";  // C = 1 - R, M = 1 - G, Y = 1 - B, no black ink
         const OIIO::ImageBuf inks = OIIO::ImageBufAlgo::invert(view);
@@ -166,11 +174,13 @@ TEST_CASE("sfm + poses on a messy folder: every encoding registered, the copy sk
         out.specmod().attribute("tiff:ColorSpace", "CMYK");
         break;
       }
-      default: file = stem + "_small.png", out = OIIO::ImageBufAlgo::resize(view, "", 0, OIIO::ROI(0, 240, 0, 180)); break;
+      default:
+        file = stem + "_small.png", out = OIIO::ImageBufAlgo::resize(view, "", 0, OIIO::ROI(0, 240, 0, 180));
+        break;
     }
     if (i == 0) REQUIRE(view.write((photos / "zz_copy.png").string()));
-    REQUIRE(out.write((photos / file).string(), out.spec().format == OIIO::TypeDesc::UINT16 ? OIIO::TypeDesc::UINT16
-                                                                                          : OIIO::TypeDesc::UINT8));
+    REQUIRE(out.write((photos / file).string(),
+                      out.spec().format == OIIO::TypeDesc::UINT16 ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::UINT8));
     true_pose_of_source[file] = ReadMatrix(frame["transform_matrix"]);
   }
   std::vector<std::string> unrelated;
@@ -178,7 +188,8 @@ TEST_CASE("sfm + poses on a messy folder: every encoding registered, the copy sk
   for (int i = 0; i < 3 && fs::exists(fern); ++i) {
     const OIIO::ImageBuf photo((fern / format("image{:03}.png", i)).string());
     unrelated.push_back(format("fern_{}.png", i));
-    REQUIRE(OIIO::ImageBufAlgo::resize(photo, "", 0, OIIO::ROI(0, 320, 0, 240)).write((photos / unrelated.back()).string()));
+    REQUIRE(OIIO::ImageBufAlgo::resize(photo, "", 0, OIIO::ROI(0, 320, 0, 240))
+                .write((photos / unrelated.back()).string()));
   }
   if (unrelated.empty()) WARN("../shared/data/fern is absent: the unrelated photos are left out of this test");
 

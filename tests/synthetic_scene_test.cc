@@ -1,7 +1,7 @@
 // The synthetic scene: camera conventions and a deterministic, textured rendering.
 
-#include <catch2/catch.hpp>
 #include <OpenImageIO/imagebufalgo.h>
+#include <catch2/catch.hpp>
 
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>

@@ -14,8 +14,7 @@ namespace fs = std::filesystem;
 
 TempDir::TempDir() {
   std::random_device random;
-  path_ = fs::temp_directory_path() /
-          ("p2n_test_" + std::to_string(::getpid()) + "_" + std::to_string(random()));
+  path_ = fs::temp_directory_path() / ("p2n_test_" + std::to_string(::getpid()) + "_" + std::to_string(random()));
   fs::create_directories(path_);
 }
 

@@ -8,8 +8,8 @@
 #include "pipeline/cancel.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
-#include "stages/stages.h"
 #include "stage_fixtures.h"
+#include "stages/stages.h"
 
 namespace p2n::testing {
 namespace fs = std::filesystem;
@@ -89,8 +89,7 @@ TEST_CASE("train stage: with train.appearance on, the report lists each training
   CHECK(appearance["gain_max"].get<double>() < 1.5);
 }
 
-TEST_CASE("train stage: a cancelled run resumes from its checkpoint and finishes the same number of steps",
-          "[train]") {
+TEST_CASE("train stage: a cancelled run resumes from its checkpoint and finishes the same number of steps", "[train]") {
   StageWorkspace setup;
   const TempDir& dir = setup.dir;
   Workspace& workspace = setup.workspace;

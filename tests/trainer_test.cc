@@ -42,7 +42,8 @@ TrainView SphereView(double angle, double height, bool wall = false) {
         const Eigen::Vector3d normal = (ray.origin + (-b - std::sqrt(b * b - c)) * ray.direction).normalized();
         colour = 0.5 * (normal + Eigen::Vector3d::Ones());
       }
-      for (int ch = 0; ch < 3; ++ch) view.pixels[(y * kSize + x) * 3 + ch] = static_cast<uint8_t>(std::lround(255 * colour[ch]));
+      for (int ch = 0; ch < 3; ++ch)
+        view.pixels[(y * kSize + x) * 3 + ch] = static_cast<uint8_t>(std::lround(255 * colour[ch]));
     }
   }
   return view;
@@ -71,7 +72,8 @@ TrainerOptions SmallOptions() {
 
 std::vector<float> Parameters(NerfModel& model) {
   std::vector<float> values;
-  for (const ParamBlock<float>& block : model.field->DenseParams()) values.insert(values.end(), block.data, block.data + block.size);
+  for (const ParamBlock<float>& block : model.field->DenseParams())
+    values.insert(values.end(), block.data, block.data + block.size);
   Encoding<float>* grid = model.field->TrainableEncoding();
   values.insert(values.end(), grid->params(), grid->params() + grid->num_params());
   return values;
@@ -110,7 +112,8 @@ TEST_CASE("training learns a sphere: held-out PSNR rises far above the untrained
   const RenderedView early = RenderView(trainer.model(), data.heldout[1].camera, -1, -1, {});
   CHECK(early.stats.samples_evaluated < all.stats.samples_evaluated);
   double worst = 0;
-  for (size_t i = 0; i < all.rgb.pixels.size(); ++i) worst = std::max(worst, double(std::abs(all.rgb.pixels[i] - early.rgb.pixels[i])));
+  for (size_t i = 0; i < all.rgb.pixels.size(); ++i)
+    worst = std::max(worst, double(std::abs(all.rgb.pixels[i] - early.rgb.pixels[i])));
   CHECK(worst <= 2e-4);
   // One sample per ray and thousands per ray both stay finite.
   RenderOptions coarse, fine;
@@ -214,7 +217,8 @@ TEST_CASE("model.bin renders the same after loading, newer and damaged files are
   CHECK_THROWS_WITH(LoadModel(dir / "other.bin"), Catch::Contains("not a photo2nerf model"));
   // The fuzzer's seeds are valid models (of both fields).
   for (const char* seed : {"tiny_ngp.bin", "tiny_vanilla.bin"}) {
-    const NerfModel tiny = LoadModel(std::filesystem::path(P2N_SOURCE_DIR) / "tests" / "fuzz" / "corpus" / "model" / seed);
+    const NerfModel tiny =
+        LoadModel(std::filesystem::path(P2N_SOURCE_DIR) / "tests" / "fuzz" / "corpus" / "model" / seed);
     CHECK(tiny.occupancy.resolution() == 2);
   }
 }
@@ -271,8 +275,7 @@ TEST_CASE("unbounded scenes: the contraction maps all of space into the field's 
   }
 }
 
-TEST_CASE("a render without a step samples at the scene's default: half the training step when bounded",
-          "[trainer]") {
+TEST_CASE("a render without a step samples at the scene's default: half the training step when bounded", "[trainer]") {
   const TrainingData data = SphereScene();
   Trainer trainer(SmallOptions(), data);
   const PinholeCamera& camera = data.heldout[0].camera;
@@ -372,8 +375,9 @@ TEST_CASE("camera refinement moves perturbed training cameras back towards the t
     double sum = 0;
     int count = 0;
     for (size_t v = 0; v < truth.size(); ++v) {
-      const PinholeCamera camera =
-          corrections.empty() ? data.train[v].camera : CorrectedCamera(data.train[v].camera, &corrections[v * kPoseParams]);
+      const PinholeCamera camera = corrections.empty()
+                                       ? data.train[v].camera
+                                       : CorrectedCamera(data.train[v].camera, &corrections[v * kPoseParams]);
       for (int corner = 0; corner < 8; ++corner) {
         const Eigen::Vector3d point(corner & 1 ? 0.5 : -0.5, corner & 2 ? 0.5 : -0.5, corner & 4 ? 0.5 : -0.5);
         sum += (Project(camera, point) - Project(truth[v], point)).norm();
@@ -392,8 +396,8 @@ TEST_CASE("camera refinement moves perturbed training cameras back towards the t
     pixels[refine] = reprojection_error(trainer.camera_corrections());
     CHECK(trainer.camera_corrections().size() == (refine ? data.train.size() * kPoseParams : 0));
   }
-  INFO("reprojection error " << pixels[0] << " px as given, " << pixels[1] << " px refined; held-out PSNR "
-                             << psnr[0] << " dB fixed, " << psnr[1] << " dB refined");
+  INFO("reprojection error " << pixels[0] << " px as given, " << pixels[1] << " px refined; held-out PSNR " << psnr[0]
+                             << " dB fixed, " << psnr[1] << " dB refined");
   CHECK(pixels[1] < 0.5 * pixels[0]);
   CHECK(psnr[1] > psnr[0] + 1);
 }

@@ -84,8 +84,7 @@ TEST_CASE("densities 0..1e8 and step sizes 1e-9..1e3 give finite results in [0, 
   CHECK(Composite(ray.segments(), kWhite, 0.0).rgb[1] == 1.0);
 }
 
-TEST_CASE("a thin stiff slab (sigma 1e6) composites exactly at every step size, explicit Euler does not",
-          "[render]") {
+TEST_CASE("a thin stiff slab (sigma 1e6) composites exactly at every step size, explicit Euler does not", "[render]") {
   // The slab: density 1e6 over [0.5 - 0.5e-6, 0.5 + 0.5e-6) (optical depth 1), colour (1, 0, 0); black behind.
   const double slab_sigma = 1e6, slab_begin = 0.5 - 0.5e-6, slab_end = 0.5 + 0.5e-6;
   const double expected = 1 - std::exp(-1.0);
@@ -157,7 +156,8 @@ TEST_CASE("volume rendering gradients match finite differences", "[render][gradi
   };
   const CompositeResult<double> forward = Composite(ray.segments(), background, 0.0);
   std::vector<double> d_sigma(12), d_segment_rgb(36);
-  CompositeBackward(ray.segments(), background, forward, d_rgb, d_opacity, d_depth, d_sigma.data(), d_segment_rgb.data());
+  CompositeBackward(ray.segments(), background, forward, d_rgb, d_opacity, d_depth, d_sigma.data(),
+                    d_segment_rgb.data());
   const double h = 1e-6;
   for (size_t i = 0; i < 12; ++i) {
     Ray plus = ray, minus = ray;

@@ -2,11 +2,11 @@
 // Helpers for the libFuzzer targets: inputs that readers take as files are written to a per-process folder
 // in /dev/shm (memory), and only the typed errors a reader may throw for bad input are accepted.
 
+#include <unistd.h>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <unistd.h>
 
 namespace p2n::fuzz {
 
@@ -20,8 +20,8 @@ inline std::filesystem::path ScratchDir() {
 }
 
 inline void WriteBytes(const std::filesystem::path& path, const uint8_t* data, size_t size) {
-  std::ofstream(path, std::ios::binary | std::ios::trunc).write(reinterpret_cast<const char*>(data),
-                                                                 static_cast<std::streamsize>(size));
+  std::ofstream(path, std::ios::binary | std::ios::trunc)
+      .write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
 }
 
 // Splits the input into `parts` pieces at the positions given by its first bytes.

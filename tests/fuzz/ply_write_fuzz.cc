@@ -78,11 +78,11 @@ void MeshRoundTrip(const std::string& bytes, const std::vector<std::string>& com
   std::ifstream in(path, std::ios::binary);
   const std::string file((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const auto [header, body] = HeaderAndBody(file);
-  const std::string expected =
-      "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(count) +
-      "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
-      "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face " + std::to_string(count) +
-      "\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string expected = "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(count) +
+                               "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty "
+                               "float ny\nproperty float nz\n"
+                               "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face " +
+                               std::to_string(count) + "\nproperty list uchar int vertex_indices\nend_header\n";
   if (header != expected) Fail("header");
   if (body.size() != count * (kVertex + kFace)) Fail("body size");
   for (size_t i = 0; i < count; ++i) {
