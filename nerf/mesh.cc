@@ -21,36 +21,6 @@ using Matrix = RadianceField<float>::Matrix;
 
 constexpr size_t kBatch = 4096;
 
-}  // namespace
-
-std::vector<float> DensitiesAt(const NerfModel& model, const std::vector<Eigen::Vector3d>& points) {
-  std::vector<float> density(points.size(), 0.0f);
-  tbb::parallel_for(size_t{0}, (points.size() + kBatch - 1) / kBatch, [&](size_t batch) {
-    FlushDenormalsOnThisThread();
-    const size_t first = batch * kBatch, count = std::min(points.size(), first + kBatch) - first;
-    Matrix positions(3, count), out;
-    for (size_t i = 0; i < count; ++i) positions.col(i) = FieldPoint(model, points[first + i]).cast<float>();
-    model.field->Density(positions, &out);
-    for (size_t i = 0; i < count; ++i) density[first + i] = out(0, i);
-  });
-  return density;
-}
-
-float SurfaceThreshold(const NerfModel& model, const std::vector<Eigen::Vector3d>& surface_points) {
-  std::vector<float> density = DensitiesAt(model, surface_points);
-  if (density.empty()) return 0;
-  std::nth_element(density.begin(), density.begin() + density.size() / 2, density.end());
-  return 0.5f * density[density.size() / 2];
-}
-
-void MeshOptions::Check() const {
-  CheckField(resolution >= 8 && resolution <= 1024, "mesh", "resolution", "be 8..1024", resolution);
-  CheckField(density_threshold > 0 && std::isfinite(density_threshold), "mesh", "density_threshold", "be positive",
-             density_threshold);
-}
-
-namespace {
-
 // The centre of lattice cell (i, j, k) of n per side of the box [-1, 1]^3 (fractional indices interpolate).
 Eigen::Vector3d LatticePoint(int n, double i, double j, double k) {
   const double spacing = 2.0 / n;
@@ -156,6 +126,32 @@ void Shade(const NerfModel& model, double h, Mesh* mesh) {
 }
 
 }  // namespace
+
+std::vector<float> DensitiesAt(const NerfModel& model, const std::vector<Eigen::Vector3d>& points) {
+  std::vector<float> density(points.size(), 0.0f);
+  tbb::parallel_for(size_t{0}, (points.size() + kBatch - 1) / kBatch, [&](size_t batch) {
+    FlushDenormalsOnThisThread();
+    const size_t first = batch * kBatch, count = std::min(points.size(), first + kBatch) - first;
+    Matrix positions(3, count), out;
+    for (size_t i = 0; i < count; ++i) positions.col(i) = FieldPoint(model, points[first + i]).cast<float>();
+    model.field->Density(positions, &out);
+    for (size_t i = 0; i < count; ++i) density[first + i] = out(0, i);
+  });
+  return density;
+}
+
+float SurfaceThreshold(const NerfModel& model, const std::vector<Eigen::Vector3d>& surface_points) {
+  std::vector<float> density = DensitiesAt(model, surface_points);
+  if (density.empty()) return 0;
+  std::nth_element(density.begin(), density.begin() + density.size() / 2, density.end());
+  return 0.5f * density[density.size() / 2];
+}
+
+void MeshOptions::Check() const {
+  CheckField(resolution >= 8 && resolution <= 1024, "mesh", "resolution", "be 8..1024", resolution);
+  CheckField(density_threshold > 0 && std::isfinite(density_threshold), "mesh", "density_threshold", "be positive",
+             density_threshold);
+}
 
 Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options,
                  const std::function<void(size_t)>& on_slices_done) {

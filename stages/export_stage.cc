@@ -155,7 +155,10 @@ MeshOptions ChooseMeshOptions(const NerfModel& model, const ExportOptions& optio
   mesh.density_threshold = static_cast<float>(options.threshold);
   if (options.threshold > 0) return mesh;
   std::vector<Eigen::Vector3d> surface;
-  for (const ColouredPoint& point : depth_points) surface.push_back(point.position.cast<double>());
+  for (const ColouredPoint& point : depth_points) {
+    // Only what the mesh covers: beyond the box an unbounded field's densities are in contracted units.
+    if (point.position.cwiseAbs().maxCoeff() <= 1) surface.push_back(point.position.cast<double>());
+  }
   const float threshold = SurfaceThreshold(model, surface);
   mesh.density_threshold = threshold > 0 ? threshold : kFallbackThreshold;
   return mesh;
