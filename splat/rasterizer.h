@@ -1,0 +1,72 @@
+#pragma once
+// The tile-based rasterizer of 3D Gaussian Splatting on the CPU, and its backward pass in closed form.
+// Forward: project every Gaussian (projection.h), list it in each 16x16 tile its 3-sigma square touches, sort
+// each tile's list by depth, and blend front to back per pixel: alpha = min(0.99, opacity · exp(-½ dᵀ Σ₂⁻¹ d)),
+// skipping alpha < 1/255 and stopping before the transmittance falls below 1e-4; the background fills what
+// remains. Backward: each pixel walks its list again back to front from its last contributor, recovering the
+// transmittance by division. Tiles are TBB tasks.
+
+#include <array>
+#include <vector>
+
+#include "nerf/camera.h"
+#include "splat/gaussians.h"
+#include "splat/projection.h"
+
+namespace p2n {
+
+inline constexpr int kSplatTileSize = 16;
+
+struct RasterOptions {
+  ProjectionOptions projection;
+  std::array<double, 3> background = {0, 0, 0};
+};
+
+template <typename T>
+class Rasterizer {
+ public:
+  // Renders `gaussians` seen by `camera`. Backward() uses what it keeps: `gaussians` must stay unchanged and
+  // alive until then.
+  void Forward(const Gaussians<T>& gaussians, const PinholeCamera& camera, const RasterOptions& options);
+
+  int width() const { return camera_.width; }
+  int height() const { return camera_.height; }
+  // RGB per pixel, row-major, 3 values each.
+  const std::vector<T>& rgb() const { return rgb_; }
+  // What the Gaussians leave of the background per pixel (1 - the pixel's opacity).
+  const std::vector<T>& transmittance() const { return transmittance_; }
+  // Gaussians drawn (in front of the near plane, finite), and tile-list entries.
+  size_t drawn() const { return drawn_; }
+  size_t tile_entries() const { return entries_.size(); }
+
+  // Adds to `grads` (shaped like the Gaussians) the gradient of a loss whose gradient with respect to rgb() is
+  // `d_rgb`. With `screen_grads`, adds to it the gradient with respect to each Gaussian's 2D mean (2 per
+  // Gaussian, pixels), which densification reads.
+  void Backward(const std::vector<T>& d_rgb, Gaussians<T>* grads, std::vector<T>* screen_grads = nullptr) const;
+
+ private:
+  struct Rect {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // tiles [x0, x1) x [y0, y1); empty when not drawn
+  };
+  void Project();
+  void BinAndSort();
+  void Blend();
+
+  const Gaussians<T>* gaussians_ = nullptr;
+  RasterOptions options_;
+  SplatCamera<T> camera_;
+  int tiles_x_ = 0, tiles_y_ = 0;
+  std::vector<Splat2D<T>> splats_;
+  std::vector<T> depths_;
+  std::vector<Rect> rects_;
+  size_t drawn_ = 0;
+  std::vector<size_t> tile_begin_;  // tiles_x · tiles_y + 1 offsets into entries_
+  std::vector<uint32_t> entries_;   // Gaussian indices, each tile's sorted front to back
+  std::vector<T> rgb_, transmittance_;
+  std::vector<uint32_t> contributors_;  // per pixel: entries of its tile up to and including its last blended
+};
+
+extern template class Rasterizer<float>;
+extern template class Rasterizer<double>;
+
+}  // namespace p2n

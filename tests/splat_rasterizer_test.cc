@@ -1,0 +1,233 @@
+// The splat rasterizer: analytic values, gradients against central finite differences in double precision, and
+// finite results for degenerate Gaussians.
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "splat/rasterizer.h"
+
+namespace p2n::testing {
+namespace {
+
+// A camera at `position` looking at the origin, `width` x `height` pixels, focal length `focal` pixels.
+PinholeCamera LookingAtOrigin(int width, int height, double focal, const Eigen::Vector3d& position) {
+  PinholeCamera camera;
+  camera.width = width;
+  camera.height = height;
+  camera.fx = camera.fy = focal;
+  camera.cx = width / 2.0;
+  camera.cy = height / 2.0;
+  camera.world_from_cam = LookAtPose(position, Eigen::Vector3d::Zero());
+  return camera;
+}
+
+// `count` Gaussians near the origin with random shapes, rotations, opacities and colours of degree `degree`.
+Gaussians<double> RandomGaussians(int count, int degree, uint64_t seed) {
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  Gaussians<double> g;
+  g.sh_degree = degree;
+  g.Resize(count);
+  for (int i = 0; i < count; ++i) {
+    for (int a = 0; a < 3; ++a) g.positions[3 * i + a] = 0.5 * uniform(random);
+    for (int a = 0; a < 3; ++a) g.log_scales[3 * i + a] = std::log(0.15) + 0.4 * uniform(random);
+    for (int a = 0; a < 4; ++a) g.rotations[4 * i + a] = uniform(random) + (a == 0 ? 1.5 : 0);
+    g.opacity_logits[i] = 1.5 * uniform(random);
+    for (int k = 0; k < 3 * g.coefficients(); ++k)
+      g.sh[3 * g.coefficients() * i + k] = (k < 3 ? 1 : 0.2) * uniform(random);
+  }
+  return g;
+}
+
+// L = Σ weight · rgb.
+double Loss(const Gaussians<double>& g, const PinholeCamera& camera, const RasterOptions& options,
+            const std::vector<double>& weights) {
+  Rasterizer<double> rasterizer;
+  rasterizer.Forward(g, camera, options);
+  double loss = 0;
+  for (size_t k = 0; k < weights.size(); ++k) loss += weights[k] * rasterizer.rgb()[k];
+  return loss;
+}
+
+}  // namespace
+
+TEST_CASE("A splat's centre pixel blends its colour by its opacity over the background", "[splat]") {
+  const PinholeCamera camera = LookingAtOrigin(32, 32, 40, {0, 0, 4});
+  Gaussians<double> g;
+  g.sh_degree = 0;
+  g.Resize(1);
+  g.rotations[0] = 1;
+  const double sigma = 0.05;
+  for (int a = 0; a < 3; ++a) g.log_scales[a] = std::log(sigma);
+  g.opacity_logits[0] = Logit(0.6);
+  const double colour[3] = {0.9, 0.2, 0.4};
+  for (int c = 0; c < 3; ++c) g.sh[c] = (colour[c] - 0.5) / kShC0;
+  RasterOptions options;
+  options.background = {0.1, 0.3, 0.5};
+  Rasterizer<double> rasterizer;
+  rasterizer.Forward(g, camera, options);
+
+  // The mean projects to (16, 16), a pixel corner; pixel (16, 16)'s centre is half a pixel off in x and y.
+  // The 2D variance is (sigma · focal / depth)² + 0.3 in each axis.
+  const double variance = std::pow(sigma * 40 / 4, 2) + 0.3;
+  const double alpha = 0.6 * std::exp(-0.5 * (0.25 + 0.25) / variance);
+  const size_t pixel = 16 * 32 + 16;
+  for (int c = 0; c < 3; ++c) {
+    CHECK(rasterizer.rgb()[3 * pixel + c] == Approx(alpha * colour[c] + (1 - alpha) * options.background[c]));
+  }
+  CHECK(rasterizer.transmittance()[pixel] == Approx(1 - alpha));
+  CHECK(rasterizer.transmittance()[0] == 1.0);  // a corner, 16 pixels away: skipped as alpha < 1/255
+  CHECK(rasterizer.drawn() == 1);
+}
+
+TEST_CASE("Opaque splats hide what lies behind them, whatever their order in memory", "[splat]") {
+  const PinholeCamera camera = LookingAtOrigin(16, 16, 20, {0, 0, 4});
+  Gaussians<double> g;
+  g.sh_degree = 0;
+  g.Resize(2);
+  for (int i = 0; i < 2; ++i) {
+    g.rotations[4 * i] = 1;
+    for (int a = 0; a < 3; ++a) g.log_scales[3 * i + a] = std::log(1.0);
+    g.opacity_logits[i] = 20;  // alpha capped at 0.99
+  }
+  g.positions[2] = -1;  // the first is farther from the camera at z = 4
+  g.positions[5] = 1;
+  for (int c = 0; c < 3; ++c) g.sh[c] = (0.0 - 0.5) / kShC0, g.sh[3 + c] = (1.0 - 0.5) / kShC0;
+  Rasterizer<double> rasterizer;
+  rasterizer.Forward(g, camera, RasterOptions{});
+  // Front: 0.99 of white; behind it 0.99 of the remaining 0.01 is black.
+  CHECK(rasterizer.rgb()[3 * (8 * 16 + 8)] == Approx(0.99).epsilon(1e-3));
+}
+
+TEST_CASE("Projection gradients match finite differences", "[splat][gradients]") {
+  const PinholeCamera camera = LookingAtOrigin(64, 48, 50, {0.3, -0.2, 3});
+  const SplatCamera<double> view = SplatCamera<double>::From(camera);
+  const ProjectionOptions options;
+  Gaussians<double> g = RandomGaussians(4, 3, 11);
+  std::mt19937_64 random(5);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  for (size_t i = 0; i < g.size(); ++i) {
+    Splat2D<double> weight;
+    weight.x = uniform(random), weight.y = uniform(random), weight.conic_a = uniform(random);
+    weight.conic_b = uniform(random), weight.conic_c = uniform(random), weight.opacity = uniform(random);
+    for (double& c : weight.rgb) c = uniform(random);
+    const auto loss = [&] {
+      Splat2D<double> s;
+      double depth, radius;
+      REQUIRE(ProjectGaussian(g, i, view, options, &s, &depth, &radius));
+      return weight.x * s.x + weight.y * s.y + weight.conic_a * s.conic_a + weight.conic_b * s.conic_b +
+             weight.conic_c * s.conic_c + weight.opacity * s.opacity + weight.rgb[0] * s.rgb[0] +
+             weight.rgb[1] * s.rgb[1] + weight.rgb[2] * s.rgb[2];
+    };
+    Gaussians<double> grads = g;
+    grads.SetZero();
+    ProjectGaussianBackward(g, i, view, options, weight, &grads);
+    std::vector<std::vector<double>*> params, analytic;
+    g.ForEachArray([&](std::vector<double>& v, int) { params.push_back(&v); });
+    grads.ForEachArray([&](std::vector<double>& v, int) { analytic.push_back(&v); });
+    for (size_t a = 0; a < params.size(); ++a) {
+      for (size_t k = 0; k < params[a]->size(); ++k) {
+        double& value = (*params[a])[k];
+        const double saved = value, h = 1e-6;
+        value = saved + h;
+        const double plus = loss();
+        value = saved - h;
+        const double minus = loss();
+        value = saved;
+        const double numeric = (plus - minus) / (2 * h);
+        INFO("gaussian " << i << " array " << a << " value " << k);
+        CHECK((*analytic[a])[k] == Approx(numeric).margin(1e-6).epsilon(1e-5));
+      }
+    }
+  }
+}
+
+TEST_CASE("Rasterizer gradients match finite differences", "[splat][gradients]") {
+  // Three tiles by two, a background, overlapping Gaussians of degree 3 seen off-centre.
+  const PinholeCamera camera = LookingAtOrigin(40, 30, 30, {0.4, 0.3, 3});
+  RasterOptions options;
+  options.background = {0.2, 0.5, 0.7};
+  Gaussians<double> g = RandomGaussians(12, 3, 3);
+  std::mt19937_64 random(9);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  std::vector<double> weights(40 * 30 * 3);
+  for (double& w : weights) w = uniform(random);
+
+  Rasterizer<double> rasterizer;
+  rasterizer.Forward(g, camera, options);
+  REQUIRE(rasterizer.drawn() == g.size());
+  Gaussians<double> grads = g;
+  grads.SetZero();
+  rasterizer.Backward(weights, &grads);
+
+  std::vector<std::vector<double>*> params, analytic;
+  g.ForEachArray([&](std::vector<double>& v, int) { params.push_back(&v); });
+  grads.ForEachArray([&](std::vector<double>& v, int) { analytic.push_back(&v); });
+  for (size_t a = 0; a < params.size(); ++a) {
+    for (size_t k = 0; k < params[a]->size(); ++k) {
+      double& value = (*params[a])[k];
+      const double saved = value, h = 1e-6;
+      value = saved + h;
+      const double plus = Loss(g, camera, options, weights);
+      value = saved - h;
+      const double minus = Loss(g, camera, options, weights);
+      value = saved;
+      const double numeric = (plus - minus) / (2 * h);
+      INFO("array " << a << " value " << k);
+      CHECK((*analytic[a])[k] == Approx(numeric).margin(1e-5).epsilon(1e-4));
+    }
+  }
+}
+
+TEST_CASE("Degenerate splats render and differentiate to finite values", "[splat]") {
+  const PinholeCamera camera = LookingAtOrigin(32, 32, 30, {0, 0, 3});
+  Gaussians<double> g = RandomGaussians(8, 3, 21);
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  for (int a = 0; a < 3; ++a) g.log_scales[a] = -inf;      // zero scale: a point, dilated to a pixel
+  for (int a = 0; a < 3; ++a) g.log_scales[3 + a] = 60;    // enormous
+  g.positions[3 * 2 + 2] = 3;                              // on the camera's plane
+  g.positions[3 * 3 + 2] = 10;                             // behind the camera
+  for (int a = 0; a < 4; ++a) g.rotations[4 * 4 + a] = 0;  // no rotation: drawn unrotated
+  g.rotations[4 * 5 + 1] = nan;                            // not a number
+  g.positions[3 * 6] = inf;
+  g.log_scales[3 * 7] = 5, g.log_scales[3 * 7 + 1] = -30;  // a needle: its covariance is nearly singular
+  Rasterizer<double> rasterizer;
+  rasterizer.Forward(g, camera, RasterOptions{});
+  for (const double v : rasterizer.rgb()) REQUIRE(std::isfinite(v));
+  std::vector<double> ones(rasterizer.rgb().size(), 1.0);
+  Gaussians<double> grads = g;
+  grads.SetZero();
+  rasterizer.Backward(ones, &grads);
+  grads.ForEachArray([](const std::vector<double>& values, int) {
+    for (const double v : values) REQUIRE(std::isfinite(v));
+  });
+  CHECK(rasterizer.drawn() < g.size());  // behind, on the plane, infinite: not drawn
+}
+
+TEST_CASE("A crop's camera renders the same pixels as the full view", "[splat]") {
+  const PinholeCamera full = LookingAtOrigin(48, 40, 45, {0.2, 0.1, 3});
+  PinholeCamera crop = full;
+  crop.width = 20, crop.height = 14;
+  // Pixels (16..35, 16..29) of the full view: the crop's tiles are the full view's (a splat's tail beyond its
+  // 3-sigma square is drawn where its square's tiles reach, so unaligned crops differ by up to 1/255).
+  crop.cx -= 16, crop.cy -= 16;
+  const Gaussians<double> g = RandomGaussians(10, 1, 8);
+  Rasterizer<double> a, b;
+  a.Forward(g, full, RasterOptions{});
+  b.Forward(g, crop, RasterOptions{});
+  double worst = 0;
+  for (int y = 0; y < crop.height; ++y) {
+    for (int x = 0; x < crop.width; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        worst = std::max(
+            worst, std::abs(b.rgb()[3 * (y * crop.width + x) + c] - a.rgb()[3 * ((y + 16) * full.width + x + 16) + c]));
+      }
+    }
+  }
+  CHECK(worst < 1e-9);
+}
+
+}  // namespace p2n::testing
