@@ -54,8 +54,9 @@ void PrintRunSummary(const Workspace& workspace, const Runner& stages, const std
                      json["ssim"].get<double>(), json["views"].size()));
     }
   }
-  const std::array<std::array<const char*, 3>, 5> results = {{{"report", "report.html", "report"},
+  const std::array<std::array<const char*, 3>, 6> results = {{{"report", "report.html", "report"},
                                                               {"render", "video.mp4", "video"},
+                                                              {"splat", "splats.ply", "splats"},
                                                               {"export", "mesh.ply", "mesh"},
                                                               {"export", "points.ply", "point cloud"},
                                                               {"train", "model.bin", "model"}}};

@@ -122,6 +122,21 @@ void Adam<T>::StepSparse(T* params, T* grads, TouchMarks* marks) {
 }
 
 template <typename T>
+void Adam<T>::Remap(const std::vector<int64_t>& sources) {
+  const size_t n = entry_size_;
+  std::vector<T> first(sources.size() * n, T(0)), second(sources.size() * n, T(0));
+  for (size_t k = 0; k < sources.size(); ++k) {
+    if (sources[k] < 0) continue;
+    if (static_cast<size_t>(sources[k]) >= entry_steps_.size()) throw std::out_of_range("Adam::Remap: no such entry");
+    std::copy_n(first_moment_.begin() + sources[k] * n, n, first.begin() + k * n);
+    std::copy_n(second_moment_.begin() + sources[k] * n, n, second.begin() + k * n);
+  }
+  first_moment_ = std::move(first);
+  second_moment_ = std::move(second);
+  entry_steps_.assign(sources.size(), 0);
+}
+
+template <typename T>
 void Adam<T>::Save(BinaryWriter* writer) const {
   writer->PutVector(first_moment_);
   writer->PutVector(second_moment_);

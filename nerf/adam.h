@@ -40,6 +40,10 @@ class Adam {
   // like `params`. With `marks` (one entry of them per Adam entry), only the marked groups are read.
   void StepSparse(T* params, T* grads, TouchMarks* marks = nullptr);
 
+  // Rebuilds the moments for a new list of entries: entry k takes those of old entry sources[k], or zeros when it
+  // is -1 (entries added or removed between steps, as splat densification does). Dense use only.
+  void Remap(const std::vector<int64_t>& sources);
+
   // The moments and step counts, for checkpoints (Load() checks the sizes).
   void Save(BinaryWriter* writer) const;
   void Load(BinaryReader* reader);

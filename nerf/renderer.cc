@@ -171,7 +171,8 @@ void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std:
     for (size_t r = 0; r < count; ++r) {
       const CompositeResult<float> result = accumulators[r].Finish(model.background.data());
       std::copy(result.rgb, result.rgb + 3, rgb + 3 * (first + r));
-      depth[first + r] = result.depth;
+      // RenderView divides by the opacity: the median depth is passed as if it were an expected one.
+      depth[first + r] = options.median_depth ? std::max(result.median_depth, 0.0f) * result.opacity : result.depth;
       opacity[first + r] = result.opacity;
     }
     marched += chunk_marched;

@@ -20,6 +20,9 @@ struct RenderOptions {
   double step_scale = 0;
   float min_transmittance = 1e-4f;  // rays stop below it (0: never)
   size_t max_samples = 4096;        // per ray
+  // Depth images hold the median depth (where the opacity first reaches one half; robust to haze in front of a
+  // surface and to the mix at its edges) instead of the expected one.
+  bool median_depth = false;
   // Called (from any worker thread) with the number of rays just finished; e.g. to advance a progress bar.
   std::function<void(size_t)> on_rays_done;
 
@@ -58,7 +61,8 @@ double DefaultStepScale(const NerfModel& model);
 double SamplingDistance(const NerfModel& model, const Ray& ray, double t);
 
 // Renders world rays (unit directions) between their near and far distances (world units; negative: the whole
-// scene). Writes rgb (3 per ray), depth (world units, weighted by opacity) and opacity.
+// scene). Writes rgb (3 per ray), depth (world units, weighted by opacity; the median depth times the opacity
+// with options.median_depth, 0 where the opacity never reaches a half) and opacity.
 void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std::vector<Eigen::Vector2d>& near_far,
                 const RenderOptions& options, float* rgb, float* depth, float* opacity, RenderStats* stats);
 

@@ -12,6 +12,7 @@ void CompositeAccumulator<T>::Add(T sigma, const T* rgb, T t, T delta) {
   const T weight = std::exp(log_transmittance_) * -std::expm1(-s);
   for (int c = 0; c < 3; ++c) result_.rgb[c] += weight * rgb[c];
   result_.depth += weight * t;
+  if (result_.median_depth < 0 && log_transmittance_ - s <= -std::log(T(2))) result_.median_depth = t;
   log_transmittance_ -= s;
   ++result_.used;
 }

@@ -37,6 +37,7 @@ struct CompositeResult {
   T rgb[3] = {0, 0, 0};
   T opacity = 0;        // 1 - final transmittance
   T depth = 0;          // expected distance of the samples, sum w_i t_i (not normalised by opacity)
+  T median_depth = -1;  // distance of the sample where the opacity first reaches one half; -1: it never does
   size_t used = 0;      // samples before early termination
   T transmittance = 1;  // after the used samples
 };

@@ -2,7 +2,10 @@
 // A cloud of 3D Gaussians (3D Gaussian Splatting, Kerbl et al. 2023), one array per parameter so that each has
 // its own Adam and a gradient of the same shape. The parameters are those of the standard splat PLY: a mean, a
 // per-axis natural-log scale, a rotation quaternion (w, x, y, z; normalised where it is used), an opacity logit
-// and the colour's spherical-harmonics coefficients (RGB per coefficient; colour = 0.5 + Σ coefficient · basis).
+// and the colour's spherical-harmonics coefficients (RGB per coefficient; colour = 0.5 + Σ coefficient · basis),
+// the degree-0 one apart from the others (they learn at different rates).
+
+#include <Eigen/Core>
 
 #include <cstddef>
 #include <vector>
@@ -21,7 +24,8 @@ struct Gaussians {
   std::vector<T> log_scales;      // 3
   std::vector<T> rotations;       // 4: w, x, y, z
   std::vector<T> opacity_logits;  // 1
-  std::vector<T> sh;              // 3 · ShCoefficients(sh_degree): coefficient k's R, G, B, then k + 1's
+  std::vector<T> sh_dc;           // 3: the degree-0 coefficient's R, G, B
+  std::vector<T> sh_rest;         // 3 · (ShCoefficients(sh_degree) - 1): coefficient 1's R, G, B, then 2's, ...
 
   size_t size() const { return opacity_logits.size(); }
   int coefficients() const { return ShCoefficients(sh_degree); }
@@ -51,9 +55,15 @@ struct Gaussians {
     visit(self.log_scales, 3);
     visit(self.rotations, 4);
     visit(self.opacity_logits, 1);
-    visit(self.sh, 3 * self.coefficients());
+    visit(self.sh_dc, 3);
+    visit(self.sh_rest, 3 * (self.coefficients() - 1));
   }
 };
+
+// Moves Gaussians by the similarity x -> linear x + translation (linear: a rotation times a positive scale):
+// means, scales and rotations. Higher SH coefficients would need turning too: std::invalid_argument unless they
+// are all zero (use it on freshly placed Gaussians), as when `linear` is not a similarity of positive determinant.
+void ApplySimilarity(const Eigen::Matrix3d& linear, const Eigen::Vector3d& translation, Gaussians<float>* gaussians);
 
 template <typename T>
 T Sigmoid(T x);

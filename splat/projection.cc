@@ -126,10 +126,10 @@ bool ComputeForward(const Gaussians<T>& g, size_t i, const SplatCamera<T>& camer
   if (f->distance > 0) f->direction /= f->distance;
   SphericalHarmonics(f->direction[0], f->direction[1], f->direction[2], f->basis);
   const int count = ShCoefficients(std::min(options.sh_degree, g.sh_degree));
-  const T* sh = &g.sh[i * 3 * g.coefficients()];
+  const T* rest = &g.sh_rest[i * 3 * (g.coefficients() - 1)];
   for (int c = 0; c < 3; ++c) {
-    T value = T(0.5);
-    for (int k = 0; k < count; ++k) value += f->basis[k] * sh[3 * k + c];
+    T value = T(0.5) + f->basis[0] * g.sh_dc[3 * i + c];
+    for (int k = 1; k < count; ++k) value += f->basis[k] * rest[3 * (k - 1) + c];
     f->rgb[c] = value;
   }
   return true;
@@ -192,14 +192,14 @@ void ProjectGaussianBackward(const Gaussians<T>& gaussians, size_t i, const Spla
 
   // Colour: coefficients and the viewing direction.
   const int count = ShCoefficients(std::min(options.sh_degree, gaussians.sh_degree));
-  const T* sh = &gaussians.sh[i * 3 * gaussians.coefficients()];
-  T* d_sh = &grads->sh[i * 3 * gaussians.coefficients()];
+  const size_t rest = i * 3 * (gaussians.coefficients() - 1);
   T d_basis[kSphericalHarmonicsCount] = {};
   for (int c = 0; c < 3; ++c) {
     if (f.rgb[c] < 0) continue;
-    for (int k = 0; k < count; ++k) {
-      d_sh[3 * k + c] += f.basis[k] * grad.rgb[c];
-      d_basis[k] += sh[3 * k + c] * grad.rgb[c];
+    grads->sh_dc[3 * i + c] += f.basis[0] * grad.rgb[c];
+    for (int k = 1; k < count; ++k) {
+      grads->sh_rest[rest + 3 * (k - 1) + c] += f.basis[k] * grad.rgb[c];
+      d_basis[k] += gaussians.sh_rest[rest + 3 * (k - 1) + c] * grad.rgb[c];
     }
   }
   if (f.distance > 0 && count > 1) {

@@ -1,11 +1,17 @@
 #include "splat/rasterizer.h"
 
+#include "splat/lanes.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
+#include <type_traits>
 
 namespace p2n {
 namespace {
@@ -13,13 +19,138 @@ namespace {
 constexpr double kMaxAlpha = 0.99;
 constexpr double kMinAlpha = 1.0 / 255.0;
 constexpr double kMinTransmittance = 1e-4;
-
-// The Gaussian's weight exponent at pixel centre (px, py): -½ dᵀ Σ₂⁻¹ d with d = mean - pixel.
+using lanes::kLanes;  // a tile's row of pixels is blended at once, one lane per pixel
+static_assert(kLanes == kSplatTileSize);
 template <typename T>
-T Power(const Splat2D<T>& s, T px, T py, T* dx, T* dy) {
-  *dx = s.x - px;
-  *dy = s.y - py;
-  return T(-0.5) * (s.conic_a * *dx * *dx + s.conic_c * *dy * *dy) - s.conic_b * *dx * *dy;
+using V = lanes::V<T>;
+template <typename T>
+using M = lanes::M<T>;
+template <typename T>
+using Lane = std::remove_reference_t<decltype(M<T>{}[0])>;  // a mask lane's integer type
+
+// A tile's splats, front to back, copied together for the row loops.
+template <typename T>
+using TileSplats = std::vector<Splat2D<T>>;
+
+template <typename T>
+void Gather(const std::vector<Splat2D<T>>& splats, const uint32_t* ids, size_t n, TileSplats<T>* tile) {
+  tile->resize(n);
+  for (size_t e = 0; e < n; ++e) (*tile)[e] = splats[ids[e]];
+}
+
+// A splat's offset, weight and alpha at the pixel centres (px[lane], py); the lanes where it is blended (before
+// the transmittance test).
+template <typename T>
+struct Footprint {
+  V<T> dx, dy, weight, raw_alpha, alpha;
+  M<T> drawn;
+
+  Footprint(const Splat2D<T>& s, V<T> px, T py) {
+    dx = s.x - px;
+    dy = lanes::Splat(s.y - py);
+    const V<T> power = T(-0.5) * (s.conic_a * dx * dx + s.conic_c * dy * dy) - s.conic_b * dx * dy;
+    weight = lanes::ExpNonPositive<T>(lanes::Min<T>(power, V<T>{}));
+    raw_alpha = s.opacity * weight;
+    alpha = lanes::Min<T>(raw_alpha, lanes::Splat(T(kMaxAlpha)));
+    drawn = (power <= 0) & (alpha >= T(kMinAlpha));
+  }
+};
+
+// A row's blend, front to back.
+template <typename T>
+struct RowForward {
+  V<T> transmittance, red, green, blue;
+  M<T> active;  // until the lane's transmittance would fall below the threshold (never beyond the image)
+  M<T> count;   // splats up to and including the last blended
+};
+
+// Blends the tile's splats front to back into the row of pixels (x0 + lane, py), the first `lanes` of them.
+template <typename T>
+void BlendRow(const TileSplats<T>& splats, T x0, T py, int lanes, RowForward<T>* row) {
+  const V<T> px = x0 + lanes::Iota<T>();
+  row->transmittance = lanes::Splat(T(1));
+  row->red = row->green = row->blue = V<T>{};
+  row->active = lanes::Iota<T>() < T(lanes);
+  row->count = M<T>{};
+  for (size_t e = 0; e < splats.size(); ++e) {
+    const Splat2D<T>& s = splats[e];
+    const Footprint<T> f(s, px, py);
+    const M<T> valid = f.drawn & row->active;
+    const V<T> next = row->transmittance * (1 - f.alpha);
+    const M<T> stop = valid & (next < T(kMinTransmittance));
+    const M<T> use = valid & ~stop;
+    const V<T> w = lanes::Select<T>(use, f.alpha * row->transmittance, V<T>{});
+    row->red += w * s.rgb[0];
+    row->green += w * s.rgb[1];
+    row->blue += w * s.rgb[2];
+    row->transmittance = lanes::Select<T>(use, next, row->transmittance);
+    row->count = use ? M<T>{} + static_cast<Lane<T>>(e + 1) : row->count;
+    row->active &= ~stop;
+    if (!lanes::Any<T>(row->active)) break;
+  }
+}
+
+// A row's backward pass: each lane walks its splats back to front from its last contributor.
+template <typename T>
+struct RowBackward {
+  V<T> transmittance, final_transmittance, background_dot;
+  V<T> g_red, g_green, g_blue;  // the loss's gradient at the lane's pixel
+  V<T> behind_red{}, behind_green{}, behind_blue{};
+  V<T> last_alpha{}, last_red{}, last_green{}, last_blue{};
+  M<T> count;
+};
+
+// A splat's gradient per lane, summed over a tile's rows.
+template <typename T>
+struct LaneGradient {
+  V<T> x{}, y{}, conic_a{}, conic_b{}, conic_c{}, opacity{}, red{}, green{}, blue{};
+
+  // The sum over lanes.
+  Splat2D<T> Sum() const {
+    Splat2D<T> out;
+    out.x = lanes::Sum<T>(x), out.y = lanes::Sum<T>(y);
+    out.conic_a = lanes::Sum<T>(conic_a), out.conic_b = lanes::Sum<T>(conic_b), out.conic_c = lanes::Sum<T>(conic_c);
+    out.opacity = lanes::Sum<T>(opacity);
+    out.rgb[0] = lanes::Sum<T>(red), out.rgb[1] = lanes::Sum<T>(green), out.rgb[2] = lanes::Sum<T>(blue);
+    return out;
+  }
+};
+
+// Adds to `g` the gradient of splat `s` (the tile's e-th) at the row's lanes, advancing each lane's state past it.
+template <typename T>
+void BackwardSplat(const Splat2D<T>& s, size_t e, V<T> px, T py, RowBackward<T>* row, LaneGradient<T>* g) {
+  const Footprint<T> f(s, px, py);
+  const M<T> valid = f.drawn & (static_cast<Lane<T>>(e) < row->count);
+  const V<T> one_minus = 1 - f.alpha;
+  const V<T> transmittance = lanes::Select<T>(valid, row->transmittance / one_minus, row->transmittance);
+  row->transmittance = transmittance;
+  const V<T> la = row->last_alpha;
+  const V<T> br = la * row->last_red + (1 - la) * row->behind_red;
+  const V<T> bg = la * row->last_green + (1 - la) * row->behind_green;
+  const V<T> bb = la * row->last_blue + (1 - la) * row->behind_blue;
+  V<T> d_alpha = (s.rgb[0] - br) * row->g_red + (s.rgb[1] - bg) * row->g_green + (s.rgb[2] - bb) * row->g_blue;
+  d_alpha = d_alpha * transmittance - row->final_transmittance / one_minus * row->background_dot;
+  row->behind_red = lanes::Select<T>(valid, br, row->behind_red);
+  row->behind_green = lanes::Select<T>(valid, bg, row->behind_green);
+  row->behind_blue = lanes::Select<T>(valid, bb, row->behind_blue);
+  row->last_red = lanes::Select<T>(valid, lanes::Splat(s.rgb[0]), row->last_red);
+  row->last_green = lanes::Select<T>(valid, lanes::Splat(s.rgb[1]), row->last_green);
+  row->last_blue = lanes::Select<T>(valid, lanes::Splat(s.rgb[2]), row->last_blue);
+  row->last_alpha = lanes::Select<T>(valid, f.alpha, la);
+  const V<T> w = lanes::Select<T>(valid, f.alpha * transmittance, V<T>{});
+  // A clamped alpha passes no gradient to the opacity or the shape.
+  const M<T> unclamped = valid & (f.raw_alpha < T(kMaxAlpha));
+  const V<T> d_opacity = lanes::Select<T>(unclamped, f.weight * d_alpha, V<T>{});
+  const V<T> d_power = lanes::Select<T>(unclamped, d_alpha * f.alpha, V<T>{});
+  g->x -= d_power * (s.conic_a * f.dx + s.conic_b * f.dy);
+  g->y -= d_power * (s.conic_c * f.dy + s.conic_b * f.dx);
+  g->conic_a -= d_power * T(0.5) * f.dx * f.dx;
+  g->conic_b -= d_power * f.dx * f.dy;
+  g->conic_c -= d_power * T(0.5) * f.dy * f.dy;
+  g->opacity += d_opacity;
+  g->red += w * row->g_red;
+  g->green += w * row->g_green;
+  g->blue += w * row->g_blue;
 }
 
 }  // namespace
@@ -89,35 +220,28 @@ void Rasterizer<T>::BinAndSort() {
 template <typename T>
 void Rasterizer<T>::Blend() {
   const int width = camera_.width, height = camera_.height;
-  rgb_.assign(static_cast<size_t>(width) * height * 3, T(0));
-  transmittance_.assign(static_cast<size_t>(width) * height, T(1));
-  contributors_.assign(static_cast<size_t>(width) * height, 0);
+  rgb_.resize(static_cast<size_t>(width) * height * 3);
+  transmittance_.resize(static_cast<size_t>(width) * height);
+  contributors_.resize(static_cast<size_t>(width) * height);
   const T background[3] = {T(options_.background[0]), T(options_.background[1]), T(options_.background[2])};
+  tbb::enumerable_thread_specific<TileSplats<T>> local;
   tbb::parallel_for(0, tiles_x_ * tiles_y_, [&](int tile) {
-    const int tx = tile % tiles_x_, ty = tile / tiles_x_;
-    const size_t begin = tile_begin_[tile], end = tile_begin_[tile + 1];
+    const int tx = tile % tiles_x_, ty = tile / tiles_x_, x0 = tx * kSplatTileSize;
+    const size_t begin = tile_begin_[tile];
+    TileSplats<T>& splats = local.local();
+    Gather(splats_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
+    const int lanes = std::min(kLanes, width - x0);
+    RowForward<T> row;
     for (int y = ty * kSplatTileSize; y < std::min(height, (ty + 1) * kSplatTileSize); ++y) {
-      for (int x = tx * kSplatTileSize; x < std::min(width, (tx + 1) * kSplatTileSize); ++x) {
-        const T px = T(x) + T(0.5), py = T(y) + T(0.5);
-        T transmittance = 1, colour[3] = {0, 0, 0};
-        uint32_t contributors = 0;
-        for (size_t e = begin; e < end; ++e) {
-          const Splat2D<T>& s = splats_[entries_[e]];
-          T dx, dy;
-          const T power = Power(s, px, py, &dx, &dy);
-          if (power > 0) continue;
-          const T alpha = std::min(T(kMaxAlpha), s.opacity * std::exp(power));
-          if (alpha < T(kMinAlpha)) continue;
-          const T next = transmittance * (1 - alpha);
-          if (next < T(kMinTransmittance)) break;
-          for (int c = 0; c < 3; ++c) colour[c] += s.rgb[c] * alpha * transmittance;
-          transmittance = next;
-          contributors = static_cast<uint32_t>(e - begin + 1);
-        }
-        const size_t pixel = static_cast<size_t>(y) * width + x;
-        for (int c = 0; c < 3; ++c) rgb_[3 * pixel + c] = colour[c] + transmittance * background[c];
-        transmittance_[pixel] = transmittance;
-        contributors_[pixel] = contributors;
+      BlendRow(splats, T(x0) + T(0.5), T(y) + T(0.5), lanes, &row);
+      for (int l = 0; l < lanes; ++l) {
+        const size_t pixel = static_cast<size_t>(y) * width + x0 + l;
+        const T t = row.transmittance[l];
+        rgb_[3 * pixel] = row.red[l] + t * background[0];
+        rgb_[3 * pixel + 1] = row.green[l] + t * background[1];
+        rgb_[3 * pixel + 2] = row.blue[l] + t * background[2];
+        transmittance_[pixel] = t;
+        contributors_[pixel] = static_cast<uint32_t>(row.count[l]);
       }
     }
   });
@@ -129,49 +253,43 @@ void Rasterizer<T>::Backward(const std::vector<T>& d_rgb, Gaussians<T>* grads, s
   const size_t n = gaussians_->size();
   tbb::enumerable_thread_specific<std::vector<Splat2D<T>>> local([n] { return std::vector<Splat2D<T>>(n); });
   const T background[3] = {T(options_.background[0]), T(options_.background[1]), T(options_.background[2])};
+  tbb::enumerable_thread_specific<TileSplats<T>> tile_splats;
   tbb::parallel_for(0, tiles_x_ * tiles_y_, [&](int tile) {
     std::vector<Splat2D<T>>& splat_grads = local.local();
-    const int tx = tile % tiles_x_, ty = tile / tiles_x_;
+    const int tx = tile % tiles_x_, ty = tile / tiles_x_, x0 = tx * kSplatTileSize;
     const size_t begin = tile_begin_[tile];
-    for (int y = ty * kSplatTileSize; y < std::min(height, (ty + 1) * kSplatTileSize); ++y) {
-      for (int x = tx * kSplatTileSize; x < std::min(width, (tx + 1) * kSplatTileSize); ++x) {
-        const size_t pixel = static_cast<size_t>(y) * width + x;
-        const T px = T(x) + T(0.5), py = T(y) + T(0.5);
+    TileSplats<T>& splats = tile_splats.local();
+    Gather(splats_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
+    const int lanes = std::min(kLanes, width - x0);
+    // Every row of the tile at once, back to front: each splat's gradient is summed over the tile in lanes, then
+    // added to its total once.
+    const int y0 = ty * kSplatTileSize, rows = std::min(kSplatTileSize, height - y0);
+    std::array<RowBackward<T>, kSplatTileSize> row;
+    std::array<uint32_t, kSplatTileSize> row_most{};
+    for (int r = 0; r < rows; ++r) {
+      for (int l = 0; l < kLanes; ++l) {
+        const size_t pixel = static_cast<size_t>(y0 + r) * width + x0 + std::min(l, lanes - 1);
         const T* g = &d_rgb[3 * pixel];
-        const T final_transmittance = transmittance_[pixel];
-        const T background_dot = background[0] * g[0] + background[1] * g[1] + background[2] * g[2];
-        T transmittance = final_transmittance, behind[3] = {0, 0, 0}, last_alpha = 0, last_rgb[3] = {0, 0, 0};
-        for (size_t e = begin + contributors_[pixel]; e-- > begin;) {
-          const Splat2D<T>& s = splats_[entries_[e]];
-          T dx, dy;
-          const T power = Power(s, px, py, &dx, &dy);
-          if (power > 0) continue;
-          const T weight = std::exp(power);
-          const T raw_alpha = s.opacity * weight;
-          const T alpha = std::min(T(kMaxAlpha), raw_alpha);
-          if (alpha < T(kMinAlpha)) continue;
-          transmittance /= 1 - alpha;
-          Splat2D<T>& out = splat_grads[entries_[e]];
-          // behind: the colour of what lies behind this Gaussian, as seen through it.
-          T d_alpha = 0;
-          for (int c = 0; c < 3; ++c) {
-            behind[c] = last_alpha * last_rgb[c] + (1 - last_alpha) * behind[c];
-            last_rgb[c] = s.rgb[c];
-            d_alpha += (s.rgb[c] - behind[c]) * g[c];
-            out.rgb[c] += alpha * transmittance * g[c];
-          }
-          d_alpha = d_alpha * transmittance - final_transmittance / (1 - alpha) * background_dot;
-          last_alpha = alpha;
-          if (raw_alpha >= T(kMaxAlpha)) continue;  // clamped: no gradient to opacity or shape
-          out.opacity += weight * d_alpha;
-          const T d_power = d_alpha * alpha;
-          out.x += d_power * -(s.conic_a * dx + s.conic_b * dy);
-          out.y += d_power * -(s.conic_c * dy + s.conic_b * dx);
-          out.conic_a += d_power * T(-0.5) * dx * dx;
-          out.conic_b += d_power * -dx * dy;
-          out.conic_c += d_power * T(-0.5) * dy * dy;
-        }
+        const uint32_t count = l < lanes ? contributors_[pixel] : 0;
+        row[r].count[l] = static_cast<Lane<T>>(count);
+        row[r].transmittance[l] = row[r].final_transmittance[l] = transmittance_[pixel];
+        row[r].g_red[l] = g[0], row[r].g_green[l] = g[1], row[r].g_blue[l] = g[2];
+        row[r].background_dot[l] = background[0] * g[0] + background[1] * g[1] + background[2] * g[2];
+        row_most[r] = std::max(row_most[r], count);
       }
+    }
+    const uint32_t most = *std::max_element(row_most.begin(), row_most.end());
+    const V<T> px = T(x0) + T(0.5) + lanes::Iota<T>();
+    for (size_t e = most; e-- > 0;) {
+      LaneGradient<T> gradient;
+      for (int r = 0; r < rows; ++r) {
+        if (e < row_most[r]) BackwardSplat(splats[e], e, px, T(y0 + r) + T(0.5), &row[r], &gradient);
+      }
+      const Splat2D<T> d = gradient.Sum();
+      Splat2D<T>& out = splat_grads[entries_[begin + e]];
+      out.x += d.x, out.y += d.y, out.conic_a += d.conic_a, out.conic_b += d.conic_b, out.conic_c += d.conic_c;
+      out.opacity += d.opacity;
+      for (int c = 0; c < 3; ++c) out.rgb[c] += d.rgb[c];
     }
   });
   if (screen_grads) screen_grads->resize(2 * n, T(0));

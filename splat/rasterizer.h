@@ -38,6 +38,7 @@ class Rasterizer {
   // Gaussians drawn (in front of the near plane, finite), and tile-list entries.
   size_t drawn() const { return drawn_; }
   size_t tile_entries() const { return entries_.size(); }
+  bool IsDrawn(size_t i) const { return rects_[i].x0 < rects_[i].x1; }
 
   // Adds to `grads` (shaped like the Gaussians) the gradient of a loss whose gradient with respect to rgb() is
   // `d_rgb`. With `screen_grads`, adds to it the gradient with respect to each Gaussian's 2D mean (2 per

@@ -17,6 +17,7 @@
 #include "stages/camera_corrections.h"
 #include "stages/dataset_import.h"
 #include "stages/mesh_io.h"
+#include "stages/output_frame.h"
 #include "stages/ply.h"
 #include "stages/stage_io.h"
 #include "stages/transforms_json.h"
@@ -27,59 +28,6 @@ namespace {
 
 constexpr size_t kMaxPoints = 2'000'000;
 constexpr float kFallbackThreshold = 25;  // per normalised unit: what fits lego's surface
-
-// The similarity from the normalised frame to the one the files are written in.
-struct OutputFrame {
-  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // out_from_normalized, scaled
-  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
-  std::string description;
-
-  Eigen::Vector3f Point(const Eigen::Vector3f& p) const {
-    return (rotation * p.cast<double>() + translation).cast<float>();
-  }
-  Eigen::Vector3f Direction(const Eigen::Vector3f& d) const {
-    return (rotation * d.cast<double>()).normalized().cast<float>();
-  }
-  double Scale() const { return std::cbrt(rotation.determinant()); }
-  // A camera in this frame: its centre mapped, its axes turned, its near and far scaled.
-  CameraView Camera(const CameraView& view) const {
-    CameraView out = view;
-    const double scale = Scale();
-    out.camera.world_from_cam.topLeftCorner<3, 3>() =
-        rotation / scale * view.camera.world_from_cam.topLeftCorner<3, 3>();
-    out.camera.world_from_cam.topRightCorner<3, 1>() =
-        rotation * view.camera.world_from_cam.topRightCorner<3, 1>() + translation;
-    if (view.near > 0) out.near = view.near * scale;
-    if (view.far > 0) out.far = view.far * scale;
-    return out;
-  }
-};
-
-// applied_transform (normalised_from_source, 3x4) of transforms.json, inverted when the source frame is asked for.
-OutputFrame MakeOutputFrame(const std::string& frame, const fs::path& transforms) {
-  OutputFrame out;
-  if (frame == "normalized") {
-    out.description = "frame: normalized (the training frame of 20_poses/transforms.json)";
-    return out;
-  }
-  const nlohmann::json json = ReadJsonFile(transforms);
-  Eigen::Matrix4d normalized_from_source = Eigen::Matrix4d::Identity();
-  if (json.contains("applied_transform")) {
-    const nlohmann::json& a = json["applied_transform"];
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 4; ++c) normalized_from_source(r, c) = a.at(r).at(c).get<double>();
-    }
-  }
-  const Eigen::Matrix4d source_from_normalized = normalized_from_source.inverse();
-  if (!source_from_normalized.allFinite()) {
-    throw UserError(format("'{}': applied_transform cannot be inverted; rerun the poses stage", transforms.string()));
-  }
-  out.rotation = source_from_normalized.topLeftCorner<3, 3>();
-  out.translation = source_from_normalized.topRightCorner<3, 1>();
-  out.description =
-      "frame: source (COLMAP's world, or the dataset's: the inverse of applied_transform in 20_poses/transforms.json)";
-  return out;
-}
 
 // The training views' cameras as the field saw them: corrected where camera refinement moved them.
 void ApplyCameraCorrections(const std::map<std::string, CameraCorrection>& corrections, ImportedDataset* dataset) {

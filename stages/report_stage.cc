@@ -78,6 +78,28 @@ std::string TrainingSection(const fs::path& train_dir) {
   return html;
 }
 
+// The splats: their numbers beside the field's, their error against optimisation time, and the file.
+std::string SplatSection(const fs::path& splat_dir, const nlohmann::json& train) {
+  const nlohmann::json report = ReadIfExists(splat_dir / "splat_report.json");
+  if (!report.value("enabled", false)) {
+    return "<h2>Splats</h2>\n<p>Off (<code>--splat.enabled false</code>).</p>\n";
+  }
+  std::string html = "<h2>Splats: error against optimisation time</h2>\n<div class=\"plots\">\n";
+  html += SvgLinePlot({"splats: held-out PSNR against optimisation time", "optimisation time (s)", "PSNR (dB)"},
+                      {CsvSeries("held-out PSNR (dB)", ReadTextFile(splat_dir / "metrics.csv"), 0, 4)});
+  html += "</div>\n";
+  html += format(
+      "<p>The field baked into {} 3D Gaussian splats (spherical harmonics of degree {}; {} placed from the field, "
+      "then optimised for {:.0f} s, {} steps): held-out PSNR {} dB and SSIM {} (the field: {} dB), {:.3f} s per "
+      "held-out view on the CPU. <a href=\"../35_splat/splats.ply\">splats.ply</a> is in the standard 3D Gaussian "
+      "Splatting layout, {}; SuperSplat, the PlayCanvas and three.js splat viewers open it as it is.</p>\n",
+      Number(report["splats"]), Number(report["sh_degree"]), Number(report["initial_splats"]),
+      report.value("seconds", 0.0), Number(report["steps"]), Number(report["heldout_psnr"]),
+      Number(report["heldout_ssim"], 3), Number(train.value("heldout_psnr", nlohmann::json(nullptr))),
+      report.value("seconds_per_view", 0.0), HtmlEscape(report.value("frame", "")));
+  return html;
+}
+
 std::string StagesSection(const StageContext& context) {
   std::string html =
       "<h2>Stages</h2>\n<table>\n<tr><th>stage</th><th>state</th><th>wall time</th><th>finished (UTC)"
@@ -196,6 +218,7 @@ void ReportStage::Run(StageContext& context) const {
     body += Card(format("{}", exported["mesh"]["triangles"].get<size_t>()), "mesh triangles");
   body += "</div>\n";
   body += TrainingSection(context.upstream_dirs.at("train"));
+  body += SplatSection(context.upstream_dirs.at("splat"), train);
   body += StagesSection(context);
   body += CamerasSection(context, dataset, heldout_split);
   body += HeldoutSection(render_dir, eval, background, options.image_width);

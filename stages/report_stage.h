@@ -25,7 +25,7 @@ class ReportStage : public Stage {
   std::string name() const override { return "report"; }
   std::string folder() const override { return "60_report"; }
   int format_version() const override { return 1; }
-  std::vector<std::string> upstream() const override { return {"poses", "train", "render", "export"}; }
+  std::vector<std::string> upstream() const override { return {"poses", "train", "splat", "render", "export"}; }
   void Run(StageContext& context) const override;
 };
 

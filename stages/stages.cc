@@ -9,6 +9,7 @@
 #include "stages/render_stage.h"
 #include "stages/report_stage.h"
 #include "stages/sfm_stage.h"
+#include "stages/splat_stage.h"
 #include "stages/train_stage.h"
 
 namespace p2n {
@@ -29,6 +30,7 @@ void ForEachSection(Section&& section) {
   section.template operator()<PosesOptions>("poses");
   section.template operator()<ImportOptions>("import");
   section.template operator()<TrainOptions>("train");
+  section.template operator()<SplatOptions>("splat");
   section.template operator()<RenderStageOptions>("render");
   section.template operator()<ExportOptions>("export");
   section.template operator()<ReportOptions>("report");
@@ -56,6 +58,7 @@ Runner MakeRunner(const std::optional<std::filesystem::path>& input) {
     stages.push_back(std::make_unique<PosesStage>());
   }
   stages.push_back(std::make_unique<TrainStage>());
+  stages.push_back(std::make_unique<SplatStage>());
   stages.push_back(std::make_unique<RenderStage>());
   stages.push_back(std::make_unique<ExportStage>());
   stages.push_back(std::make_unique<ReportStage>());

@@ -83,4 +83,23 @@ TEST_CASE("sparse Adam given touch marks reads only the marked groups, updates t
   CHECK(25 / group != 17 / group);
 }
 
+TEST_CASE("Adam::Remap carries each kept entry's moments and starts new entries from zero", "[adam]") {
+  // Two entries of two values; after one step, entry 1 is kept twice (cloned), entry 0 dropped, one added.
+  Adam<double> adam(AdamOptions{}, 4, 2);
+  std::vector<double> params = {0, 0, 0, 0};
+  const std::vector<double> grads = {1, 1, 2, -3};
+  adam.Step(params.data(), grads.data());
+  adam.Remap({1, 1, -1});
+  // A second step with zero gradients: the kept entries move by their carried first moment; the new one not at all.
+  std::vector<double> after = {0, 0, 0, 0, 0, 0}, none(6, 0.0);
+  adam.Step(after.data(), none.data());
+  CHECK(after[0] < 0);
+  CHECK(after[1] > 0);  // entry 1's second value had gradient -3
+  CHECK(after[2] == after[0]);
+  CHECK(after[3] == after[1]);
+  CHECK(after[4] == 0);
+  CHECK(after[5] == 0);
+  CHECK_THROWS_AS(adam.Remap({5}), std::out_of_range);
+}
+
 }  // namespace p2n::testing

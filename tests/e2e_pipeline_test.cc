@@ -11,6 +11,7 @@
 
 #include "nerf/synthetic_scene.h"
 #include "pipeline/file_util.h"
+#include "splat/splat_ply.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {
@@ -37,6 +38,8 @@ TEST_CASE("photo2nerf run: photos to report with real COLMAP, then everything fr
                                             "200",
                                             "--train.time_budget",
                                             "600",
+                                            "--splat.steps",
+                                            "60",
                                             "--render.frames",
                                             "8",
                                             "--render.width",
@@ -50,8 +53,8 @@ TEST_CASE("photo2nerf run: photos to report with real COLMAP, then everything fr
   std::string output;
   REQUIRE(RunCommand(command, &output) == 0);
   INFO(output);
-  const std::vector<std::string> stages = {"ingest", "sfm", "poses", "train", "render", "export", "report"};
-  CHECK_THAT(output, Catch::Contains("7 of 7 stages ran"));
+  const std::vector<std::string> stages = {"ingest", "sfm", "poses", "train", "splat", "render", "export", "report"};
+  CHECK_THAT(output, Catch::Contains("8 of 8 stages ran"));
 
   const nlohmann::json eval = ReadJsonFile(dir / "ws" / "40_render" / "eval.json");
   CHECK(eval["views"].size() == 3);  // every 8th of 24
@@ -68,6 +71,10 @@ TEST_CASE("photo2nerf run: photos to report with real COLMAP, then everything fr
              std::isfinite(mesh->mVertices[v].z)));
   }
 
+  const nlohmann::json splats = ReadJsonFile(dir / "ws" / "35_splat" / "splat_report.json");
+  CHECK(splats["heldout_psnr"].get<double>() > 15.0);  // 60 steps from a field of 200: a working stage, not a score
+  CHECK(ReadSplatPly(dir / "ws" / "35_splat" / "splats.ply").size() == splats["splats"].get<size_t>());
+
   const std::string report = ReadText(dir / "ws" / "60_report" / "report.html");
   std::map<std::string, std::string> finished;
   for (const std::string& stage : stages) {
@@ -78,12 +85,12 @@ TEST_CASE("photo2nerf run: photos to report with real COLMAP, then everything fr
       finished[entry.path().filename().string()] = ReadJsonFile(entry.path() / "manifest.json")["finished_utc"];
     }
   }
-  CHECK(finished.size() == 7);
+  CHECK(finished.size() == 8);
   CHECK_THAT(report, Catch::Contains("COLMAP 3."));
 
   // Again: nothing to do, nothing rewritten.
   REQUIRE(RunCommand(command, &output) == 0);
-  CHECK_THAT(output, Catch::Contains("0 of 7 stages ran"));
+  CHECK_THAT(output, Catch::Contains("0 of 8 stages ran"));
   for (const std::string& stage : stages) CHECK_THAT(output, Catch::Contains(stage + ": fresh, skipped"));
   for (const auto& [folder, time] : finished)
     CHECK(ReadJsonFile(dir / "ws" / folder / "manifest.json")["finished_utc"] == time);

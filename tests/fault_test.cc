@@ -10,6 +10,7 @@
 #include <spawn.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <chrono>
 #include <thread>
 
@@ -45,6 +46,14 @@ std::vector<std::string> RunArgs(const fs::path& data, const fs::path& workspace
           "1",
           "--train.eval_pixels",
           "512",
+          "--splat.steps",
+          "40",
+          "--splat.init_width",
+          "48",
+          "--splat.checkpoint_interval",
+          "0.2",
+          "--splat.eval_interval",
+          "1",
           "--render.frames",
           "4",
           "--export.resolution",
@@ -133,7 +142,7 @@ TEST_CASE("faults: SIGKILL at many moments, then a rerun, gives the uninterrupte
   std::string output;
   REQUIRE(RunCommand(RunArgs(data, dir / "reference"), &output) == 0);
   const std::map<std::string, std::string> reference = CheckedKeys(dir / "reference");
-  REQUIRE(reference.size() == 5);  // poses (import), train, render, export, report
+  REQUIRE(reference.size() == 6);  // poses (import), train, splat, render, export, report
   const double reference_psnr = ReadJsonFile(dir / "reference" / "40_render" / "eval.json")["psnr"];
 
   // Each run is killed the moment a file or folder appears (polled every millisecond): every stage's start, a
@@ -147,19 +156,23 @@ TEST_CASE("faults: SIGKILL at many moments, then a rerun, gives the uninterrupte
                                             "30_train.resume/checkpoint.bin",
                                             "30_train.partial/model.bin.tmp",
                                             "30_train.partial/metrics.csv",
+                                            "35_splat.partial",
+                                            "35_splat.resume/checkpoint.bin",
+                                            "35_splat.partial/splats.ply",
                                             "40_render.partial",
                                             "40_render.partial/video.mp4",
                                             "50_export.partial",
                                             "50_export.partial/mesh.ply",
                                             "60_report.partial",
                                             "60_report.partial/manifest.json"};
-  const std::vector<std::string> stages = {"poses", "train", "render", "export", "report"};
+  const std::vector<std::string> folders = {"20_poses", "30_train", "35_splat", "40_render", "50_export", "60_report"};
+  const std::vector<std::string> stages = {"poses", "train", "splat", "render", "export", "report"};
   std::vector<std::string> hit;
   for (const std::string& moment : moments) {
     // A moment of a stage that an earlier run finished: that stage and the later ones are removed first.
     const std::string folder = moment.substr(0, moment.find_first_of("./"));
     if (fs::exists(workspace / folder / "manifest.json")) {
-      const size_t first = std::stoi(folder.substr(0, 2)) / 10 - 2;  // 20_poses -> 0
+      const size_t first = std::find(folders.begin(), folders.end(), folder) - folders.begin();
       std::vector<std::string> clean = {P2N_BINARY, "clean", "-w", workspace.string()};
       for (size_t i = first; i < stages.size(); ++i) clean.insert(clean.end(), {"--stage", stages[i]});
       std::string ignored;
@@ -209,6 +222,27 @@ TEST_CASE("faults: a file-size limit gives a clear error naming the file and kee
   CHECK_THAT(status, Catch::Matches("(.|\n)*train +incomplete(.|\n)*"));
   REQUIRE(RunCommand(RunArgs(data, workspace), &output) == 0);
   CHECK_THAT(output, Catch::Contains("poses: fresh, skipped"));
+}
+
+TEST_CASE("faults: a full disk in the splat stage names its file and keeps the trained field", "[fault]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), workspace = dir / "ws";
+  std::vector<std::string> until_train = RunArgs(data, workspace);
+  until_train.insert(until_train.end(), {"--until", "train"});
+  std::string output;
+  REQUIRE(RunCommand(until_train, &output) == 0);
+  std::vector<std::string> limited = {"/bin/bash", "-c", "ulimit -f 64 && exec \"$@\"", "limited"};
+  for (const std::string& arg : RunArgs(data, workspace)) limited.push_back(arg);
+  CHECK(RunCommand(limited, &output) == 1);
+  INFO(output);
+  CHECK_THAT(output, Catch::Contains("35_splat") && Catch::Contains("File too large") && Catch::Contains("free space"));
+  std::string status;
+  REQUIRE(RunCommand({P2N_BINARY, "status", "-w", workspace.string()}, &status) == 0);
+  CHECK_THAT(status, Catch::Matches("(.|\n)*train +fresh(.|\n)*"));
+  CHECK_THAT(status, Catch::Matches("(.|\n)*splat +(incomplete|missing)(.|\n)*"));
+  REQUIRE(RunCommand(RunArgs(data, workspace), &output) == 0);
+  CHECK_THAT(output, Catch::Contains("train: fresh, skipped"));
+  CHECK(fs::exists(workspace / "35_splat" / "splats.ply"));
 }
 
 }  // namespace p2n::testing

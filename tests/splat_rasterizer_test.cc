@@ -36,8 +36,9 @@ Gaussians<double> RandomGaussians(int count, int degree, uint64_t seed) {
     for (int a = 0; a < 3; ++a) g.log_scales[3 * i + a] = std::log(0.15) + 0.4 * uniform(random);
     for (int a = 0; a < 4; ++a) g.rotations[4 * i + a] = uniform(random) + (a == 0 ? 1.5 : 0);
     g.opacity_logits[i] = 1.5 * uniform(random);
-    for (int k = 0; k < 3 * g.coefficients(); ++k)
-      g.sh[3 * g.coefficients() * i + k] = (k < 3 ? 1 : 0.2) * uniform(random);
+    for (int c = 0; c < 3; ++c) g.sh_dc[3 * i + c] = uniform(random);
+    const int rest = 3 * (g.coefficients() - 1);
+    for (int k = 0; k < rest; ++k) g.sh_rest[rest * i + k] = 0.2 * uniform(random);
   }
   return g;
 }
@@ -64,7 +65,7 @@ TEST_CASE("A splat's centre pixel blends its colour by its opacity over the back
   for (int a = 0; a < 3; ++a) g.log_scales[a] = std::log(sigma);
   g.opacity_logits[0] = Logit(0.6);
   const double colour[3] = {0.9, 0.2, 0.4};
-  for (int c = 0; c < 3; ++c) g.sh[c] = (colour[c] - 0.5) / kShC0;
+  for (int c = 0; c < 3; ++c) g.sh_dc[c] = (colour[c] - 0.5) / kShC0;
   RasterOptions options;
   options.background = {0.1, 0.3, 0.5};
   Rasterizer<double> rasterizer;
@@ -95,7 +96,7 @@ TEST_CASE("Opaque splats hide what lies behind them, whatever their order in mem
   }
   g.positions[2] = -1;  // the first is farther from the camera at z = 4
   g.positions[5] = 1;
-  for (int c = 0; c < 3; ++c) g.sh[c] = (0.0 - 0.5) / kShC0, g.sh[3 + c] = (1.0 - 0.5) / kShC0;
+  for (int c = 0; c < 3; ++c) g.sh_dc[c] = (0.0 - 0.5) / kShC0, g.sh_dc[3 + c] = (1.0 - 0.5) / kShC0;
   Rasterizer<double> rasterizer;
   rasterizer.Forward(g, camera, RasterOptions{});
   // Front: 0.99 of white; behind it 0.99 of the remaining 0.01 is black.

@@ -24,6 +24,8 @@ Config SmallStageConfig(int steps) {
   config.Set("train.steps", steps, "test");
   config.Set("train.eval_interval", 1.0, "test");
   config.Set("train.eval_pixels", 512, "test");  // of 3072 per view: evaluations stay cheap (under sanitizers too)
+  config.Set("splat.steps", 30, "test");
+  config.Set("splat.init_width", 48, "test");
   config.Set("render.frames", 6, "test");
   config.Set("render.fps", 6.0, "test");
   config.Set("export.resolution", 48, "test");

@@ -47,6 +47,25 @@ TEST_CASE("constant density over length d gives opacity 1 - exp(-sigma d), at an
   }
 }
 
+TEST_CASE("the median depth is the sample where the opacity first reaches one half", "[render]") {
+  // Constant density: the opacity reaches 1/2 at t = ln 2 / sigma; the sample there is the one whose segment
+  // holds it (segments of 0.01 from 0).
+  const Ray ray = Uniform(400, 4.0, 1.0, {1, 1, 1});
+  const CompositeResult<double> result = Composite(ray.segments(), kBlack, 0.0);
+  CHECK(result.median_depth == Approx(std::log(2.0)).margin(0.01));
+  // Haze (opacity 0.2) in front of a wall: the expected depth is pulled forward, the median is at the wall.
+  Ray haze_and_wall;
+  haze_and_wall.sigma = {-std::log(0.8), 50.0};
+  haze_and_wall.rgb = {1, 1, 1, 1, 1, 1};
+  haze_and_wall.t = {1.0, 3.0};
+  haze_and_wall.delta = {1.0, 1.0};
+  const CompositeResult<double> wall = Composite(haze_and_wall.segments(), kBlack, 0.0);
+  CHECK(wall.median_depth == 3.0);
+  CHECK(wall.depth / wall.opacity < 2.7);
+  // Never half opaque: none.
+  CHECK(Composite(Uniform(10, 1.0, 0.1, {1, 1, 1}).segments(), kBlack, 0.0).median_depth == -1.0);
+}
+
 TEST_CASE("a ray through empty space returns the background exactly", "[render]") {
   const double background[3] = {0.25, 0.5, 0.75};
   const Ray ray = Uniform(100, 3.0, 0.0, {1, 0, 0});

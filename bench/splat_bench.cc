@@ -1,0 +1,71 @@
+// Rendering from splats: renders a workspace's held-out views from 35_splat/splats.ply on the CPU and prints the
+// seconds per view (median of REPEATS renders of each view), frames per second and PSNR against the photos;
+// with SAVE_DIR, writes the renders and the photos there as PNGs.
+// With SPLIT train, the training views instead of the held-out ones.
+// Usage: splat_bench WORKSPACE [VIEWS (0: all)] [REPEATS] [SAVE_DIR] [SPLIT]
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+
+#include "pipeline/file_util.h"
+#include "splat/rasterizer.h"
+#include "splat/splat_ply.h"
+#include "stages/output_frame.h"
+#include "stages/training_data.h"
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: splat_bench WORKSPACE [VIEWS] [REPEATS] [SAVE_DIR] [SPLIT]\n");
+    return 1;
+  }
+  const std::filesystem::path ws = argv[1];
+  const size_t max_views = argc > 2 ? std::atoi(argv[2]) : 0;
+  const int repeats = argc > 3 ? std::max(1, std::atoi(argv[3])) : 3;
+  const std::filesystem::path transforms = ws / "20_poses" / "transforms.json";
+  std::string split;
+  p2n::TrainingData data = p2n::LoadTrainingData(transforms, ws, &split);
+  if (argc > 5 && std::string(argv[5]) == "train") data.heldout = data.train;
+  if (max_views > 0 && data.heldout.size() > max_views) data.heldout.resize(max_views);
+  const nlohmann::json report = p2n::ReadJsonFile(ws / "35_splat" / "splat_report.json");
+  const std::string frame_name =
+      report.value("frame", "").find("normalized") != std::string::npos ? "normalized" : "source";
+  const p2n::OutputFrame frame = p2n::MakeOutputFrame(frame_name, transforms);
+  const p2n::Gaussians<float> gaussians = p2n::ReadSplatPly(ws / "35_splat" / "splats.ply");
+  const std::array<float, 3> background = p2n::DatasetBackground(transforms);
+  const double near = report.value("near", 0.01);
+
+  std::vector<double> seconds;
+  double psnr = 0;
+  for (size_t v = 0; v < data.heldout.size(); ++v) {
+    p2n::TrainView& view = data.heldout[v];
+    view.camera.world_from_cam = frame.Pose(view.camera.world_from_cam);
+    p2n::RasterOptions options;
+    options.projection.near = near;
+    for (int c = 0; c < 3; ++c) options.background[c] = background[c];
+    p2n::Rasterizer<float> rasterizer;
+    std::vector<double> times;
+    for (int r = 0; r < repeats; ++r) {
+      const auto start = std::chrono::steady_clock::now();
+      rasterizer.Forward(gaussians, view.camera, options);
+      times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    }
+    std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
+    seconds.push_back(times[times.size() / 2]);
+    const p2n::FloatImage image{view.camera.width, view.camera.height, 3, rasterizer.rgb()};
+    const p2n::FloatImage photo = p2n::PhotoOnBackground(view, background);
+    psnr += p2n::Psnr(image, photo) / data.heldout.size();
+    if (argc > 4) {
+      const std::filesystem::path dir = argv[4];
+      p2n::SaveFloatImage(image, dir / (std::to_string(v) + ".png"));
+      p2n::SaveFloatImage(photo, dir / (std::to_string(v) + "_photo.png"));
+    }
+  }
+  double total = 0;
+  for (const double s : seconds) total += s;
+  std::printf("%zu splats, %zu views %dx%d: %.4f s per view (%.1f frames/s), %.3f s in all, %.2f dB\n",
+              gaussians.size(), seconds.size(), data.heldout[0].camera.width, data.heldout[0].camera.height,
+              total / seconds.size(), seconds.size() / total, total, psnr);
+  return 0;
+}

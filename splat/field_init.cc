@@ -1,0 +1,203 @@
+#include "splat/field_init.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include <tbb/parallel_for.h>
+
+#include "nerf/rays.h"
+#include "nerf/renderer.h"
+
+namespace p2n {
+namespace {
+
+constexpr double kTangentSigma = 0.5;        // cells
+constexpr double kNormalSigma = 0.05;        // cells
+constexpr double kMinNormalAgreement = 0.5;  // length of the cell's mean unit normal
+constexpr double kOpacityShare = 0.8;        // of the field's opacity
+constexpr double kDepthTolerance = 0.03;     // relative: two views agree on a point's depth
+
+struct CellKey {
+  int level;
+  int64_t x, y, z;
+  bool operator==(const CellKey&) const = default;
+};
+
+struct CellKeyHash {
+  size_t operator()(const CellKey& k) const {
+    uint64_t h = static_cast<uint64_t>(k.level) * 0x9E3779B97F4A7C15ull;
+    for (const int64_t v : {k.x, k.y, k.z}) h = (h ^ static_cast<uint64_t>(v)) * 0xBF58476D1CE4E5B9ull + (h >> 29);
+    return static_cast<size_t>(h);
+  }
+};
+
+struct Cell {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rgb = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  double opacity = 0;
+  int count = 0;
+};
+
+// Cells of side 2^level, level the rounded log2 of (footprint · spread); keyed by level and integer coordinates.
+std::unordered_map<CellKey, Cell, CellKeyHash> Pool(const std::vector<SurfacePoint>& points, double spread) {
+  std::unordered_map<CellKey, Cell, CellKeyHash> cells;
+  for (const SurfacePoint& p : points) {
+    const int level = static_cast<int>(std::lround(std::log2(std::max(p.footprint * spread, 1e-9))));
+    const double side = std::ldexp(1.0, level);
+    const CellKey key{level, static_cast<int64_t>(std::floor(p.position.x() / side)),
+                      static_cast<int64_t>(std::floor(p.position.y() / side)),
+                      static_cast<int64_t>(std::floor(p.position.z() / side))};
+    Cell& cell = cells[key];
+    cell.position += p.position;
+    cell.rgb += p.rgb.cast<double>();
+    cell.normal += p.normal.cast<double>();
+    cell.opacity += p.opacity;
+    ++cell.count;
+  }
+  return cells;
+}
+
+}  // namespace
+
+Gaussians<float> GaussiansFromPoints(const std::vector<SurfacePoint>& points, size_t max_gaussians, int sh_degree) {
+  double spread = 1;
+  std::unordered_map<CellKey, Cell, CellKeyHash> cells = Pool(points, spread);
+  while (cells.size() > max_gaussians) cells = Pool(points, spread *= 2);
+  Gaussians<float> g;
+  g.sh_degree = sh_degree;
+  g.Resize(cells.size());
+  size_t i = 0;
+  for (const auto& [key, cell] : cells) {
+    const Eigen::Vector3d mean = cell.position / cell.count;
+    const double side = std::ldexp(1.0, key.level);
+    // Along the surface, σ of kTangentSigma cells: neighbouring discs overlap into an even cover; across it, thin.
+    // Where the cell's normals disagree (an edge, a thin part seen from both sides), a ball.
+    const Eigen::Vector3d normal = cell.normal / cell.count;
+    const bool flat = normal.norm() > kMinNormalAgreement;
+    const Eigen::Quaterniond rotation =
+        flat ? Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), normal) : Eigen::Quaterniond::Identity();
+    const double tangent = kTangentSigma * side, across = flat ? kNormalSigma * side : tangent;
+    for (int a = 0; a < 3; ++a) {
+      g.positions[3 * i + a] = static_cast<float>(mean[a]);
+      g.log_scales[3 * i + a] = static_cast<float>(std::log(a == 2 ? across : tangent));
+      g.sh_dc[3 * i + a] = static_cast<float>((cell.rgb[a] / cell.count - 0.5) / kShC0);
+    }
+    const double q[4] = {rotation.w(), rotation.x(), rotation.y(), rotation.z()};
+    for (int a = 0; a < 4; ++a) g.rotations[4 * i + a] = static_cast<float>(q[a]);
+    const double opacity = std::clamp(kOpacityShare * cell.opacity / cell.count, 0.01, 0.99);
+    g.opacity_logits[i] = static_cast<float>(Logit(opacity));
+    ++i;
+  }
+  return g;
+}
+
+namespace {
+
+// The training views rendered small, with their median depths.
+struct DepthViews {
+  std::vector<PinholeCamera> cameras;
+  std::vector<RenderedView> renders;
+
+  // How many views other than `self` see `p` at its distance from them (within kDepthTolerance of it), counting
+  // up to `enough`: a point that only its own view puts there is a floater of that view's depth, not a surface.
+  int Support(const Eigen::Vector3d& p, size_t self, int enough) const {
+    int support = 0;
+    for (size_t j = 0; j < cameras.size() && support < enough; ++j) {
+      if (j == self) continue;
+      double z = 0;
+      const Eigen::Vector2d pixel = Project(cameras[j], p, &z);
+      const int x = static_cast<int>(std::floor(pixel.x())), y = static_cast<int>(std::floor(pixel.y()));
+      if (!(z > 0) || x < 0 || y < 0 || x >= cameras[j].width || y >= cameras[j].height) continue;
+      const size_t i = size_t(y) * cameras[j].width + x;
+      if (renders[j].opacity.pixels[i] <= 0) continue;
+      const double distance = (p - cameras[j].world_from_cam.topRightCorner<3, 1>()).norm();
+      if (std::abs(renders[j].depth.pixels[i] - distance) <= kDepthTolerance * distance) ++support;
+    }
+    return support;
+  }
+};
+
+// The points of view `v`: pixels at least `min_opacity` opaque, at their median depth, seen there by at least
+// `min_views` views (their own included), with the surface's colour and the depth map's normal where the
+// neighbouring pixels lie on the same surface.
+void AddViewPoints(const NerfModel& model, const DepthViews& views, size_t v, double min_opacity, int min_views,
+                   std::vector<SurfacePoint>* points) {
+  const PinholeCamera& camera = views.cameras[v];
+  const RenderedView& rendered = views.renders[v];
+  const int w = camera.width, h = camera.height;
+  std::vector<Eigen::Vector3d> position(size_t(w) * h, Eigen::Vector3d::Constant(NAN));
+  std::vector<Eigen::Vector3d> origin(position.size());
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      if (!(rendered.opacity.pixels[i] >= min_opacity)) continue;
+      const Ray ray = CameraRay(camera, x + 0.5, y + 0.5);
+      position[i] = ray.origin + double(rendered.depth.pixels[i]) * ray.direction;
+      origin[i] = ray.origin;
+    }
+  }
+  // A neighbour's point if it is on the same surface: within kMaxStep footprints of depth.
+  constexpr double kMaxStep = 4;
+  const auto neighbour = [&](int x, int y, size_t i, double footprint) -> const Eigen::Vector3d* {
+    if (x < 0 || y < 0 || x >= w || y >= h) return nullptr;
+    const Eigen::Vector3d& p = position[size_t(y) * w + x];
+    if (!p.allFinite()) return nullptr;
+    return std::abs(rendered.depth.pixels[size_t(y) * w + x] - rendered.depth.pixels[i]) <= kMaxStep * footprint
+               ? &p
+               : nullptr;
+  };
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      if (!position[i].allFinite()) continue;
+      const float opacity = rendered.opacity.pixels[i];
+      if (views.Support(position[i], v, min_views - 1) < min_views - 1) continue;
+      SurfacePoint point;
+      point.position = position[i];
+      point.footprint = rendered.depth.pixels[i] / camera.fx;  // about: the ray's length over the focal length
+      for (int c = 0; c < 3; ++c) {                            // the render less the background seen through it
+        const float surface = (rendered.rgb.pixels[3 * i + c] - (1 - opacity) * model.background[c]) / opacity;
+        point.rgb[c] = std::clamp(surface, 0.0f, 1.0f);
+      }
+      point.opacity = opacity;
+      const Eigen::Vector3d *left = neighbour(x - 1, y, i, point.footprint),
+                            *right = neighbour(x + 1, y, i, point.footprint),
+                            *up = neighbour(x, y - 1, i, point.footprint),
+                            *down = neighbour(x, y + 1, i, point.footprint);
+      if ((left || right) && (up || down)) {
+        const Eigen::Vector3d across = (right ? *right : position[i]) - (left ? *left : position[i]);
+        const Eigen::Vector3d along = (down ? *down : position[i]) - (up ? *up : position[i]);
+        Eigen::Vector3d normal = across.cross(along).normalized();
+        if (normal.dot(origin[i] - position[i]) < 0) normal = -normal;
+        if (normal.allFinite()) point.normal = normal.cast<float>();
+      }
+      points->push_back(point);
+    }
+  }
+}
+
+}  // namespace
+
+Gaussians<float> GaussiansFromField(const NerfModel& model, const std::vector<TrainView>& views,
+                                    const FieldInitOptions& options, const RenderOptions& render) {
+  DepthViews depth_views;
+  for (const TrainView& view : views) {
+    depth_views.cameras.push_back(ScaledCamera(view.camera, options.width));
+    depth_views.renders.push_back(RenderView(model, depth_views.cameras.back(), view.near, view.far, render));
+  }
+  std::vector<std::vector<SurfacePoint>> per_view(views.size());
+  tbb::parallel_for(size_t(0), views.size(), [&](size_t v) {
+    AddViewPoints(model, depth_views, v, options.min_opacity, options.min_views, &per_view[v]);
+  });
+  std::vector<SurfacePoint> points;
+  for (const std::vector<SurfacePoint>& view_points : per_view) {
+    points.insert(points.end(), view_points.begin(), view_points.end());
+  }
+  return GaussiansFromPoints(points, options.max_gaussians, options.sh_degree);
+}
+
+}  // namespace p2n

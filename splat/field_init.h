@@ -1,0 +1,44 @@
+#pragma once
+// Gaussians where a trained radiance field says the surfaces are: the training views are rendered small, and
+// each pixel opaque enough gives a point at its median depth with its rendered colour (the background seen
+// through it taken out) and the normal of the depth map there, if another view sees the same depth there (a
+// floater in front of one view is not where the others see a surface). The points are pooled in cubic cells whose size
+// follows the pixel footprint there (a power of two times it, the same for all, grown until the cells are few
+// enough), one Gaussian per cell: the mean and colour of its points, a flat disc across the cell along their mean
+// normal (a ball where the normals disagree), an opacity from the field's. Far surfaces of a real capture get
+// larger and fewer Gaussians than near ones, as a photo resolves them.
+
+#include <functional>
+#include <vector>
+
+#include "nerf/nerf_model.h"
+#include "nerf/trainer.h"
+#include "splat/gaussians.h"
+
+namespace p2n {
+
+struct FieldInitOptions {
+  int width = 200;                 // the training views are rendered this wide
+  double min_opacity = 0.5;        // pixels at least this opaque give points
+  int min_views = 2;               // ... if at least this many views (their own included) see them at that depth
+  size_t max_gaussians = 400'000;  // the cells grow until there are at most this many
+  int sh_degree = 3;               // of the Gaussians made (the higher coefficients start at zero)
+};
+
+// `views`: cameras and near/far in the field's (normalised) frame; their pixels are not read. `render` is passed
+// to RenderView (its on_rays_done can report progress or stop the work). The Gaussians are in the same frame.
+Gaussians<float> GaussiansFromField(const NerfModel& model, const std::vector<TrainView>& views,
+                                    const FieldInitOptions& options, const RenderOptions& render);
+
+// The same from given points (each with a colour in [0, 1] and the world size of a pixel there): what
+// GaussiansFromField does after rendering, and what an initialisation from sparse points uses.
+struct SurfacePoint {
+  Eigen::Vector3d position;
+  Eigen::Vector3f rgb;
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();  // unit, towards the camera that saw it; zero: unknown
+  float opacity = 1;
+  double footprint = 0;  // world units
+};
+Gaussians<float> GaussiansFromPoints(const std::vector<SurfacePoint>& points, size_t max_gaussians, int sh_degree);
+
+}  // namespace p2n

@@ -1,0 +1,220 @@
+#include "splat/splat_trainer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "nerf/config_check.h"
+
+namespace p2n {
+
+void SplatTrainerOptions::Check() const {
+  const char* what = "splat";
+  CheckField(steps >= 0, what, "steps", "be at least 0", steps);
+  for (const auto& [name, value] : {std::pair{"position_lr", position_lr},
+                                    {"final_position_lr", final_position_lr},
+                                    {"colour_lr", colour_lr},
+                                    {"opacity_lr", opacity_lr},
+                                    {"scale_lr", scale_lr},
+                                    {"rotation_lr", rotation_lr}}) {
+    CheckField(value > 0 && std::isfinite(value), what, name, "be positive", value);
+  }
+  CheckField(sh_interval > 0, what, "sh_interval", "be positive", sh_interval);
+  CheckField(densify_interval > 0, what, "densify_interval", "be positive", densify_interval);
+  CheckField(densify_until >= 0 && densify_until <= 1, what, "densify_until", "be in [0, 1]", densify_until);
+  CheckField(densify_gradient > 0, what, "densify_gradient", "be positive", densify_gradient);
+  CheckField(prune_opacity >= 0 && prune_opacity < 1, what, "prune_opacity", "be in [0, 1)", prune_opacity);
+}
+
+SplatTrainer::SplatTrainer(Gaussians<float> gaussians, const SplatScene& scene, const SplatTrainerOptions& options)
+    : gaussians_(std::move(gaussians)), scene_(scene), options_(options), random_(options.seed) {
+  options_.Check();
+  if (scene_.views == nullptr || scene_.views->empty()) throw std::invalid_argument("SplatTrainer: no training views");
+  gaussians_.ForEachArray([&](const std::vector<float>& values, int per) {
+    adams_.emplace_back(AdamOptions{1e-3, 0.9, 0.999, 1e-15}, values.size(), std::max(per, 1));
+  });
+  screen_gradient_sum_.assign(gaussians_.size(), 0);
+  screen_gradient_count_.assign(gaussians_.size(), 0);
+}
+
+int SplatTrainer::ShDegree() const { return std::min(gaussians_.sh_degree, step_ / options_.sh_interval); }
+
+double SplatTrainer::PositionLearningRate() const {
+  const double t = options_.steps > 0 ? std::min(1.0, double(step_) / options_.steps) : 1.0;
+  return scene_.extent * std::exp((1 - t) * std::log(options_.position_lr) + t * std::log(options_.final_position_lr));
+}
+
+const TrainView& SplatTrainer::NextView() {
+  if (order_.empty()) {
+    order_.resize(scene_.views->size());
+    for (size_t i = 0; i < order_.size(); ++i) order_[i] = i;
+    std::shuffle(order_.begin(), order_.end(), random_);
+  }
+  const size_t view = order_.back();
+  order_.pop_back();
+  return (*scene_.views)[view];
+}
+
+double SplatTrainer::Step() {
+  const TrainView& view = NextView();
+  RasterOptions raster;
+  raster.projection.near = scene_.near;
+  raster.projection.sh_degree = ShDegree();
+  for (int c = 0; c < 3; ++c) raster.background[c] = scene_.background[c];
+  rasterizer_.Forward(gaussians_, view.camera, raster);
+
+  // L1 against the photo on the background.
+  const std::vector<float>& rgb = rasterizer_.rgb();
+  std::vector<float> d_rgb(rgb.size());
+  double loss = 0;
+  const float scale = 1.0f / static_cast<float>(rgb.size());
+  for (size_t i = 0; i < rgb.size() / 3; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      const float difference = rgb[3 * i + c] - view.OnBackground(i, c, scene_.background[c]);
+      loss += std::abs(difference);
+      d_rgb[3 * i + c] = difference > 0 ? scale : (difference < 0 ? -scale : 0.0f);
+    }
+  }
+  Gaussians<float> grads;
+  grads.sh_degree = gaussians_.sh_degree;
+  grads.Resize(gaussians_.size());
+  std::vector<float> screen;
+  rasterizer_.Backward(d_rgb, &grads, &screen);
+
+  // Screen-space gradients in normalised device units (as the reference's threshold is), for densification.
+  const float half_width = 0.5f * view.camera.width, half_height = 0.5f * view.camera.height;
+  for (size_t i = 0; i < gaussians_.size(); ++i) {
+    if (!rasterizer_.IsDrawn(i)) continue;
+    screen_gradient_sum_[i] += std::hypot(screen[2 * i] * half_width, screen[2 * i + 1] * half_height);
+    ++screen_gradient_count_[i];
+  }
+
+  const double rates[6] = {PositionLearningRate(), options_.scale_lr,  options_.rotation_lr,
+                           options_.opacity_lr,    options_.colour_lr, options_.colour_lr / 20};
+  std::vector<std::vector<float>*> gradients;
+  grads.ForEachArray([&](std::vector<float>& values, int) { gradients.push_back(&values); });
+  size_t array = 0;
+  gaussians_.ForEachArray([&](std::vector<float>& values, int) {
+    Adam<float>& adam = adams_[array];
+    adam.set_learning_rate(rates[array]);
+    adam.Step(values.data(), gradients[array]->data());
+    ++array;
+  });
+  ++step_;
+  const int densify_last = static_cast<int>(options_.densify_until * options_.steps);
+  if (step_ >= options_.densify_from && step_ <= densify_last && step_ % options_.densify_interval == 0) Densify();
+  return loss / rgb.size();
+}
+
+void SplatTrainer::Densify() {
+  const size_t n = gaussians_.size();
+  const double dense_scale = options_.dense_fraction * scene_.extent;
+  std::normal_distribution<float> normal;
+  Gaussians<float> added;
+  added.sh_degree = gaussians_.sh_degree;
+  std::vector<bool> keep(n, true);
+  size_t budget = options_.max_gaussians > n ? options_.max_gaussians - n : 0;
+  for (size_t i = 0; i < n && budget > 0; ++i) {
+    if (screen_gradient_count_[i] == 0 ||
+        screen_gradient_sum_[i] / screen_gradient_count_[i] < options_.densify_gradient) {
+      continue;
+    }
+    const float* log_scale = &gaussians_.log_scales[3 * i];
+    const float largest = std::exp(std::max({log_scale[0], log_scale[1], log_scale[2]}));
+    if (largest <= dense_scale) {  // small: a copy, which the next steps pull apart
+      added.Append(gaussians_, i);
+      --budget;
+      continue;
+    }
+    // Large: two Gaussians drawn from it, each 1/1.6 of its size; the original goes.
+    const float* q = &gaussians_.rotations[4 * i];
+    Eigen::Quaternionf rotation(q[0], q[1], q[2], q[3]);
+    if (!(rotation.norm() > 0)) rotation = Eigen::Quaternionf::Identity();
+    const Eigen::Matrix3f r = rotation.normalized().toRotationMatrix();
+    for (int child = 0; child < 2; ++child) {
+      added.Append(gaussians_, i);
+      const size_t k = added.size() - 1;
+      const Eigen::Vector3f offset(std::exp(log_scale[0]) * normal(random_), std::exp(log_scale[1]) * normal(random_),
+                                   std::exp(log_scale[2]) * normal(random_));
+      const Eigen::Vector3f shift = r * offset;
+      for (int a = 0; a < 3; ++a) {
+        added.positions[3 * k + a] += shift[a];
+        added.log_scales[3 * k + a] -= std::log(1.6f);
+      }
+    }
+    keep[i] = false;
+    budget = budget > 0 ? budget - 1 : 0;
+  }
+  for (size_t i = 0; i < n; ++i) {
+    if (Sigmoid(gaussians_.opacity_logits[i]) < options_.prune_opacity) keep[i] = false;
+  }
+  std::vector<int64_t> sources;
+  for (size_t i = 0; i < n; ++i) {
+    if (keep[i]) sources.push_back(static_cast<int64_t>(i));
+  }
+  sources.resize(sources.size() + added.size(), -1);
+  gaussians_.Filter(keep);
+  for (size_t k = 0; k < added.size(); ++k) gaussians_.Append(added, k);
+  size_t array = 0;  // an array of no values per Gaussian (SH degree 0's higher coefficients) keeps none
+  gaussians_.ForEachArray([&](const std::vector<float>&, int per) {
+    if (per > 0) adams_[array].Remap(sources);
+    ++array;
+  });
+  screen_gradient_sum_.assign(gaussians_.size(), 0);
+  screen_gradient_count_.assign(gaussians_.size(), 0);
+}
+
+void SplatTrainer::Save(BinaryWriter* writer) const {
+  writer->Put<int32_t>(step_);
+  writer->Put<int32_t>(gaussians_.sh_degree);
+  gaussians_.ForEachArray([&](const std::vector<float>& values, int) { writer->PutVector(values); });
+  for (const Adam<float>& adam : adams_) adam.Save(writer);
+  writer->PutVector(screen_gradient_sum_);
+  writer->PutVector(screen_gradient_count_);
+  std::vector<uint64_t> order(order_.begin(), order_.end());
+  writer->PutVector(order);
+  std::ostringstream state;
+  state << random_;
+  writer->PutString(state.str());
+}
+
+void SplatTrainer::Load(BinaryReader* reader) {
+  step_ = reader->Get<int32_t>();
+  gaussians_.sh_degree = reader->Get<int32_t>();
+  if (gaussians_.sh_degree < 0 || gaussians_.sh_degree > kMaxShDegree) {
+    throw std::runtime_error("a splat checkpoint's SH degree is not 0..3");
+  }
+  size_t count = SIZE_MAX;
+  gaussians_.ForEachArray([&](std::vector<float>& values, int per) {
+    values = reader->GetVector<float>(count == SIZE_MAX ? SIZE_MAX : count * per);
+    if (count == SIZE_MAX) count = values.size() / per;
+    if (values.size() != count * per) throw std::runtime_error("a splat checkpoint's arrays disagree in length");
+  });
+  adams_.clear();
+  gaussians_.ForEachArray([&](const std::vector<float>& values, int per) {
+    adams_.emplace_back(AdamOptions{1e-3, 0.9, 0.999, 1e-15}, values.size(), std::max(per, 1));
+    adams_.back().Load(reader);
+  });
+  screen_gradient_sum_ = reader->GetVector<float>(count);
+  screen_gradient_count_ = reader->GetVector<uint32_t>(count);
+  const std::vector<uint64_t> order = reader->GetVector<uint64_t>();
+  for (const uint64_t v : order) {
+    if (v >= scene_.views->size()) throw std::runtime_error("a splat checkpoint names a view that is not there");
+  }
+  order_.assign(order.begin(), order.end());
+  std::istringstream state(reader->GetString());
+  state >> random_;
+  if (state.fail()) throw std::runtime_error("a splat checkpoint's random state cannot be read");
+}
+
+FloatImage RenderSplats(const Gaussians<float>& gaussians, const PinholeCamera& camera,
+                        const std::array<float, 3>& background, double near) {
+  RasterOptions options;
+  options.projection.near = near;
+  for (int c = 0; c < 3; ++c) options.background[c] = background[c];
+  Rasterizer<float> rasterizer;
+  rasterizer.Forward(gaussians, camera, options);
+  return FloatImage{camera.width, camera.height, 3, rasterizer.rgb()};
+}
+
+}  // namespace p2n

@@ -1,0 +1,89 @@
+#pragma once
+// Optimises Gaussians against posed photos (3D Gaussian Splatting's recipe, sized for a CPU): one training view
+// per step, rendered whole by the rasterizer, an L1 loss against the photo on the known background, Adam with a
+// learning rate per parameter (the means' decaying exponentially and scaled by the scene's extent), the
+// spherical harmonics' degrees joining one at a time, and densification: Gaussians whose mean the loss pulls hard
+// across the screen are cloned when small and split in two when large, transparent ones are pruned.
+
+#include <array>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "nerf/adam.h"
+#include "nerf/binary_io.h"
+#include "nerf/float_image.h"
+#include "nerf/trainer.h"
+#include "splat/gaussians.h"
+#include "splat/rasterizer.h"
+
+namespace p2n {
+
+struct SplatTrainerOptions {
+  int steps = 2000;
+  double position_lr = 1.6e-4;  // × the extent, decaying to final_position_lr × the extent at the last step
+  double final_position_lr = 1.6e-6;
+  double colour_lr = 1e-2;  // the degree-0 coefficients; the higher ones at a twentieth of it
+  double opacity_lr = 0.025;
+  double scale_lr = 5e-3;
+  double rotation_lr = 1e-3;
+  int sh_interval = 200;           // steps between the joining of each higher SH degree
+  int densify_interval = 100;      // steps between densifications
+  int densify_from = 100;          // the first densification's step
+  double densify_until = 0.5;      // fraction of the steps after which the Gaussians' number stays
+  double densify_gradient = 2e-4;  // mean screen-space gradient (normalised device units) that densifies
+  double dense_fraction = 0.01;    // of the extent: larger Gaussians split, smaller ones clone
+  double prune_opacity = 0.005;
+  size_t max_gaussians = 1'500'000;
+  uint64_t seed = 0;
+
+  // std::invalid_argument naming the field and its rule.
+  void Check() const;
+};
+
+// The scene the Gaussians learn: training views (cameras in the Gaussians' frame), the background behind them,
+// the scene's extent (a radius around the cameras, for learning rates and densification) and the near plane.
+struct SplatScene {
+  const std::vector<TrainView>* views = nullptr;
+  std::array<float, 3> background{1, 1, 1};
+  double extent = 1;
+  double near = 0.01;
+};
+
+class SplatTrainer {
+ public:
+  SplatTrainer(Gaussians<float> gaussians, const SplatScene& scene, const SplatTrainerOptions& options);
+
+  // One step on the next training view (each view once per epoch, in a random order); returns the L1 loss.
+  double Step();
+  int step() const { return step_; }
+  const Gaussians<float>& gaussians() const { return gaussians_; }
+  // The SH degree in use at this step.
+  int ShDegree() const;
+
+  // Everything a resumed run needs to continue as this one would (the scene excepted).
+  void Save(BinaryWriter* writer) const;
+  void Load(BinaryReader* reader);
+
+ private:
+  double PositionLearningRate() const;
+  void Densify();
+  const TrainView& NextView();
+
+  Gaussians<float> gaussians_;
+  SplatScene scene_;
+  SplatTrainerOptions options_;
+  std::vector<Adam<float>> adams_;  // one per parameter array, in Gaussians::ForEachArray's order
+  Rasterizer<float> rasterizer_;
+  int step_ = 0;
+  std::mt19937_64 random_;
+  std::vector<size_t> order_;  // this epoch's views; the next is order_.back()
+  std::vector<float> screen_gradient_sum_;
+  std::vector<uint32_t> screen_gradient_count_;
+};
+
+// The Gaussians' image of `camera` over `background`: an RGB FloatImage.
+FloatImage RenderSplats(const Gaussians<float>& gaussians, const PinholeCamera& camera,
+                        const std::array<float, 3>& background, double near);
+
+}  // namespace p2n

@@ -1,0 +1,35 @@
+#pragma once
+// The frame the stages' files are written in: COLMAP's world (or the dataset's), undoing the poses stage's
+// normalisation (applied_transform in transforms.json), or the normalised training frame itself.
+
+#include <Eigen/Core>
+
+#include <cmath>
+
+#include <filesystem>
+#include <string>
+
+#include "stages/transforms_json.h"
+
+namespace p2n {
+
+// The similarity from the normalised frame to the one the files are written in.
+struct OutputFrame {
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // out_from_normalized, scaled
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  std::string description;
+
+  Eigen::Vector3f Point(const Eigen::Vector3f& p) const;
+  Eigen::Vector3f Direction(const Eigen::Vector3f& d) const;
+  double Scale() const { return std::cbrt(rotation.determinant()); }
+  // A camera's world_from_cam (OpenGL axes) in this frame: its centre mapped, its axes turned.
+  Eigen::Matrix4d Pose(const Eigen::Matrix4d& world_from_cam) const;
+  // A camera in this frame: its pose mapped, its near and far scaled.
+  CameraView Camera(const CameraView& view) const;
+};
+
+// "normalized" or "source" (the inverse of transforms.json's applied_transform); UserError naming the file when
+// that cannot be inverted.
+OutputFrame MakeOutputFrame(const std::string& frame, const std::filesystem::path& transforms);
+
+}  // namespace p2n

@@ -1,0 +1,283 @@
+#include "stages/splat_stage.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "nerf/binary_io.h"
+#include "nerf/plot.h"
+#include "nerf/renderer.h"
+#include "pipeline/cancel.h"
+#include "pipeline/errors.h"
+#include "pipeline/file_util.h"
+#include "pipeline/format.h"
+#include "pipeline/log.h"
+#include "pipeline/progress.h"
+#include "splat/field_init.h"
+#include "splat/splat_ply.h"
+#include "splat/splat_trainer.h"
+#include "stages/camera_corrections.h"
+#include "stages/output_frame.h"
+#include "stages/stage_io.h"
+#include "stages/train_stage.h"
+#include "stages/training_data.h"
+
+namespace p2n {
+
+namespace fs = std::filesystem;
+
+void SplatOptions::Check() const {
+  CheckOption(time_budget >= 0, "splat.time_budget", "must be 0 (by the preset) or positive");
+  CheckOption(steps >= 0, "splat.steps", "must be 0 (no limit) or positive");
+  CheckOption(sh_degree >= 0 && sh_degree <= kMaxShDegree, "splat.sh_degree", "must be 0..3");
+  CheckOption(init_width >= 8 && init_width <= 8192, "splat.init_width", "must be 8..8192");
+  CheckOption(max_gaussians >= 1, "splat.max_gaussians", "must be positive");
+  CheckOption(eval_interval > 0, "splat.eval_interval", "must be positive");
+  CheckOption(checkpoint_interval >= 0, "splat.checkpoint_interval", "must be 0 (none) or positive");
+}
+
+double SplatTimeBudget(const SplatOptions& options, const std::string& train_preset) {
+  if (options.time_budget > 0 || options.steps > 0) return options.time_budget;
+  return train_preset == "fast" ? 30 : train_preset == "quality" ? 180 : 120;
+}
+
+namespace {
+
+constexpr int kMaxEvalViewsDuringTraining = 4;
+constexpr size_t kPixelsPerSplat = 64;
+
+// The splats' world: the training data with every camera in the output frame (the training views as camera
+// refinement left them), the first Gaussians there, and the scene's extent.
+struct SplatSetup {
+  TrainingData data;
+  OutputFrame frame;
+  Gaussians<float> gaussians;
+  std::array<float, 3> background{1, 1, 1};
+  double extent = 1;
+};
+
+// 1.1 times the largest distance of a training camera from their mean (3D Gaussian Splatting's scene radius).
+double CameraExtent(const std::vector<TrainView>& views) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const TrainView& v : views) mean += v.camera.world_from_cam.topRightCorner<3, 1>();
+  mean /= static_cast<double>(views.size());
+  double radius = 0;
+  for (const TrainView& v : views)
+    radius = std::max(radius, (v.camera.world_from_cam.topRightCorner<3, 1>() - mean).norm());
+  return 1.1 * std::max(radius, 1e-6);
+}
+
+SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& options) {
+  SplatSetup setup;
+  const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
+  const fs::path train_dir = context.upstream_dirs.at("train");
+  const NerfModel model = LoadTrainedModel(train_dir / "model.bin");
+  std::string split;
+  setup.data = LoadTrainingData(transforms, context.workspace.root(), &split);
+  setup.background = model.background;
+  const std::map<std::string, CameraCorrection> corrections = ReadCameraCorrections(train_dir / "train_report.json");
+  for (TrainView& view : setup.data.train) {
+    const auto found = corrections.find(view.name);
+    if (found != corrections.end()) view.camera = CorrectedCamera(view.camera, found->second.data());
+  }
+
+  FieldInitOptions init;
+  init.width = options.init_width;
+  // At most one splat per kPixelsPerSplat training pixels: small photos do not resolve more (3D Gaussian
+  // Splatting ends with about one per 100 to 300).
+  size_t pixels = 0;
+  for (const TrainView& view : setup.data.train) pixels += size_t(view.camera.width) * view.camera.height;
+  init.max_gaussians = std::min(static_cast<size_t>(options.max_gaussians), pixels / kPixelsPerSplat);
+  init.sh_degree = options.sh_degree;
+  {
+    Progress progress("splat: placing splats from the field", static_cast<int64_t>(setup.data.train.size()), "views");
+    RenderOptions render;
+    render.on_rays_done = [](size_t) { ThrowIfCancelled(); };
+    render.median_depth = true;
+    std::vector<TrainView> cameras;  // the views without their pixels
+    for (const TrainView& view : setup.data.train)
+      cameras.push_back({view.camera, view.near, view.far, 3, {}, view.name});
+    setup.gaussians = GaussiansFromField(model, cameras, init, render);
+    progress.Add(static_cast<int64_t>(cameras.size()));
+  }
+
+  setup.frame = MakeOutputFrame(options.frame, transforms);
+  if (setup.frame.rotation.determinant() <= 0) {
+    LogWarning("splat: the source frame is mirrored; splats.ply is written in the normalised frame");
+    setup.frame = MakeOutputFrame("normalized", transforms);
+  }
+  ApplySimilarity(setup.frame.rotation, setup.frame.translation, &setup.gaussians);
+  for (auto* views : {&setup.data.train, &setup.data.heldout}) {
+    for (TrainView& view : *views) view.camera.world_from_cam = setup.frame.Pose(view.camera.world_from_cam);
+  }
+  setup.extent = CameraExtent(setup.data.train);
+  return setup;
+}
+
+// PSNR and SSIM of the splats on held-out views (the first `max_views`, or all for 0).
+struct Scores {
+  std::vector<double> psnr, ssim;
+  double seconds_per_view = 0;
+};
+Scores Evaluate(const Gaussians<float>& gaussians, const SplatSetup& setup, double near, size_t max_views,
+                bool with_ssim) {
+  Scores scores;
+  const size_t views = max_views == 0 ? setup.data.heldout.size() : std::min(max_views, setup.data.heldout.size());
+  double seconds = 0;
+  for (size_t v = 0; v < views; ++v) {
+    ThrowIfCancelled();
+    const TrainView& view = setup.data.heldout[v];
+    const auto start = std::chrono::steady_clock::now();
+    const FloatImage image = RenderSplats(gaussians, view.camera, setup.background, near);
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const FloatImage photo = PhotoOnBackground(view, setup.background);
+    scores.psnr.push_back(Psnr(image, photo));
+    if (with_ssim) scores.ssim.push_back(Ssim(image, photo));
+  }
+  scores.seconds_per_view = views > 0 ? seconds / views : 0;
+  return scores;
+}
+
+// The run's state besides the trainer's, kept in checkpoints.
+struct RunState {
+  double seconds = 0;
+  std::string metrics;  // metrics.csv rows so far
+  double loss_sum = 0;
+  int loss_steps = 0;
+};
+
+void SaveCheckpoint(const fs::path& path, const std::string& key, const RunState& state, const SplatTrainer& trainer) {
+  BinaryWriter writer;
+  writer.PutString(key);
+  writer.Put<double>(state.seconds);
+  writer.PutString(state.metrics);
+  writer.Put<double>(state.loss_sum);
+  writer.Put<int32_t>(state.loss_steps);
+  trainer.Save(&writer);
+  fs::create_directories(path.parent_path());
+  WriteBinaryFileAtomic(path, writer.buffer());
+}
+
+// Resumes from `path` when it is a checkpoint of this very result (same key); false otherwise.
+bool LoadCheckpoint(const fs::path& path, const std::string& key, RunState* state, SplatTrainer* trainer) {
+  if (!fs::exists(path)) return false;
+  try {
+    BinaryReader reader(ReadBinaryFile(path), path.string());
+    if (reader.GetString() != key) return false;
+    RunState loaded;
+    loaded.seconds = reader.Get<double>();
+    loaded.metrics = reader.GetString();
+    loaded.loss_sum = reader.Get<double>();
+    loaded.loss_steps = reader.Get<int32_t>();
+    trainer->Load(&reader);
+    *state = loaded;
+    return true;
+  } catch (const std::runtime_error& error) {
+    LogWarning(format("splat: cannot resume ({}); starting over", error.what()));
+    return false;
+  }
+}
+
+// Optimises until the budget (seconds, else steps) is spent: a metrics row at every evaluation, checkpoints.
+void OptimiseUntilDone(SplatTrainer& trainer, const SplatSetup& setup, const SplatOptions& options, double budget,
+                       double near, const fs::path& checkpoint, const std::string& key, RunState* state) {
+  using Clock = std::chrono::steady_clock;
+  const auto done = [&] {
+    return (budget > 0 && state->seconds >= budget) || (options.steps > 0 && trainer.step() >= options.steps);
+  };
+  Progress progress("splat", budget > 0 ? static_cast<int64_t>(budget) : options.steps, budget > 0 ? "s" : "steps");
+  progress.Add(budget > 0 ? static_cast<int64_t>(state->seconds) : trainer.step());
+  double next_eval = (std::floor(state->seconds / options.eval_interval) + 1) * options.eval_interval;
+  auto last_checkpoint = Clock::now();
+  while (!done()) {
+    ThrowIfCancelled();
+    const auto start = Clock::now();
+    state->loss_sum += trainer.Step();
+    ++state->loss_steps;
+    const int64_t whole_before = static_cast<int64_t>(state->seconds);
+    state->seconds += std::chrono::duration<double>(Clock::now() - start).count();
+    progress.Add(budget > 0 ? static_cast<int64_t>(state->seconds) - whole_before : 1);
+    if (state->seconds >= next_eval || done()) {
+      const Scores scores = Evaluate(trainer.gaussians(), setup, near, kMaxEvalViewsDuringTraining, false);
+      state->metrics += format("{:.3f},{},{},{:.6g},{:.4f}\n", state->seconds, trainer.step(),
+                               trainer.gaussians().size(), state->loss_sum / state->loss_steps, Mean(scores.psnr));
+      state->loss_sum = 0;
+      state->loss_steps = 0;
+      next_eval = (std::floor(state->seconds / options.eval_interval) + 1) * options.eval_interval;
+    }
+    if (options.checkpoint_interval > 0 &&
+        std::chrono::duration<double>(Clock::now() - last_checkpoint).count() >= options.checkpoint_interval) {
+      WriteOrExplain([&] { SaveCheckpoint(checkpoint, key, *state, trainer); });
+      last_checkpoint = Clock::now();
+    }
+  }
+}
+
+}  // namespace
+
+void SplatStage::Run(StageContext& context) const {
+  const SplatOptions options = ReadOptions<SplatOptions>(context.config, "splat");
+  const fs::path out = context.output_dir;
+  if (!options.enabled) {
+    WriteJsonAtomic(out / "splat_report.json", {{"enabled", false}});
+    context.summary["splats"] = "off";
+    return;
+  }
+  const TrainOptions train_options = ReadOptions<TrainOptions>(context.config, "train");
+  const double budget = SplatTimeBudget(options, train_options.preset);
+  const SplatSetup setup = LoadSplatSetup(context, options);
+  const double near = 0.01 * setup.extent;
+  LogInfo(format("splat: {} splats placed from the field; {} training and {} held-out views, {}",
+                 setup.gaussians.size(), setup.data.train.size(), setup.data.heldout.size(),
+                 budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
+
+  SplatTrainerOptions trainer_options;
+  trainer_options.seed = static_cast<uint64_t>(options.seed);
+  trainer_options.max_gaussians = 2 * static_cast<size_t>(options.max_gaussians);
+  const SplatScene scene{&setup.data.train, setup.background, setup.extent, near};
+  SplatTrainer trainer(setup.gaussians, scene, trainer_options);
+  RunState state;
+  const fs::path checkpoint = context.resume_dir / "checkpoint.bin";
+  const int resumed_from = LoadCheckpoint(checkpoint, context.key, &state, &trainer) ? trainer.step() : 0;
+  if (resumed_from > 0) LogInfo(format("splat: resumed at step {} from {}", resumed_from, checkpoint.string()));
+  OptimiseUntilDone(trainer, setup, options, budget, near, checkpoint, context.key, &state);
+
+  const Scores scores = Evaluate(trainer.gaussians(), setup, near, 0, true);
+  WriteOrExplain([&] {
+    WriteSplatPly(out / "splats.ply", trainer.gaussians(),
+                  {setup.frame.description,
+                   format("{} splats of SH degree {}", trainer.gaussians().size(), trainer.gaussians().sh_degree)});
+  });
+  const std::string metrics = "wall_seconds,step,splats,train_loss,heldout_psnr\n" + state.metrics;
+  WriteFileAtomic(out / "metrics.csv", metrics);
+  const PlotSeries curve = CsvSeries("held-out PSNR", metrics, 0, 4);
+  if (!curve.x.empty()) {
+    WriteOrExplain([&] {
+      WriteLinePlot(out / "psnr.png", {"splats: held-out PSNR against optimisation time", "time (s)", "PSNR (dB)"},
+                    {curve});
+    });
+  }
+  const nlohmann::json report = {
+      {"enabled", true},
+      {"splats", trainer.gaussians().size()},
+      {"initial_splats", setup.gaussians.size()},
+      {"sh_degree", trainer.gaussians().sh_degree},
+      {"steps", trainer.step()},
+      {"seconds", state.seconds},
+      {"resumed_from_step", resumed_from},
+      {"heldout_views", setup.data.heldout.size()},
+      {"heldout_psnr", setup.data.heldout.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(scores.psnr))},
+      {"heldout_ssim", setup.data.heldout.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(scores.ssim))},
+      {"heldout_psnr_per_view", scores.psnr},
+      {"seconds_per_view", scores.seconds_per_view},
+      {"frame", setup.frame.description},
+      {"near", near},
+      {"background", setup.background},
+      {"file", "splats.ply"}};
+  WriteJsonAtomic(out / "splat_report.json", report);
+  context.summary["splats"] = trainer.gaussians().size();
+  if (!setup.data.heldout.empty()) context.summary["splat_psnr"] = Mean(scores.psnr);
+  LogInfo(format("splat: {} splats, held-out PSNR {:.2f} dB, {:.3f} s per held-out view", trainer.gaussians().size(),
+                 Mean(scores.psnr), scores.seconds_per_view));
+}
+
+}  // namespace p2n

@@ -1,0 +1,58 @@
+#pragma once
+// The splat stage: the trained field baked into 3D Gaussians (splat/), initialised where the field's surfaces
+// are and optimised against the training photos for a time budget; held-out PSNR and SSIM against time
+// (metrics.csv, psnr.png), and splats.ply in the standard 3D Gaussian Splatting layout, in COLMAP's (or the
+// dataset's) frame like the mesh, which splat viewers and tools open unchanged. Interruptible and resumable as
+// training is.
+
+#include <string>
+
+#include "pipeline/stage.h"
+
+namespace p2n {
+
+struct SplatOptions {
+  bool enabled = true;
+  double time_budget = 0;  // seconds of optimisation; 0: by the training preset (SplatTimeBudget)
+  int steps = 0;           // stop after this many steps; 0: no step limit
+  int sh_degree = 3;
+  int init_width = 200;         // training views rendered this wide to place the first Gaussians
+  int max_gaussians = 400'000;  // of the first; densification may double it
+  std::string frame = "source";
+  double eval_interval = 20;  // seconds of optimisation between held-out evaluations
+  double checkpoint_interval = 60;
+  int seed = 0;
+
+  template <class V>
+  void Visit(V& v) {
+    v("enabled", enabled, "bake the trained field into 3D Gaussian splats (splats.ply, for live viewing)");
+    v("time_budget", time_budget,
+      "optimisation time of the splats; 0: by train.preset (fast 30, default 120, quality 180)", "s");
+    v("steps", steps, "stop after this many steps (one training photo each); 0: no step limit", "steps");
+    v("sh_degree", sh_degree, "spherical-harmonics degree of the splats' colours (0: one colour each)");
+    v("init_width", init_width, "width the training views are rendered at to place the first splats", "pixels");
+    v("max_gaussians", max_gaussians, "splats placed from the field (densification may add as many again)");
+    v("frame", frame,
+      "coordinates of splats.ply: source (COLMAP's world, or the dataset's) or normalized (the training frame)", "",
+      OptionKind::kResult, {"source", "normalized"});
+    v("eval_interval", eval_interval, "optimisation time between held-out evaluations (metrics.csv rows)", "s");
+    v("checkpoint_interval", checkpoint_interval, "time between checkpoints that a killed run resumes from; 0: none",
+      "s", OptionKind::kRuntime);
+    v("seed", seed, "random seed (view order, splits)");
+  }
+  void Check() const;
+};
+
+// splat.time_budget, or the training preset's share when it is 0.
+double SplatTimeBudget(const SplatOptions& options, const std::string& train_preset);
+
+class SplatStage : public Stage {
+ public:
+  std::string name() const override { return "splat"; }
+  std::string folder() const override { return "35_splat"; }
+  int format_version() const override { return 1; }
+  std::vector<std::string> upstream() const override { return {"poses", "train"}; }
+  void Run(StageContext& context) const override;
+};
+
+}  // namespace p2n

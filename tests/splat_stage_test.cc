@@ -1,0 +1,48 @@
+// The splat stage: splats.ply in the standard layout, placed where the scene is, with their held-out scores; off
+// when asked.
+
+#include <catch2/catch.hpp>
+
+#include "pipeline/file_util.h"
+#include "splat/splat_ply.h"
+#include "stage_fixtures.h"
+#include "stages/output_frame.h"
+
+namespace p2n::testing {
+namespace fs = std::filesystem;
+
+TEST_CASE("splat stage: splats where the scene is, scored on the held-out views, with their curve", "[splat]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(150);
+  setup.runner.Run(setup.workspace, config, Until("splat"));
+  const fs::path out = setup.dir / "ws" / "35_splat";
+  const nlohmann::json report = ReadJsonFile(out / "splat_report.json");
+  const Gaussians<float> splats = ReadSplatPly(out / "splats.ply");
+  CHECK(splats.size() == report["splats"].get<size_t>());
+  CHECK(splats.sh_degree == 3);
+  CHECK(report["steps"] == 30);
+  CHECK(report["heldout_psnr"].get<double>() > 15);
+  CHECK(report["heldout_psnr_per_view"].size() == report["heldout_views"].get<size_t>());
+  CHECK(ReadTextFile(out / "metrics.csv").find("wall_seconds,step,splats,train_loss,heldout_psnr\n") == 0);
+
+  // In the source frame, the splats lie where the normalised scene's unit box maps to.
+  const OutputFrame frame = MakeOutputFrame("source", setup.dir / "ws" / "20_poses" / "transforms.json");
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < splats.size(); ++i) {
+    mean += Eigen::Vector3d(splats.positions[3 * i], splats.positions[3 * i + 1], splats.positions[3 * i + 2]);
+  }
+  mean /= static_cast<double>(splats.size());
+  CHECK((mean - frame.translation).norm() < 1.5 * frame.Scale());
+}
+
+TEST_CASE("splat stage: splat.enabled false writes no splats and says so", "[splat]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(30);
+  config.Set("splat.enabled", false, "test");
+  setup.runner.Run(setup.workspace, config, Until("splat"));
+  const fs::path out = setup.dir / "ws" / "35_splat";
+  CHECK(ReadJsonFile(out / "splat_report.json")["enabled"] == false);
+  CHECK_FALSE(fs::exists(out / "splats.ply"));
+}
+
+}  // namespace p2n::testing

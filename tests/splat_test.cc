@@ -1,0 +1,193 @@
+// The splat library beyond the rasterizer: the PLY layout, similarity moves, placing Gaussians from surface
+// points, and the optimiser (it fits, and a resumed run continues as an uninterrupted one would).
+
+#include <catch2/catch.hpp>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <random>
+
+#include "splat/field_init.h"
+#include "splat/rasterizer.h"
+#include "splat/splat_ply.h"
+#include "splat/splat_trainer.h"
+#include "tests/test_util.h"
+
+namespace p2n::testing {
+namespace {
+
+PinholeCamera CameraAt(const Eigen::Vector3d& position, int size = 32) {
+  PinholeCamera camera;
+  camera.width = camera.height = size;
+  camera.fx = camera.fy = size;
+  camera.cx = camera.cy = size / 2.0;
+  camera.world_from_cam = LookAtPose(position, Eigen::Vector3d::Zero());
+  return camera;
+}
+
+Gaussians<float> RandomSplats(int count, int degree, uint64_t seed) {
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<float> uniform(-1, 1);
+  Gaussians<float> g;
+  g.sh_degree = degree;
+  g.Resize(count);
+  for (int i = 0; i < count; ++i) {
+    for (int a = 0; a < 3; ++a) g.positions[3 * i + a] = 0.4f * uniform(random);
+    for (int a = 0; a < 3; ++a) g.log_scales[3 * i + a] = std::log(0.12f) + 0.3f * uniform(random);
+    for (int a = 0; a < 4; ++a) g.rotations[4 * i + a] = uniform(random) + (a == 0 ? 1.5f : 0.0f);
+    g.opacity_logits[i] = uniform(random);
+    for (int c = 0; c < 3; ++c) g.sh_dc[3 * i + c] = 1.5f * uniform(random);
+  }
+  return g;
+}
+
+// Views of the origin from a ring of cameras, their pixels rendered from `truth`.
+std::vector<TrainView> ViewsOf(const Gaussians<float>& truth, int count) {
+  std::vector<TrainView> views;
+  for (int v = 0; v < count; ++v) {
+    const double angle = 2 * M_PI * v / count;
+    TrainView view;
+    view.camera = CameraAt({2.5 * std::cos(angle), 2.5 * std::sin(angle), 0.8});
+    const FloatImage image = RenderSplats(truth, view.camera, {1, 1, 1}, 0.01);
+    for (const float value : image.pixels)
+      view.pixels.push_back(static_cast<uint8_t>(std::lround(255 * std::clamp(value, 0.0f, 1.0f))));
+    views.push_back(std::move(view));
+  }
+  return views;
+}
+
+}  // namespace
+
+TEST_CASE("Splat PLY files have the standard layout and read back exactly", "[splat]") {
+  const Gaussians<float> g = RandomSplats(5, 3, 1);
+  const std::vector<char> bytes = SplatPlyBytes(g, {"frame: test"});
+  const std::string text(bytes.begin(), bytes.end());
+  const std::string header = text.substr(0, text.find("end_header"));
+  CHECK(header.find("element vertex 5\n") != std::string::npos);
+  CHECK(header.find("property float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\nproperty float f_rest_0\n") !=
+        std::string::npos);
+  CHECK(header.find("property float f_rest_44\nproperty float opacity\nproperty float scale_0\n") != std::string::npos);
+  CHECK(header.find("property float rot_3\n") != std::string::npos);
+  CHECK(bytes.size() == header.size() + std::string("end_header\n").size() + 5 * 62 * sizeof(float));
+
+  const Gaussians<float> back = ParseSplatPly(text, "test.ply");
+  CHECK(back.sh_degree == 3);
+  CHECK(back.positions == g.positions);
+  CHECK(back.log_scales == g.log_scales);
+  CHECK(back.rotations == g.rotations);
+  CHECK(back.opacity_logits == g.opacity_logits);
+  CHECK(back.sh_dc == g.sh_dc);
+  CHECK(back.sh_rest == g.sh_rest);
+
+  // f_rest is channel-major: red's 15 coefficients first.
+  Gaussians<float> one = RandomSplats(1, 1, 2);
+  one.sh_rest = {1, 2, 3, 4, 5, 6, 7, 8, 9};  // coefficient 1 RGB, 2 RGB, 3 RGB
+  const std::vector<char> one_bytes = SplatPlyBytes(one);
+  const std::string one_text(one_bytes.begin(), one_bytes.end());
+  const size_t body = one_text.find("end_header\n") + 11;
+  float rest[9];
+  std::memcpy(rest, one_text.data() + body + 9 * sizeof(float), sizeof(rest));
+  CHECK(std::vector<float>(rest, rest + 9) == std::vector<float>{1, 4, 7, 2, 5, 8, 3, 6, 9});
+}
+
+TEST_CASE("Damaged splat PLY files are refused with the file's name", "[splat]") {
+  const std::vector<char> bytes = SplatPlyBytes(RandomSplats(3, 1, 3));
+  const std::string text(bytes.begin(), bytes.end());
+  CHECK_THROWS_WITH(ParseSplatPly(text.substr(0, text.size() - 4), "cut.ply"),
+                    Catch::Contains("cut.ply") && Catch::Contains("shorter"));
+  CHECK_THROWS_WITH(ParseSplatPly("ply\nformat ascii 1.0\nend_header\n", "a.ply"), Catch::Contains("little-endian"));
+  std::string no_opacity = text;
+  no_opacity.replace(no_opacity.find("opacity"), 7, "opacitx");
+  CHECK_THROWS_WITH(ParseSplatPly(no_opacity, "b.ply"), Catch::Contains("'opacity'"));
+  CHECK_THROWS_WITH(ParseSplatPly("not a ply", "c.ply"), Catch::Contains("c.ply"));
+}
+
+TEST_CASE("A similarity moves splats and cameras together without changing the picture", "[splat]") {
+  Gaussians<float> g = RandomSplats(20, 0, 4);
+  const PinholeCamera camera = CameraAt({0.5, 2.0, 1.0}, 48);
+  const FloatImage before = RenderSplats(g, camera, {0, 0, 0}, 0.01);
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const double scale = 2.5;
+  const Eigen::Vector3d shift(1, -2, 0.5);
+  ApplySimilarity(scale * rotation, shift, &g);
+  PinholeCamera moved = camera;
+  moved.world_from_cam.topLeftCorner<3, 3>() = rotation * camera.world_from_cam.topLeftCorner<3, 3>();
+  moved.world_from_cam.topRightCorner<3, 1>() = scale * rotation * camera.world_from_cam.topRightCorner<3, 1>() + shift;
+  const FloatImage after = RenderSplats(g, moved, {0, 0, 0}, 0.01 * scale);
+  CHECK(Psnr(before, after) > 60);
+  g.sh_degree = 1;
+  g.sh_rest.assign(9 * g.size(), 0.5f);
+  CHECK_THROWS_AS(ApplySimilarity(rotation, shift, &g), std::invalid_argument);
+}
+
+TEST_CASE("Points on a plane become flat splats along it, as many as asked at most", "[splat]") {
+  std::vector<SurfacePoint> points;
+  const Eigen::Vector3d normal = Eigen::Vector3d(1, 1, 2).normalized();
+  const Eigen::Vector3d u = normal.unitOrthogonal(), v = normal.cross(u);
+  for (int i = 0; i < 200; ++i) {
+    for (int j = 0; j < 200; ++j) {
+      SurfacePoint p;
+      p.position = (i / 200.0 - 0.5) * u + (j / 200.0 - 0.5) * v;
+      p.rgb = Eigen::Vector3f(0.2f, 0.4f, 0.6f);
+      p.normal = normal.cast<float>();
+      p.footprint = 1.0 / 200;
+      points.push_back(p);
+    }
+  }
+  const Gaussians<float> g = GaussiansFromPoints(points, 1000, 2);
+  REQUIRE(g.size() > 100);
+  CHECK(g.size() <= 1000);
+  CHECK(g.sh_degree == 2);
+  for (size_t i = 0; i < g.size(); ++i) {
+    const Eigen::Quaterniond q(g.rotations[4 * i], g.rotations[4 * i + 1], g.rotations[4 * i + 2],
+                               g.rotations[4 * i + 3]);
+    const Eigen::Vector3d thin_axis = q.normalized().toRotationMatrix().col(2);
+    CHECK(std::abs(thin_axis.dot(normal)) > 0.999);
+    CHECK(g.log_scales[3 * i + 2] < g.log_scales[3 * i] - 2);  // thin across the plane
+    const Eigen::Vector3d p(g.positions[3 * i], g.positions[3 * i + 1], g.positions[3 * i + 2]);
+    CHECK(std::abs(p.dot(normal)) < 1e-5);
+    CHECK(0.5 + kShC0 * g.sh_dc[3 * i + 1] == Approx(0.4).margin(1e-5));
+  }
+}
+
+TEST_CASE("Splat optimisation fits photos, and a resumed run continues as an uninterrupted one", "[splat]") {
+  const Gaussians<float> truth = RandomSplats(30, 0, 5);
+  const std::vector<TrainView> views = ViewsOf(truth, 8);
+  Gaussians<float> start = truth;
+  std::mt19937_64 random(6);
+  std::normal_distribution<float> noise(0, 1);
+  for (float& v : start.positions) v += 0.05f * noise(random);
+  for (float& v : start.sh_dc) v += 1.0f * noise(random);
+  const SplatScene scene{&views, {1, 1, 1}, 2.5, 0.01};
+  SplatTrainerOptions options;
+  options.steps = 160;
+  options.densify_from = 40;
+  options.densify_interval = 40;
+  const auto psnr = [&](const Gaussians<float>& g) {
+    double sum = 0;
+    for (const TrainView& view : views)
+      sum += Psnr(RenderSplats(g, view.camera, {1, 1, 1}, 0.01), PhotoOnBackground(view, {1, 1, 1}));
+    return sum / views.size();
+  };
+  SplatTrainer whole(start, scene, options);
+  for (int s = 0; s < options.steps; ++s) whole.Step();
+  const double before = psnr(start), after = psnr(whole.gaussians());
+  INFO("PSNR " << before << " -> " << after);
+  CHECK(after > before + 4);
+
+  SplatTrainer first(start, scene, options);
+  for (int s = 0; s < 70; ++s) first.Step();
+  BinaryWriter writer;
+  first.Save(&writer);
+  SplatTrainer resumed(RandomSplats(3, 0, 9), scene, options);
+  BinaryReader reader(writer.buffer(), "checkpoint");
+  resumed.Load(&reader);
+  for (int s = 70; s < options.steps; ++s) resumed.Step();
+  // Equal up to the order in which threads sum gradients (floating point), which differs between runs.
+  REQUIRE(resumed.gaussians().size() == whole.gaussians().size());
+  CHECK(resumed.step() == whole.step());
+  CHECK(psnr(resumed.gaussians()) == Approx(after).margin(0.05));
+}
+
+}  // namespace p2n::testing
