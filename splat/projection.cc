@@ -178,7 +178,7 @@ bool ProjectGaussian(const Gaussians<T>& gaussians, size_t i, const SplatCamera<
   for (int k = 0; k < 3; ++k) splat->rgb[k] = std::max(f.rgb[k], T(0));
   const T mid = T(0.5) * (a + c);
   const T largest_eigenvalue = mid + std::sqrt(std::max(T(0.1), mid * mid - det));
-  *depth = f.t.z();
+  *depth = splat->depth = f.t.z();
   *radius = std::ceil(3 * std::sqrt(largest_eigenvalue));
   return std::isfinite(splat->x) && std::isfinite(splat->y) && std::isfinite(*radius);
 }

@@ -40,6 +40,7 @@ struct Splat2D {
   T conic_a = 0, conic_b = 0, conic_c = 0;  // inverse 2D covariance [[a, b], [b, c]]
   T opacity = 0;
   T rgb[3] = {0, 0, 0};
+  T depth = 0;  // along the view axis (not differentiated: the backward pass ignores it)
 };
 
 // Projects Gaussian `i`; false when it is not drawn (behind the near plane, or not finite). `depth` is along the

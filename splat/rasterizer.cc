@@ -59,7 +59,7 @@ struct Footprint {
 // A row's blend, front to back.
 template <typename T>
 struct RowForward {
-  V<T> transmittance, red, green, blue;
+  V<T> transmittance, red, green, blue, depth;
   M<T> active;  // until the lane's transmittance would fall below the threshold (never beyond the image)
   M<T> count;   // splats up to and including the last blended
 };
@@ -69,7 +69,7 @@ template <typename T>
 void BlendRow(const TileSplats<T>& splats, T x0, T py, int lanes, RowForward<T>* row) {
   const V<T> px = x0 + lanes::Iota<T>();
   row->transmittance = lanes::Splat(T(1));
-  row->red = row->green = row->blue = V<T>{};
+  row->red = row->green = row->blue = row->depth = V<T>{};
   row->active = lanes::Iota<T>() < T(lanes);
   row->count = M<T>{};
   for (size_t e = 0; e < splats.size(); ++e) {
@@ -83,6 +83,7 @@ void BlendRow(const TileSplats<T>& splats, T x0, T py, int lanes, RowForward<T>*
     row->red += w * s.rgb[0];
     row->green += w * s.rgb[1];
     row->blue += w * s.rgb[2];
+    row->depth += w * s.depth;
     row->transmittance = lanes::Select<T>(use, next, row->transmittance);
     row->count = use ? M<T>{} + static_cast<Lane<T>>(e + 1) : row->count;
     row->active &= ~stop;
@@ -171,12 +172,11 @@ template <typename T>
 void Rasterizer<T>::Project() {
   const size_t n = gaussians_->size();
   splats_.resize(n);
-  depths_.resize(n);
   rects_.assign(n, Rect{});
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t i = range.begin(); i < range.end(); ++i) {
-      T radius = 0;
-      if (!ProjectGaussian(*gaussians_, i, camera_, options_.projection, &splats_[i], &depths_[i], &radius)) continue;
+      T depth = 0, radius = 0;
+      if (!ProjectGaussian(*gaussians_, i, camera_, options_.projection, &splats_[i], &depth, &radius)) continue;
       const auto tile = [](T v) { return static_cast<int>(std::floor(v / kSplatTileSize)); };
       const T x = splats_[i].x, y = splats_[i].y;
       Rect r;
@@ -212,8 +212,10 @@ void Rasterizer<T>::BinAndSort() {
     }
   }
   tbb::parallel_for(size_t(0), tiles, [&](size_t t) {
-    std::sort(entries_.begin() + tile_begin_[t], entries_.begin() + tile_begin_[t + 1],
-              [&](uint32_t a, uint32_t b) { return depths_[a] < depths_[b] || (depths_[a] == depths_[b] && a < b); });
+    std::sort(entries_.begin() + tile_begin_[t], entries_.begin() + tile_begin_[t + 1], [&](uint32_t a, uint32_t b) {
+      const T da = splats_[a].depth, db = splats_[b].depth;
+      return da < db || (da == db && a < b);
+    });
   });
 }
 
@@ -222,6 +224,7 @@ void Rasterizer<T>::Blend() {
   const int width = camera_.width, height = camera_.height;
   rgb_.resize(static_cast<size_t>(width) * height * 3);
   transmittance_.resize(static_cast<size_t>(width) * height);
+  depth_.resize(static_cast<size_t>(width) * height);
   contributors_.resize(static_cast<size_t>(width) * height);
   const T background[3] = {T(options_.background[0]), T(options_.background[1]), T(options_.background[2])};
   tbb::enumerable_thread_specific<TileSplats<T>> local;
@@ -241,6 +244,7 @@ void Rasterizer<T>::Blend() {
         rgb_[3 * pixel + 1] = row.green[l] + t * background[1];
         rgb_[3 * pixel + 2] = row.blue[l] + t * background[2];
         transmittance_[pixel] = t;
+        depth_[pixel] = row.depth[l];
         contributors_[pixel] = static_cast<uint32_t>(row.count[l]);
       }
     }

@@ -35,6 +35,8 @@ class Rasterizer {
   const std::vector<T>& rgb() const { return rgb_; }
   // What the Gaussians leave of the background per pixel (1 - the pixel's opacity).
   const std::vector<T>& transmittance() const { return transmittance_; }
+  // Σ weight · depth along the view axis per pixel (divided by 1 - transmittance: the expected depth).
+  const std::vector<T>& weighted_depth() const { return depth_; }
   // Gaussians drawn (in front of the near plane, finite), and tile-list entries.
   size_t drawn() const { return drawn_; }
   size_t tile_entries() const { return entries_.size(); }
@@ -58,12 +60,11 @@ class Rasterizer {
   SplatCamera<T> camera_;
   int tiles_x_ = 0, tiles_y_ = 0;
   std::vector<Splat2D<T>> splats_;
-  std::vector<T> depths_;
   std::vector<Rect> rects_;
   size_t drawn_ = 0;
   std::vector<size_t> tile_begin_;  // tiles_x · tiles_y + 1 offsets into entries_
   std::vector<uint32_t> entries_;   // Gaussian indices, each tile's sorted front to back
-  std::vector<T> rgb_, transmittance_;
+  std::vector<T> rgb_, transmittance_, depth_;
   std::vector<uint32_t> contributors_;  // per pixel: entries of its tile up to and including its last blended
 };
 

@@ -39,6 +39,7 @@ CameraView OutputFrame::Camera(const CameraView& view) const {
 // applied_transform (normalised_from_source, 3x4) of transforms.json, inverted when the source frame is asked for.
 OutputFrame MakeOutputFrame(const std::string& frame, const fs::path& transforms) {
   OutputFrame out;
+  out.name = frame;
   if (frame == "normalized") {
     out.description = "frame: normalized (the training frame of 20_poses/transforms.json)";
     return out;

@@ -17,6 +17,7 @@ namespace p2n {
 struct OutputFrame {
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // out_from_normalized, scaled
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  std::string name = "normalized";  // "normalized" or "source"
   std::string description;
 
   Eigen::Vector3f Point(const Eigen::Vector3f& p) const;

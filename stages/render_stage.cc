@@ -20,12 +20,14 @@
 #include "stages/stage_io.h"
 #include "stages/training_data.h"
 #include "stages/video.h"
+#include "stages/view_renderer.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
 namespace {
 
 constexpr float kHeatMapMaxError = 0.2f;  // mean absolute error over RGB shown as the brightest colour
+constexpr double kSplatPsnrMargin = 0.5;  // dB: render.source auto takes splats this close to the field
 
 // Image writes fail for the user's reasons (a full disk, permissions): UserError naming the file.
 void Save(const FloatImage& image, const fs::path& path, bool sixteen_bits = false) {
@@ -85,8 +87,7 @@ PinholeCamera WithIntrinsics(const nlohmann::json& json, PinholeCamera camera, c
   return camera;
 }
 
-nlohmann::json RenderHeldout(const NerfModel& model, const ImportedDataset& dataset, const RenderOptions& base,
-                             const fs::path& out) {
+nlohmann::json RenderHeldout(const ViewRenderer& renderer, const ImportedDataset& dataset, const fs::path& out) {
   const std::string split = HeldoutSplit(dataset);
   std::vector<const ImportedView*> views;
   size_t pixels = 0;
@@ -102,15 +103,14 @@ nlohmann::json RenderHeldout(const NerfModel& model, const ImportedDataset& data
   if (views.empty()) return {{"split", split}, {"views", per_view}};
   fs::create_directories(out / "heldout");
   Progress progress("render: held-out views", static_cast<int64_t>(pixels), "pixels");
-  RenderOptions options = base;
-  options.on_rays_done = [&](size_t n) {
+  const auto on_pixels_done = [&](size_t n) {
     progress.Add(static_cast<int64_t>(n));
     ThrowIfCancelled();  // Ctrl-C stops within a tile
   };
   for (const ImportedView* view : views) {
     const TrainView photo_view = LoadTrainView(*view);
-    const FloatImage photo = PhotoOnBackground(photo_view, model.background);
-    const RenderedView rendered = RenderView(model, photo_view.camera, photo_view.near, photo_view.far, options);
+    const FloatImage photo = PhotoOnBackground(photo_view, renderer.background);
+    const RenderedView rendered = renderer.render(photo_view.camera, photo_view.near, photo_view.far, on_pixels_done);
     const std::string stem = view->source.stem().string();
     Save(rendered.rgb, out / "heldout" / (stem + ".png"));
     Save(ErrorHeatMap(rendered.rgb, photo, kHeatMapMaxError), out / "heldout" / (stem + "_error.png"));
@@ -128,6 +128,7 @@ nlohmann::json RenderHeldout(const NerfModel& model, const ImportedDataset& data
                         {"seconds", rendered.stats.seconds}});
   }
   return {{"split", split},
+          {"source", renderer.source},
           {"views", per_view},
           {"psnr", Mean(psnrs)},
           {"ssim", Mean(ssims)},
@@ -176,9 +177,9 @@ struct PathRange {
   }
 };
 
-nlohmann::json RenderPath(const NerfModel& model, const ImportedDataset& dataset,
+nlohmann::json RenderPath(const ViewRenderer& renderer, const ImportedDataset& dataset,
                           const std::vector<PinholeCamera>& cameras, const RenderStageOptions& options,
-                          const RenderOptions& base, const fs::path& out) {
+                          const fs::path& out) {
   fs::create_directories(out / "frames");
   if (options.depth) {
     fs::create_directories(out / "depth");
@@ -189,13 +190,12 @@ nlohmann::json RenderPath(const NerfModel& model, const ImportedDataset& dataset
   double depth_max = 0;
   for (const PinholeCamera& camera : cameras)
     depth_max = std::max(depth_max, camera.world_from_cam.block<3, 1>(0, 3).norm());
-  depth_max = (depth_max + std::sqrt(3.0)) * (model.space == SceneSpace::kBounded ? 1 : 2);
+  depth_max = (depth_max + std::sqrt(3.0)) * (renderer.bounded ? 1 : 2);
 
   size_t pixels = 0;
   for (const PinholeCamera& camera : cameras) pixels += size_t(camera.width) * camera.height;
   Progress progress("render: path", static_cast<int64_t>(pixels), "pixels");
-  RenderOptions render = base;
-  render.on_rays_done = [&](size_t n) {
+  const auto on_pixels_done = [&](size_t n) {
     progress.Add(static_cast<int64_t>(n));
     ThrowIfCancelled();  // Ctrl-C stops within a tile
   };
@@ -207,7 +207,7 @@ nlohmann::json RenderPath(const NerfModel& model, const ImportedDataset& dataset
   size_t samples = 0, rays = 0;
   for (size_t f = 0; f < cameras.size(); ++f) {
     const Eigen::Vector2d range = path_range.For(cameras[f]);
-    const RenderedView frame = RenderView(model, cameras[f], range[0], range[1], render);
+    const RenderedView frame = renderer.render(cameras[f], range[0], range[1], on_pixels_done);
     const std::string name = format("{:04d}", f);
     Save(frame.rgb, out / "frames" / (name + ".png"));
     if (options.exr) Save(frame.rgb, out / "frames" / (name + ".exr"));
@@ -223,18 +223,60 @@ nlohmann::json RenderPath(const NerfModel& model, const ImportedDataset& dataset
     samples += frame.stats.samples_evaluated;
     rays += frame.stats.rays;
   }
-  nlohmann::json report = {{"frames", cameras.size()},
-                           {"width", cameras[0].width},
-                           {"height", cameras[0].height},
-                           {"seconds_per_frame", seconds / cameras.size()},
-                           {"frames_per_second", cameras.size() / std::max(seconds, 1e-9)},
-                           {"samples_per_ray", double(samples) / std::max<size_t>(rays, 1)},
-                           {"depth_png_max", depth_max}};
+  nlohmann::json report = {
+      {"source", renderer.source},
+      {"frames", cameras.size()},
+      {"width", cameras[0].width},
+      {"height", cameras[0].height},
+      {"seconds_per_frame", seconds / cameras.size()},
+      {"frames_per_second", cameras.size() / std::max(seconds, 1e-9)},
+      {"samples_per_ray", renderer.source == "field" ? nlohmann::json(double(samples) / std::max<size_t>(rays, 1))
+                                                     : nlohmann::json(nullptr)},
+      {"depth_png_max", depth_max}};
   if (video) {
     video->Close();
     report["video"] = {{"file", "video.mp4"}, {"codec", video->codec()}, {"fps", options.fps}};
   }
   return report;
+}
+
+// splat_report.json, or nothing when the splat stage is off.
+nlohmann::json SplatReport(const StageContext& context) {
+  const nlohmann::json report = ReadJsonFile(context.upstream_dirs.at("splat") / "splat_report.json");
+  return report.value("enabled", false) ? report : nlohmann::json::object();
+}
+
+// The field's held-out PSNR as the train stage measured it (train.final_eval_pixels per view).
+nlohmann::json FieldPsnr(const StageContext& context) {
+  return ReadJsonFile(context.upstream_dirs.at("train") / "train_report.json")
+      .value("heldout_psnr", nlohmann::json(nullptr));
+}
+
+// render.source resolved: auto takes the splats when their held-out PSNR is within kSplatPsnrMargin of the
+// field's (they render tens of times faster), else the field.
+ViewRenderer ChooseRenderer(const StageContext& context, const RenderStageOptions& options, const NerfModel& model,
+                            const RenderOptions& render) {
+  const nlohmann::json splats = SplatReport(context);
+  const bool bounded = model.space == SceneSpace::kBounded;
+  if (options.source == "field") return FieldRenderer(model, render);
+  if (splats.empty()) {
+    if (options.source == "splats") {
+      throw UserError(
+          "render.source splats: the splat stage is off (splat.enabled false); turn it on or render the field");
+    }
+    return FieldRenderer(model, render);
+  }
+  const nlohmann::json field_psnr = FieldPsnr(context),
+                       splat_psnr = splats.value("heldout_psnr", nlohmann::json(nullptr));
+  const bool good = field_psnr.is_number() && splat_psnr.is_number() &&
+                    splat_psnr.get<double>() >= field_psnr.get<double>() - kSplatPsnrMargin;
+  if (options.source == "auto" && !good) {
+    LogInfo(format("render: the splats' held-out PSNR ({} dB) is below the field's ({} dB): rendering the field",
+                   splat_psnr.dump(), field_psnr.dump()));
+    return FieldRenderer(model, render);
+  }
+  return SplatRenderer(context.upstream_dirs.at("splat"), context.upstream_dirs.at("poses") / "transforms.json",
+                       bounded);
 }
 
 }  // namespace
@@ -314,16 +356,22 @@ void RenderStage::Run(StageContext& context) const {
   const ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
   RenderOptions render;
   render.step_scale = options.step_scale;
+  const ViewRenderer renderer = ChooseRenderer(context, options, model, render);
 
   nlohmann::json summary = nlohmann::json::object();
   if (options.heldout) {
-    const nlohmann::json eval = RenderHeldout(model, dataset, render, context.output_dir);
+    nlohmann::json eval = RenderHeldout(renderer, dataset, context.output_dir);
+    eval["field_psnr"] = renderer.source == "field" ? eval.value("psnr", nlohmann::json(nullptr)) : FieldPsnr(context);
+    eval["splats_psnr"] = renderer.source == "splats"
+                              ? eval.value("psnr", nlohmann::json(nullptr))
+                              : SplatReport(context).value("heldout_psnr", nlohmann::json(nullptr));
     WriteJsonAtomic(context.output_dir / "eval.json", eval);
     if (eval.contains("psnr")) {
       summary["heldout_psnr"] = eval["psnr"];
       summary["heldout_ssim"] = eval["ssim"];
-      LogInfo(format("render: held-out {} views: PSNR {:.2f} dB, SSIM {:.3f}, {:.2f} s per view", eval["views"].size(),
-                     eval["psnr"].get<double>(), eval["ssim"].get<double>(), eval["seconds_per_view"].get<double>()));
+      LogInfo(format("render: held-out {} views from the {}: PSNR {:.2f} dB, SSIM {:.3f}, {:.2f} s per view",
+                     eval["views"].size(), renderer.source, eval["psnr"].get<double>(), eval["ssim"].get<double>(),
+                     eval["seconds_per_view"].get<double>()));
     }
   }
   std::string kind = options.path;
@@ -339,13 +387,13 @@ void RenderStage::Run(StageContext& context) const {
     const int width = options.width > 0 ? options.width : std::min(first->view.camera.width, kDefaultMaxPathWidth);
     const PinholeCamera reference = ScaledCamera(first->view.camera, width);
     const std::vector<PinholeCamera> cameras = PathCameras(options, kind, dataset, reference);
-    nlohmann::json path = RenderPath(model, dataset, cameras, options, render, context.output_dir);
+    nlohmann::json path = RenderPath(renderer, dataset, cameras, options, context.output_dir);
     path["kind"] = kind;
     WriteJsonAtomic(context.output_dir / "render_report.json", {{"path", path}});
     summary["frames"] = path["frames"];
     summary["frames_per_second"] = path["frames_per_second"];
-    LogInfo(format("render: {} path, {} frames of {}x{} at {:.2f} frames per second", kind, cameras.size(),
-                   cameras[0].width, cameras[0].height, path["frames_per_second"].get<double>()));
+    LogInfo(format("render: {} path from the {}, {} frames of {}x{} at {:.2f} frames per second", kind, renderer.source,
+                   cameras.size(), cameras[0].width, cameras[0].height, path["frames_per_second"].get<double>()));
   }
   context.summary = summary;
 }

@@ -1,8 +1,9 @@
 #pragma once
-// The render stage: renders a trained model without its training data. The held-out views are compared with
-// their photos (PSNR and SSIM per view and on average, eval.json, with error heat maps); a camera path (an
-// orbit, a spiral in front of the capture, or cameras from a file) becomes frames, depth and opacity images
-// and an MP4 video. Rendering marches through the model's occupancy grid with early termination, in tiles.
+// The render stage: renders a trained model (the field, or the splats baked from it when they are as good:
+// render.source) without its training data. The held-out views are compared with their photos (PSNR and SSIM per view
+// and on average, eval.json, with error heat maps); a camera path (an orbit, a spiral in front of the capture, or
+// cameras from a file) becomes frames, depth and opacity images and an MP4 video. Rendering marches through the model's
+// occupancy grid with early termination, in tiles.
 
 #include <filesystem>
 #include <string>
@@ -17,6 +18,7 @@ inline constexpr int kDefaultMaxPathWidth = 320;
 
 struct RenderStageOptions {
   bool heldout = true;             // render and evaluate the held-out views
+  std::string source = "auto";     // field | splats | auto: the splats when they score within 0.5 dB of the field
   std::string path = "auto";       // orbit | spiral | file | none; auto: spiral for LLFF captures, else orbit
   std::string path_file;           // cameras of the path (transforms.json layout) when path = file
   int frames = 60;                 // frames of an orbit or spiral
@@ -34,6 +36,10 @@ struct RenderStageOptions {
   template <class V>
   void Visit(V& v) {
     v("heldout", heldout, "render the held-out views and compare them with their photos (PSNR, SSIM)");
+    v("source", source,
+      "what renders the views: field (ray marching), splats (rasterized, tens of times faster) or auto: the "
+      "splats when their held-out PSNR is within 0.5 dB of the field's, else the field",
+      "", OptionKind::kResult, {"auto", "field", "splats"});
     v("path", path,
       "camera path: orbit, spiral (in front of the capture), file, none; auto: spiral for LLFF "
       "captures, else orbit",
@@ -69,8 +75,8 @@ class RenderStage : public Stage {
  public:
   std::string name() const override { return "render"; }
   std::string folder() const override { return "40_render"; }
-  int format_version() const override { return 1; }
-  std::vector<std::string> upstream() const override { return {"poses", "train"}; }
+  int format_version() const override { return 2; }  // 2: renders from the splats when they are as good
+  std::vector<std::string> upstream() const override { return {"poses", "train", "splat"}; }
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
   void Run(StageContext& context) const override;
 };

@@ -269,7 +269,8 @@ void SplatStage::Run(StageContext& context) const {
       {"heldout_ssim", setup.data.heldout.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(scores.ssim))},
       {"heldout_psnr_per_view", scores.psnr},
       {"seconds_per_view", scores.seconds_per_view},
-      {"frame", setup.frame.description},
+      {"frame", setup.frame.name},
+      {"frame_description", setup.frame.description},
       {"near", near},
       {"background", setup.background},
       {"file", "splats.ply"}};

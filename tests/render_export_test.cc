@@ -7,6 +7,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <assimp/Importer.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
 #include <cmath>
@@ -33,6 +34,19 @@ const aiScene* ReadWithAssimp(Assimp::Importer& importer, const fs::path& file) 
   return scene;
 }
 
+// The mean depth (normalised units) over the pixels of path frame `f` that the render stage gave one.
+double MeanDepth(const fs::path& out, int f) {
+  const cv::Mat depth = cv::imread((out / "depth" / format("{:04d}.png", f)).string(), cv::IMREAD_UNCHANGED);
+  REQUIRE(depth.depth() == CV_16U);
+  const double depth_max = ReadJsonFile(out / "render_report.json")["path"]["depth_png_max"];
+  double sum = 0, count = 0;
+  for (auto d = depth.begin<uint16_t>(); d != depth.end<uint16_t>(); ++d) {
+    if (*d > 0) sum += *d / 65535.0 * depth_max, ++count;
+  }
+  REQUIRE(count > 0);
+  return sum / count;
+}
+
 }  // namespace
 
 TEST_CASE("render stage: held-out PSNR and SSIM, path frames, depth, video, a written path renders the same",
@@ -40,6 +54,7 @@ TEST_CASE("render stage: held-out PSNR and SSIM, path frames, depth, video, a wr
   StageWorkspace setup;
   Config config = SmallStageConfig(60);
   config.Set("train.final_eval_pixels", 0, "test");  // every pixel, as the render stage
+  config.Set("render.source", "field", "test");
   setup.runner.Run(setup.workspace, config, Until("render"));
   const fs::path out = setup.dir / "ws" / "40_render";
 
@@ -84,6 +99,37 @@ TEST_CASE("render stage: held-out PSNR and SSIM, path frames, depth, video, a wr
   // Editing the path file makes the result stale.
   WriteText(setup.dir / "path.json", ReadText(setup.dir / "path.json") + "\n");
   CHECK(setup.Status(config, "render").state == StageState::kStale);
+}
+
+TEST_CASE("render stage: from the splats, with both PSNRs in eval.json, refused when there are none", "[render]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(60);
+  config.Set("render.source", "splats", "test");
+  setup.runner.Run(setup.workspace, config, Until("render"));
+  const fs::path out = setup.dir / "ws" / "40_render";
+  const nlohmann::json eval = ReadJsonFile(out / "eval.json");
+  const nlohmann::json splats = ReadJsonFile(setup.dir / "ws" / "35_splat" / "splat_report.json");
+  const nlohmann::json train = ReadJsonFile(setup.dir / "ws" / "30_train" / "train_report.json");
+  CHECK(eval["source"] == "splats");
+  // The same splats, cameras, pixels and rasterizer as the splat stage's own evaluation.
+  CHECK(eval["psnr"].get<double>() == Approx(splats["heldout_psnr"].get<double>()).margin(1e-3));
+  CHECK(eval["splats_psnr"] == eval["psnr"]);
+  CHECK(eval["field_psnr"] == train["heldout_psnr"]);
+  CHECK(ReadJsonFile(out / "render_report.json")["path"]["source"] == "splats");
+  for (int f = 0; f < 6; ++f) {
+    for (const char* folder : {"frames", "depth", "opacity"}) CHECK(fs::exists(out / folder / format("{:04d}.png", f)));
+  }
+  // Depth along the rays in normalised units, as the field's: the splats were placed at the field's depth.
+  const double splat_depth = MeanDepth(out, 0);
+  config.Set("render.source", "field", "test");
+  setup.runner.Run(setup.workspace, config, Until("render"));
+  CHECK(ReadJsonFile(out / "eval.json")["source"] == "field");
+  CHECK(splat_depth == Approx(MeanDepth(out, 0)).epsilon(0.15));
+
+  config.Set("render.source", "splats", "test");
+  config.Set("splat.enabled", false, "test");
+  CHECK_THROWS_WITH(setup.runner.Run(setup.workspace, config, Until("render")),
+                    Catch::Contains("render.source splats") && Catch::Contains("splat.enabled"));
 }
 
 TEST_CASE("render stage: a camera path file is read back as written, bad ones are refused by name", "[render]") {

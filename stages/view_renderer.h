@@ -1,0 +1,35 @@
+#pragma once
+// What the render stage draws views with: the trained field (ray marching) or the splats baked from it
+// (rasterized), behind one call that takes a camera of the normalised frame and gives the image, the depth along
+// the rays (normalised units) and the opacity.
+
+#include <array>
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include "nerf/camera.h"
+#include "nerf/nerf_model.h"
+#include "nerf/renderer.h"
+
+namespace p2n {
+
+struct ViewRenderer {
+  std::string source;  // "field" or "splats"
+  std::array<float, 3> background{1, 1, 1};
+  bool bounded = true;  // the scene lies in the unit box
+  // Renders `camera` between `near` and `far` (the field's; splats ignore them); on_pixels_done(n) may report
+  // progress or stop the work by throwing.
+  std::function<RenderedView(const PinholeCamera& camera, double near, double far,
+                             const std::function<void(size_t)>& on_pixels_done)>
+      render;
+};
+
+// The field, rendered with `options` (its progress callback is replaced by each call's).
+ViewRenderer FieldRenderer(const NerfModel& model, const RenderOptions& options);
+// The splat stage's result in `splat_dir` (splats.ply, splat_report.json); UserError naming a file that cannot be
+// read. `transforms` is the poses stage's, for the splats' frame.
+ViewRenderer SplatRenderer(const std::filesystem::path& splat_dir, const std::filesystem::path& transforms,
+                           bool bounded);
+
+}  // namespace p2n
