@@ -13,8 +13,11 @@ packages=(
   libopenvdb-dev libblosc-dev libboost-dev      # marching cubes (OpenVDB's headers need Boost's)
   libassimp-dev                            # tests: an independent reader of our PLY and OBJ files
   libjpeg-dev                              # tests: writes a CMYK JPEG
-  chromium fonts-dejavu-core               # tests: the report page opened in a real browser
+  chromium fonts-dejavu-core               # tests: the report and viewer pages opened in a real browser
 )
+# The viewer page is bundled at build time with npm (viewer/package-lock.json): Debian's Node.js and npm, unless the
+# machine has its own.
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
 
 missing=()
 for p in "${packages[@]}"; do

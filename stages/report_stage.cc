@@ -84,19 +84,26 @@ std::string SplatSection(const fs::path& splat_dir, const nlohmann::json& train)
   if (!report.value("enabled", false)) {
     return "<h2>Splats</h2>\n<p>Off (<code>--splat.enabled false</code>).</p>\n";
   }
-  std::string html = "<h2>Splats: error against optimisation time</h2>\n<div class=\"plots\">\n";
+  std::string html = "<h2>Splats: error against optimisation time</h2>\n";
+  html += format(
+      "<p><a href=\"../35_splat/viewer.html\"><b>Open the scene in the live viewer</b></a> (viewer.html, {:.1f} MB, "
+      "works offline in any browser with WebGL 2: drag to orbit, right-drag to pan, wheel or pinch to zoom, W A S D "
+      "to fly, the training cameras in its menu).</p>\n",
+      report.value("viewer_bytes", 0.0) / 1e6);
+  html += "<div class=\"plots\">\n";
   html += SvgLinePlot({"splats: held-out PSNR against optimisation time", "optimisation time (s)", "PSNR (dB)"},
                       {CsvSeries("held-out PSNR (dB)", ReadTextFile(splat_dir / "metrics.csv"), 0, 4)});
   html += "</div>\n";
   html += format(
       "<p>The field baked into {} 3D Gaussian splats (spherical harmonics of degree {}; {} placed from the field, "
       "then optimised for {:.0f} s, {} steps): held-out PSNR {} dB and SSIM {} (the field: {} dB), {:.3f} s per "
-      "held-out view on the CPU. <a href=\"../35_splat/splats.ply\">splats.ply</a> is in the standard 3D Gaussian "
-      "Splatting layout, {}; SuperSplat, the PlayCanvas and three.js splat viewers open it as it is.</p>\n",
+      "held-out view on the CPU. <a href=\"../35_splat/splats.ply\">splats.ply</a> ({:.1f} MB) is in the standard 3D "
+      "Gaussian Splatting layout, {}; SuperSplat, the PlayCanvas and three.js splat viewers open it as it is.</p>\n",
       Number(report["splats"]), Number(report["sh_degree"]), Number(report["initial_splats"]),
       report.value("seconds", 0.0), Number(report["steps"]), Number(report["heldout_psnr"]),
       Number(report["heldout_ssim"], 3), Number(train.value("heldout_psnr", nlohmann::json(nullptr))),
-      report.value("seconds_per_view", 0.0), HtmlEscape(report.value("frame", "")));
+      report.value("seconds_per_view", 0.0), report.value("file_bytes", 0.0) / 1e6,
+      HtmlEscape(report.value("frame_description", "")));
   return html;
 }
 

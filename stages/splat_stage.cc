@@ -17,6 +17,7 @@
 #include "splat/splat_trainer.h"
 #include "stages/camera_corrections.h"
 #include "stages/output_frame.h"
+#include "stages/splat_viewer.h"
 #include "stages/stage_io.h"
 #include "stages/train_stage.h"
 #include "stages/training_data.h"
@@ -247,6 +248,14 @@ void SplatStage::Run(StageContext& context) const {
                   {setup.frame.description,
                    format("{} splats of SH degree {}", trainer.gaussians().size(), trainer.gaussians().sh_degree)});
   });
+  size_t viewer_bytes = 0;
+  WriteOrExplain([&] {
+    fs::path root = context.workspace.root().lexically_normal();
+    if (!root.has_filename()) root = root.parent_path();  // "ws/" -> "ws"
+    const std::string scene = root.filename().string();
+    viewer_bytes = WriteSplatViewer(out / "viewer.html", "photo2nerf: " + scene, trainer.gaussians(), setup.data,
+                                    setup.frame, setup.background, near);
+  });
   const std::string metrics = "wall_seconds,step,splats,train_loss,heldout_psnr\n" + state.metrics;
   WriteFileAtomic(out / "metrics.csv", metrics);
   const PlotSeries curve = CsvSeries("held-out PSNR", metrics, 0, 4);
@@ -273,7 +282,10 @@ void SplatStage::Run(StageContext& context) const {
       {"frame_description", setup.frame.description},
       {"near", near},
       {"background", setup.background},
-      {"file", "splats.ply"}};
+      {"file", "splats.ply"},
+      {"file_bytes", fs::file_size(out / "splats.ply")},
+      {"viewer", "viewer.html"},
+      {"viewer_bytes", viewer_bytes}};
   WriteJsonAtomic(out / "splat_report.json", report);
   context.summary["splats"] = trainer.gaussians().size();
   if (!setup.data.heldout.empty()) context.summary["splat_psnr"] = Mean(scores.psnr);

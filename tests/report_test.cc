@@ -51,7 +51,8 @@ TEST_CASE("report stage: a self-contained page with every section, drawn by head
   CHECK_THAT(html, Catch::Contains("held-out PSNR against training time") && Catch::Contains("<svg"));
   CHECK_THAT(html, Catch::Contains("training loss against training time"));
   CHECK_THAT(html, Catch::Contains("splats: held-out PSNR against optimisation time") &&
-                       Catch::Contains("href=\"../35_splat/splats.ply\""));
+                       Catch::Contains("href=\"../35_splat/splats.ply\"") &&
+                       Catch::Contains("href=\"../35_splat/viewer.html\""));
   for (const char* stage : {"poses", "train", "splat", "render", "export"})
     CHECK_THAT(html, Catch::Contains(format("<td>{}</td>", stage)));
   CHECK(Count(html, "data:image/jpeg;base64,") >= 6);  // 2 held-out views: photo, render, error map

@@ -1,0 +1,159 @@
+// The splat files and the viewer page against independent readers: splat-transform (PlayCanvas's splat tool, from
+// npm) reads our standard and compressed PLYs to the values we wrote, and headless Chromium shows viewer.html
+// with Spark: the frame it draws from a camera matches our CPU rasterizer's render of that camera, a drag moves
+// the view, and the page asks the network for nothing.
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <set>
+
+#include "pipeline/file_util.h"
+#include "splat/compressed_ply.h"
+#include "splat/splat_ply.h"
+#include "stage_fixtures.h"
+#include "viewer/viewer_page.h"
+
+namespace p2n::testing {
+namespace fs = std::filesystem;
+namespace {
+
+// Splats spread over a box of 4, every parameter random, SH degree 3.
+Gaussians<float> RandomSplats(int count, uint64_t seed) {
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<float> uniform(-1, 1);
+  Gaussians<float> g;
+  g.Resize(count);
+  for (std::vector<float>* values : {&g.positions, &g.rotations, &g.opacity_logits, &g.sh_dc}) {
+    for (float& v : *values) v = 2 * uniform(random);
+  }
+  for (float& v : g.log_scales) v = -4 + 2 * uniform(random);
+  for (float& v : g.sh_rest) v = 0.5f * uniform(random);
+  return g;
+}
+
+// `input` converted by splat-transform into a standard PLY, read back.
+Gaussians<float> ThroughSplatTransform(const fs::path& input, const TempDir& dir) {
+  const fs::path output = dir / "converted.ply";
+  std::string log;
+  const int status = RunCommand({P2N_NODE, P2N_NODE_DIR "/node_modules/@playcanvas/splat-transform/bin/cli.mjs",
+                                 "--overwrite", input.string(), output.string()},
+                                &log);
+  INFO(log);
+  REQUIRE(status == 0);
+  return ReadSplatPly(output);
+}
+
+// The largest difference between the unit quaternions a and b (w, x, y, z), either sign.
+float QuaternionError(const float* a, const float* b) {
+  const float na = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + a[3] * a[3]);
+  const float nb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2] + b[3] * b[3]);
+  float same = 0, opposite = 0;
+  for (int k = 0; k < 4; ++k) {
+    same = std::max(same, std::abs(a[k] / na - b[k] / nb));
+    opposite = std::max(opposite, std::abs(a[k] / na + b[k] / nb));
+  }
+  return std::min(same, opposite);
+}
+
+// The index in `g` of each splat of `h` (the compressed file reorders them), by nearest position.
+std::vector<size_t> Match(const Gaussians<float>& g, const Gaussians<float>& h) {
+  std::vector<size_t> match(h.size());
+  for (size_t j = 0; j < h.size(); ++j) {
+    float best = INFINITY;
+    for (size_t i = 0; i < g.size(); ++i) {
+      float d = 0;
+      for (int a = 0; a < 3; ++a) d += std::pow(g.positions[3 * i + a] - h.positions[3 * j + a], 2.f);
+      if (d < best) best = d, match[j] = i;
+    }
+  }
+  return match;
+}
+
+}  // namespace
+
+TEST_CASE("splat-transform reads our standard splat PLY to the very values we wrote", "[viewer]") {
+  TempDir dir;
+  const Gaussians<float> g = RandomSplats(300, 1);
+  WriteSplatPly(dir / "splats.ply", g);
+  const Gaussians<float> read = ThroughSplatTransform(dir / "splats.ply", dir);
+  REQUIRE(read.size() == g.size());
+  REQUIRE(read.sh_degree == 3);
+  g.ForEachArray([&, a = 0](const std::vector<float>& values, int) mutable {
+    int b = 0;
+    read.ForEachArray([&](const std::vector<float>& other, int) {
+      if (b++ == a) CHECK(other == values);
+    });
+    ++a;
+  });
+}
+
+TEST_CASE("splat-transform reads our compressed splat PLY to within its quantisation", "[viewer]") {
+  TempDir dir;
+  const Gaussians<float> g = RandomSplats(1000, 2);  // four chunks
+  const std::vector<char> bytes = CompressedSplatPlyBytes(g);
+  CHECK(bytes.size() < g.size() * 62 + 1500);  // 61 bytes a splat at degree 3, 72 a chunk, and the header
+  WriteFileAtomic(dir / "splats.compressed.ply", std::string_view(bytes.data(), bytes.size()));
+  const Gaussians<float> read = ThroughSplatTransform(dir / "splats.compressed.ply", dir);
+  REQUIRE(read.size() == g.size());
+  REQUIRE(read.sh_degree == 3);
+  const std::vector<size_t> match = Match(g, read);
+  CHECK(std::set<size_t>(match.begin(), match.end()).size() == g.size());
+  float position = 0, scale = 0, rotation = 0, alpha = 0, colour = 0, sh = 0;
+  for (size_t j = 0; j < read.size(); ++j) {
+    const size_t i = match[j];
+    for (int a = 0; a < 3; ++a) {
+      position = std::max(position, std::abs(read.positions[3 * j + a] - g.positions[3 * i + a]));
+      scale = std::max(scale, std::abs(read.log_scales[3 * j + a] - g.log_scales[3 * i + a]));
+      colour = std::max(colour, std::abs(read.sh_dc[3 * j + a] - g.sh_dc[3 * i + a]) * 0.2821f);
+    }
+    rotation = std::max(rotation, QuaternionError(&read.rotations[4 * j], &g.rotations[4 * i]));
+    const auto sigmoid = [](float x) { return 1 / (1 + std::exp(-x)); };
+    alpha = std::max(alpha, std::abs(sigmoid(read.opacity_logits[j]) - sigmoid(g.opacity_logits[i])));
+    for (int k = 0; k < 45; ++k) {
+      // f_rest in the file: channel by channel; ours: coefficient by coefficient.
+      sh = std::max(sh, std::abs(read.sh_rest[45 * j + k] - g.sh_rest[45 * i + k]));
+    }
+  }
+  // A chunk of 256 of the 1000 splats along the Morton curve spans about a quarter of the box of 4: 11 and
+  // 10 bits of it. The scales' range is 2 (in logarithms), colours about 1.7 (after SH_C0), opacity 1.
+  CHECK(position < 4.0f / 1023);
+  CHECK(scale < 2.0f / 1023);
+  CHECK(rotation < 0.002f);
+  CHECK(alpha < 0.6f / 255);
+  CHECK(colour < 1.7f / 255);
+  CHECK(sh < 8.0f / 256);
+}
+
+TEST_CASE("viewer.html in headless Chromium draws what our rasterizer renders, moves with a drag, stays offline",
+          "[viewer]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(60);
+  config.Set("render.source", "splats", "test");
+  config.Set("render.path", "none", "test");
+  setup.runner.Run(setup.workspace, config, Until("render"));
+  const fs::path splat_dir = setup.dir / "ws" / "35_splat", render_dir = setup.dir / "ws" / "40_render";
+  const nlohmann::json report = ReadJsonFile(splat_dir / "splat_report.json");
+  CHECK(report["viewer_bytes"].get<size_t>() == fs::file_size(splat_dir / "viewer.html"));
+  // A held-out camera: the render stage drew it from the same splats with our CPU rasterizer.
+  const nlohmann::json view = ReadJsonFile(render_dir / "eval.json")["views"].at(0);
+  const std::string name = view["view"];
+  std::string output;
+  const int status =
+      RunCommand({P2N_NODE, P2N_NODE_DIR "/viewer_check.mjs", (splat_dir / "viewer.html").string(), name,
+                  (render_dir / view["render"].get<std::string>()).string(), (setup.dir / "viewer.png").string()},
+                 &output);
+  INFO(output);
+  REQUIRE(status == 0);
+  const nlohmann::json result = nlohmann::json::parse(output.substr(output.rfind('{')));
+  CHECK(result["errors"].empty());
+  CHECK(result["requests"].empty());
+  REQUIRE(result["psnr"].is_number());
+  CHECK(result["psnr"].get<double>() >= 25);
+  CHECK(result["drag_changed_picture"] == true);
+}
+
+}  // namespace p2n::testing

@@ -1,0 +1,68 @@
+// Opens a viewer page in headless Chromium and prints what it found, as JSON: whether the page loaded without
+// errors or network requests, the PSNR between the frame it drew from a chosen camera and a reference image (our
+// CPU rasterizer's render of the same camera), and whether a mouse drag changed the picture.
+//   node viewer_check.mjs VIEWER.html CAMERA_NAME REFERENCE.png [SCREENSHOT.png]
+import { chromium } from "playwright-core";
+import { readFileSync, writeFileSync } from "node:fs";
+import { pathToFileURL } from "node:url";
+
+const [page_path, camera_name, reference_path, screenshot_path] = process.argv.slice(2);
+const browser = await chromium.launch({
+  executablePath: process.env.P2N_CHROMIUM ?? "/usr/bin/chromium",
+  args: ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--disable-gpu-sandbox",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run"],
+});
+const result = { errors: [], requests: [] };
+try {
+  const page = await browser.newPage();
+  page.on("pageerror", (e) => result.errors.push(String(e)));
+  page.on("console", (m) => { if (m.type() === "error") result.errors.push(m.text()); });
+  page.on("request", (r) => { if (!/^(data|blob|file):/.test(r.url())) result.requests.push(r.url()); });
+  const url = `${pathToFileURL(page_path)}#camera=${encodeURIComponent(camera_name)}&size=native`;
+  await page.goto(url, { waitUntil: "load" });
+  await page.evaluate(() => window.p2n.loaded);
+  // Spark sorts the splats in a worker: let a few frames go by, then wait until two frames agree.
+  const snapshot = () => page.evaluate(() => document.getElementById("p2n-canvas").toDataURL("image/png"));
+  const settled = async () => {
+    let previous = "";
+    for (let i = 0; i < 40; ++i) {
+      await page.evaluate(() => new Promise((done) => setTimeout(done, 250)));
+      const now = await snapshot();
+      if (now === previous) return now;
+      previous = now;
+    }
+    return previous;
+  };
+  const before = await settled();
+  const reference = `data:image/png;base64,${readFileSync(reference_path).toString("base64")}`;
+  result.psnr = await page.evaluate(async ([a, b]) => {
+    const pixels = async (src) => {
+      const image = new Image();
+      image.src = src;
+      await image.decode();
+      const c = new OffscreenCanvas(image.width, image.height);
+      const g = c.getContext("2d");
+      g.drawImage(image, 0, 0);
+      return g.getImageData(0, 0, image.width, image.height);
+    };
+    const [x, y] = [await pixels(a), await pixels(b)];
+    if (x.width !== y.width || x.height !== y.height) return `sizes differ: ${x.width}x${x.height} and ${y.width}x${y.height}`;
+    let sum = 0, n = 0;
+    for (let i = 0; i < x.data.length; i += 4) {
+      for (let c = 0; c < 3; ++c, ++n) sum += ((x.data[i + c] - y.data[i + c]) / 255) ** 2;
+    }
+    return -10 * Math.log10(Math.max(sum / n, 1e-12));
+  }, [before, reference]);
+  if (screenshot_path) writeFileSync(screenshot_path, Buffer.from(before.split(",")[1], "base64"));
+  const box = await page.locator("#p2n-canvas").boundingBox();
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await page.mouse.down();
+  await page.mouse.move(box.x + box.width * 0.8, box.y + box.height / 2, { steps: 8 });
+  await page.mouse.up();
+  result.drag_changed_picture = (await settled()) !== before;
+} catch (error) {
+  result.errors.push(String(error));
+} finally {
+  await browser.close();
+}
+console.log(JSON.stringify(result));

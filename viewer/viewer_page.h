@@ -1,0 +1,36 @@
+#pragma once
+// viewer.html: one self-contained page (no network) that shows a scene's splats live in the browser, starting
+// from one of its cameras: the splats as a compressed PLY in base64, the cameras and the scene's extent as JSON,
+// and the bundled script (three.js and Spark) that draws them.
+
+#include <Eigen/Core>
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace p2n {
+
+struct ViewerCamera {
+  std::string name;
+  std::string split;  // "train" or "heldout"
+  int width = 0, height = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+  Eigen::Matrix4d world_from_cam = Eigen::Matrix4d::Identity();  // OpenGL axes, in the splats' frame
+};
+
+struct ViewerScene {
+  std::string title;
+  std::array<float, 3> background{1, 1, 1};
+  std::vector<ViewerCamera> cameras;                 // the first training camera is where the page starts
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // what the orbit turns about
+  double radius = 1;                                 // the scene's size: how fast the keys fly
+  double near = 0.01, far = 100;
+};
+
+// The page. `splats` is a compressed splat PLY (splat/compressed_ply.h).
+std::string ViewerPage(const ViewerScene& scene, const std::vector<char>& splats);
+
+std::string Base64(const char* data, size_t size);
+
+}  // namespace p2n
