@@ -29,9 +29,7 @@ int main(int argc, char** argv) {
   if (argc > 5 && std::string(argv[5]) == "train") data.heldout = data.train;
   if (max_views > 0 && data.heldout.size() > max_views) data.heldout.resize(max_views);
   const nlohmann::json report = p2n::ReadJsonFile(ws / "35_splat" / "splat_report.json");
-  const std::string frame_name =
-      report.value("frame", "").find("normalized") != std::string::npos ? "normalized" : "source";
-  const p2n::OutputFrame frame = p2n::MakeOutputFrame(frame_name, transforms);
+  const p2n::OutputFrame frame = p2n::MakeOutputFrame(report.value("frame", "source"), transforms);
   const p2n::Gaussians<float> gaussians = p2n::ReadSplatPly(ws / "35_splat" / "splats.ply");
   const std::array<float, 3> background = p2n::DatasetBackground(transforms);
   const double near = report.value("near", 0.01);

@@ -19,6 +19,7 @@ constexpr double kNormalSigma = 0.05;        // cells
 constexpr double kMinNormalAgreement = 0.5;  // length of the cell's mean unit normal
 constexpr double kOpacityShare = 0.8;        // of the field's opacity
 constexpr double kDepthTolerance = 0.03;     // relative: two views agree on a point's depth
+constexpr double kSparseOpacity = 0.1;       // 3D Gaussian Splatting's first opacity
 
 struct CellKey {
   int level;
@@ -93,6 +94,69 @@ Gaussians<float> GaussiansFromPoints(const std::vector<SurfacePoint>& points, si
     ++i;
   }
   return g;
+}
+
+namespace {
+
+// The root mean square distance of each point to its three nearest others, searched in a grid of about one point
+// a cell, shell by shell (up to kMaxShells cells away; the grid's cell where none is nearer).
+std::vector<double> NeighbourDistances(const std::vector<Eigen::Vector3d>& points) {
+  constexpr int kNeighbours = 3, kMaxShells = 4;
+  Eigen::AlignedBox3d box;
+  for (const Eigen::Vector3d& p : points) box.extend(p);
+  const Eigen::Vector3d size = box.sizes().cwiseMax(1e-9);
+  const double cell = std::max(std::cbrt(size.prod() / static_cast<double>(points.size())), size.maxCoeff() * 1e-4);
+  const auto key = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d c = ((p - box.min()) / cell).array().floor();
+    return CellKey{0, static_cast<int64_t>(c.x()), static_cast<int64_t>(c.y()), static_cast<int64_t>(c.z())};
+  };
+  std::unordered_map<CellKey, std::vector<size_t>, CellKeyHash> grid;
+  for (size_t i = 0; i < points.size(); ++i) grid[key(points[i])].push_back(i);
+  std::vector<double> distances(points.size(), cell);
+  tbb::parallel_for(size_t(0), points.size(), [&](size_t i) {
+    const CellKey home = key(points[i]);
+    std::vector<double> nearest;  // squared, the kNeighbours smallest so far
+    for (int r = 0; r <= kMaxShells; ++r) {
+      for (int64_t x = -r; x <= r; ++x) {
+        for (int64_t y = -r; y <= r; ++y) {
+          for (int64_t z = -r; z <= r; ++z) {
+            if (std::max({std::abs(x), std::abs(y), std::abs(z)}) != r) continue;  // this shell only
+            const auto found = grid.find({0, home.x + x, home.y + y, home.z + z});
+            if (found == grid.end()) continue;
+            for (const size_t j : found->second) {
+              if (j != i) nearest.push_back((points[j] - points[i]).squaredNorm());
+            }
+          }
+        }
+      }
+      std::sort(nearest.begin(), nearest.end());
+      if (nearest.size() > kNeighbours) nearest.resize(kNeighbours);
+      // Points beyond shell r are at least r cells away: done when the k-th nearest is closer than that.
+      if (nearest.size() == kNeighbours && nearest.back() <= std::pow(r * cell, 2)) break;
+    }
+    if (!nearest.empty()) {
+      double sum = 0;
+      for (const double d : nearest) sum += d;
+      distances[i] = std::max(std::sqrt(sum / static_cast<double>(nearest.size())), cell * 1e-3);
+    }
+  });
+  return distances;
+}
+
+}  // namespace
+
+Gaussians<float> GaussiansFromSparsePoints(const std::vector<Eigen::Vector3d>& points,
+                                           const std::vector<Eigen::Vector3f>& rgb, size_t max_gaussians,
+                                           int sh_degree) {
+  if (points.empty()) return GaussiansFromPoints({}, max_gaussians, sh_degree);
+  const std::vector<double> distances = NeighbourDistances(points);
+  std::vector<SurfacePoint> surface(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    // A cell of about the neighbour distance: its Gaussian's sigma is kTangentSigma of it.
+    surface[i] = {points[i], rgb[i], Eigen::Vector3f::Zero(), static_cast<float>(kSparseOpacity / kOpacityShare),
+                  distances[i]};
+  }
+  return GaussiansFromPoints(surface, max_gaussians, sh_degree);
 }
 
 namespace {

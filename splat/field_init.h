@@ -41,4 +41,10 @@ struct SurfacePoint {
 };
 Gaussians<float> GaussiansFromPoints(const std::vector<SurfacePoint>& points, size_t max_gaussians, int sh_degree);
 
+// 3D Gaussian Splatting's initialisation, for comparison: a ball at each sparse point (colours in [0, 1]), of
+// about the distance to its three nearest neighbours, opacity 0.1 (points closer than that share one).
+Gaussians<float> GaussiansFromSparsePoints(const std::vector<Eigen::Vector3d>& points,
+                                           const std::vector<Eigen::Vector3f>& rgb, size_t max_gaussians,
+                                           int sh_degree);
+
 }  // namespace p2n

@@ -17,6 +17,7 @@
 #include "splat/splat_trainer.h"
 #include "stages/camera_corrections.h"
 #include "stages/output_frame.h"
+#include "stages/ply.h"
 #include "stages/splat_viewer.h"
 #include "stages/stage_io.h"
 #include "stages/train_stage.h"
@@ -67,6 +68,25 @@ double CameraExtent(const std::vector<TrainView>& views) {
   return 1.1 * std::max(radius, 1e-6);
 }
 
+// 3D Gaussian Splatting's start from the poses stage's sparse points (normalised frame); UserError when there are
+// none (a dataset imported with its cameras has none).
+Gaussians<float> GaussiansFromSparseFile(const fs::path& file, const FieldInitOptions& init) {
+  const std::vector<ColouredPoint> cloud = fs::exists(file) ? ReadPly(file) : std::vector<ColouredPoint>{};
+  if (cloud.empty()) {
+    throw UserError(
+        format("splat.init sparse: '{}' has no points (a dataset imported with its cameras has none); "
+               "use --splat.init field",
+               file.string()));
+  }
+  std::vector<Eigen::Vector3d> points;
+  std::vector<Eigen::Vector3f> rgb;
+  for (const ColouredPoint& p : cloud) {
+    points.push_back(p.position.cast<double>());
+    rgb.emplace_back(p.rgb[0] / 255.0f, p.rgb[1] / 255.0f, p.rgb[2] / 255.0f);
+  }
+  return GaussiansFromSparsePoints(points, rgb, init.max_gaussians, init.sh_degree);
+}
+
 SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& options) {
   SplatSetup setup;
   const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
@@ -89,7 +109,9 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   for (const TrainView& view : setup.data.train) pixels += size_t(view.camera.width) * view.camera.height;
   init.max_gaussians = std::min(static_cast<size_t>(options.max_gaussians), pixels / kPixelsPerSplat);
   init.sh_degree = options.sh_degree;
-  {
+  if (options.init == "sparse") {
+    setup.gaussians = GaussiansFromSparseFile(context.upstream_dirs.at("poses") / "sparse_points.ply", init);
+  } else {
     Progress progress("splat: placing splats from the field", static_cast<int64_t>(setup.data.train.size()), "views");
     RenderOptions render;
     render.on_rays_done = [](size_t) { ThrowIfCancelled(); };

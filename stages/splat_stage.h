@@ -16,6 +16,7 @@ struct SplatOptions {
   double time_budget = 0;  // seconds of optimisation; 0: by the training preset (SplatTimeBudget)
   int steps = 0;           // stop after this many steps; 0: no step limit
   int sh_degree = 3;
+  std::string init = "field";   // field | sparse: where the first Gaussians come from
   int init_width = 200;         // training views rendered this wide to place the first Gaussians
   int max_gaussians = 400'000;  // of the first; densification may double it
   std::string frame = "source";
@@ -30,6 +31,10 @@ struct SplatOptions {
       "optimisation time of the splats; 0: by train.preset (fast 30, default 120, quality 180)", "s");
     v("steps", steps, "stop after this many steps (one training photo each); 0: no step limit", "steps");
     v("sh_degree", sh_degree, "spherical-harmonics degree of the splats' colours (0: one colour each)");
+    v("init", init,
+      "where the first splats come from: field (its surfaces, seen by the training views) or sparse (COLMAP's "
+      "sparse points, as 3D Gaussian Splatting starts; for comparison)",
+      "", OptionKind::kResult, {"field", "sparse"});
     v("init_width", init_width, "width the training views are rendered at to place the first splats", "pixels");
     v("max_gaussians", max_gaussians, "splats placed from the field (densification may add as many again)");
     v("frame", frame,

@@ -45,4 +45,12 @@ TEST_CASE("splat stage: splat.enabled false writes no splats and says so", "[spl
   CHECK_FALSE(fs::exists(out / "splats.ply"));
 }
 
+TEST_CASE("splat stage: splat.init sparse without sparse points says where they would be and what to do", "[splat]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(30);
+  config.Set("splat.init", "sparse", "test");  // the small dataset comes with its cameras and no points
+  CHECK_THROWS_WITH(setup.runner.Run(setup.workspace, config, Until("splat")),
+                    Catch::Contains("sparse_points.ply") && Catch::Contains("--splat.init field"));
+}
+
 }  // namespace p2n::testing

@@ -151,6 +151,34 @@ TEST_CASE("Points on a plane become flat splats along it, as many as asked at mo
   }
 }
 
+TEST_CASE("Sparse points become balls of their neighbours' distance at opacity 0.1, as 3D Gaussian Splatting starts",
+          "[splat]") {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<Eigen::Vector3f> rgb;
+  for (int i = 0; i < 10; ++i) {
+    for (int j = 0; j < 10; ++j) {
+      for (int k = 0; k < 10; ++k) {
+        points.emplace_back(0.1 * i, 0.1 * j, 0.1 * k);  // every point's three nearest are 0.1 away
+        rgb.emplace_back(0.1f * i, 0.5f, 0.9f);
+      }
+    }
+  }
+  const Gaussians<float> g = GaussiansFromSparsePoints(points, rgb, 100'000, 1);
+  // Cells of 2^round(log2 0.1) = 0.125 hold one or two points a side: between 1000 / 8 and 1000 balls.
+  REQUIRE(g.size() >= 125);
+  CHECK(g.size() <= 1000);
+  CHECK(g.sh_degree == 1);
+  for (size_t i = 0; i < g.size(); ++i) {
+    for (int a = 0; a < 3; ++a) CHECK(std::exp(g.log_scales[3 * i + a]) == Approx(0.0625).epsilon(1e-5));
+    CHECK(1 / (1 + std::exp(-g.opacity_logits[i])) == Approx(0.1).epsilon(1e-4));
+    CHECK(0.5 + kShC0 * g.sh_dc[3 * i + 2] == Approx(0.9).margin(1e-5));
+    const Eigen::Vector3d p(g.positions[3 * i], g.positions[3 * i + 1], g.positions[3 * i + 2]);
+    CHECK((p.array() >= -1e-9).all());
+    CHECK((p.array() <= 0.9 + 1e-9).all());
+  }
+  CHECK(GaussiansFromSparsePoints({}, {}, 10, 3).size() == 0);
+}
+
 TEST_CASE("Splat optimisation fits photos, and a resumed run continues as an uninterrupted one", "[splat]") {
   const Gaussians<float> truth = RandomSplats(30, 0, 5);
   const std::vector<TrainView> views = ViewsOf(truth, 8);

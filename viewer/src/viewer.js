@@ -38,6 +38,7 @@ camera.up.copy(up.lengthSq() > 0 ? up.normalize() : new THREE.Vector3(0, 1, 0));
 const controls = new OrbitControls(camera, canvas);
 controls.enableDamping = false;
 controls.screenSpacePanning = true;
+controls.listenToKeyEvents(window);  // the arrow keys pan
 let current = scene.cameras[0];
 
 // Sizes the canvas (the window, or the camera's own pixels) and sets the projection of `current`.
@@ -102,7 +103,8 @@ let frames = 0, last = performance.now();
 renderer.setAnimationLoop((now) => {
   fly(Math.min((now - last) / 1000, 0.1));
   last = now;
-  controls.update();
+  // No controls.update() here: it would turn the camera upright about the scene's up, and a photo's camera may
+  // lean; the controls update themselves when the user drags.
   renderer.render(world, camera);
   ++frames;
 });
