@@ -44,6 +44,11 @@ double SplatTrainer::PositionLearningRate() const {
   return scene_.extent * std::exp((1 - t) * std::log(options_.position_lr) + t * std::log(options_.final_position_lr));
 }
 
+void SplatTrainer::SetViews(const std::vector<TrainView>* views) {
+  if (views->size() != scene_.views->size()) throw std::invalid_argument("SplatTrainer::SetViews: other views");
+  scene_.views = views;
+}
+
 const TrainView& SplatTrainer::NextView() {
   if (order_.empty()) {
     order_.resize(scene_.views->size());
@@ -215,6 +220,34 @@ FloatImage RenderSplats(const Gaussians<float>& gaussians, const PinholeCamera& 
   Rasterizer<float> rasterizer;
   rasterizer.Forward(gaussians, camera, options);
   return FloatImage{camera.width, camera.height, 3, rasterizer.rgb()};
+}
+
+std::vector<TrainView> HalfSizeViews(const std::vector<TrainView>& views) {
+  std::vector<TrainView> half;
+  for (const TrainView& view : views) {
+    const int w = view.camera.width / 2, ht = view.camera.height / 2, c = view.channels;
+    if (w < 1 || ht < 1)
+      throw std::invalid_argument("HalfSizeViews: a view of " + std::to_string(view.camera.width) + "x" +
+                                  std::to_string(view.camera.height) + " pixels");
+    TrainView h{view.camera, view.near, view.far, c, {}, view.name};
+    h.camera.width = w, h.camera.height = ht;
+    h.camera.fx /= 2, h.camera.fy /= 2, h.camera.cx /= 2, h.camera.cy /= 2;
+    h.pixels.assign(size_t(w) * ht * c, 0);
+    for (int y = 0; y < ht; ++y) {
+      for (int x = 0; x < w; ++x) {
+        for (int k = 0; k < c; ++k) {
+          int sum = 2;  // rounds
+          for (int dy = 0; dy < 2; ++dy) {
+            for (int dx = 0; dx < 2; ++dx)
+              sum += view.pixels[(size_t(2 * y + dy) * view.camera.width + 2 * x + dx) * c + k];
+          }
+          h.pixels[(size_t(y) * w + x) * c + k] = static_cast<uint8_t>(sum / 4);
+        }
+      }
+    }
+    half.push_back(std::move(h));
+  }
+  return half;
 }
 
 }  // namespace p2n

@@ -56,6 +56,9 @@ class SplatTrainer {
 
   // One step on the next training view (each view once per epoch, in a random order); returns the L1 loss.
   double Step();
+  // Trains on `views` from the next step on: the same views in the same order, at another size (the coarse
+  // first part of an optimisation).
+  void SetViews(const std::vector<TrainView>* views);
   int step() const { return step_; }
   const Gaussians<float>& gaussians() const { return gaussians_; }
   // The SH degree in use at this step.
@@ -81,6 +84,10 @@ class SplatTrainer {
   std::vector<float> screen_gradient_sum_;
   std::vector<uint32_t> screen_gradient_count_;
 };
+
+// `views` at half their size (odd last rows and columns dropped): each pixel the mean of four, the cameras'
+// intrinsics halved exactly. For the coarse first part of an optimisation: many more steps for the time.
+std::vector<TrainView> HalfSizeViews(const std::vector<TrainView>& views);
 
 // The Gaussians' image of `camera` over `background`: an RGB FloatImage.
 FloatImage RenderSplats(const Gaussians<float>& gaussians, const PinholeCamera& camera,

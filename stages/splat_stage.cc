@@ -33,6 +33,7 @@ void SplatOptions::Check() const {
   CheckOption(sh_degree >= 0 && sh_degree <= kMaxShDegree, "splat.sh_degree", "must be 0..3");
   CheckOption(init_width >= 8 && init_width <= 8192, "splat.init_width", "must be 8..8192");
   CheckOption(max_gaussians >= 1, "splat.max_gaussians", "must be positive");
+  CheckOption(coarse >= 0 && coarse <= 1, "splat.coarse", "must be 0..1");
   CheckOption(eval_interval > 0, "splat.eval_interval", "must be positive");
   CheckOption(checkpoint_interval >= 0, "splat.checkpoint_interval", "must be 0 (none) or positive");
 }
@@ -211,8 +212,13 @@ void OptimiseUntilDone(SplatTrainer& trainer, const SplatSetup& setup, const Spl
   progress.Add(budget > 0 ? static_cast<int64_t>(state->seconds) : trainer.step());
   double next_eval = (std::floor(state->seconds / options.eval_interval) + 1) * options.eval_interval;
   auto last_checkpoint = Clock::now();
+  const std::vector<TrainView> coarse = options.coarse > 0 ? HalfSizeViews(setup.data.train) : std::vector<TrainView>{};
+  const auto coarse_phase = [&] {
+    return budget > 0 ? state->seconds < options.coarse * budget : trainer.step() < options.coarse * options.steps;
+  };
   while (!done()) {
     ThrowIfCancelled();
+    trainer.SetViews(!coarse.empty() && coarse_phase() ? &coarse : &setup.data.train);
     const auto start = Clock::now();
     state->loss_sum += trainer.Step();
     ++state->loss_steps;

@@ -19,6 +19,7 @@ struct SplatOptions {
   std::string init = "field";   // field | sparse: where the first Gaussians come from
   int init_width = 200;         // training views rendered this wide to place the first Gaussians
   int max_gaussians = 400'000;  // of the first; densification may double it
+  double coarse = 0.75;          // share of the optimisation on the photos at half size
   std::string frame = "source";
   double eval_interval = 20;  // seconds of optimisation between held-out evaluations
   double checkpoint_interval = 60;
@@ -37,6 +38,8 @@ struct SplatOptions {
       "", OptionKind::kResult, {"field", "sparse"});
     v("init_width", init_width, "width the training views are rendered at to place the first splats", "pixels");
     v("max_gaussians", max_gaussians, "splats placed from the field (densification may add as many again)");
+    v("coarse", coarse,
+      "share of the optimisation time spent on the photos at half size (four times the steps; coarse to fine)");
     v("frame", frame,
       "coordinates of splats.ply: source (COLMAP's world, or the dataset's) or normalized (the training frame)", "",
       OptionKind::kResult, {"source", "normalized"});

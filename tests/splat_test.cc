@@ -179,6 +179,38 @@ TEST_CASE("Sparse points become balls of their neighbours' distance at opacity 0
   CHECK(GaussiansFromSparsePoints({}, {}, 10, 3).size() == 0);
 }
 
+TEST_CASE("Views at half size: each pixel the mean of four, every point where the camera put it, halved", "[splat]") {
+  TrainView view;
+  view.camera = CameraAt({0.3, -2, 0.5}, 5);  // 5 x 5: the last row and column are dropped
+  view.camera.cx = 2.2;                       // off centre
+  view.name = "a.png";
+  for (int i = 0; i < 5 * 5 * 3; ++i) view.pixels.push_back(static_cast<uint8_t>(i * 3));
+  const std::vector<TrainView> half = HalfSizeViews({view});
+  REQUIRE(half.size() == 1);
+  const TrainView& h = half[0];
+  CHECK(h.camera.width == 2);
+  CHECK(h.camera.height == 2);
+  CHECK(h.name == "a.png");
+  REQUIRE(h.pixels.size() == 2 * 2 * 3);
+  for (int y = 0; y < 2; ++y) {
+    for (int x = 0; x < 2; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        int sum = 0;
+        for (int dy = 0; dy < 2; ++dy) {
+          for (int dx = 0; dx < 2; ++dx) sum += view.pixels[((2 * y + dy) * 5 + 2 * x + dx) * 3 + c];
+        }
+        CHECK(std::abs(h.pixels[(y * 2 + x) * 3 + c] - sum / 4.0) <= 0.5);
+      }
+    }
+  }
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.2, 0.1, -0.3)}) {
+    double z_full = 0, z_half = 0;
+    const Eigen::Vector2d full = Project(view.camera, p, &z_full), halved = Project(h.camera, p, &z_half);
+    CHECK((halved - full / 2).norm() < 1e-9);  // pixel corners: full pixel 2x..2x+2 is half pixel x..x+1
+    CHECK(z_half == Approx(z_full));
+  }
+}
+
 TEST_CASE("Splat optimisation fits photos, and a resumed run continues as an uninterrupted one", "[splat]") {
   const Gaussians<float> truth = RandomSplats(30, 0, 5);
   const std::vector<TrainView> views = ViewsOf(truth, 8);
