@@ -80,9 +80,10 @@ double SplatTrainer::Step() {
       d_rgb[3 * i + c] = difference > 0 ? scale : (difference < 0 ? -scale : 0.0f);
     }
   }
-  Gaussians<float> grads;
+  Gaussians<float>& grads = gradients_;  // kept between steps: no allocation of its tens of megabytes each step
   grads.sh_degree = gaussians_.sh_degree;
-  grads.Resize(gaussians_.size());
+  if (grads.size() != gaussians_.size()) grads.Resize(gaussians_.size());
+  grads.SetZero();
   std::vector<float> screen;
   rasterizer_.Backward(d_rgb, &grads, &screen);
 
@@ -102,7 +103,9 @@ double SplatTrainer::Step() {
   gaussians_.ForEachArray([&](std::vector<float>& values, int) {
     Adam<float>& adam = adams_[array];
     adam.set_learning_rate(rates[array]);
-    adam.Step(values.data(), gradients[array]->data());
+    // The higher SH coefficients wait for their degree: until then their gradients are zero, and so would be
+    // their updates (their moments start from zero when the first degree joins).
+    if (array != kShRestArray || ShDegree() > 0) adam.Step(values.data(), gradients[array]->data());
     ++array;
   });
   ++step_;

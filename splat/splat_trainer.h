@@ -76,7 +76,9 @@ class SplatTrainer {
   Gaussians<float> gaussians_;
   SplatScene scene_;
   SplatTrainerOptions options_;
-  std::vector<Adam<float>> adams_;  // one per parameter array, in Gaussians::ForEachArray's order
+  static constexpr size_t kShRestArray = 5;  // sh_rest's place in Gaussians::ForEachArray's order
+  std::vector<Adam<float>> adams_;           // one per parameter array, in Gaussians::ForEachArray's order
+  Gaussians<float> gradients_;
   Rasterizer<float> rasterizer_;
   int step_ = 0;
   std::mt19937_64 random_;
