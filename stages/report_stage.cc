@@ -95,15 +95,15 @@ std::string SplatSection(const fs::path& splat_dir, const nlohmann::json& train)
                       {CsvSeries("held-out PSNR (dB)", ReadTextFile(splat_dir / "metrics.csv"), 0, 4)});
   html += "</div>\n";
   html += format(
-      "<p>The field baked into {} 3D Gaussian splats (spherical harmonics of degree {}; {} placed from the field, "
+      "<p>The field baked into {} 3D Gaussian splats (spherical harmonics of degree {}; {} placed from the {}, "
       "then optimised for {:.0f} s, {} steps): held-out PSNR {} dB and SSIM {} (the field: {} dB), {:.3f} s per "
       "held-out view on the CPU. <a href=\"../35_splat/splats.ply\">splats.ply</a> ({:.1f} MB) is in the standard 3D "
       "Gaussian Splatting layout, {}; SuperSplat, the PlayCanvas and three.js splat viewers open it as it is.</p>\n",
       Number(report["splats"]), Number(report["sh_degree"]), Number(report["initial_splats"]),
-      report.value("seconds", 0.0), Number(report["steps"]), Number(report["heldout_psnr"]),
-      Number(report["heldout_ssim"], 3), Number(train.value("heldout_psnr", nlohmann::json(nullptr))),
-      report.value("seconds_per_view", 0.0), report.value("file_bytes", 0.0) / 1e6,
-      HtmlEscape(report.value("frame_description", "")));
+      report.value("init", "field") == "sparse" ? "sparse points" : "field", report.value("seconds", 0.0),
+      Number(report["steps"]), Number(report["heldout_psnr"]), Number(report["heldout_ssim"], 3),
+      Number(train.value("heldout_psnr", nlohmann::json(nullptr))), report.value("seconds_per_view", 0.0),
+      report.value("file_bytes", 0.0) / 1e6, HtmlEscape(report.value("frame_description", "")));
   return html;
 }
 

@@ -255,8 +255,9 @@ void SplatStage::Run(StageContext& context) const {
   const double budget = SplatTimeBudget(options, train_options.preset);
   const SplatSetup setup = LoadSplatSetup(context, options);
   const double near = 0.01 * setup.extent;
-  LogInfo(format("splat: {} splats placed from the field; {} training and {} held-out views, {}",
-                 setup.gaussians.size(), setup.data.train.size(), setup.data.heldout.size(),
+  LogInfo(format("splat: {} splats placed from the {}; {} training and {} held-out views, {}", setup.gaussians.size(),
+                 options.init == "sparse" ? "sparse points" : "field", setup.data.train.size(),
+                 setup.data.heldout.size(),
                  budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
 
   SplatTrainerOptions trainer_options;
@@ -297,6 +298,7 @@ void SplatStage::Run(StageContext& context) const {
       {"enabled", true},
       {"splats", trainer.gaussians().size()},
       {"initial_splats", setup.gaussians.size()},
+      {"init", options.init},
       {"sh_degree", trainer.gaussians().sh_degree},
       {"steps", trainer.step()},
       {"seconds", state.seconds},

@@ -53,6 +53,29 @@ double Loss(const Gaussians<double>& g, const PinholeCamera& camera, const Raste
   return loss;
 }
 
+// Every parameter's derivative in `grads` against central differences (step 1e-6) of loss() as `g` changes.
+template <class Loss>
+void CheckAgainstCentralDifferences(Gaussians<double>* g, const Gaussians<double>& grads, const Loss& loss,
+                                    double margin, double epsilon) {
+  std::vector<std::vector<double>*> params;
+  std::vector<const std::vector<double>*> analytic;
+  g->ForEachArray([&](std::vector<double>& v, int) { params.push_back(&v); });
+  grads.ForEachArray([&](const std::vector<double>& v, int) { analytic.push_back(&v); });
+  for (size_t a = 0; a < params.size(); ++a) {
+    for (size_t k = 0; k < params[a]->size(); ++k) {
+      double& value = (*params[a])[k];
+      const double saved = value, h = 1e-6;
+      value = saved + h;
+      const double plus = loss();
+      value = saved - h;
+      const double minus = loss();
+      value = saved;
+      INFO("array " << a << " value " << k);
+      CHECK((*analytic[a])[k] == Approx((plus - minus) / (2 * h)).margin(margin).epsilon(epsilon));
+    }
+  }
+}
+
 }  // namespace
 
 TEST_CASE("A splat's centre pixel blends its colour by its opacity over the background", "[splat]") {
@@ -126,23 +149,8 @@ TEST_CASE("Projection gradients match finite differences", "[splat][gradients]")
     Gaussians<double> grads = g;
     grads.SetZero();
     ProjectGaussianBackward(g, i, view, options, weight, &grads);
-    std::vector<std::vector<double>*> params, analytic;
-    g.ForEachArray([&](std::vector<double>& v, int) { params.push_back(&v); });
-    grads.ForEachArray([&](std::vector<double>& v, int) { analytic.push_back(&v); });
-    for (size_t a = 0; a < params.size(); ++a) {
-      for (size_t k = 0; k < params[a]->size(); ++k) {
-        double& value = (*params[a])[k];
-        const double saved = value, h = 1e-6;
-        value = saved + h;
-        const double plus = loss();
-        value = saved - h;
-        const double minus = loss();
-        value = saved;
-        const double numeric = (plus - minus) / (2 * h);
-        INFO("gaussian " << i << " array " << a << " value " << k);
-        CHECK((*analytic[a])[k] == Approx(numeric).margin(1e-6).epsilon(1e-5));
-      }
-    }
+    INFO("gaussian " << i);
+    CheckAgainstCentralDifferences(&g, grads, loss, 1e-6, 1e-5);
   }
 }
 
@@ -164,23 +172,8 @@ TEST_CASE("Rasterizer gradients match finite differences", "[splat][gradients]")
   grads.SetZero();
   rasterizer.Backward(weights, &grads);
 
-  std::vector<std::vector<double>*> params, analytic;
-  g.ForEachArray([&](std::vector<double>& v, int) { params.push_back(&v); });
-  grads.ForEachArray([&](std::vector<double>& v, int) { analytic.push_back(&v); });
-  for (size_t a = 0; a < params.size(); ++a) {
-    for (size_t k = 0; k < params[a]->size(); ++k) {
-      double& value = (*params[a])[k];
-      const double saved = value, h = 1e-6;
-      value = saved + h;
-      const double plus = Loss(g, camera, options, weights);
-      value = saved - h;
-      const double minus = Loss(g, camera, options, weights);
-      value = saved;
-      const double numeric = (plus - minus) / (2 * h);
-      INFO("array " << a << " value " << k);
-      CHECK((*analytic[a])[k] == Approx(numeric).margin(1e-5).epsilon(1e-4));
-    }
-  }
+  CheckAgainstCentralDifferences(
+      &g, grads, [&] { return Loss(g, camera, options, weights); }, 1e-5, 1e-4);
 }
 
 TEST_CASE("Degenerate splats render and differentiate to finite values", "[splat]") {

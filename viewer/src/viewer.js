@@ -49,8 +49,8 @@ function resize() {
   const zoom = height / current.height;  // the photo's vertical field of view fills the canvas
   camera.fov = THREE.MathUtils.radToDeg(2 * Math.atan(current.height / 2 / current.fy));
   camera.aspect = width / height;
-  // The principal point where the photo has it, in canvas pixels.
-  const dx = (width / 2 - current.cx * zoom), dy = (height / 2 - current.cy * zoom);
+  // The principal point as far from the canvas's centre as the photo has it from its own.
+  const dx = (current.width / 2 - current.cx) * zoom, dy = (current.height / 2 - current.cy) * zoom;
   camera.setViewOffset(width, height, dx, dy, width, height);
   camera.updateProjectionMatrix();
 }
@@ -76,7 +76,10 @@ for (const view of scene.cameras) {
   option.textContent = `${view.split === "train" ? "training" : "held-out"}: ${view.name}`;
   select.append(option);
 }
-select.addEventListener("change", () => showCamera(scene.cameras.find((v) => v.name === select.value)));
+select.addEventListener("change", () => {
+  showCamera(scene.cameras.find((v) => v.name === select.value));
+  select.blur();  // the keys fly again
+});
 window.addEventListener("resize", resize);
 
 // Flying: W/S forward and back, A/D sideways, R/F (or E/Q) up and down; Shift flies faster.
