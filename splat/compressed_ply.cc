@@ -151,7 +151,7 @@ std::vector<char> CompressedSplatPlyBytes(const Gaussians<float>& g) {
   }
   sh.reserve(n * rest);
   for (const size_t i : order) {
-    const float* coefficients = rest > 0 ? &g.sh_rest[i * rest] : nullptr;
+    const float* coefficients = g.sh_rest.data() + i * rest;  // none at degree 0
     for (int c = 0; c < 3; ++c) {  // f_rest order: all of red's coefficients, then green's, then blue's
       for (int k = 0; k < rest / 3; ++k) {
         const float t = coefficients[3 * k + c] / 8 + 0.5f;

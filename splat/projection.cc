@@ -126,7 +126,7 @@ bool ComputeForward(const Gaussians<T>& g, size_t i, const SplatCamera<T>& camer
   if (f->distance > 0) f->direction /= f->distance;
   SphericalHarmonics(f->direction[0], f->direction[1], f->direction[2], f->basis);
   const int count = ShCoefficients(std::min(options.sh_degree, g.sh_degree));
-  const T* rest = &g.sh_rest[i * 3 * (g.coefficients() - 1)];
+  const T* rest = g.sh_rest.data() + i * 3 * (g.coefficients() - 1);  // none at degree 0
   for (int c = 0; c < 3; ++c) {
     T value = T(0.5) + f->basis[0] * g.sh_dc[3 * i + c];
     for (int k = 1; k < count; ++k) value += f->basis[k] * rest[3 * (k - 1) + c];

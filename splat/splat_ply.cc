@@ -25,7 +25,7 @@ std::vector<std::string> PropertyNames(int degree) {
 template <class G, class Visit>
 void ForEachProperty(G& g, size_t i, int degree, Visit&& values) {
   const int rest = ShCoefficients(degree) - 1;
-  auto* sh = &g.sh_rest[i * 3 * rest];
+  auto* sh = g.sh_rest.data() + i * 3 * rest;  // none at degree 0
   int at = 0;
   const auto visit = [&](auto& value) { values(value, at++); };
   for (int a = 0; a < 3; ++a) visit(g.positions[3 * i + a]);
