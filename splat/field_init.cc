@@ -67,7 +67,7 @@ std::unordered_map<CellKey, Cell, CellKeyHash> Pool(const std::vector<SurfacePoi
 Gaussians<float> GaussiansFromPoints(const std::vector<SurfacePoint>& points, size_t max_gaussians, int sh_degree) {
   double spread = 1;
   std::unordered_map<CellKey, Cell, CellKeyHash> cells = Pool(points, spread);
-  while (cells.size() > max_gaussians) cells = Pool(points, spread *= 2);
+  while (cells.size() > max_gaussians) cells = Pool(points, spread *= std::sqrt(2.0));  // half the cells a step
   Gaussians<float> g;
   g.sh_degree = sh_degree;
   g.Resize(cells.size());

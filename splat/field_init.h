@@ -21,7 +21,7 @@ struct FieldInitOptions {
   int width = 200;                 // the training views are rendered this wide
   double min_opacity = 0.5;        // pixels at least this opaque give points
   int min_views = 2;               // ... if at least this many views (their own included) see them at that depth
-  size_t max_gaussians = 400'000;  // the cells grow until there are at most this many
+  size_t max_gaussians = 100'000;  // the cells grow until there are at most this many
   int sh_degree = 3;               // of the Gaussians made (the higher coefficients start at zero)
 };
 

@@ -18,8 +18,8 @@ struct SplatOptions {
   int sh_degree = 3;
   std::string init = "field";   // field | sparse: where the first Gaussians come from
   int init_width = 200;         // training views rendered this wide to place the first Gaussians
-  int max_gaussians = 400'000;  // of the first; densification may double it
-  double coarse = 0.75;          // share of the optimisation on the photos at half size
+  int max_gaussians = 100'000;  // of the first; densification may double it. Fewer: more steps for the time
+  double coarse = 0.75;         // share of the optimisation on the photos at half size
   std::string frame = "source";
   double eval_interval = 20;  // seconds of optimisation between held-out evaluations
   double checkpoint_interval = 60;

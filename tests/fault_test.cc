@@ -197,7 +197,10 @@ TEST_CASE("faults: SIGKILL at many moments, then a rerun, gives the uninterrupte
     for (const auto& [stage, key] : CheckedKeys(workspace)) CHECK(key == reference.at(stage));
     std::string status_text;
     REQUIRE(RunCommand({P2N_BINARY, "status", "-w", workspace.string()}, &status_text) == 0);
-    CHECK_THAT(status_text, Catch::Contains("incomplete") || Catch::Contains("missing"));
+    // The report stage can finish within the millisecond between its manifest appearing and the kill.
+    if (!fs::exists(workspace / folders.back() / "manifest.json")) {
+      CHECK_THAT(status_text, Catch::Contains("incomplete") || Catch::Contains("missing"));
+    }
   }
   INFO("killed at " << Catch::Detail::stringify(hit) << "\n" << ReadText(dir / "kills.log"));
   CHECK(hit.size() >= 8);
