@@ -54,6 +54,12 @@ try {
     return -10 * Math.log10(Math.max(sum / n, 1e-12));
   }, [before, reference]);
   if (screenshot_path) writeFileSync(screenshot_path, Buffer.from(before.split(",")[1], "base64"));
+  // The whole canvas inside the window, so that the drag reaches it.
+  const size = await page.evaluate(() => {
+    const canvas = document.getElementById("p2n-canvas");
+    return [canvas.width, canvas.height];
+  });
+  await page.setViewportSize({ width: Math.max(size[0], 320), height: size[1] + 120 });
   const box = await page.locator("#p2n-canvas").boundingBox();
   await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
   await page.mouse.down();
