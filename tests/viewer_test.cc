@@ -11,9 +11,11 @@
 #include <random>
 #include <set>
 
+#include "nerf/float_image.h"
 #include "pipeline/file_util.h"
 #include "splat/compressed_ply.h"
 #include "splat/splat_ply.h"
+#include "splat/splat_trainer.h"
 #include "stage_fixtures.h"
 #include "viewer/viewer_page.h"
 
@@ -136,24 +138,44 @@ TEST_CASE("viewer.html in headless Chromium draws what our rasterizer renders, m
   config.Set("render.path", "none", "test");
   setup.runner.Run(setup.workspace, config, Until("render"));
   const fs::path splat_dir = setup.dir / "ws" / "35_splat", render_dir = setup.dir / "ws" / "40_render";
+  const fs::path page = splat_dir / "viewer.html";
   const nlohmann::json report = ReadJsonFile(splat_dir / "splat_report.json");
-  CHECK(report["viewer_bytes"].get<size_t>() == fs::file_size(splat_dir / "viewer.html"));
-  // A held-out camera: the render stage drew it from the same splats with our CPU rasterizer.
-  const nlohmann::json view = ReadJsonFile(render_dir / "eval.json")["views"].at(0);
-  const std::string name = view["view"];
-  std::string output;
-  const int status =
-      RunCommand({P2N_NODE, P2N_NODE_DIR "/viewer_check.mjs", (splat_dir / "viewer.html").string(), name,
-                  (render_dir / view["render"].get<std::string>()).string(), (setup.dir / "viewer.png").string()},
-                 &output);
-  INFO(output);
-  REQUIRE(status == 0);
-  const nlohmann::json result = nlohmann::json::parse(output.substr(output.rfind('{')));
-  CHECK(result["errors"].empty());
-  CHECK(result["requests"].empty());
-  REQUIRE(result["psnr"].is_number());
-  CHECK(result["psnr"].get<double>() >= 25);
-  CHECK(result["drag_changed_picture"] == true);
+  CHECK(report["viewer_bytes"].get<size_t>() == fs::file_size(page));
+
+  // The training camera the page starts at, rendered by our rasterizer from splats.ply.
+  const std::string html = ReadText(page);
+  const std::string open = R"(<script id="p2n-scene" type="application/json">)";
+  const size_t begin = html.find(open) + open.size();
+  const nlohmann::json scene = nlohmann::json::parse(html.substr(begin, html.find("</script>", begin) - begin));
+  const nlohmann::json& first = scene["cameras"].at(0);
+  REQUIRE(first["split"] == "train");
+  PinholeCamera camera;
+  camera.width = first["width"], camera.height = first["height"];
+  camera.fx = first["fx"], camera.fy = first["fy"], camera.cx = first["cx"], camera.cy = first["cy"];
+  const std::vector<double> pose = first["pose"];
+  camera.world_from_cam = Eigen::Map<const Eigen::Matrix4d>(pose.data());  // column-major
+  const std::vector<float> background = report["background"];
+  SaveFloatImage(RenderSplats(ReadSplatPly(splat_dir / "splats.ply"), camera,
+                              {background[0], background[1], background[2]}, report["near"].get<double>()),
+                 setup.dir / "train_view.png");
+  // And a held-out camera, which the render stage drew from the same splats (its camera not from the page).
+  const nlohmann::json heldout = ReadJsonFile(render_dir / "eval.json")["views"].at(0);
+
+  for (const auto& [name, reference] :
+       {std::pair{first["name"].get<std::string>(), setup.dir / "train_view.png"},
+        std::pair{heldout["view"].get<std::string>(), render_dir / heldout["render"].get<std::string>()}}) {
+    std::string output;
+    const int status =
+        RunCommand({P2N_NODE, P2N_NODE_DIR "/viewer_check.mjs", page.string(), name, reference.string()}, &output);
+    INFO(name << ": " << output);
+    REQUIRE(status == 0);
+    const nlohmann::json result = nlohmann::json::parse(output.substr(output.rfind('{')));
+    CHECK(result["errors"].empty());
+    CHECK(result["requests"].empty());
+    REQUIRE(result["psnr"].is_number());
+    CHECK(result["psnr"].get<double>() >= 25);
+    CHECK(result["drag_changed_picture"] == true);
+  }
 }
 
 }  // namespace p2n::testing
