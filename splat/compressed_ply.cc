@@ -155,7 +155,8 @@ std::vector<char> CompressedSplatPlyBytes(const Gaussians<float>& g) {
     for (int c = 0; c < 3; ++c) {  // f_rest order: all of red's coefficients, then green's, then blue's
       for (int k = 0; k < rest / 3; ++k) {
         const float t = coefficients[3 * k + c] / 8 + 0.5f;
-        sh.push_back(static_cast<char>(std::clamp(std::isfinite(t) ? std::floor(t * 256) : 128.f, 0.f, 255.f)));
+        const float byte = std::clamp(std::isfinite(t) ? std::floor(t * 256) : 128.f, 0.f, 255.f);
+        sh.push_back(static_cast<char>(static_cast<uint8_t>(byte)));  // a float above 127 is no char
       }
     }
   }

@@ -44,24 +44,31 @@ std::string EscapeHtml(const std::string& text) {
   return out;
 }
 
-nlohmann::json SceneJson(const ViewerScene& scene) {
-  nlohmann::json cameras = nlohmann::json::array();
-  for (const ViewerCamera& camera : scene.cameras) {
-    std::vector<double> pose(camera.world_from_cam.data(), camera.world_from_cam.data() + 16);  // column-major
-    cameras.push_back({{"name", camera.name},
-                       {"split", camera.split},
-                       {"width", camera.width},
-                       {"height", camera.height},
-                       {"fx", camera.fx},
-                       {"fy", camera.fy},
-                       {"cx", camera.cx},
-                       {"cy", camera.cy},
-                       {"pose", pose}});
+// Field by field rather than from nested initialiser lists, whose temporaries clang's AddressSanitizer finds
+// read after their scope.
+nlohmann::json SceneJson(const SplatViewerScene& scene) {
+  nlohmann::json json = nlohmann::json::object(), cameras = nlohmann::json::array();
+  for (const SplatViewerCamera& camera : scene.cameras) {
+    nlohmann::json c = nlohmann::json::object();
+    c["name"] = camera.name;
+    c["split"] = camera.split;
+    c["width"] = camera.width;
+    c["height"] = camera.height;
+    c["fx"] = camera.fx;
+    c["fy"] = camera.fy;
+    c["cx"] = camera.cx;
+    c["cy"] = camera.cy;
+    c["pose"] = camera.world_from_cam;
+    cameras.push_back(std::move(c));
   }
-  return {{"title", scene.title},   {"background", scene.background},
-          {"cameras", cameras},     {"centre", {scene.centre.x(), scene.centre.y(), scene.centre.z()}},
-          {"radius", scene.radius}, {"near", scene.near},
-          {"far", scene.far}};
+  json["title"] = scene.title;
+  json["background"] = scene.background;
+  json["cameras"] = std::move(cameras);
+  json["centre"] = std::vector<double>{scene.centre.x(), scene.centre.y(), scene.centre.z()};
+  json["radius"] = scene.radius;
+  json["near"] = scene.near;
+  json["far"] = scene.far;
+  return json;
 }
 
 constexpr const char* kStyle = R"(
@@ -91,7 +98,7 @@ std::string Base64(const char* data, size_t size) {
   return out;
 }
 
-std::string ViewerPage(const ViewerScene& scene, const std::vector<char>& splats) {
+std::string ViewerPage(const SplatViewerScene& scene, const std::vector<char>& splats) {
   std::string page = "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
   page += "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
   page += "<title>" + EscapeHtml(scene.title) + "</title>\n<style>" + kStyle + "</style>\n</head>\n<body>\n";

@@ -11,25 +11,25 @@
 
 namespace p2n {
 
-struct ViewerCamera {
+struct SplatViewerCamera {
   std::string name;
   std::string split;  // "train" or "heldout"
   int width = 0, height = 0;
   double fx = 0, fy = 0, cx = 0, cy = 0;
-  Eigen::Matrix4d world_from_cam = Eigen::Matrix4d::Identity();  // OpenGL axes, in the splats' frame
+  std::array<double, 16> world_from_cam{};  // column-major; OpenGL axes, in the splats' frame
 };
 
-struct ViewerScene {
+struct SplatViewerScene {
   std::string title;
   std::array<float, 3> background{1, 1, 1};
-  std::vector<ViewerCamera> cameras;                 // the first training camera is where the page starts
+  std::vector<SplatViewerCamera> cameras;            // the first training camera is where the page starts
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // what the orbit turns about
   double radius = 1;                                 // the scene's size: how fast the keys fly
   double near = 0.01, far = 100;
 };
 
 // The page. `splats` is a compressed splat PLY (splat/compressed_ply.h).
-std::string ViewerPage(const ViewerScene& scene, const std::vector<char>& splats);
+std::string ViewerPage(const SplatViewerScene& scene, const std::vector<char>& splats);
 
 std::string Base64(const char* data, size_t size);
 
