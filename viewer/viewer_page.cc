@@ -21,29 +21,6 @@ std::string InScript(std::string_view text) {
   return out;
 }
 
-std::string EscapeHtml(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
 // Field by field rather than from nested initialiser lists, whose temporaries clang's AddressSanitizer finds
 // read after their scope.
 nlohmann::json SceneJson(const SplatViewerScene& scene) {
@@ -101,11 +78,14 @@ std::string Base64(const char* data, size_t size) {
 std::string ViewerPage(const SplatViewerScene& scene, const std::vector<char>& splats) {
   std::string page = "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
   page += "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
-  page += "<title>" + EscapeHtml(scene.title) + "</title>\n<style>" + kStyle + "</style>\n</head>\n<body>\n";
-  page += "<canvas id=\"p2n-canvas\"></canvas>\n<div id=\"p2n-panel\"><b>" + EscapeHtml(scene.title) +
-          "</b> <label>camera <select id=\"p2n-camera\"></select></label> <span id=\"p2n-status\">loading"
-          "</span><details><summary>controls</summary>" +
-          kHelp + "</details></div>\n";
+  // The title comes from the scene's JSON (the script sets it as text): nothing here needs escaping.
+  page += std::string("<title>photo2nerf viewer</title>\n<style>") + kStyle + "</style>\n</head>\n<body>\n";
+  page +=
+      std::string(
+          "<canvas id=\"p2n-canvas\"></canvas>\n<div id=\"p2n-panel\"><b id=\"p2n-title\"></b> <label>camera <select "
+          "id=\"p2n-camera\"></select></label> <span id=\"p2n-status\">loading"
+          "</span><details><summary>controls</summary>") +
+      kHelp + "</details></div>\n";
   page += "<script id=\"p2n-scene\" type=\"application/json\">" + InScript(SceneJson(scene).dump()) + "</script>\n";
   page += "<script id=\"p2n-splats\" type=\"application/octet-stream\">" + Base64(splats.data(), splats.size()) +
           "</script>\n";

@@ -9,6 +9,8 @@ const scene = JSON.parse(document.getElementById("p2n-scene").textContent);
 const canvas = document.getElementById("p2n-canvas");
 const select = document.getElementById("p2n-camera");
 const status = document.getElementById("p2n-status");
+document.title = scene.title;
+document.getElementById("p2n-title").textContent = scene.title;
 const params = new URLSearchParams(location.hash.slice(1));
 const nativeSize = params.get("size") === "native";  // the canvas at the camera's own size (tests, screenshots)
 if (nativeSize) document.getElementById("p2n-panel").style.position = "static";  // below the canvas, not over it
