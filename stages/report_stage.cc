@@ -231,11 +231,13 @@ void ReportStage::Run(StageContext& context) const {
   body += HeldoutSection(render_dir, eval, background, options.image_width);
   if (render.contains("path")) {
     const nlohmann::json& path = render["path"];
-    body += format(
-        "<h2>New views</h2>\n<p>{} path, {} frames of {}x{} at {:.2f} frames per second ({:.1f} samples per "
-        "ray).</p>\n",
-        HtmlEscape(path.value("kind", "")), Number(path["frames"]), Number(path["width"]), Number(path["height"]),
-        path.value("frames_per_second", 0.0), path.value("samples_per_ray", 0.0));
+    // Frames from the splats have no samples per ray (render_report.json holds null).
+    const std::string how = path.value("source", "field") == "splats"
+                                ? "from the splats"
+                                : format("{} samples per ray", Number(path["samples_per_ray"], 3));
+    body += format("<h2>New views</h2>\n<p>{} path, {} frames of {}x{} at {:.2f} frames per second ({}).</p>\n",
+                   HtmlEscape(path.value("kind", "")), Number(path["frames"]), Number(path["width"]),
+                   Number(path["height"]), path.value("frames_per_second", 0.0), how);
     const fs::path video = render_dir / "video.mp4";
     if (fs::exists(video)) {
       const std::string source = options.embed_video ? FileDataUri(video, "video/mp4") : "../40_render/video.mp4";

@@ -94,4 +94,14 @@ TEST_CASE("report stage: a self-contained page with every section, drawn by head
   CHECK(PixelsNear(rgb, 0xe0, 0x70, 0x00) > 20);   // held-out cameras
 }
 
+TEST_CASE("report stage: a render drawn from the splats (no samples per ray) is reported as such", "[report]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(60);
+  config.Set("render.source", "splats", "test");
+  setup.runner.Run(setup.workspace, config, {});
+  const std::string html = ReadText(setup.dir / "ws" / "60_report" / "report.html");
+  CHECK_THAT(html, Catch::Contains("frames per second (from the splats)"));
+  CHECK_THAT(html, !Catch::Contains("samples per ray)"));
+}
+
 }  // namespace p2n::testing
