@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "nerf/config_check.h"
+#include "splat/ssim_loss.h"
 
 namespace p2n {
 
@@ -24,6 +25,7 @@ void SplatTrainerOptions::Check() const {
   CheckField(densify_until >= 0 && densify_until <= 1, what, "densify_until", "be in [0, 1]", densify_until);
   CheckField(densify_gradient > 0, what, "densify_gradient", "be positive", densify_gradient);
   CheckField(prune_opacity >= 0 && prune_opacity < 1, what, "prune_opacity", "be in [0, 1)", prune_opacity);
+  CheckField(ssim_weight >= 0 && ssim_weight <= 1, what, "ssim_weight", "be in [0, 1]", ssim_weight);
 }
 
 SplatTrainer::SplatTrainer(Gaussians<float> gaussians, const SplatScene& scene, const SplatTrainerOptions& options)
@@ -68,18 +70,27 @@ double SplatTrainer::Step() {
   for (int c = 0; c < 3; ++c) raster.background[c] = scene_.background[c];
   rasterizer_.Forward(gaussians_, view.camera, raster);
 
-  // L1 against the photo on the background.
+  // (1 - w) L1 + w (1 - SSIM) against the photo on the background (w: options_.ssim_weight).
   const std::vector<float>& rgb = rasterizer_.rgb();
-  std::vector<float> d_rgb(rgb.size());
-  double loss = 0;
-  const float scale = 1.0f / static_cast<float>(rgb.size());
+  std::vector<float> photo(rgb.size()), d_rgb(rgb.size());
   for (size_t i = 0; i < rgb.size() / 3; ++i) {
-    for (int c = 0; c < 3; ++c) {
-      const float difference = rgb[3 * i + c] - view.OnBackground(i, c, scene_.background[c]);
-      loss += std::abs(difference);
-      d_rgb[3 * i + c] = difference > 0 ? scale : (difference < 0 ? -scale : 0.0f);
-    }
+    for (int c = 0; c < 3; ++c) photo[3 * i + c] = view.OnBackground(i, c, scene_.background[c]);
   }
+  const float weight = static_cast<float>(options_.ssim_weight);
+  double loss = 0;
+  if (weight > 0) {
+    loss = weight * (1 - SsimWithGradient(rgb.data(), photo.data(), view.camera.width, view.camera.height, 3,
+                                          d_rgb.data()));
+    for (float& d : d_rgb) d *= -weight;
+  }
+  const float scale = (1 - weight) / static_cast<float>(rgb.size());
+  double l1 = 0;
+  for (size_t i = 0; i < rgb.size(); ++i) {
+    const float difference = rgb[i] - photo[i];
+    l1 += std::abs(difference);
+    d_rgb[i] += difference > 0 ? scale : (difference < 0 ? -scale : 0.0f);
+  }
+  loss += (1 - weight) * l1 / rgb.size();
   Gaussians<float>& grads = gradients_;  // kept between steps: no allocation of its tens of megabytes each step
   grads.sh_degree = gaussians_.sh_degree;
   if (grads.size() != gaussians_.size()) grads.Resize(gaussians_.size());
@@ -111,7 +122,7 @@ double SplatTrainer::Step() {
   ++step_;
   const int densify_last = static_cast<int>(options_.densify_until * options_.steps);
   if (step_ >= options_.densify_from && step_ <= densify_last && step_ % options_.densify_interval == 0) Densify();
-  return loss / rgb.size();
+  return loss;
 }
 
 void SplatTrainer::Densify() {

@@ -1,6 +1,6 @@
 #pragma once
 // Optimises Gaussians against posed photos (3D Gaussian Splatting's recipe, sized for a CPU): one training view
-// per step, rendered whole by the rasterizer, an L1 loss against the photo on the known background, Adam with a
+// per step, rendered whole by the rasterizer, a loss of L1 and SSIM against the photo on the known background, Adam with a
 // learning rate per parameter (the means' decaying exponentially and scaled by the scene's extent), the
 // spherical harmonics' degrees joining one at a time, and densification: Gaussians whose mean the loss pulls hard
 // across the screen are cloned when small and split in two when large, transparent ones are pruned.
@@ -34,6 +34,7 @@ struct SplatTrainerOptions {
   double densify_gradient = 2e-4;  // mean screen-space gradient (normalised device units) that densifies
   double dense_fraction = 0.01;    // of the extent: larger Gaussians split, smaller ones clone
   double prune_opacity = 0.005;
+  double ssim_weight = 0.2;  // the loss: (1 - ssim_weight) L1 + ssim_weight (1 - SSIM) (ssim_loss.h)
   size_t max_gaussians = 1'500'000;
   uint64_t seed = 0;
 
@@ -54,7 +55,7 @@ class SplatTrainer {
  public:
   SplatTrainer(Gaussians<float> gaussians, const SplatScene& scene, const SplatTrainerOptions& options);
 
-  // One step on the next training view (each view once per epoch, in a random order); returns the L1 loss.
+  // One step on the next training view (each view once per epoch, in a random order); returns its loss.
   double Step();
   // Trains on `views` from the next step on: the same views in the same order, at another size (the coarse
   // first part of an optimisation).

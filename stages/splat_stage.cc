@@ -34,6 +34,7 @@ void SplatOptions::Check() const {
   CheckOption(init_width >= 8 && init_width <= 8192, "splat.init_width", "must be 8..8192");
   CheckOption(max_gaussians >= 1, "splat.max_gaussians", "must be positive");
   CheckOption(coarse >= 0 && coarse <= 1, "splat.coarse", "must be 0..1");
+  CheckOption(ssim_weight >= 0 && ssim_weight <= 1, "splat.ssim_weight", "must be 0..1");
   CheckOption(eval_interval > 0, "splat.eval_interval", "must be positive");
   CheckOption(checkpoint_interval >= 0, "splat.checkpoint_interval", "must be 0 (none) or positive");
 }
@@ -263,6 +264,7 @@ void SplatStage::Run(StageContext& context) const {
   SplatTrainerOptions trainer_options;
   trainer_options.seed = static_cast<uint64_t>(options.seed);
   trainer_options.max_gaussians = 2 * static_cast<size_t>(options.max_gaussians);
+  trainer_options.ssim_weight = options.ssim_weight;
   const SplatScene scene{&setup.data.train, setup.background, setup.extent, near};
   SplatTrainer trainer(setup.gaussians, scene, trainer_options);
   RunState state;

@@ -20,6 +20,7 @@ struct SplatOptions {
   int init_width = 200;         // training views rendered this wide to place the first Gaussians
   int max_gaussians = 100'000;  // of the first; densification may double it. Fewer: more steps for the time
   double coarse = 0.75;         // share of the optimisation on the photos at half size
+  double ssim_weight = 0.2;     // the loss: (1 - w) L1 + w (1 - SSIM)
   std::string frame = "source";
   double eval_interval = 20;  // seconds of optimisation between held-out evaluations
   double checkpoint_interval = 60;
@@ -40,6 +41,8 @@ struct SplatOptions {
     v("max_gaussians", max_gaussians, "splats placed from the field (densification may add as many again)");
     v("coarse", coarse,
       "share of the optimisation time spent on the photos at half size (four times the steps; coarse to fine)");
+    v("ssim_weight", ssim_weight,
+      "weight of the structural dissimilarity (1 - SSIM) in the loss, the rest L1 (3D Gaussian Splatting's 0.2)");
     v("frame", frame,
       "coordinates of splats.ply: source (COLMAP's world, or the dataset's) or normalized (the training frame)", "",
       OptionKind::kResult, {"source", "normalized"});
@@ -58,7 +61,7 @@ class SplatStage : public Stage {
  public:
   std::string name() const override { return "splat"; }
   std::string folder() const override { return "35_splat"; }
-  int format_version() const override { return 1; }
+  int format_version() const override { return 2; }  // 2: the SSIM term
   std::vector<std::string> upstream() const override { return {"poses", "train"}; }
   void Run(StageContext& context) const override;
 };

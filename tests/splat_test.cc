@@ -12,6 +12,7 @@
 #include "splat/rasterizer.h"
 #include "splat/splat_ply.h"
 #include "splat/splat_trainer.h"
+#include "splat/ssim_loss.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {
@@ -209,6 +210,41 @@ TEST_CASE("Views at half size: each pixel the mean of four, every point where th
     CHECK((halved - full / 2).norm() < 1e-9);  // pixel corners: full pixel 2x..2x+2 is half pixel x..x+1
     CHECK(z_half == Approx(z_full));
   }
+}
+
+TEST_CASE("SSIM of the splats' loss: 1 for the photo itself, its gradient against central differences", "[splat]") {
+  constexpr int kWidth = 14, kHeight = 11, kChannels = 3;
+  std::mt19937_64 random(7);
+  std::uniform_real_distribution<double> uniform(0, 1);
+  std::vector<double> render(kWidth * kHeight * kChannels), photo(render.size()), gradient(render.size());
+  for (size_t i = 0; i < render.size(); ++i) {
+    photo[i] = uniform(random);
+    render[i] = std::clamp(photo[i] + 0.8 * (uniform(random) - 0.5), 0.0, 1.0);
+  }
+  std::vector<double> same_gradient(render.size());
+  CHECK(SsimWithGradient(photo.data(), photo.data(), kWidth, kHeight, kChannels, same_gradient.data()) ==
+        Approx(1).epsilon(1e-12));
+  for (double g : same_gradient) CHECK(std::abs(g) < 1e-12);  // the maximum
+
+  const double ssim = SsimWithGradient(render.data(), photo.data(), kWidth, kHeight, kChannels, gradient.data());
+  CHECK(ssim < 0.9);
+  constexpr double kStep = 1e-6;
+  for (size_t i = 0; i < render.size(); i += 7) {
+    std::vector<double> plus = render, minus = render;
+    plus[i] += kStep;
+    minus[i] -= kStep;
+    const double numeric = (SsimWithGradient(plus.data(), photo.data(), kWidth, kHeight, kChannels, (double*)nullptr) -
+                            SsimWithGradient(minus.data(), photo.data(), kWidth, kHeight, kChannels, (double*)nullptr)) /
+                           (2 * kStep);
+    INFO("value " << i);
+    CHECK(gradient[i] == Approx(numeric).margin(1e-9).epsilon(1e-5));
+  }
+  // The same in single precision, as the trainer uses it.
+  std::vector<float> render_f(render.begin(), render.end()), photo_f(photo.begin(), photo.end());
+  std::vector<float> gradient_f(render.size());
+  CHECK(SsimWithGradient(render_f.data(), photo_f.data(), kWidth, kHeight, kChannels, gradient_f.data()) ==
+        Approx(ssim).epsilon(1e-5));
+  for (size_t i = 0; i < render.size(); ++i) CHECK(gradient_f[i] == Approx(gradient[i]).margin(1e-7).epsilon(1e-3));
 }
 
 TEST_CASE("Splat optimisation fits photos, and a resumed run continues as an uninterrupted one", "[splat]") {
