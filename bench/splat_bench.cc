@@ -13,6 +13,7 @@
 #include "splat/rasterizer.h"
 #include "splat/splat_ply.h"
 #include "stages/output_frame.h"
+#include "stages/stage_reports.h"
 #include "stages/training_data.h"
 
 int main(int argc, char** argv) {
@@ -28,11 +29,11 @@ int main(int argc, char** argv) {
   p2n::TrainingData data = p2n::LoadTrainingData(transforms, ws, &split);
   if (argc > 5 && std::string(argv[5]) == "train") data.heldout = data.train;
   if (max_views > 0 && data.heldout.size() > max_views) data.heldout.resize(max_views);
-  const nlohmann::json report = p2n::ReadJsonFile(ws / "35_splat" / "splat_report.json");
-  const p2n::OutputFrame frame = p2n::MakeOutputFrame(report.value("frame", "source"), transforms);
+  const p2n::SplatReport report = p2n::SplatReport::Read(ws / "35_splat" / "splat_report.json");
+  const p2n::OutputFrame frame = p2n::MakeOutputFrame(report.frame, transforms);
   const p2n::Gaussians<float> gaussians = p2n::ReadSplatPly(ws / "35_splat" / "splats.ply");
   const std::array<float, 3> background = p2n::DatasetBackground(transforms);
-  const double near = report.value("near", 0.01);
+  const double near = report.near;
 
   std::vector<double> seconds;
   double psnr = 0;

@@ -14,6 +14,7 @@
 #include "pipeline/log.h"
 #include "pipeline/runner.h"
 #include "stages/dataset_import.h"
+#include "stages/stage_reports.h"
 #include "stages/stages.h"
 
 namespace p2n {
@@ -48,10 +49,10 @@ void PrintRunSummary(const Workspace& workspace, const Runner& stages, const std
   };
   const fs::path eval = file_of("render", "eval.json");
   if (fs::exists(eval)) {
-    const nlohmann::json json = ReadJsonFile(eval);
-    if (json.contains("psnr")) {
-      LogInfo(format("  held-out: PSNR {:.2f} dB, SSIM {:.3f} over {} views", json["psnr"].get<double>(),
-                     json["ssim"].get<double>(), json["views"].size()));
+    const EvalReport report = EvalReport::Read(eval);
+    if (report.psnr && report.ssim) {
+      LogInfo(format("  held-out: PSNR {:.2f} dB, SSIM {:.3f} over {} views", *report.psnr, *report.ssim,
+                     report.views.size()));
     }
   }
   const std::array<std::array<const char*, 3>, 6> results = {{{"report", "report.html", "report"},

@@ -18,6 +18,7 @@
 #include "pipeline/progress.h"
 #include "stages/dataset_import.h"
 #include "stages/stage_io.h"
+#include "stages/stage_reports.h"
 #include "stages/training_data.h"
 #include "stages/video.h"
 #include "stages/view_renderer.h"
@@ -87,8 +88,12 @@ PinholeCamera WithIntrinsics(const nlohmann::json& json, PinholeCamera camera, c
   return camera;
 }
 
-nlohmann::json RenderHeldout(const ViewRenderer& renderer, const ImportedDataset& dataset, const fs::path& out) {
-  const std::string split = HeldoutSplit(dataset);
+EvalReport RenderHeldout(const ViewRenderer& renderer, const ImportedDataset& dataset, const fs::path& out) {
+  EvalReport eval;
+  eval.split = HeldoutSplit(dataset);
+  eval.source = renderer.source;
+  eval.heat_map_max_error = kHeatMapMaxError;
+  const std::string& split = eval.split;
   std::vector<const ImportedView*> views;
   size_t pixels = 0;
   for (const ImportedView& view : dataset.views) {
@@ -96,11 +101,10 @@ nlohmann::json RenderHeldout(const ViewRenderer& renderer, const ImportedDataset
     views.push_back(&view);
     pixels += size_t(view.view.camera.width) * view.view.camera.height;
   }
-  nlohmann::json per_view = nlohmann::json::array();
   std::vector<double> psnrs, ssims;
   double seconds = 0;
   size_t samples = 0, rays = 0;
-  if (views.empty()) return {{"split", split}, {"views", per_view}};
+  if (views.empty()) return eval;
   fs::create_directories(out / "heldout");
   Progress progress("render: held-out views", static_cast<int64_t>(pixels), "pixels");
   const auto on_pixels_done = [&](size_t n) {
@@ -119,22 +123,15 @@ nlohmann::json RenderHeldout(const ViewRenderer& renderer, const ImportedDataset
     seconds += rendered.stats.seconds;
     samples += rendered.stats.samples_evaluated;
     rays += rendered.stats.rays;
-    per_view.push_back({{"view", view->source.filename().string()},
-                        {"render", "heldout/" + stem + ".png"},
-                        {"error_map", "heldout/" + stem + "_error.png"},
-                        {"photo", view->source.string()},
-                        {"psnr", psnrs.back()},
-                        {"ssim", ssims.back()},
-                        {"seconds", rendered.stats.seconds}});
+    eval.views.push_back({view->source.filename().string(), "heldout/" + stem + ".png",
+                          "heldout/" + stem + "_error.png", view->source.string(), psnrs.back(), ssims.back(),
+                          rendered.stats.seconds});
   }
-  return {{"split", split},
-          {"source", renderer.source},
-          {"views", per_view},
-          {"psnr", Mean(psnrs)},
-          {"ssim", Mean(ssims)},
-          {"seconds_per_view", seconds / views.size()},
-          {"samples_per_ray", double(samples) / std::max<size_t>(rays, 1)},
-          {"heat_map_max_error", kHeatMapMaxError}};
+  eval.psnr = Mean(psnrs);
+  eval.ssim = Mean(ssims);
+  eval.seconds_per_view = seconds / views.size();
+  if (renderer.source == "field") eval.samples_per_ray = double(samples) / std::max<size_t>(rays, 1);
+  return eval;
 }
 
 std::vector<PinholeCamera> PathCameras(const RenderStageOptions& options, const std::string& kind,
@@ -177,7 +174,7 @@ struct PathRange {
   }
 };
 
-nlohmann::json RenderPath(const ViewRenderer& renderer, const ImportedDataset& dataset,
+PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& dataset,
                           const std::vector<PinholeCamera>& cameras, const RenderStageOptions& options,
                           const fs::path& out) {
   fs::create_directories(out / "frames");
@@ -223,56 +220,50 @@ nlohmann::json RenderPath(const ViewRenderer& renderer, const ImportedDataset& d
     samples += frame.stats.samples_evaluated;
     rays += frame.stats.rays;
   }
-  nlohmann::json report = {
-      {"source", renderer.source},
-      {"frames", cameras.size()},
-      {"width", cameras[0].width},
-      {"height", cameras[0].height},
-      {"seconds_per_frame", seconds / cameras.size()},
-      {"frames_per_second", cameras.size() / std::max(seconds, 1e-9)},
-      {"samples_per_ray", renderer.source == "field" ? nlohmann::json(double(samples) / std::max<size_t>(rays, 1))
-                                                     : nlohmann::json(nullptr)},
-      {"depth_png_max", depth_max}};
+  PathReport report;
+  report.source = renderer.source;
+  report.frames = static_cast<int>(cameras.size());
+  report.width = cameras[0].width;
+  report.height = cameras[0].height;
+  report.seconds_per_frame = seconds / cameras.size();
+  report.frames_per_second = cameras.size() / std::max(seconds, 1e-9);
+  if (renderer.source == "field") report.samples_per_ray = double(samples) / std::max<size_t>(rays, 1);
+  report.depth_png_max = depth_max;
   if (video) {
     video->Close();
-    report["video"] = {{"file", "video.mp4"}, {"codec", video->codec()}, {"fps", options.fps}};
+    report.video = PathReport::Video{"video.mp4", video->codec(), options.fps};
   }
   return report;
 }
 
-// splat_report.json, or nothing when the splat stage is off.
-nlohmann::json SplatReport(const StageContext& context) {
-  const nlohmann::json report = ReadJsonFile(context.upstream_dirs.at("splat") / "splat_report.json");
-  return report.value("enabled", false) ? report : nlohmann::json::object();
+// The field's held-out PSNR as the train stage measured it (train.final_eval_pixels per view).
+std::optional<double> FieldPsnr(const StageContext& context) {
+  const nlohmann::json psnr = ReadJsonFile(context.upstream_dirs.at("train") / "train_report.json")
+                                  .value("heldout_psnr", nlohmann::json(nullptr));
+  return psnr.is_number() ? std::optional<double>(psnr.get<double>()) : std::nullopt;
 }
 
-// The field's held-out PSNR as the train stage measured it (train.final_eval_pixels per view).
-nlohmann::json FieldPsnr(const StageContext& context) {
-  return ReadJsonFile(context.upstream_dirs.at("train") / "train_report.json")
-      .value("heldout_psnr", nlohmann::json(nullptr));
-}
+std::string DbText(const std::optional<double>& psnr) { return psnr ? format("{:.2f} dB", *psnr) : "none"; }
 
 // render.source resolved: auto takes the splats when their held-out PSNR is within kSplatPsnrMargin of the
 // field's (they render tens of times faster), else the field.
 ViewRenderer ChooseRenderer(const StageContext& context, const RenderStageOptions& options, const NerfModel& model,
                             const RenderOptions& render) {
-  const nlohmann::json splats = SplatReport(context);
+  const SplatReport splats = SplatReport::Read(context.upstream_dirs.at("splat") / "splat_report.json");
   const bool bounded = model.space == SceneSpace::kBounded;
   if (options.source == "field") return FieldRenderer(model, render);
-  if (splats.empty()) {
+  if (!splats.enabled) {
     if (options.source == "splats") {
       throw UserError(
           "render.source splats: the splat stage is off (splat.enabled false); turn it on or render the field");
     }
     return FieldRenderer(model, render);
   }
-  const nlohmann::json field_psnr = FieldPsnr(context),
-                       splat_psnr = splats.value("heldout_psnr", nlohmann::json(nullptr));
-  const bool good = field_psnr.is_number() && splat_psnr.is_number() &&
-                    splat_psnr.get<double>() >= field_psnr.get<double>() - kSplatPsnrMargin;
+  const std::optional<double> field_psnr = FieldPsnr(context), splat_psnr = splats.heldout_psnr;
+  const bool good = field_psnr && splat_psnr && *splat_psnr >= *field_psnr - kSplatPsnrMargin;
   if (options.source == "auto" && !good) {
-    LogInfo(format("render: the splats' held-out PSNR ({} dB) is below the field's ({} dB): rendering the field",
-                   splat_psnr.dump(), field_psnr.dump()));
+    LogInfo(format("render: the splats' held-out PSNR ({}) is below the field's ({}): rendering the field",
+                   DbText(splat_psnr), DbText(field_psnr)));
     return FieldRenderer(model, render);
   }
   return SplatRenderer(context.upstream_dirs.at("splat"), context.upstream_dirs.at("poses") / "transforms.json",
@@ -360,18 +351,17 @@ void RenderStage::Run(StageContext& context) const {
 
   nlohmann::json summary = nlohmann::json::object();
   if (options.heldout) {
-    nlohmann::json eval = RenderHeldout(renderer, dataset, context.output_dir);
-    eval["field_psnr"] = renderer.source == "field" ? eval.value("psnr", nlohmann::json(nullptr)) : FieldPsnr(context);
-    eval["splats_psnr"] = renderer.source == "splats"
-                              ? eval.value("psnr", nlohmann::json(nullptr))
-                              : SplatReport(context).value("heldout_psnr", nlohmann::json(nullptr));
-    WriteJsonAtomic(context.output_dir / "eval.json", eval);
-    if (eval.contains("psnr")) {
-      summary["heldout_psnr"] = eval["psnr"];
-      summary["heldout_ssim"] = eval["ssim"];
+    EvalReport eval = RenderHeldout(renderer, dataset, context.output_dir);
+    eval.field_psnr = renderer.source == "field" ? eval.psnr : FieldPsnr(context);
+    eval.splats_psnr = renderer.source == "splats"
+                           ? eval.psnr
+                           : SplatReport::Read(context.upstream_dirs.at("splat") / "splat_report.json").heldout_psnr;
+    WriteJsonAtomic(context.output_dir / "eval.json", eval.ToJson());
+    if (eval.psnr) {
+      summary["heldout_psnr"] = *eval.psnr;
+      summary["heldout_ssim"] = *eval.ssim;
       LogInfo(format("render: held-out {} views from the {}: PSNR {:.2f} dB, SSIM {:.3f}, {:.2f} s per view",
-                     eval["views"].size(), renderer.source, eval["psnr"].get<double>(), eval["ssim"].get<double>(),
-                     eval["seconds_per_view"].get<double>()));
+                     eval.views.size(), renderer.source, *eval.psnr, *eval.ssim, eval.seconds_per_view));
     }
   }
   std::string kind = options.path;
@@ -387,13 +377,13 @@ void RenderStage::Run(StageContext& context) const {
     const int width = options.width > 0 ? options.width : std::min(first->view.camera.width, kDefaultMaxPathWidth);
     const PinholeCamera reference = ScaledCamera(first->view.camera, width);
     const std::vector<PinholeCamera> cameras = PathCameras(options, kind, dataset, reference);
-    nlohmann::json path = RenderPath(renderer, dataset, cameras, options, context.output_dir);
-    path["kind"] = kind;
-    WriteJsonAtomic(context.output_dir / "render_report.json", {{"path", path}});
-    summary["frames"] = path["frames"];
-    summary["frames_per_second"] = path["frames_per_second"];
+    PathReport path = RenderPath(renderer, dataset, cameras, options, context.output_dir);
+    path.kind = kind;
+    WriteJsonAtomic(context.output_dir / "render_report.json", {{"path", path.ToJson()}});
+    summary["frames"] = path.frames;
+    summary["frames_per_second"] = path.frames_per_second;
     LogInfo(format("render: {} path from the {}, {} frames of {}x{} at {:.2f} frames per second", kind, renderer.source,
-                   cameras.size(), cameras[0].width, cameras[0].height, path["frames_per_second"].get<double>()));
+                   path.frames, path.width, path.height, path.frames_per_second));
   }
   context.summary = summary;
 }

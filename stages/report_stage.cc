@@ -1,6 +1,7 @@
 #include "stages/report_stage.h"
 
 #include <cmath>
+#include <optional>
 
 #include "nerf/plot.h"
 #include "photo2nerf/version.h"
@@ -10,6 +11,7 @@
 #include "pipeline/runner.h"
 #include "stages/dataset_import.h"
 #include "stages/report_html.h"
+#include "stages/stage_reports.h"
 #include "stages/training_data.h"
 
 namespace p2n {
@@ -25,6 +27,10 @@ std::string Number(const nlohmann::json& value, int digits = 4) {
   if (value.is_number_float()) return format("{:.{}g}", value.get<double>(), digits);
   if (value.is_string()) return value.get<std::string>();
   return value.is_null() ? "-" : value.dump();
+}
+
+std::string Number(const std::optional<double>& value, int digits = 4) {
+  return value ? format("{:.{}g}", *value, digits) : "-";
 }
 
 std::string Card(const std::string& value, const std::string& label) {
@@ -80,8 +86,8 @@ std::string TrainingSection(const fs::path& train_dir) {
 
 // The splats: their numbers beside the field's, their error against optimisation time, and the file.
 std::string SplatSection(const fs::path& splat_dir, const nlohmann::json& train) {
-  const nlohmann::json report = ReadIfExists(splat_dir / "splat_report.json");
-  if (!report.value("enabled", false)) {
+  const SplatReport report = SplatReport::Read(splat_dir / "splat_report.json");
+  if (!report.enabled) {
     return "<h2>Splats</h2>\n<p>Off (<code>--splat.enabled false</code>).</p>\n";
   }
   std::string html = "<h2>Splats: error against optimisation time</h2>\n";
@@ -89,7 +95,7 @@ std::string SplatSection(const fs::path& splat_dir, const nlohmann::json& train)
       "<p><a href=\"../35_splat/viewer.html\"><b>Open the scene in the live viewer</b></a> (viewer.html, {:.1f} MB, "
       "works offline in any browser with WebGL 2: drag to orbit, right-drag to pan, wheel or pinch to zoom, W A S D "
       "to fly, the training cameras in its menu).</p>\n",
-      report.value("viewer_bytes", 0.0) / 1e6);
+      report.viewer_bytes / 1e6);
   html += "<div class=\"plots\">\n";
   html += SvgLinePlot({"splats: held-out PSNR against optimisation time", "optimisation time (s)", "PSNR (dB)"},
                       {CsvSeries("held-out PSNR (dB)", ReadTextFile(splat_dir / "metrics.csv"), 0, 4)});
@@ -99,11 +105,10 @@ std::string SplatSection(const fs::path& splat_dir, const nlohmann::json& train)
       "then optimised for {:.0f} s, {} steps): held-out PSNR {} dB and SSIM {} (the field: {} dB), {:.3f} s per "
       "held-out view on the CPU. <a href=\"../35_splat/splats.ply\">splats.ply</a> ({:.1f} MB) is in the standard 3D "
       "Gaussian Splatting layout, {}; SuperSplat, the PlayCanvas and three.js splat viewers open it as it is.</p>\n",
-      Number(report["splats"]), Number(report["sh_degree"]), Number(report["initial_splats"]),
-      report.value("init", "field") == "sparse" ? "sparse points" : "field", report.value("seconds", 0.0),
-      Number(report["steps"]), Number(report["heldout_psnr"]), Number(report["heldout_ssim"], 3),
-      Number(train.value("heldout_psnr", nlohmann::json(nullptr))), report.value("seconds_per_view", 0.0),
-      report.value("file_bytes", 0.0) / 1e6, HtmlEscape(report.value("frame_description", "")));
+      report.splats, report.sh_degree, report.initial_splats, report.init == "sparse" ? "sparse points" : "field",
+      report.seconds, report.steps, Number(report.heldout_psnr), Number(report.heldout_ssim, 3),
+      Number(train.value("heldout_psnr", nlohmann::json(nullptr))), report.seconds_per_view, report.file_bytes / 1e6,
+      HtmlEscape(report.frame_description));
   return html;
 }
 
@@ -168,26 +173,25 @@ std::string CamerasSection(const StageContext& context, const ImportedDataset& d
   return html + SceneViewerHtml(cameras, points);
 }
 
-std::string HeldoutSection(const fs::path& render_dir, const nlohmann::json& eval,
+std::string HeldoutSection(const fs::path& render_dir, const std::optional<EvalReport>& eval,
                            const std::array<float, 3>& background, int image_width) {
-  if (!eval.contains("views") || eval["views"].empty())
+  if (!eval || eval->views.empty())
     return "<h2>Held-out views</h2>\n<p>None rendered: no view was held out, or render.heldout is false.</p>\n";
   std::string html = format(
       "<h2>Held-out views</h2>\n<p>{} views of the {} split, never trained on: PSNR {} dB, SSIM {} "
       "on average. Error maps: mean absolute RGB error, black 0 to yellow {} and above.</p>\n",
-      eval["views"].size(), HtmlEscape(eval.value("split", "")), Number(eval["psnr"], 4), Number(eval["ssim"], 3),
-      Number(eval["heat_map_max_error"], 2));
-  for (const nlohmann::json& view : eval["views"]) {
+      eval->views.size(), HtmlEscape(eval->split), Number(eval->psnr, 4), Number(eval->ssim, 3),
+      Number(std::optional<double>(eval->heat_map_max_error), 2));
+  for (const HeldoutScore& view : eval->views) {
     const auto figure = [&](const std::string& uri, const std::string& caption) {
       return format("<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>", uri, HtmlEscape(caption),
                     HtmlEscape(caption));
     };
-    const std::string name = view.value("view", "");
     html += "<div class=\"triple\">" +
-            figure(ImageDataUri(view.value("photo", ""), image_width, background), "photo " + name) +
-            figure(ImageDataUri(render_dir / view.value("render", ""), image_width),
-                   format("render: {:.2f} dB, SSIM {:.3f}", view["psnr"].get<double>(), view["ssim"].get<double>())) +
-            figure(ImageDataUri(render_dir / view.value("error_map", ""), image_width), "error map") + "</div>\n";
+            figure(ImageDataUri(view.photo, image_width, background), "photo " + view.view) +
+            figure(ImageDataUri(render_dir / view.render, image_width),
+                   format("render: {:.2f} dB, SSIM {:.3f}", view.psnr, view.ssim)) +
+            figure(ImageDataUri(render_dir / view.error_map, image_width), "error map") + "</div>\n";
   }
   return html;
 }
@@ -205,8 +209,8 @@ void ReportStage::Run(StageContext& context) const {
   const ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
   const std::string heldout_split = HeldoutSplit(dataset);
   const nlohmann::json train = ReadIfExists(context.upstream_dirs.at("train") / "train_report.json");
-  const nlohmann::json eval = ReadIfExists(render_dir / "eval.json");
-  const nlohmann::json render = ReadIfExists(render_dir / "render_report.json");
+  const std::optional<EvalReport> eval =
+      fs::exists(render_dir / "eval.json") ? std::optional(EvalReport::Read(render_dir / "eval.json")) : std::nullopt;
   const nlohmann::json exported = ReadIfExists(export_dir / "export_report.json");
   const std::array<float, 3> background = DatasetBackground(transforms);
 
@@ -216,8 +220,8 @@ void ReportStage::Run(StageContext& context) const {
       HtmlEscape(context.workspace.root().string()),
       HtmlEscape(context.workspace.input() ? context.workspace.input()->string() : "-"), kVersion, UtcTimestamp());
   body += "<div class=\"cards\">\n";
-  body += Card(eval.contains("psnr") ? format("{:.2f} dB", eval["psnr"].get<double>()) : "-", "held-out PSNR");
-  body += Card(eval.contains("ssim") ? format("{:.3f}", eval["ssim"].get<double>()) : "-", "held-out SSIM");
+  body += Card(eval && eval->psnr ? format("{:.2f} dB", *eval->psnr) : "-", "held-out PSNR");
+  body += Card(eval && eval->ssim ? format("{:.3f}", *eval->ssim) : "-", "held-out SSIM");
   body += Card(train.contains("wall_seconds") ? format("{:.0f} s", train["wall_seconds"].get<double>()) : "-",
                "training time");
   body += Card(format("{}", dataset.views.size()), "cameras");
@@ -229,15 +233,12 @@ void ReportStage::Run(StageContext& context) const {
   body += StagesSection(context);
   body += CamerasSection(context, dataset, heldout_split);
   body += HeldoutSection(render_dir, eval, background, options.image_width);
-  if (render.contains("path")) {
-    const nlohmann::json& path = render["path"];
-    // Frames from the splats have no samples per ray (render_report.json holds null).
-    const std::string how = path.value("source", "field") == "splats"
-                                ? "from the splats"
-                                : format("{} samples per ray", Number(path["samples_per_ray"], 3));
+  if (fs::exists(render_dir / "render_report.json")) {
+    const PathReport path = PathReport::Read(render_dir / "render_report.json");
+    const std::string how =
+        path.samples_per_ray ? format("{:.3g} samples per ray", *path.samples_per_ray) : "from the " + path.source;
     body += format("<h2>New views</h2>\n<p>{} path, {} frames of {}x{} at {:.2f} frames per second ({}).</p>\n",
-                   HtmlEscape(path.value("kind", "")), Number(path["frames"]), Number(path["width"]),
-                   Number(path["height"]), path.value("frames_per_second", 0.0), how);
+                   HtmlEscape(path.kind), path.frames, path.width, path.height, path.frames_per_second, how);
     const fs::path video = render_dir / "video.mp4";
     if (fs::exists(video)) {
       const std::string source = options.embed_video ? FileDataUri(video, "video/mp4") : "../40_render/video.mp4";

@@ -20,6 +20,7 @@
 #include "stages/ply.h"
 #include "stages/splat_viewer.h"
 #include "stages/stage_io.h"
+#include "stages/stage_reports.h"
 #include "stages/train_stage.h"
 #include "stages/training_data.h"
 
@@ -248,7 +249,7 @@ void SplatStage::Run(StageContext& context) const {
   const SplatOptions options = ReadOptions<SplatOptions>(context.config, "splat");
   const fs::path out = context.output_dir;
   if (!options.enabled) {
-    WriteJsonAtomic(out / "splat_report.json", {{"enabled", false}});
+    WriteJsonAtomic(out / "splat_report.json", SplatReport{}.ToJson());
     context.summary["splats"] = "off";
     return;
   }
@@ -296,29 +297,29 @@ void SplatStage::Run(StageContext& context) const {
                     {curve});
     });
   }
-  const nlohmann::json report = {
-      {"enabled", true},
-      {"splats", trainer.gaussians().size()},
-      {"initial_splats", setup.gaussians.size()},
-      {"init", options.init},
-      {"sh_degree", trainer.gaussians().sh_degree},
-      {"steps", trainer.step()},
-      {"seconds", state.seconds},
-      {"resumed_from_step", resumed_from},
-      {"heldout_views", setup.data.heldout.size()},
-      {"heldout_psnr", setup.data.heldout.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(scores.psnr))},
-      {"heldout_ssim", setup.data.heldout.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(scores.ssim))},
-      {"heldout_psnr_per_view", scores.psnr},
-      {"seconds_per_view", scores.seconds_per_view},
-      {"frame", setup.frame.name},
-      {"frame_description", setup.frame.description},
-      {"near", near},
-      {"background", setup.background},
-      {"file", "splats.ply"},
-      {"file_bytes", fs::file_size(out / "splats.ply")},
-      {"viewer", "viewer.html"},
-      {"viewer_bytes", viewer_bytes}};
-  WriteJsonAtomic(out / "splat_report.json", report);
+  SplatReport report;
+  report.enabled = true;
+  report.splats = trainer.gaussians().size();
+  report.initial_splats = setup.gaussians.size();
+  report.init = options.init;
+  report.sh_degree = trainer.gaussians().sh_degree;
+  report.steps = trainer.step();
+  report.seconds = state.seconds;
+  report.resumed_from_step = resumed_from;
+  report.heldout_views = setup.data.heldout.size();
+  if (!setup.data.heldout.empty()) {
+    report.heldout_psnr = Mean(scores.psnr);
+    report.heldout_ssim = Mean(scores.ssim);
+  }
+  report.heldout_psnr_per_view = scores.psnr;
+  report.seconds_per_view = scores.seconds_per_view;
+  report.frame = setup.frame.name;
+  report.frame_description = setup.frame.description;
+  report.near = near;
+  report.background = setup.background;
+  report.file_bytes = fs::file_size(out / "splats.ply");
+  report.viewer_bytes = viewer_bytes;
+  WriteJsonAtomic(out / "splat_report.json", report.ToJson());
   context.summary["splats"] = trainer.gaussians().size();
   if (!setup.data.heldout.empty()) context.summary["splat_psnr"] = Mean(scores.psnr);
   LogInfo(format("splat: {} splats, held-out PSNR {:.2f} dB, {:.3f} s per held-out view", trainer.gaussians().size(),

@@ -11,6 +11,7 @@
 #include "splat/rasterizer.h"
 #include "splat/splat_ply.h"
 #include "stages/output_frame.h"
+#include "stages/stage_reports.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -66,23 +67,21 @@ RenderedView RenderSplatView(const Gaussians<float>& splats, const OutputFrame& 
 
 ViewRenderer SplatRenderer(const fs::path& splat_dir, const fs::path& transforms, bool bounded) {
   const fs::path file = splat_dir / "splats.ply";
-  const nlohmann::json report = ReadJsonFile(splat_dir / "splat_report.json");
+  const SplatReport report = SplatReport::Read(splat_dir / "splat_report.json");
   std::shared_ptr<const Gaussians<float>> splats;
   try {
     splats = std::make_shared<const Gaussians<float>>(ReadSplatPly(file));
   } catch (const std::runtime_error& error) {
     throw UserError(format("{}; rerun the splat stage (photo2nerf splat -w WORKSPACE --force)", error.what()));
   }
-  const OutputFrame frame = MakeOutputFrame(report.value("frame", "normalized"), transforms);
+  const OutputFrame frame = MakeOutputFrame(report.frame, transforms);
   RasterOptions options;
-  options.projection.near = report.value("near", 0.01);
+  options.projection.near = report.near;
   ViewRenderer renderer;
   renderer.source = "splats";
   renderer.bounded = bounded;
-  const std::vector<float> background = report.value("background", std::vector<float>{1, 1, 1});
-  if (background.size() != 3)
-    throw UserError(format("'{}': \"background\" must be 3 numbers", (splat_dir / "splat_report.json").string()));
-  for (int c = 0; c < 3; ++c) renderer.background[c] = background[c], options.background[c] = background[c];
+  renderer.background = report.background;
+  for (int c = 0; c < 3; ++c) options.background[c] = report.background[c];
   renderer.render = [splats, frame, options](const PinholeCamera& camera, double, double,
                                              const std::function<void(size_t)>& on_pixels_done) {
     RenderedView view = RenderSplatView(*splats, frame, options, camera);

@@ -1,0 +1,75 @@
+#pragma once
+// The reports that one stage writes and others read (DESIGN.md §5), one struct each: the writer fills it and
+// writes it with ToJson(), every reader reads it with Read(), so a field has one name and one type. A reader
+// meets a missing or mistyped field as a UserError that names the file and the field and says which stage to
+// rerun, never as an internal error at a distance.
+//   35_splat/splat_report.json   SplatReport (render, its view renderer, report, splat_bench)
+//   40_render/eval.json          EvalReport  (report, the run summary)
+//   40_render/render_report.json PathReport, under "path" (report)
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace p2n {
+
+struct SplatReport {
+  bool enabled = false;  // false: the stage was off, and nothing else is written
+  size_t splats = 0, initial_splats = 0;
+  std::string init;  // field | sparse
+  int sh_degree = 0, steps = 0, resumed_from_step = 0;
+  double seconds = 0;  // of optimisation
+  size_t heldout_views = 0;
+  std::optional<double> heldout_psnr, heldout_ssim;  // none without held-out views
+  std::vector<double> heldout_psnr_per_view;
+  double seconds_per_view = 0;  // rendering a held-out view on the CPU
+  std::string frame = "normalized", frame_description;
+  double near = 0.01;
+  std::array<float, 3> background{1, 1, 1};
+  size_t file_bytes = 0, viewer_bytes = 0;  // splats.ply, viewer.html
+
+  nlohmann::json ToJson() const;
+  static SplatReport Read(const std::filesystem::path& file);
+};
+
+// One held-out view's scores and images (paths of the render and the error map relative to 40_render/).
+struct HeldoutScore {
+  std::string view, render, error_map, photo;
+  double psnr = 0, ssim = 0, seconds = 0;
+};
+
+struct EvalReport {
+  std::string split, source;  // the held-out split; what rendered it: field | splats
+  std::vector<HeldoutScore> views;
+  std::optional<double> psnr, ssim;  // means over the views; none without views
+  double seconds_per_view = 0;
+  std::optional<double> samples_per_ray;  // none from the splats
+  double heat_map_max_error = 0;
+  std::optional<double> field_psnr, splats_psnr;  // both sources' held-out PSNR, where known
+
+  nlohmann::json ToJson() const;
+  static EvalReport Read(const std::filesystem::path& file);
+};
+
+struct PathReport {
+  std::string source, kind;  // field | splats; orbit | spiral | file
+  int frames = 0, width = 0, height = 0;
+  double seconds_per_frame = 0, frames_per_second = 0;
+  std::optional<double> samples_per_ray;  // none from the splats
+  double depth_png_max = 0;               // the depth that 65535 stands for in the depth PNGs
+  struct Video {
+    std::string file, codec;
+    double fps = 0;
+  };
+  std::optional<Video> video;  // none when no encoder could write one
+
+  // render_report.json holds {"path": ToJson()}.
+  nlohmann::json ToJson() const;
+  static PathReport Read(const std::filesystem::path& render_report);
+};
+
+}  // namespace p2n

@@ -1,0 +1,149 @@
+// The reports between stages (stages/stage_reports.h): each reads back exactly what its writer wrote, and a
+// missing or mistyped field is a UserError that names the file, the field and the stage to rerun.
+
+#include <catch2/catch.hpp>
+
+#include "pipeline/errors.h"
+#include "pipeline/file_util.h"
+#include "stages/stage_reports.h"
+#include "test_util.h"
+
+namespace p2n::testing {
+namespace fs = std::filesystem;
+namespace {
+
+SplatReport SomeSplatReport() {
+  SplatReport report;
+  report.enabled = true;
+  report.splats = 12345;
+  report.initial_splats = 9000;
+  report.init = "sparse";
+  report.sh_degree = 2;
+  report.steps = 77;
+  report.resumed_from_step = 40;
+  report.seconds = 12.5;
+  report.heldout_views = 2;
+  report.heldout_psnr = 24.25;
+  report.heldout_ssim = 0.81;
+  report.heldout_psnr_per_view = {24.0, 24.5};
+  report.seconds_per_view = 0.031;
+  report.frame = "source";
+  report.frame_description = "COLMAP's world";
+  report.near = 0.02;
+  report.background = {0.0f, 0.5f, 1.0f};
+  report.file_bytes = 1000;
+  report.viewer_bytes = 2000;
+  return report;
+}
+
+EvalReport SomeEvalReport() {
+  EvalReport report;
+  report.split = "val";
+  report.source = "splats";
+  report.views = {{"a.png", "heldout/a.png", "heldout/a_error.png", "/photos/a.png", 25.5, 0.8, 0.1},
+                  {"b.png", "heldout/b.png", "heldout/b_error.png", "/photos/b.png", 23.5, 0.7, 0.2}};
+  report.psnr = 24.5;
+  report.ssim = 0.75;
+  report.seconds_per_view = 0.15;
+  report.heat_map_max_error = 0.2;
+  report.field_psnr = 24.0;
+  report.splats_psnr = 24.5;  // samples_per_ray stays none: the splats rendered it
+  return report;
+}
+
+PathReport SomePathReport() {
+  PathReport report;
+  report.source = "field";
+  report.kind = "orbit";
+  report.frames = 60;
+  report.width = 320;
+  report.height = 240;
+  report.seconds_per_frame = 0.5;
+  report.frames_per_second = 2;
+  report.samples_per_ray = 7.5;
+  report.depth_png_max = 6.25;
+  report.video = PathReport::Video{"video.mp4", "avc1", 24};
+  return report;
+}
+
+// The UserError that reading `file` after replacing `key` of its JSON (a JSON pointer) by `value` throws.
+template <class Report>
+std::string ErrorAfterEdit(const fs::path& file, const nlohmann::json& written, const std::string& key,
+                           const nlohmann::json& value) {
+  nlohmann::json edited = written;
+  if (value.is_discarded()) {
+    edited.erase(nlohmann::json::json_pointer(key).back());
+  } else {
+    edited[nlohmann::json::json_pointer(key)] = value;
+  }
+  WriteJsonAtomic(file, edited);
+  try {
+    Report::Read(file);
+  } catch (const UserError& error) {
+    return error.what();
+  }
+  return "no error";
+}
+
+}  // namespace
+
+TEST_CASE("Reports between stages read back exactly what was written", "[reports]") {
+  TempDir dir;
+  const SplatReport splat = SomeSplatReport();
+  WriteJsonAtomic(dir.path() / "splat_report.json", splat.ToJson());
+  CHECK(SplatReport::Read(dir.path() / "splat_report.json").ToJson() == splat.ToJson());
+  WriteJsonAtomic(dir.path() / "off.json", SplatReport{}.ToJson());
+  CHECK_FALSE(SplatReport::Read(dir.path() / "off.json").enabled);
+
+  const EvalReport eval = SomeEvalReport();
+  WriteJsonAtomic(dir.path() / "eval.json", eval.ToJson());
+  const EvalReport eval_read = EvalReport::Read(dir.path() / "eval.json");
+  CHECK(eval_read.ToJson() == eval.ToJson());
+  CHECK_FALSE(eval_read.samples_per_ray.has_value());
+  CHECK(eval_read.views.at(1).psnr == 23.5);
+
+  const PathReport path = SomePathReport();
+  WriteJsonAtomic(dir.path() / "render_report.json", {{"path", path.ToJson()}});
+  const PathReport path_read = PathReport::Read(dir.path() / "render_report.json");
+  CHECK(path_read.ToJson() == path.ToJson());
+  REQUIRE(path_read.video.has_value());
+  CHECK(path_read.video->codec == "avc1");
+  PathReport no_video = path;
+  no_video.video.reset();
+  no_video.samples_per_ray.reset();
+  WriteJsonAtomic(dir.path() / "render_report.json", {{"path", no_video.ToJson()}});
+  CHECK_FALSE(PathReport::Read(dir.path() / "render_report.json").video.has_value());
+}
+
+TEST_CASE("A damaged report names its file, the field and the stage to rerun", "[reports]") {
+  TempDir dir;
+  const fs::path splat = dir.path() / "splat_report.json";
+  const nlohmann::json splat_json = SomeSplatReport().ToJson();
+  CHECK_THAT(ErrorAfterEdit<SplatReport>(splat, splat_json, "/near", "far"),
+             Catch::Contains("splat_report.json") && Catch::Contains("\"near\" must be a number, not string") &&
+                 Catch::Contains("photo2nerf splat -w WORKSPACE --force"));
+  CHECK_THAT(ErrorAfterEdit<SplatReport>(splat, splat_json, "/near", -1), Catch::Contains("\"near\" must be positive"));
+  CHECK_THAT(ErrorAfterEdit<SplatReport>(splat, splat_json, "/background", nlohmann::json::array({1, 1})),
+             Catch::Contains("\"background\" must be 3 numbers"));
+  CHECK_THAT(ErrorAfterEdit<SplatReport>(splat, splat_json, "/frame", "sideways"),
+             Catch::Contains("\"frame\" must be normalized or source"));
+  CHECK_THAT(ErrorAfterEdit<SplatReport>(splat, splat_json, "/steps", nlohmann::json::value_t::discarded),
+             Catch::Contains("\"steps\" is missing"));
+
+  const fs::path eval = dir.path() / "eval.json";
+  const nlohmann::json eval_json = SomeEvalReport().ToJson();
+  CHECK_THAT(ErrorAfterEdit<EvalReport>(eval, eval_json, "/views/1/psnr", nullptr),
+             Catch::Contains("\"views[1].psnr\" must be a number, not null") && Catch::Contains("photo2nerf render"));
+  CHECK_THAT(ErrorAfterEdit<EvalReport>(eval, eval_json, "/views", "none"), Catch::Contains("\"views\" must be an array"));
+  CHECK_THAT(ErrorAfterEdit<EvalReport>(eval, eval_json, "/psnr", "high"),
+             Catch::Contains("\"psnr\" must be a number, not string"));
+
+  const fs::path render = dir.path() / "render_report.json";
+  const nlohmann::json render_json = {{"path", SomePathReport().ToJson()}};
+  CHECK_THAT(ErrorAfterEdit<PathReport>(render, render_json, "/path/video/fps", "fast"),
+             Catch::Contains("\"path.video.fps\" must be a number"));
+  CHECK_THAT(ErrorAfterEdit<PathReport>(render, render_json, "/path", nlohmann::json::value_t::discarded),
+             Catch::Contains("\"path\" is missing"));
+}
+
+}  // namespace p2n::testing
