@@ -75,7 +75,8 @@ class RenderStage : public Stage {
  public:
   std::string name() const override { return "render"; }
   std::string folder() const override { return "40_render"; }
-  int format_version() const override { return 2; }  // 2: renders from the splats when they are as good
+  // 2: renders from the splats when they are as good; 3: eval.json and render_report.json as stage_reports.h types them
+  int format_version() const override { return 3; }
   std::vector<std::string> upstream() const override { return {"poses", "train", "splat"}; }
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
   void Run(StageContext& context) const override;
