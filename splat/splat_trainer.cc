@@ -5,7 +5,6 @@
 #include <sstream>
 
 #include "nerf/config_check.h"
-#include "splat/ssim_loss.h"
 
 namespace p2n {
 
@@ -79,8 +78,7 @@ double SplatTrainer::Step() {
   const float weight = static_cast<float>(options_.ssim_weight);
   double loss = 0;
   if (weight > 0) {
-    loss = weight * (1 - SsimWithGradient(rgb.data(), photo.data(), view.camera.width, view.camera.height, 3,
-                                          d_rgb.data()));
+    loss = weight * (1 - ssim_(rgb.data(), photo.data(), view.camera.width, view.camera.height, 3, d_rgb.data()));
     for (float& d : d_rgb) d *= -weight;
   }
   const float scale = (1 - weight) / static_cast<float>(rgb.size());

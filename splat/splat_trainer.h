@@ -1,7 +1,7 @@
 #pragma once
 // Optimises Gaussians against posed photos (3D Gaussian Splatting's recipe, sized for a CPU): one training view
-// per step, rendered whole by the rasterizer, a loss of L1 and SSIM against the photo on the known background, Adam with a
-// learning rate per parameter (the means' decaying exponentially and scaled by the scene's extent), the
+// per step, rendered whole by the rasterizer, a loss of L1 and SSIM against the photo on the known background,
+// Adam with a learning rate per parameter (the means' decaying exponentially and scaled by the scene's extent), the
 // spherical harmonics' degrees joining one at a time, and densification: Gaussians whose mean the loss pulls hard
 // across the screen are cloned when small and split in two when large, transparent ones are pruned.
 
@@ -16,6 +16,7 @@
 #include "nerf/trainer.h"
 #include "splat/gaussians.h"
 #include "splat/rasterizer.h"
+#include "splat/ssim_loss.h"
 
 namespace p2n {
 
@@ -34,7 +35,7 @@ struct SplatTrainerOptions {
   double densify_gradient = 2e-4;  // mean screen-space gradient (normalised device units) that densifies
   double dense_fraction = 0.01;    // of the extent: larger Gaussians split, smaller ones clone
   double prune_opacity = 0.005;
-  double ssim_weight = 0.2;  // the loss: (1 - ssim_weight) L1 + ssim_weight (1 - SSIM) (ssim_loss.h)
+  double ssim_weight = 0.1;  // the loss: (1 - ssim_weight) L1 + ssim_weight (1 - SSIM) (ssim_loss.h)
   size_t max_gaussians = 1'500'000;
   uint64_t seed = 0;
 
@@ -81,6 +82,7 @@ class SplatTrainer {
   std::vector<Adam<float>> adams_;           // one per parameter array, in Gaussians::ForEachArray's order
   Gaussians<float> gradients_;
   Rasterizer<float> rasterizer_;
+  SsimLoss ssim_;
   int step_ = 0;
   std::mt19937_64 random_;
   std::vector<size_t> order_;  // this epoch's views; the next is order_.back()

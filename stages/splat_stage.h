@@ -20,7 +20,7 @@ struct SplatOptions {
   int init_width = 200;         // training views rendered this wide to place the first Gaussians
   int max_gaussians = 100'000;  // of the first; densification may double it. Fewer: more steps for the time
   double coarse = 0.75;         // share of the optimisation on the photos at half size
-  double ssim_weight = 0.2;     // the loss: (1 - w) L1 + w (1 - SSIM)
+  double ssim_weight = 0.1;     // the loss: (1 - w) L1 + w (1 - SSIM)
   std::string frame = "source";
   double eval_interval = 20;  // seconds of optimisation between held-out evaluations
   double checkpoint_interval = 60;
@@ -42,7 +42,7 @@ struct SplatOptions {
     v("coarse", coarse,
       "share of the optimisation time spent on the photos at half size (four times the steps; coarse to fine)");
     v("ssim_weight", ssim_weight,
-      "weight of the structural dissimilarity (1 - SSIM) in the loss, the rest L1 (3D Gaussian Splatting's 0.2)");
+      "weight of the structural dissimilarity (1 - SSIM) in the loss, the rest L1 (3D Gaussian Splatting uses 0.2)");
     v("frame", frame,
       "coordinates of splats.ply: source (COLMAP's world, or the dataset's) or normalized (the training frame)", "",
       OptionKind::kResult, {"source", "normalized"});

@@ -221,20 +221,21 @@ TEST_CASE("SSIM of the splats' loss: 1 for the photo itself, its gradient agains
     photo[i] = uniform(random);
     render[i] = std::clamp(photo[i] + 0.8 * (uniform(random) - 0.5), 0.0, 1.0);
   }
+  SsimLoss ssim;
   std::vector<double> same_gradient(render.size());
-  CHECK(SsimWithGradient(photo.data(), photo.data(), kWidth, kHeight, kChannels, same_gradient.data()) ==
+  CHECK(ssim(photo.data(), photo.data(), kWidth, kHeight, kChannels, same_gradient.data()) ==
         Approx(1).epsilon(1e-12));
   for (double g : same_gradient) CHECK(std::abs(g) < 1e-12);  // the maximum
 
-  const double ssim = SsimWithGradient(render.data(), photo.data(), kWidth, kHeight, kChannels, gradient.data());
-  CHECK(ssim < 0.9);
+  const double value = ssim(render.data(), photo.data(), kWidth, kHeight, kChannels, gradient.data());
+  CHECK(value < 0.9);
   constexpr double kStep = 1e-6;
   for (size_t i = 0; i < render.size(); i += 7) {
     std::vector<double> plus = render, minus = render;
     plus[i] += kStep;
     minus[i] -= kStep;
-    const double numeric = (SsimWithGradient(plus.data(), photo.data(), kWidth, kHeight, kChannels, (double*)nullptr) -
-                            SsimWithGradient(minus.data(), photo.data(), kWidth, kHeight, kChannels, (double*)nullptr)) /
+    const double numeric = (ssim(plus.data(), photo.data(), kWidth, kHeight, kChannels, (double*)nullptr) -
+                            ssim(minus.data(), photo.data(), kWidth, kHeight, kChannels, (double*)nullptr)) /
                            (2 * kStep);
     INFO("value " << i);
     CHECK(gradient[i] == Approx(numeric).margin(1e-9).epsilon(1e-5));
@@ -242,8 +243,8 @@ TEST_CASE("SSIM of the splats' loss: 1 for the photo itself, its gradient agains
   // The same in single precision, as the trainer uses it.
   std::vector<float> render_f(render.begin(), render.end()), photo_f(photo.begin(), photo.end());
   std::vector<float> gradient_f(render.size());
-  CHECK(SsimWithGradient(render_f.data(), photo_f.data(), kWidth, kHeight, kChannels, gradient_f.data()) ==
-        Approx(ssim).epsilon(1e-5));
+  CHECK(ssim(render_f.data(), photo_f.data(), kWidth, kHeight, kChannels, gradient_f.data()) ==
+        Approx(value).epsilon(1e-5));
   for (size_t i = 0; i < render.size(); ++i) CHECK(gradient_f[i] == Approx(gradient[i]).margin(1e-7).epsilon(1e-3));
 }
 
