@@ -175,8 +175,8 @@ struct PathRange {
 };
 
 PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& dataset,
-                          const std::vector<PinholeCamera>& cameras, const RenderStageOptions& options,
-                          const fs::path& out) {
+                      const std::vector<PinholeCamera>& cameras, const RenderStageOptions& options,
+                      const fs::path& out) {
   fs::create_directories(out / "frames");
   if (options.depth) {
     fs::create_directories(out / "depth");
@@ -238,9 +238,7 @@ PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& datas
 
 // The field's held-out PSNR as the train stage measured it (train.final_eval_pixels per view).
 std::optional<double> FieldPsnr(const StageContext& context) {
-  const nlohmann::json psnr = ReadJsonFile(context.upstream_dirs.at("train") / "train_report.json")
-                                  .value("heldout_psnr", nlohmann::json(nullptr));
-  return psnr.is_number() ? std::optional<double>(psnr.get<double>()) : std::nullopt;
+  return TrainReport::Read(context.upstream_dirs.at("train") / "train_report.json").heldout_psnr;
 }
 
 std::string DbText(const std::optional<double>& psnr) { return psnr ? format("{:.2f} dB", *psnr) : "none"; }

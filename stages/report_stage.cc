@@ -45,47 +45,41 @@ std::string TrainingSection(const fs::path& train_dir) {
                       {CsvSeries("held-out PSNR (dB)", metrics, 0, 3)});
   html += SvgLinePlot({"training loss against training time", "training time (s)", "loss"},
                       {CsvSeries("training loss", metrics, 0, 2)});
-  const nlohmann::json report = ReadIfExists(train_dir / "train_report.json");
   html += "</div>\n";
-  if (!report.empty()) {
+  if (!fs::exists(train_dir / "train_report.json")) return html;
+  const TrainReport report = TrainReport::Read(train_dir / "train_report.json");
+  const auto pixels = [](int count) { return count == 0 ? std::string("all") : format("{}", count); };
+  html += format(
+      "<p>{} steps in {:.1f} s of training; final held-out PSNR {} dB over {} {} views ({} pixels each); "
+      "{:.3g} samples per ray when rendering; {:.1f}% of the occupancy grid occupied.</p>\n",
+      report.steps, report.wall_seconds, Number(report.heldout_psnr), report.heldout_views,
+      HtmlEscape(report.heldout_split), pixels(report.heldout_pixels_per_view), report.samples_per_ray_rendered,
+      100 * report.occupied_fraction);
+  const TrainReport::Evaluations& evals = report.evaluations_during_training;
+  html += format(
+      "<p>Distortion loss weight {:.4g}; {} held-out evaluations during training ({} pixels per view) took "
+      "{:.1f} s.</p>\n",
+      report.trainer.distortion_weight, evals.count, pixels(evals.pixels_per_view), evals.seconds);
+  if (report.appearance.enabled) {
     html += format(
-        "<p>{} steps in {:.1f} s of training; final held-out PSNR {} dB over {} {} views ({} pixels each); "
-        "{} samples per ray when rendering; {:.1f}% of the occupancy grid occupied.</p>\n",
-        report["steps"].get<int>(), report["wall_seconds"].get<double>(), Number(report["heldout_psnr"]),
-        report["heldout_views"].get<int>(), HtmlEscape(report.value("heldout_split", "")),
-        Number(report["heldout_pixels_per_view"]), Number(report["samples_per_ray_rendered"], 3),
-        100 * report.value("occupied_fraction", 0.0));
-    const nlohmann::json evals = report.value("evaluations_during_training", nlohmann::json::object());
-    const nlohmann::json trainer = report.value("trainer", nlohmann::json::object());
+        "<p>Each training photo has its own colour transform (exposure, white balance): it makes white "
+        "{:.3g} to {:.3g} of itself. Novel views show the average photo; a held-out photo given its own, "
+        "fitted on its left half, scores {} dB on its right half.</p>\n",
+        report.appearance.gain_min, report.appearance.gain_max, Number(report.heldout_psnr_fitted));
+  }
+  const TrainReport::Refinement& cameras = report.refinement;
+  if (cameras.enabled) {
     html += format(
-        "<p>Distortion loss weight {}; {} held-out evaluations during training ({} pixels per view) took "
-        "{:.1f} s.</p>\n",
-        Number(trainer.value("distortion_weight", nlohmann::json(0))), evals.value("count", 0),
-        Number(evals.value("pixels_per_view", nlohmann::json(nullptr))), evals.value("seconds", 0.0));
-    const nlohmann::json appearance = report.value("appearance", nlohmann::json::object());
-    if (appearance.value("enabled", false)) {
-      html += format(
-          "<p>Each training photo has its own colour transform (exposure, white balance): it makes white "
-          "{} to {} of itself. Novel views show the average photo; a held-out photo given its own, "
-          "fitted on its left half, scores {} dB on its right half.</p>\n",
-          Number(appearance["gain_min"], 3), Number(appearance["gain_max"], 3),
-          Number(report.value("heldout_psnr_fitted", nlohmann::json(nullptr))));
-    }
-    const nlohmann::json cameras = report.value("camera_refinement", nlohmann::json::object());
-    if (cameras.value("enabled", false)) {
-      html += format(
-          "<p>Camera refinement turned the training cameras by {}&deg; (median; at most {}&deg;) and "
-          "moved them by {} (median; at most {}) normalised units; the export stage writes the refined "
-          "cameras (transforms.json).</p>\n",
-          Number(cameras["rotation_degrees_median"], 3), Number(cameras["rotation_degrees_max"], 3),
-          Number(cameras["shift_median"], 3), Number(cameras["shift_max"], 3));
-    }
+        "<p>Camera refinement turned the training cameras by {:.3g}&deg; (median; at most {:.3g}&deg;) and "
+        "moved them by {:.3g} (median; at most {:.3g}) normalised units; the export stage writes the refined "
+        "cameras (transforms.json).</p>\n",
+        cameras.rotation_degrees_median, cameras.rotation_degrees_max, cameras.shift_median, cameras.shift_max);
   }
   return html;
 }
 
 // The splats: their numbers beside the field's, their error against optimisation time, and the file.
-std::string SplatSection(const fs::path& splat_dir, const nlohmann::json& train) {
+std::string SplatSection(const fs::path& splat_dir, const std::optional<TrainReport>& train) {
   const SplatReport report = SplatReport::Read(splat_dir / "splat_report.json");
   if (!report.enabled) {
     return "<h2>Splats</h2>\n<p>Off (<code>--splat.enabled false</code>).</p>\n";
@@ -107,7 +101,7 @@ std::string SplatSection(const fs::path& splat_dir, const nlohmann::json& train)
       "Gaussian Splatting layout, {}; SuperSplat, the PlayCanvas and three.js splat viewers open it as it is.</p>\n",
       report.splats, report.sh_degree, report.initial_splats, report.init == "sparse" ? "sparse points" : "field",
       report.seconds, report.steps, Number(report.heldout_psnr), Number(report.heldout_ssim, 3),
-      Number(train.value("heldout_psnr", nlohmann::json(nullptr))), report.seconds_per_view, report.file_bytes / 1e6,
+      Number(train ? train->heldout_psnr : std::nullopt), report.seconds_per_view, report.file_bytes / 1e6,
       HtmlEscape(report.frame_description));
   return html;
 }
@@ -187,8 +181,7 @@ std::string HeldoutSection(const fs::path& render_dir, const std::optional<EvalR
       return format("<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>", uri, HtmlEscape(caption),
                     HtmlEscape(caption));
     };
-    html += "<div class=\"triple\">" +
-            figure(ImageDataUri(view.photo, image_width, background), "photo " + view.view) +
+    html += "<div class=\"triple\">" + figure(ImageDataUri(view.photo, image_width, background), "photo " + view.view) +
             figure(ImageDataUri(render_dir / view.render, image_width),
                    format("render: {:.2f} dB, SSIM {:.3f}", view.psnr, view.ssim)) +
             figure(ImageDataUri(render_dir / view.error_map, image_width), "error map") + "</div>\n";
@@ -208,7 +201,9 @@ void ReportStage::Run(StageContext& context) const {
   const fs::path render_dir = context.upstream_dirs.at("render"), export_dir = context.upstream_dirs.at("export");
   const ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
   const std::string heldout_split = HeldoutSplit(dataset);
-  const nlohmann::json train = ReadIfExists(context.upstream_dirs.at("train") / "train_report.json");
+  const fs::path train_report = context.upstream_dirs.at("train") / "train_report.json";
+  const std::optional<TrainReport> train =
+      fs::exists(train_report) ? std::optional(TrainReport::Read(train_report)) : std::nullopt;
   const std::optional<EvalReport> eval =
       fs::exists(render_dir / "eval.json") ? std::optional(EvalReport::Read(render_dir / "eval.json")) : std::nullopt;
   const nlohmann::json exported = ReadIfExists(export_dir / "export_report.json");
@@ -222,8 +217,7 @@ void ReportStage::Run(StageContext& context) const {
   body += "<div class=\"cards\">\n";
   body += Card(eval && eval->psnr ? format("{:.2f} dB", *eval->psnr) : "-", "held-out PSNR");
   body += Card(eval && eval->ssim ? format("{:.3f}", *eval->ssim) : "-", "held-out SSIM");
-  body += Card(train.contains("wall_seconds") ? format("{:.0f} s", train["wall_seconds"].get<double>()) : "-",
-               "training time");
+  body += Card(train ? format("{:.0f} s", train->wall_seconds) : "-", "training time");
   body += Card(format("{}", dataset.views.size()), "cameras");
   if (exported.contains("mesh"))
     body += Card(format("{}", exported["mesh"]["triangles"].get<size_t>()), "mesh triangles");

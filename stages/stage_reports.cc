@@ -33,15 +33,23 @@ class Fields {
     Convert(key, json_.at(key), &converted);
     *value = converted;
   }
+  // Element `i` of the array at `key` (an object), to read further fields from.
+  Fields Element(const char* key, size_t i) const {
+    return Fields(json_.at(key).at(i), file_, stage_, format("{}{}[{}].", prefix_, key, i));
+  }
   // The object at `key`, to read further fields from.
   Fields Object(const char* key) const {
     if (!json_.contains(key)) Fail(key, "is missing");
     return Fields(json_.at(key), file_, stage_, prefix_ + key + ".");
   }
   bool Has(const char* key) const { return json_.contains(key) && !json_.at(key).is_null(); }
+  const nlohmann::json& At(const char* key) const {
+    if (!json_.contains(key)) Fail(key, "is missing");
+    return json_.at(key);
+  }
   [[noreturn]] void Fail(const std::string& key, const std::string& problem) const {
-    throw UserError(format("'{}': \"{}{}\" {}; rerun the {} stage (photo2nerf {} -w WORKSPACE --force)",
-                           file_.string(), prefix_, key, problem, stage_, stage_));
+    throw UserError(format("'{}': \"{}{}\" {}; rerun the {} stage (photo2nerf {} -w WORKSPACE --force)", file_.string(),
+                           prefix_, key, problem, stage_, stage_));
   }
 
  private:
@@ -66,7 +74,131 @@ nlohmann::json OrNull(const std::optional<double>& value) {
   return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }
 
+// A pixels-per-view count as written: the number, or "all" for 0.
+nlohmann::json PixelsPerView(int pixels) { return pixels == 0 ? nlohmann::json("all") : nlohmann::json(pixels); }
+
+int ReadPixelsPerView(const Fields& fields, const char* key) {
+  const nlohmann::json& value = fields.At(key);
+  if (value == "all") return 0;
+  if (!value.is_number_integer() || value.get<int64_t>() < 1) fields.Fail(key, "must be \"all\" or a positive count");
+  return value.get<int>();
+}
+
+void ReadAppearance(const Fields& fields, TrainReport::Appearance* appearance) {
+  fields.Get("enabled", &appearance->enabled);
+  if (!appearance->enabled) return;
+  fields.Get("gain_min", &appearance->gain_min);
+  fields.Get("gain_max", &appearance->gain_max);
+  const nlohmann::json& views = fields.At("per_view");
+  if (!views.is_array()) fields.Fail("per_view", "must be an array");
+  for (size_t i = 0; i < views.size(); ++i) {
+    const Fields view = fields.Element("per_view", i);
+    TrainReport::AppearanceView& out = appearance->per_view.emplace_back();
+    view.Get("view", &out.view);
+    view.Get("gain", &out.gain);
+    view.Get("transform", &out.transform);
+  }
+}
+
 }  // namespace
+
+nlohmann::json TrainReport::ToJson() const {
+  nlohmann::json per_view = nlohmann::json::array();
+  for (const ViewPsnr& v : heldout_per_view) per_view.push_back({{"view", v.view}, {"psnr", v.psnr}});
+  nlohmann::json appearance_json = {{"enabled", appearance.enabled}};
+  if (appearance.enabled) {
+    nlohmann::json views = nlohmann::json::array();
+    for (const AppearanceView& v : appearance.per_view)
+      views.push_back({{"view", v.view}, {"gain", v.gain}, {"transform", v.transform}});
+    appearance_json.update({{"gain_min", appearance.gain_min}, {"gain_max", appearance.gain_max}, {"per_view", views}});
+  }
+  return {{"steps", steps},
+          {"wall_seconds", wall_seconds},
+          {"heldout_psnr", OrNull(heldout_psnr)},
+          {"heldout_views", heldout_views},
+          {"heldout_split", heldout_split},
+          {"heldout_pixels_per_view", PixelsPerView(heldout_pixels_per_view)},
+          {"heldout_per_view", per_view},
+          {"heldout_psnr_fitted", OrNull(heldout_psnr_fitted)},
+          {"heldout_psnr_fitted_is",
+           "each held-out photo's colour transform fitted (least squares) on its left half, PSNR on its right half "
+           "(NeRF-W)"},
+          {"evaluations_during_training",
+           {{"count", evaluations_during_training.count},
+            {"seconds", evaluations_during_training.seconds},
+            {"pixels_per_view", PixelsPerView(evaluations_during_training.pixels_per_view)}}},
+          {"skipped_steps", skipped_steps},
+          {"resumed_from_step", resumed_from_step},
+          {"training_views", training_views},
+          {"samples_per_ray_rendered", samples_per_ray_rendered},
+          {"render_seconds_per_view", render_seconds_per_view},
+          {"occupied_fraction", occupied_fraction},
+          {"field", field},
+          {"trainer",
+           {{"march_step", trainer.march_step},
+            {"batch_samples", trainer.batch_samples},
+            {"scene", trainer.scene},
+            {"learning_rate", trainer.learning_rate},
+            {"distortion_weight", trainer.distortion_weight},
+            {"appearance", trainer.appearance},
+            {"refine_cameras", trainer.refine_cameras},
+            {"error_sampling", trainer.error_sampling},
+            {"random_background", trainer.random_background}}},
+          {"appearance", appearance_json},
+          {"camera_refinement", camera_refinement}};
+}
+
+TrainReport TrainReport::Read(const fs::path& file) {
+  const nlohmann::json json = ReadJsonFile(file);
+  const Fields fields(json, file, "train");
+  TrainReport report;
+  fields.Get("steps", &report.steps);
+  fields.Get("wall_seconds", &report.wall_seconds);
+  fields.Get("heldout_psnr", &report.heldout_psnr);
+  fields.Get("heldout_views", &report.heldout_views);
+  fields.Get("heldout_split", &report.heldout_split);
+  report.heldout_pixels_per_view = ReadPixelsPerView(fields, "heldout_pixels_per_view");
+  if (!fields.At("heldout_per_view").is_array()) fields.Fail("heldout_per_view", "must be an array");
+  for (size_t i = 0; i < json["heldout_per_view"].size(); ++i) {
+    const Fields view = fields.Element("heldout_per_view", i);
+    ViewPsnr& score = report.heldout_per_view.emplace_back();
+    view.Get("view", &score.view);
+    view.Get("psnr", &score.psnr);
+  }
+  fields.Get("heldout_psnr_fitted", &report.heldout_psnr_fitted);
+  const Fields evaluations = fields.Object("evaluations_during_training");
+  evaluations.Get("count", &report.evaluations_during_training.count);
+  evaluations.Get("seconds", &report.evaluations_during_training.seconds);
+  report.evaluations_during_training.pixels_per_view = ReadPixelsPerView(evaluations, "pixels_per_view");
+  fields.Get("skipped_steps", &report.skipped_steps);
+  fields.Get("resumed_from_step", &report.resumed_from_step);
+  fields.Get("training_views", &report.training_views);
+  fields.Get("samples_per_ray_rendered", &report.samples_per_ray_rendered);
+  fields.Get("render_seconds_per_view", &report.render_seconds_per_view);
+  fields.Get("occupied_fraction", &report.occupied_fraction);
+  fields.Get("field", &report.field);
+  const Fields trainer = fields.Object("trainer");
+  trainer.Get("march_step", &report.trainer.march_step);
+  trainer.Get("batch_samples", &report.trainer.batch_samples);
+  trainer.Get("scene", &report.trainer.scene);
+  trainer.Get("learning_rate", &report.trainer.learning_rate);
+  trainer.Get("distortion_weight", &report.trainer.distortion_weight);
+  trainer.Get("appearance", &report.trainer.appearance);
+  trainer.Get("refine_cameras", &report.trainer.refine_cameras);
+  trainer.Get("error_sampling", &report.trainer.error_sampling);
+  trainer.Get("random_background", &report.trainer.random_background);
+  ReadAppearance(fields.Object("appearance"), &report.appearance);
+  fields.Get("camera_refinement", &report.camera_refinement);
+  const Fields refinement = fields.Object("camera_refinement");
+  refinement.Get("enabled", &report.refinement.enabled);
+  if (report.refinement.enabled) {
+    refinement.Get("rotation_degrees_median", &report.refinement.rotation_degrees_median);
+    refinement.Get("rotation_degrees_max", &report.refinement.rotation_degrees_max);
+    refinement.Get("shift_median", &report.refinement.shift_median);
+    refinement.Get("shift_max", &report.refinement.shift_max);
+  }
+  return report;
+}
 
 nlohmann::json SplatReport::ToJson() const {
   if (!enabled) return {{"enabled", false}};
@@ -154,9 +286,9 @@ EvalReport EvalReport::Read(const fs::path& file) {
   EvalReport report;
   fields.Get("split", &report.split);
   fields.Get("source", &report.source);
-  if (!json.contains("views") || !json["views"].is_array()) fields.Fail("views", "must be an array");
+  if (!fields.At("views").is_array()) fields.Fail("views", "must be an array");
   for (size_t i = 0; i < json["views"].size(); ++i) {
-    const Fields view(json["views"][i], file, "render", format("views[{}].", i));
+    const Fields view = fields.Element("views", i);
     HeldoutScore& score = report.views.emplace_back();
     view.Get("view", &score.view);
     view.Get("render", &score.render);

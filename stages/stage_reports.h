@@ -3,6 +3,7 @@
 // writes it with ToJson(), every reader reads it with Read(), so a field has one name and one type. A reader
 // meets a missing or mistyped field as a UserError that names the file and the field and says which stage to
 // rerun, never as an internal error at a distance.
+//   30_train/train_report.json   TrainReport (render, report)
 //   35_splat/splat_report.json   SplatReport (render, its view renderer, report, splat_bench)
 //   40_render/eval.json          EvalReport  (report, the run summary)
 //   40_render/render_report.json PathReport, under "path" (report)
@@ -16,6 +17,55 @@
 #include <nlohmann/json.hpp>
 
 namespace p2n {
+
+struct TrainReport {
+  int steps = 0, skipped_steps = 0, resumed_from_step = 0;
+  double wall_seconds = 0;  // of training
+  size_t training_views = 0, heldout_views = 0;
+  std::string heldout_split;
+  int heldout_pixels_per_view = 0;     // 0: every pixel (written "all")
+  std::optional<double> heldout_psnr;  // none without held-out views
+  // Each held-out photo scored as NeRF-W does (its colour transform fitted on its left half, PSNR on the right).
+  std::optional<double> heldout_psnr_fitted;
+  struct ViewPsnr {
+    std::string view;
+    double psnr = 0;
+  };
+  std::vector<ViewPsnr> heldout_per_view;
+  struct Evaluations {
+    int count = 0;
+    double seconds = 0;
+    int pixels_per_view = 0;  // 0: every pixel
+  } evaluations_during_training;
+  double samples_per_ray_rendered = 0, render_seconds_per_view = 0, occupied_fraction = 0;
+  nlohmann::json field = nlohmann::json::object();  // the field's config, as MakeField reads it
+  struct Trainer {
+    double march_step = 0, learning_rate = 0, distortion_weight = 0;
+    size_t batch_samples = 0;
+    std::string scene;  // bounded | unbounded | forward
+    bool appearance = false, refine_cameras = false, error_sampling = false, random_background = false;
+  } trainer;
+  struct AppearanceView {
+    std::string view;
+    double gain = 0;  // what the transform makes of white
+    std::vector<float> transform;
+  };
+  struct Appearance {
+    bool enabled = false;
+    double gain_min = 0, gain_max = 0;
+    std::vector<AppearanceView> per_view;
+  } appearance;
+  // The section camera_corrections.h writes (CameraRefinementJson) and reads back (ReadCameraCorrections), and
+  // the summary of it that Read() takes from it.
+  nlohmann::json camera_refinement = {{"enabled", false}};
+  struct Refinement {
+    bool enabled = false;
+    double rotation_degrees_median = 0, rotation_degrees_max = 0, shift_median = 0, shift_max = 0;
+  } refinement;
+
+  nlohmann::json ToJson() const;
+  static TrainReport Read(const std::filesystem::path& file);
+};
 
 struct SplatReport {
   bool enabled = false;  // false: the stage was off, and nothing else is written

@@ -18,6 +18,7 @@
 #include "stages/camera_corrections.h"
 #include "stages/dataset_import.h"
 #include "stages/stage_io.h"
+#include "stages/stage_reports.h"
 #include "stages/training_data.h"
 
 namespace p2n {
@@ -111,9 +112,6 @@ bool LoadCheckpoint(const fs::path& path, const std::string& key, RunState* stat
   }
 }
 
-// A pixels-per-view option as JSON: the count, or "all" for 0.
-nlohmann::json PixelsPerView(int pixels) { return pixels == 0 ? nlohmann::json("all") : nlohmann::json(pixels); }
-
 // The held-out evaluations during training (in this session of the run: a resumed run counts from its resumption).
 struct EvalLog {
   int count = 0;
@@ -121,60 +119,47 @@ struct EvalLog {
 };
 
 // The per-photo colour transforms (train_report.json's "appearance").
-nlohmann::json AppearanceReport(const Trainer& trainer, const TrainingData& data) {
+TrainReport::Appearance AppearanceReport(const Trainer& trainer, const TrainingData& data) {
+  TrainReport::Appearance appearance;
   const std::vector<float>& params = trainer.appearance();
-  if (params.empty()) return {{"enabled", false}};
-  nlohmann::json per_view = nlohmann::json::array();
+  if (params.empty()) return appearance;
+  appearance.enabled = true;
   std::vector<double> gains;
   for (size_t v = 0; v < data.train.size(); ++v) {
     const float* transform = &params[v * kAppearanceParams];
     gains.push_back(AppearanceGain(transform));
-    per_view.push_back({{"view", data.train[v].name},
-                        {"gain", gains.back()},
-                        {"transform", std::vector<float>(transform, transform + kAppearanceParams)}});
+    appearance.per_view.push_back(
+        {data.train[v].name, gains.back(), std::vector<float>(transform, transform + kAppearanceParams)});
   }
-  return {{"enabled", true},
-          {"gain_min", *std::min_element(gains.begin(), gains.end())},
-          {"gain_max", *std::max_element(gains.begin(), gains.end())},
-          {"per_view", per_view}};
+  appearance.gain_min = *std::min_element(gains.begin(), gains.end());
+  appearance.gain_max = *std::max_element(gains.begin(), gains.end());
+  return appearance;
 }
 
-nlohmann::json TrainReport(Trainer& trainer, const TrainerOptions& trainer_options, const TrainOptions& options,
-                           const TrainingData& data, const std::string& heldout_split, const std::vector<double>& psnrs,
-                           const RenderStats& eval_stats, double train_seconds, int resumed_from,
-                           const EvalLog& eval_log) {
-  nlohmann::json per_view = nlohmann::json::array();
-  for (size_t v = 0; v < psnrs.size(); ++v) per_view.push_back({{"view", data.heldout[v].name}, {"psnr", psnrs[v]}});
-  NerfModel& model = trainer.model();
-  return {
-      {"steps", trainer.step()},
-      {"wall_seconds", train_seconds},
-      {"heldout_psnr", psnrs.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(psnrs))},
-      {"heldout_views", data.heldout.size()},
-      {"heldout_split", heldout_split},
-      {"heldout_pixels_per_view", PixelsPerView(options.final_eval_pixels)},
-      {"heldout_per_view", per_view},
-      {"evaluations_during_training",
-       {{"count", eval_log.count},
-        {"seconds", eval_log.seconds},
-        {"pixels_per_view", PixelsPerView(options.eval_pixels)}}},
-      {"skipped_steps", trainer.skipped_steps()},
-      {"resumed_from_step", resumed_from},
-      {"training_views", data.train.size()},
-      {"samples_per_ray_rendered", eval_stats.rays > 0 ? double(eval_stats.samples_evaluated) / eval_stats.rays : 0.0},
-      {"render_seconds_per_view", psnrs.empty() ? 0.0 : eval_stats.seconds / psnrs.size()},
-      {"occupied_fraction", model.occupancy.OccupiedFraction()},
-      {"field", model.field->Config()},
-      {"trainer",
-       {{"march_step", trainer_options.march_step},
-        {"batch_samples", trainer_options.batch_samples},
-        {"scene", SceneSpaceName(trainer_options.space)},
-        {"learning_rate", trainer_options.learning_rate},
-        {"distortion_weight", trainer_options.distortion_weight},
-        {"appearance", trainer_options.appearance},
-        {"refine_cameras", trainer_options.refine_cameras},
-        {"error_sampling", trainer_options.error_sampling},
-        {"random_background", trainer_options.random_background}}}};
+TrainReport MakeTrainReport(Trainer& trainer, const TrainerOptions& trainer_options, const TrainOptions& options,
+                            const TrainingData& data, const std::vector<double>& psnrs, const RenderStats& eval_stats,
+                            int resumed_from, const EvalLog& eval_log) {
+  TrainReport report;
+  report.steps = trainer.step();
+  report.skipped_steps = trainer.skipped_steps();
+  report.resumed_from_step = resumed_from;
+  report.training_views = data.train.size();
+  report.heldout_views = data.heldout.size();
+  report.heldout_pixels_per_view = options.final_eval_pixels;
+  if (!psnrs.empty()) report.heldout_psnr = Mean(psnrs);
+  for (size_t v = 0; v < psnrs.size(); ++v) report.heldout_per_view.push_back({data.heldout[v].name, psnrs[v]});
+  report.evaluations_during_training = {eval_log.count, eval_log.seconds, options.eval_pixels};
+  report.samples_per_ray_rendered = eval_stats.rays > 0 ? double(eval_stats.samples_evaluated) / eval_stats.rays : 0;
+  report.render_seconds_per_view = psnrs.empty() ? 0.0 : eval_stats.seconds / psnrs.size();
+  const NerfModel& model = trainer.model();
+  report.occupied_fraction = model.occupancy.OccupiedFraction();
+  report.field = model.field->Config();
+  report.trainer = {
+      trainer_options.march_step,     trainer_options.learning_rate,         trainer_options.distortion_weight,
+      trainer_options.batch_samples,  SceneSpaceName(trainer_options.space), trainer_options.appearance,
+      trainer_options.refine_cameras, trainer_options.error_sampling,        trainer_options.random_background};
+  report.appearance = AppearanceReport(trainer, data);
+  return report;
 }
 
 bool ModelIsFinite(NerfModel& model) {
@@ -336,20 +321,19 @@ void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptio
 
 // What a finished training writes besides the model: train_report.json, metrics.csv and psnr.png; returns the
 // report.
-nlohmann::json WriteTrainReport(const fs::path& out, Trainer& trainer, const TrainingSetup& setup,
-                                const std::vector<double>& psnrs, const std::vector<double>& fitted,
-                                const RenderStats& eval_stats, const RunState& state, int resumed_from,
-                                const EvalLog& eval_log) {
-  nlohmann::json report = TrainReport(trainer, setup.trainer, setup.options, setup.data, setup.heldout_split, psnrs,
-                                      eval_stats, state.train_seconds, resumed_from, eval_log);
-  report["heldout_psnr_fitted"] = fitted.empty() ? nlohmann::json(nullptr) : nlohmann::json(Mean(fitted));
-  report["heldout_psnr_fitted_is"] =
-      "each held-out photo's colour transform fitted (least squares) on its left half, PSNR on its right half (NeRF-W)";
-  report["appearance"] = AppearanceReport(trainer, setup.data);
+TrainReport WriteTrainReport(const fs::path& out, Trainer& trainer, const TrainingSetup& setup,
+                             const std::vector<double>& psnrs, const std::vector<double>& fitted,
+                             const RenderStats& eval_stats, const RunState& state, int resumed_from,
+                             const EvalLog& eval_log) {
+  TrainReport report =
+      MakeTrainReport(trainer, setup.trainer, setup.options, setup.data, psnrs, eval_stats, resumed_from, eval_log);
+  report.wall_seconds = state.train_seconds;
+  report.heldout_split = setup.heldout_split;
+  if (!fitted.empty()) report.heldout_psnr_fitted = Mean(fitted);
   std::vector<std::string> names;
   for (const TrainView& view : setup.data.train) names.push_back(view.name);
-  report["camera_refinement"] = CameraRefinementJson(names, trainer.camera_corrections());
-  WriteJsonAtomic(out / "train_report.json", report);
+  report.camera_refinement = CameraRefinementJson(names, trainer.camera_corrections());
+  WriteJsonAtomic(out / "train_report.json", report.ToJson());
   const std::string metrics = "wall_seconds,step,train_loss,heldout_psnr\n" + state.metrics;
   WriteFileAtomic(out / "metrics.csv", metrics);
   const PlotSeries curve = CsvSeries("held-out PSNR", metrics, 0, 3);
@@ -405,13 +389,13 @@ void TrainStage::Run(StageContext& context) const {
                 {"appearance", setup.trainer.appearance},
                 {"refine_cameras", setup.trainer.refine_cameras}};
   WriteOrExplain([&] { SaveModel(model, context.output_dir / "model.bin"); });
-  const nlohmann::json report =
+  const TrainReport report =
       WriteTrainReport(context.output_dir, trainer, setup, psnrs, fitted, eval_stats, state, resumed_from, eval_log);
-  context.summary = {
-      {"steps", trainer.step()}, {"train_seconds", state.train_seconds}, {"heldout_psnr", report["heldout_psnr"]}};
+  context.summary = {{"steps", trainer.step()},
+                     {"train_seconds", state.train_seconds},
+                     {"heldout_psnr", report.heldout_psnr ? nlohmann::json(*report.heldout_psnr) : nullptr}};
   LogInfo(format("train: {} steps in {:.1f} s; held-out PSNR {:.2f} dB over {} views ({:.1f} samples per ray)",
-                 trainer.step(), state.train_seconds, Mean(psnrs), psnrs.size(),
-                 report["samples_per_ray_rendered"].get<double>()));
+                 trainer.step(), state.train_seconds, Mean(psnrs), psnrs.size(), report.samples_per_ray_rendered));
 }
 
 }  // namespace p2n

@@ -223,8 +223,7 @@ TEST_CASE("SSIM of the splats' loss: 1 for the photo itself, its gradient agains
   }
   SsimLoss ssim;
   std::vector<double> same_gradient(render.size());
-  CHECK(ssim(photo.data(), photo.data(), kWidth, kHeight, kChannels, same_gradient.data()) ==
-        Approx(1).epsilon(1e-12));
+  CHECK(ssim(photo.data(), photo.data(), kWidth, kHeight, kChannels, same_gradient.data()) == Approx(1).epsilon(1e-12));
   for (double g : same_gradient) CHECK(std::abs(g) < 1e-12);  // the maximum
 
   const double value = ssim(render.data(), photo.data(), kWidth, kHeight, kChannels, gradient.data());

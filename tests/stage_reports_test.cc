@@ -12,6 +12,35 @@ namespace p2n::testing {
 namespace fs = std::filesystem;
 namespace {
 
+TrainReport SomeTrainReport() {
+  TrainReport report;
+  report.steps = 500;
+  report.skipped_steps = 1;
+  report.resumed_from_step = 200;
+  report.wall_seconds = 61.5;
+  report.training_views = 10;
+  report.heldout_views = 2;
+  report.heldout_split = "val";
+  report.heldout_pixels_per_view = 0;  // every pixel: "all"
+  report.heldout_psnr = 27.25;
+  report.heldout_psnr_fitted = 27.5;
+  report.heldout_per_view = {{"a.png", 27.0}, {"b.png", 27.5}};
+  report.evaluations_during_training = {6, 1.5, 4096};
+  report.samples_per_ray_rendered = 9.5;
+  report.render_seconds_per_view = 0.25;
+  report.occupied_fraction = 0.125;
+  report.field = {{"otype", "ngp"}};
+  report.trainer = {0.0135, 0.01, 0.002, 65536, "unbounded", true, true, false, false};
+  report.appearance = {true, 0.875, 1.125, {{"a.png", 0.875, std::vector<float>(12, 0.5f)}}};
+  report.camera_refinement = {{"enabled", true},
+                              {"rotation_degrees_median", 0.125},
+                              {"rotation_degrees_max", 0.25},
+                              {"shift_median", 0.001},
+                              {"shift_max", 0.002},
+                              {"per_view", nlohmann::json::array()}};
+  return report;
+}
+
 SplatReport SomeSplatReport() {
   SplatReport report;
   report.enabled = true;
@@ -89,6 +118,21 @@ std::string ErrorAfterEdit(const fs::path& file, const nlohmann::json& written, 
 
 TEST_CASE("Reports between stages read back exactly what was written", "[reports]") {
   TempDir dir;
+  const TrainReport train = SomeTrainReport();
+  WriteJsonAtomic(dir.path() / "train_report.json", train.ToJson());
+  const TrainReport train_read = TrainReport::Read(dir.path() / "train_report.json");
+  CHECK(train_read.ToJson() == train.ToJson());
+  CHECK(train_read.heldout_pixels_per_view == 0);
+  CHECK(train_read.refinement.enabled);
+  CHECK(train_read.refinement.rotation_degrees_max == 0.25);
+  CHECK(train_read.appearance.per_view.at(0).transform.size() == 12);
+  TrainReport plain = train;
+  plain.appearance = {};
+  plain.camera_refinement = {{"enabled", false}};
+  plain.heldout_psnr.reset();
+  WriteJsonAtomic(dir.path() / "train_report.json", plain.ToJson());
+  CHECK(TrainReport::Read(dir.path() / "train_report.json").ToJson() == plain.ToJson());
+
   const SplatReport splat = SomeSplatReport();
   WriteJsonAtomic(dir.path() / "splat_report.json", splat.ToJson());
   CHECK(SplatReport::Read(dir.path() / "splat_report.json").ToJson() == splat.ToJson());
@@ -117,6 +161,18 @@ TEST_CASE("Reports between stages read back exactly what was written", "[reports
 
 TEST_CASE("A damaged report names its file, the field and the stage to rerun", "[reports]") {
   TempDir dir;
+  const fs::path train = dir.path() / "train_report.json";
+  const nlohmann::json train_json = SomeTrainReport().ToJson();
+  CHECK_THAT(ErrorAfterEdit<TrainReport>(train, train_json, "/heldout_psnr", "good"),
+             Catch::Contains("train_report.json") && Catch::Contains("\"heldout_psnr\" must be a number, not string") &&
+                 Catch::Contains("photo2nerf train -w WORKSPACE --force"));
+  CHECK_THAT(ErrorAfterEdit<TrainReport>(train, train_json, "/evaluations_during_training/pixels_per_view", "some"),
+             Catch::Contains("\"evaluations_during_training.pixels_per_view\" must be \"all\" or a positive count"));
+  CHECK_THAT(ErrorAfterEdit<TrainReport>(train, train_json, "/camera_refinement/shift_max", nullptr),
+             Catch::Contains("\"camera_refinement.shift_max\" must be a number, not null"));
+  CHECK_THAT(ErrorAfterEdit<TrainReport>(train, train_json, "/appearance/per_view/0/transform", "identity"),
+             Catch::Contains("\"appearance.per_view[0].transform\" has the wrong type (string)"));
+
   const fs::path splat = dir.path() / "splat_report.json";
   const nlohmann::json splat_json = SomeSplatReport().ToJson();
   CHECK_THAT(ErrorAfterEdit<SplatReport>(splat, splat_json, "/near", "far"),
@@ -134,7 +190,8 @@ TEST_CASE("A damaged report names its file, the field and the stage to rerun", "
   const nlohmann::json eval_json = SomeEvalReport().ToJson();
   CHECK_THAT(ErrorAfterEdit<EvalReport>(eval, eval_json, "/views/1/psnr", nullptr),
              Catch::Contains("\"views[1].psnr\" must be a number, not null") && Catch::Contains("photo2nerf render"));
-  CHECK_THAT(ErrorAfterEdit<EvalReport>(eval, eval_json, "/views", "none"), Catch::Contains("\"views\" must be an array"));
+  CHECK_THAT(ErrorAfterEdit<EvalReport>(eval, eval_json, "/views", "none"),
+             Catch::Contains("\"views\" must be an array"));
   CHECK_THAT(ErrorAfterEdit<EvalReport>(eval, eval_json, "/psnr", "high"),
              Catch::Contains("\"psnr\" must be a number, not string"));
 
