@@ -133,25 +133,20 @@ std::string CamerasSection(const StageContext& context, const ImportedDataset& d
                            const std::string& heldout_split) {
   std::string html = "<h2>Cameras</h2>\n";
   const Stage* sfm_stage = context.runner->Find("sfm");
-  const nlohmann::json sfm = sfm_stage
-                                 ? ReadIfExists(context.workspace.StageDir(sfm_stage->folder()) / "sfm_report.json")
-                                 : nlohmann::json::object();
+  const fs::path sfm_report =
+      sfm_stage ? context.workspace.StageDir(sfm_stage->folder()) / "sfm_report.json" : fs::path();
   const std::string dataset_kind = SourceDatasetKind(context.upstream_dirs.at("poses") / "transforms.json");
-  if (!sfm.empty() && dataset_kind.empty()) {
+  if (!sfm_report.empty() && fs::exists(sfm_report) && dataset_kind.empty()) {
+    const SfmReport sfm = SfmReport::Read(sfm_report);
     html += format(
-        "<p>COLMAP {}: {} of {} images registered ({}), mean reprojection error {} px, {} sparse points, "
-        "mean track length {}, {} matching.</p>\n",
-        HtmlEscape(sfm.value("colmap_version", "")), Number(sfm["registered"]), Number(sfm["images_given"]),
-        format("{:.0f}%", sfm.value("registered_percent", 0.0)), Number(sfm["mean_reprojection_error_px"], 3),
-        Number(sfm["points"]), Number(sfm["mean_track_length"], 3), HtmlEscape(sfm.value("matcher", "")));
-    if (sfm.contains("steps")) {
-      html += "<table><tr><th>COLMAP step</th><th>wall time</th></tr>\n";
-      for (const nlohmann::json& step : sfm["steps"]) {
-        html += format("<tr><td>{}</td><td>{:.1f} s</td></tr>\n", HtmlEscape(step.value("step", "")),
-                       step.value("wall_seconds", 0.0));
-      }
-      html += "</table>\n";
-    }
+        "<p>COLMAP {}: {} of {} images registered ({:.0f}%), mean reprojection error {:.3g} px, {} sparse points, "
+        "mean track length {:.3g}, {} matching.</p>\n",
+        HtmlEscape(sfm.colmap_version), sfm.registered, sfm.images_given, sfm.registered_percent,
+        sfm.mean_reprojection_error_px, sfm.points, sfm.mean_track_length, HtmlEscape(sfm.matcher));
+    html += "<table><tr><th>COLMAP step</th><th>wall time</th></tr>\n";
+    for (const SfmReport::Step& step : sfm.steps)
+      html += format("<tr><td>{}</td><td>{:.1f} s</td></tr>\n", HtmlEscape(step.step), step.wall_seconds);
+    html += "</table>\n";
   } else {
     html += format("<p>Cameras imported from a {} dataset (no structure from motion needed).</p>\n",
                    HtmlEscape(dataset_kind));

@@ -14,6 +14,7 @@
 #include "stages/camera_geometry.h"
 #include "stages/colmap_flags.h"
 #include "stages/colmap_model.h"
+#include "stages/stage_reports.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -39,21 +40,19 @@ class StepRunner {
     const fs::path log = log_dir_ / (file + ".log");
     const SubprocessResult result = allow_failure ? RunSubprocess(argv, log, step) : CheckSubprocess(argv, log, step);
     last_ok_ = result.signal == 0 && result.exit_code == 0;
-    timings_.push_back({{"step", step},
-                        {"wall_seconds", result.wall_seconds},
-                        {"log", fs::relative(log, log_dir_.parent_path()).string()}});
+    timings_.push_back({step, fs::relative(log, log_dir_.parent_path()).string(), result.wall_seconds});
     ThrowIfCancelled();
     return log;
   }
   bool last_ok() const { return last_ok_; }
-  const nlohmann::json& timings() const { return timings_; }
+  const std::vector<SfmReport::Step>& timings() const { return timings_; }
 
  private:
   fs::path log_dir_;
   int total_;
   int index_ = 0;
   bool last_ok_ = true;
-  nlohmann::json timings_ = nlohmann::json::array();
+  std::vector<SfmReport::Step> timings_;
 };
 
 std::vector<std::string> ImageNames(const fs::path& folder) {
@@ -142,7 +141,7 @@ struct ColmapRun {
 
   // Runs the mapper; returns the folder of the model with the most registered images (COLMAP's exit code says
   // nothing about that) and lists every model in `models`. UserError when there is none.
-  fs::path MapLargestModel(size_t photos, nlohmann::json* models) const {
+  fs::path MapLargestModel(size_t photos, std::vector<SfmReport::Model>* models) const {
     const fs::path log = steps->Run("mapping",
                                     {options.colmap, "mapper", "--database_path", database().string(), "--image_path",
                                      images.string(), "--output_path", (out / "sparse").string(), "--random_seed", seed,
@@ -157,13 +156,13 @@ struct ColmapRun {
       }
       throw ExternalToolError(format("COLMAP's mapper failed; log: {}", log.string()));
     }
-    *models = nlohmann::json::array();
+    models->clear();
     fs::path chosen;
     size_t most = 0;
     for (const fs::directory_entry& entry : fs::directory_iterator(out / "sparse")) {
       if (!entry.is_directory()) continue;
       const size_t registered = ReadColmapModel(entry.path()).images.size();
-      models->push_back({{"path", fs::relative(entry.path(), out).string()}, {"registered", registered}});
+      models->push_back({fs::relative(entry.path(), out).string(), registered});
       if (registered > most) {
         most = registered;
         chosen = entry.path();
@@ -203,7 +202,7 @@ struct ColmapRun {
 
 // What sfm_report.json says of a model: registration, points, errors, and whether the cameras look at a common
 // point (a warning when not).
-nlohmann::json ModelReport(const ColmapModel& model, const std::vector<std::string>& names) {
+SfmReport ModelReport(const ColmapModel& model, const std::vector<std::string>& names) {
   std::set<std::string> registered_names;
   std::vector<Eigen::Vector3d> centres, axes;
   for (const auto& [id, image] : model.images) {
@@ -212,24 +211,23 @@ nlohmann::json ModelReport(const ColmapModel& model, const std::vector<std::stri
     centres.push_back(-world_from_cam * image.cam_from_world_translation);
     axes.push_back(world_from_cam.col(2));  // COLMAP cameras look along +z
   }
-  std::vector<std::string> left_out;
+  SfmReport report;
   for (const std::string& name : names) {
-    if (!registered_names.count(name)) left_out.push_back(name);
+    if (!registered_names.count(name)) report.left_out.push_back(name);
   }
   double error_sum = 0, observations = 0;
   for (const auto& [id, point] : model.points) {
     error_sum += point.error * point.track.size();
     observations += point.track.size();
   }
-  nlohmann::json report = {{"images_given", names.size()},
-                           {"registered", model.images.size()},
-                           {"registered_percent", 100.0 * model.images.size() / names.size()},
-                           {"left_out", left_out},
-                           {"points", model.points.size()},
-                           {"mean_reprojection_error_px", observations > 0 ? error_sum / observations : 0.0},
-                           {"mean_track_length", model.points.empty() ? 0.0 : observations / model.points.size()}};
+  report.images_given = names.size();
+  report.registered = model.images.size();
+  report.registered_percent = 100.0 * model.images.size() / names.size();
+  report.points = model.points.size();
+  report.mean_reprojection_error_px = observations > 0 ? error_sum / observations : 0.0;
+  report.mean_track_length = model.points.empty() ? 0.0 : observations / model.points.size();
   if (const auto focus = FindFocusPoint(centres, axes)) {
-    report["median_axis_to_focus_angle_deg"] = focus->median_angle_deg;
+    report.median_axis_to_focus_angle_deg = focus->median_angle_deg;
     if (focus->median_angle_deg > kSuspiciousFocusAngleDeg) {
       LogWarning(
           format("sfm: the cameras' optical axes miss their common focus point by a median {:.1f} degrees; "
@@ -241,18 +239,18 @@ nlohmann::json ModelReport(const ColmapModel& model, const std::vector<std::stri
 }
 
 // UserError when sfm_report.json's model registers less than sfm.min_registered of the photos.
-void CheckRegistered(const nlohmann::json& report, double min_registered) {
-  const double fraction = report.at("registered").get<double>() / report.at("images_given").get<double>();
+void CheckRegistered(const SfmReport& report, double min_registered) {
+  const double fraction = double(report.registered) / report.images_given;
   if (fraction >= min_registered) return;
-  const std::vector<std::string> left_out = report.at("left_out").get<std::vector<std::string>>();
   std::string listed;
-  for (size_t i = 0; i < left_out.size() && i < kMaxNamesListed; ++i) listed += (i ? ", " : "") + left_out[i];
-  if (left_out.size() > kMaxNamesListed) listed += format(" and {} more", left_out.size() - kMaxNamesListed);
+  for (size_t i = 0; i < report.left_out.size() && i < kMaxNamesListed; ++i)
+    listed += (i ? ", " : "") + report.left_out[i];
+  if (report.left_out.size() > kMaxNamesListed)
+    listed += format(" and {} more", report.left_out.size() - kMaxNamesListed);
   throw UserError(
       format("COLMAP registered only {} of {} photos ({:.0f}%, sfm.min_registered is {:.0f}%); left out: "
              "{}; {}",
-             report.at("registered").get<size_t>(), report.at("images_given").get<size_t>(), 100 * fraction,
-             100 * min_registered, listed, kAdvice));
+             report.registered, report.images_given, 100 * fraction, 100 * min_registered, listed, kAdvice));
 }
 
 }  // namespace
@@ -277,7 +275,8 @@ std::map<std::string, std::string> SfmStage::ExternalInputs(const Workspace& wor
 }
 
 void SfmStage::CheckResult(const fs::path& result_dir, const Config& config) const {
-  CheckRegistered(ReadJsonFile(result_dir / "sfm_report.json"), ReadOptions<SfmOptions>(config, "sfm").min_registered);
+  CheckRegistered(SfmReport::Read(result_dir / "sfm_report.json"),
+                  ReadOptions<SfmOptions>(config, "sfm").min_registered);
 }
 
 void SfmStage::Run(StageContext& context) const {
@@ -305,24 +304,24 @@ void SfmStage::Run(StageContext& context) const {
 
   colmap.ExtractFeatures(camera_per_size ? groups : decltype(groups){});
   colmap.Match(matcher);
-  nlohmann::json models;
+  std::vector<SfmReport::Model> models;
   const fs::path chosen = colmap.MapLargestModel(names.size(), &models);
   const fs::path model_dir = options.refine_principal_point ? colmap.RefinePrincipalPoint(chosen) : chosen;
   const ColmapModel model = ReadColmapModel(model_dir);
-  nlohmann::json report = ModelReport(model, names);
-  report.update({{"colmap_version", version.ToString()},
-                 {"matcher", matcher},
-                 {"models", models},
-                 {"chosen_model", fs::relative(chosen, out).string()},
-                 {"steps", steps.timings()}});
-  WriteJsonAtomic(out / "sfm_report.json", report);  // also for a run that fails the check below
+  SfmReport report = ModelReport(model, names);
+  report.colmap_version = version.ToString();
+  report.matcher = matcher;
+  report.models = models;
+  report.chosen_model = fs::relative(chosen, out).string();
+  report.steps = steps.timings();
+  WriteJsonAtomic(out / "sfm_report.json", report.ToJson());  // also for a run that fails the check below
   context.summary = {{"registered", model.images.size()}, {"images", names.size()}, {"points", model.points.size()}};
   LogInfo(format("sfm: {}/{} photos registered, {} points, mean reprojection error {:.2f} px", model.images.size(),
-                 names.size(), model.points.size(), report["mean_reprojection_error_px"].get<double>()));
+                 names.size(), model.points.size(), report.mean_reprojection_error_px));
   CheckRegistered(report, options.min_registered);
   colmap.Undistort(model_dir);
-  report["steps"] = steps.timings();
-  WriteJsonAtomic(out / "sfm_report.json", report);
+  report.steps = steps.timings();
+  WriteJsonAtomic(out / "sfm_report.json", report.ToJson());
 }
 
 }  // namespace p2n

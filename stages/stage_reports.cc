@@ -102,6 +102,62 @@ void ReadAppearance(const Fields& fields, TrainReport::Appearance* appearance) {
 
 }  // namespace
 
+nlohmann::json SfmReport::ToJson() const {
+  nlohmann::json models_json = nlohmann::json::array(), steps_json = nlohmann::json::array();
+  for (const Model& m : models) models_json.push_back({{"path", m.path}, {"registered", m.registered}});
+  for (const Step& step : steps)
+    steps_json.push_back({{"step", step.step}, {"wall_seconds", step.wall_seconds}, {"log", step.log}});
+  nlohmann::json json = {{"images_given", images_given},
+                         {"registered", registered},
+                         {"registered_percent", registered_percent},
+                         {"left_out", left_out},
+                         {"points", points},
+                         {"mean_reprojection_error_px", mean_reprojection_error_px},
+                         {"mean_track_length", mean_track_length},
+                         {"colmap_version", colmap_version},
+                         {"matcher", matcher},
+                         {"models", models_json},
+                         {"chosen_model", chosen_model},
+                         {"steps", steps_json}};
+  if (median_axis_to_focus_angle_deg) json["median_axis_to_focus_angle_deg"] = *median_axis_to_focus_angle_deg;
+  return json;
+}
+
+SfmReport SfmReport::Read(const fs::path& file) {
+  const nlohmann::json json = ReadJsonFile(file);
+  const Fields fields(json, file, "sfm");
+  SfmReport report;
+  fields.Get("images_given", &report.images_given);
+  fields.Get("registered", &report.registered);
+  fields.Get("registered_percent", &report.registered_percent);
+  fields.Get("left_out", &report.left_out);
+  fields.Get("points", &report.points);
+  fields.Get("mean_reprojection_error_px", &report.mean_reprojection_error_px);
+  fields.Get("mean_track_length", &report.mean_track_length);
+  fields.Get("median_axis_to_focus_angle_deg", &report.median_axis_to_focus_angle_deg);
+  fields.Get("colmap_version", &report.colmap_version);
+  fields.Get("matcher", &report.matcher);
+  fields.Get("chosen_model", &report.chosen_model);
+  if (!fields.At("models").is_array()) fields.Fail("models", "must be an array");
+  for (size_t i = 0; i < json["models"].size(); ++i) {
+    const Fields model = fields.Element("models", i);
+    Model& out = report.models.emplace_back();
+    model.Get("path", &out.path);
+    model.Get("registered", &out.registered);
+  }
+  if (!fields.At("steps").is_array()) fields.Fail("steps", "must be an array");
+  for (size_t i = 0; i < json["steps"].size(); ++i) {
+    const Fields step = fields.Element("steps", i);
+    Step& out = report.steps.emplace_back();
+    step.Get("step", &out.step);
+    step.Get("wall_seconds", &out.wall_seconds);
+    step.Get("log", &out.log);
+  }
+  if (report.images_given == 0 || report.registered > report.images_given)
+    fields.Fail("registered", "must be at most images_given, which must be positive");
+  return report;
+}
+
 nlohmann::json TrainReport::ToJson() const {
   nlohmann::json per_view = nlohmann::json::array();
   for (const ViewPsnr& v : heldout_per_view) per_view.push_back({{"view", v.view}, {"psnr", v.psnr}});

@@ -3,6 +3,7 @@
 // writes it with ToJson(), every reader reads it with Read(), so a field has one name and one type. A reader
 // meets a missing or mistyped field as a UserError that names the file and the field and says which stage to
 // rerun, never as an internal error at a distance.
+//   10_sfm/sfm_report.json       SfmReport   (the sfm stage's registration check, report)
 //   30_train/train_report.json   TrainReport (render, report)
 //   35_splat/splat_report.json   SplatReport (render, its view renderer, report, splat_bench)
 //   40_render/eval.json          EvalReport  (report, the run summary)
@@ -17,6 +18,28 @@
 #include <nlohmann/json.hpp>
 
 namespace p2n {
+
+struct SfmReport {
+  size_t images_given = 0, registered = 0, points = 0;
+  double registered_percent = 0;
+  std::vector<std::string> left_out;  // photos COLMAP did not register
+  double mean_reprojection_error_px = 0, mean_track_length = 0;
+  std::optional<double> median_axis_to_focus_angle_deg;  // none when the cameras have no common focus point
+  std::string colmap_version, matcher, chosen_model;
+  struct Model {
+    std::string path;  // relative to 10_sfm/
+    size_t registered = 0;
+  };
+  std::vector<Model> models;  // every model COLMAP's mapper made
+  struct Step {
+    std::string step, log;
+    double wall_seconds = 0;
+  };
+  std::vector<Step> steps;  // the COLMAP runs in order
+
+  nlohmann::json ToJson() const;
+  static SfmReport Read(const std::filesystem::path& file);
+};
 
 struct TrainReport {
   int steps = 0, skipped_steps = 0, resumed_from_step = 0;

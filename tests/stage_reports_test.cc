@@ -12,6 +12,24 @@ namespace p2n::testing {
 namespace fs = std::filesystem;
 namespace {
 
+SfmReport SomeSfmReport() {
+  SfmReport report;
+  report.images_given = 12;
+  report.registered = 11;
+  report.registered_percent = 100.0 * 11 / 12;
+  report.left_out = {"blurred.jpg"};
+  report.points = 4000;
+  report.mean_reprojection_error_px = 0.75;
+  report.mean_track_length = 4.5;
+  report.median_axis_to_focus_angle_deg = 2.5;
+  report.colmap_version = "3.8";
+  report.matcher = "exhaustive";
+  report.chosen_model = "sparse/0";
+  report.models = {{"sparse/0", 11}, {"sparse/1", 3}};
+  report.steps = {{"feature extraction", "logs/feature_extraction.log", 4.5}, {"mapping", "logs/mapping.log", 9}};
+  return report;
+}
+
 TrainReport SomeTrainReport() {
   TrainReport report;
   report.steps = 500;
@@ -118,6 +136,16 @@ std::string ErrorAfterEdit(const fs::path& file, const nlohmann::json& written, 
 
 TEST_CASE("Reports between stages read back exactly what was written", "[reports]") {
   TempDir dir;
+  const SfmReport sfm = SomeSfmReport();
+  WriteJsonAtomic(dir.path() / "sfm_report.json", sfm.ToJson());
+  const SfmReport sfm_read = SfmReport::Read(dir.path() / "sfm_report.json");
+  CHECK(sfm_read.ToJson() == sfm.ToJson());
+  CHECK(sfm_read.left_out == std::vector<std::string>{"blurred.jpg"});
+  SfmReport unfocused = sfm;
+  unfocused.median_axis_to_focus_angle_deg.reset();
+  WriteJsonAtomic(dir.path() / "sfm_report.json", unfocused.ToJson());
+  CHECK_FALSE(SfmReport::Read(dir.path() / "sfm_report.json").median_axis_to_focus_angle_deg.has_value());
+
   const TrainReport train = SomeTrainReport();
   WriteJsonAtomic(dir.path() / "train_report.json", train.ToJson());
   const TrainReport train_read = TrainReport::Read(dir.path() / "train_report.json");
@@ -161,6 +189,15 @@ TEST_CASE("Reports between stages read back exactly what was written", "[reports
 
 TEST_CASE("A damaged report names its file, the field and the stage to rerun", "[reports]") {
   TempDir dir;
+  const fs::path sfm = dir.path() / "sfm_report.json";
+  const nlohmann::json sfm_json = SomeSfmReport().ToJson();
+  CHECK_THAT(ErrorAfterEdit<SfmReport>(sfm, sfm_json, "/registered", 13),
+             Catch::Contains("\"registered\" must be at most images_given") && Catch::Contains("photo2nerf sfm"));
+  CHECK_THAT(ErrorAfterEdit<SfmReport>(sfm, sfm_json, "/left_out", "none"),
+             Catch::Contains("\"left_out\" has the wrong type (string)"));
+  CHECK_THAT(ErrorAfterEdit<SfmReport>(sfm, sfm_json, "/steps/1/wall_seconds", "long"),
+             Catch::Contains("\"steps[1].wall_seconds\" must be a number, not string"));
+
   const fs::path train = dir.path() / "train_report.json";
   const nlohmann::json train_json = SomeTrainReport().ToJson();
   CHECK_THAT(ErrorAfterEdit<TrainReport>(train, train_json, "/heldout_psnr", "good"),
