@@ -33,9 +33,13 @@ class Fields {
     Convert(key, json_.at(key), &converted);
     *value = converted;
   }
-  // Element `i` of the array at `key` (an object), to read further fields from.
-  Fields Element(const char* key, size_t i) const {
-    return Fields(json_.at(key).at(i), file_, stage_, format("{}{}[{}].", prefix_, key, i));
+  // Calls read(fields of the element) for each element of the array at `key`, in order.
+  template <class Read>
+  void ForEach(const char* key, Read read) const {
+    const nlohmann::json& array = At(key);
+    if (!array.is_array()) Fail(key, "must be an array");
+    for (size_t i = 0; i < array.size(); ++i)
+      read(Fields(array[i], file_, stage_, format("{}{}[{}].", prefix_, key, i)));
   }
   // The object at `key`, to read further fields from.
   Fields Object(const char* key) const {
@@ -89,15 +93,12 @@ void ReadAppearance(const Fields& fields, TrainReport::Appearance* appearance) {
   if (!appearance->enabled) return;
   fields.Get("gain_min", &appearance->gain_min);
   fields.Get("gain_max", &appearance->gain_max);
-  const nlohmann::json& views = fields.At("per_view");
-  if (!views.is_array()) fields.Fail("per_view", "must be an array");
-  for (size_t i = 0; i < views.size(); ++i) {
-    const Fields view = fields.Element("per_view", i);
+  fields.ForEach("per_view", [&](const Fields& view) {
     TrainReport::AppearanceView& out = appearance->per_view.emplace_back();
     view.Get("view", &out.view);
     view.Get("gain", &out.gain);
     view.Get("transform", &out.transform);
-  }
+  });
 }
 
 }  // namespace
@@ -138,21 +139,17 @@ SfmReport SfmReport::Read(const fs::path& file) {
   fields.Get("colmap_version", &report.colmap_version);
   fields.Get("matcher", &report.matcher);
   fields.Get("chosen_model", &report.chosen_model);
-  if (!fields.At("models").is_array()) fields.Fail("models", "must be an array");
-  for (size_t i = 0; i < json["models"].size(); ++i) {
-    const Fields model = fields.Element("models", i);
+  fields.ForEach("models", [&](const Fields& model) {
     Model& out = report.models.emplace_back();
     model.Get("path", &out.path);
     model.Get("registered", &out.registered);
-  }
-  if (!fields.At("steps").is_array()) fields.Fail("steps", "must be an array");
-  for (size_t i = 0; i < json["steps"].size(); ++i) {
-    const Fields step = fields.Element("steps", i);
+  });
+  fields.ForEach("steps", [&](const Fields& step) {
     Step& out = report.steps.emplace_back();
     step.Get("step", &out.step);
     step.Get("wall_seconds", &out.wall_seconds);
     step.Get("log", &out.log);
-  }
+  });
   if (report.images_given == 0 || report.registered > report.images_given)
     fields.Fail("registered", "must be at most images_given, which must be positive");
   return report;
@@ -214,13 +211,11 @@ TrainReport TrainReport::Read(const fs::path& file) {
   fields.Get("heldout_views", &report.heldout_views);
   fields.Get("heldout_split", &report.heldout_split);
   report.heldout_pixels_per_view = ReadPixelsPerView(fields, "heldout_pixels_per_view");
-  if (!fields.At("heldout_per_view").is_array()) fields.Fail("heldout_per_view", "must be an array");
-  for (size_t i = 0; i < json["heldout_per_view"].size(); ++i) {
-    const Fields view = fields.Element("heldout_per_view", i);
+  fields.ForEach("heldout_per_view", [&](const Fields& view) {
     ViewPsnr& score = report.heldout_per_view.emplace_back();
     view.Get("view", &score.view);
     view.Get("psnr", &score.psnr);
-  }
+  });
   fields.Get("heldout_psnr_fitted", &report.heldout_psnr_fitted);
   const Fields evaluations = fields.Object("evaluations_during_training");
   evaluations.Get("count", &report.evaluations_during_training.count);
@@ -342,9 +337,7 @@ EvalReport EvalReport::Read(const fs::path& file) {
   EvalReport report;
   fields.Get("split", &report.split);
   fields.Get("source", &report.source);
-  if (!fields.At("views").is_array()) fields.Fail("views", "must be an array");
-  for (size_t i = 0; i < json["views"].size(); ++i) {
-    const Fields view = fields.Element("views", i);
+  fields.ForEach("views", [&](const Fields& view) {
     HeldoutScore& score = report.views.emplace_back();
     view.Get("view", &score.view);
     view.Get("render", &score.render);
@@ -353,7 +346,7 @@ EvalReport EvalReport::Read(const fs::path& file) {
     view.Get("psnr", &score.psnr);
     view.Get("ssim", &score.ssim);
     view.Get("seconds", &score.seconds);
-  }
+  });
   fields.Get("psnr", &report.psnr);
   fields.Get("ssim", &report.ssim);
   fields.Get("seconds_per_view", &report.seconds_per_view);
