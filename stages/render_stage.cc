@@ -231,7 +231,7 @@ PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& datas
   report.depth_png_max = depth_max;
   if (video) {
     video->Close();
-    report.video = PathReport::Video{"video.mp4", video->codec(), options.fps};
+    report.video = PathVideo{"video.mp4", video->codec(), options.fps};
   }
   return report;
 }

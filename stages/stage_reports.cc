@@ -386,7 +386,7 @@ PathReport PathReport::Read(const fs::path& render_report) {
   fields.Get("depth_png_max", &report.depth_png_max);
   if (fields.Has("video")) {
     const Fields video = fields.Object("video");
-    PathReport::Video& out = report.video.emplace();
+    PathVideo& out = report.video.emplace();
     video.Get("file", &out.file);
     video.Get("codec", &out.codec);
     video.Get("fps", &out.fps);

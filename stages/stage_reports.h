@@ -128,17 +128,20 @@ struct EvalReport {
   static EvalReport Read(const std::filesystem::path& file);
 };
 
+// The video of a path (outside PathReport: clang cannot tell whether a nested struct with member initialisers is
+// constructible while the struct around it is incomplete, so std::optional of one fails to build).
+struct PathVideo {
+  std::string file, codec;
+  double fps = 0;
+};
+
 struct PathReport {
   std::string source, kind;  // field | splats; orbit | spiral | file
   int frames = 0, width = 0, height = 0;
   double seconds_per_frame = 0, frames_per_second = 0;
   std::optional<double> samples_per_ray;  // none from the splats
   double depth_png_max = 0;               // the depth that 65535 stands for in the depth PNGs
-  struct Video {
-    std::string file, codec;
-    double fps = 0;
-  };
-  std::optional<Video> video;  // none when no encoder could write one
+  std::optional<PathVideo> video;         // none when no encoder could write one
 
   // render_report.json holds {"path": ToJson()}.
   nlohmann::json ToJson() const;

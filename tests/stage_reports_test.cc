@@ -109,7 +109,7 @@ PathReport SomePathReport() {
   report.frames_per_second = 2;
   report.samples_per_ray = 7.5;
   report.depth_png_max = 6.25;
-  report.video = PathReport::Video{"video.mp4", "avc1", 24};
+  report.video = PathVideo{"video.mp4", "avc1", 24};
   return report;
 }
 
