@@ -15,6 +15,7 @@
 #include "pipeline/hash.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
+#include "stages/stage_reports.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -32,27 +33,12 @@ fs::path InputFolder(const Workspace& workspace) {
   return *workspace.input();
 }
 
-struct IngestedImage {
-  std::string name;    // output file name inside images/
-  std::string source;  // input file name
-  int width = 0, height = 0, channels = 0;
-  int source_width = 0, source_height = 0;
-  int orientation = 1;
-  bool from_cmyk = false;
-  std::string fingerprint;
-};
-
-struct Skipped {
-  std::string file;
-  std::string reason;
-};
-
 // Decodes one photo and writes what later stages read. Files that need no change are copied byte for byte.
-std::variant<IngestedImage, Skipped> IngestOne(const fs::path& source, const fs::path& images_dir,
-                                               const IngestOptions& options) {
+std::variant<IngestedImage, SkippedPhoto> IngestOne(const fs::path& source, const fs::path& images_dir,
+                                                    const IngestOptions& options) {
   const std::string file = source.filename().string();
   ReadImageResult read = ReadImage(source);
-  if (!read.ok()) return Skipped{file, read.error};
+  if (!read.ok()) return SkippedPhoto{file, read.error};
   IngestedImage out;
   out.source = file;
   out.orientation = read.orientation;
@@ -93,17 +79,15 @@ std::variant<IngestedImage, Skipped> IngestOne(const fs::path& source, const fs:
 }
 
 // UserError when the report counts fewer usable images than ingest.min_images.
-void CheckImageCount(const nlohmann::json& report, int min_images) {
-  const size_t count = report.at("images").size();
+void CheckImageCount(const IngestReport& report, int min_images) {
+  const size_t count = report.images.size();
   if (static_cast<int>(count) >= min_images) return;
   size_t duplicates = 0;
-  for (const nlohmann::json& skip : report.at("skipped")) {
-    duplicates += skip.at("reason").get<std::string>().rfind(kDuplicateReason, 0) == 0;
-  }
+  for (const SkippedPhoto& skip : report.skipped) duplicates += skip.reason.rfind(kDuplicateReason, 0) == 0;
   throw UserError(
       format("only {} usable images in '{}' ({} skipped{}, see the warnings above); photo2nerf needs at "
              "least {} (ingest.min_images): add more photos of the scene, taken from different places",
-             count, report.at("input_folder").get<std::string>(), report.at("skipped").size(),
+             count, report.input_folder, report.skipped.size(),
              duplicates ? format(", {} of them copies of another photo", duplicates) : "", min_images));
 }
 
@@ -161,7 +145,7 @@ std::map<std::string, std::string> IngestStage::ExternalInputs(const Workspace& 
 
 void IngestStage::CheckResult(const fs::path& result_dir, const Config& config) const {
   const IngestOptions options = ReadOptions<IngestOptions>(config, "ingest");
-  CheckImageCount(ReadJsonFile(result_dir / "ingest_report.json"), options.min_images);
+  CheckImageCount(IngestReport::Read(result_dir / "ingest_report.json"), options.min_images);
 }
 
 void IngestStage::Run(StageContext& context) const {
@@ -171,7 +155,7 @@ void IngestStage::Run(StageContext& context) const {
   const fs::path images_dir = context.output_dir / "images";
   fs::create_directories(images_dir);
 
-  std::vector<std::variant<IngestedImage, Skipped>> results(photos.size());
+  std::vector<std::variant<IngestedImage, SkippedPhoto>> results(photos.size());
   {
     Progress progress("ingest: decoding", static_cast<int64_t>(photos.size()), "images");
     tbb::parallel_for(size_t{0}, photos.size(), [&](size_t i) {
@@ -182,14 +166,15 @@ void IngestStage::Run(StageContext& context) const {
   }
   ThrowIfCancelled();
 
-  nlohmann::json images = nlohmann::json::array(), skipped = nlohmann::json::array();
+  IngestReport report;
+  report.input_folder = folder.string();
   std::set<std::string> names;
   std::map<std::string, std::string> first_with_fingerprint;
   std::set<std::pair<int, int>> sizes;
   for (const auto& result : results) {
-    if (const Skipped* skip = std::get_if<Skipped>(&result)) {
+    if (const SkippedPhoto* skip = std::get_if<SkippedPhoto>(&result)) {
       LogWarning(format("ingest: skipped {}: {}", skip->file, skip->reason));
-      skipped.push_back({{"file", skip->file}, {"reason", skip->reason}});
+      report.skipped.push_back(*skip);
       continue;
     }
     const IngestedImage& image = std::get<IngestedImage>(result);
@@ -204,30 +189,20 @@ void IngestStage::Run(StageContext& context) const {
       fs::remove(images_dir / image.name);
       const std::string reason = kDuplicateReason + it->second;
       LogWarning(format("ingest: skipped {}: {}", image.source, reason));
-      skipped.push_back({{"file", image.source}, {"reason", reason}});
+      report.skipped.push_back({image.source, reason});
       continue;
     }
     sizes.insert({image.width, image.height});
-    images.push_back({{"name", image.name},
-                      {"source", image.source},
-                      {"width", image.width},
-                      {"height", image.height},
-                      {"channels", image.channels},
-                      {"source_width", image.source_width},
-                      {"source_height", image.source_height},
-                      {"exif_orientation", image.orientation},
-                      {"from_cmyk", image.from_cmyk},
-                      {"fingerprint", image.fingerprint}});
+    report.images.push_back(image);
   }
   if (sizes.size() > 1) {
     LogWarning(format("ingest: the photos have {} different sizes; sfm will give each size a camera of its own",
                       sizes.size()));
   }
-  const nlohmann::json report = {{"input_folder", folder.string()}, {"images", images}, {"skipped", skipped}};
-  WriteJsonAtomic(context.output_dir / "ingest_report.json", report);
+  WriteJsonAtomic(context.output_dir / "ingest_report.json", report.ToJson());
   CheckImageCount(report, options.min_images);
-  context.summary = {{"images", images.size()}, {"skipped", skipped.size()}};
-  LogInfo(format("ingest: {} images, {} skipped", images.size(), skipped.size()));
+  context.summary = {{"images", report.images.size()}, {"skipped", report.skipped.size()}};
+  LogInfo(format("ingest: {} images, {} skipped", report.images.size(), report.skipped.size()));
 }
 
 }  // namespace p2n

@@ -66,10 +66,9 @@ std::vector<std::string> ImageNames(const fs::path& folder) {
 
 // The ingested images' names by image size (ingest's report lists each image's size).
 std::map<std::pair<int, int>, std::vector<std::string>> ImagesBySize(const fs::path& ingest_dir) {
-  const nlohmann::json report = ReadJsonFile(ingest_dir / "ingest_report.json");
   std::map<std::pair<int, int>, std::vector<std::string>> groups;
-  for (const auto& image : report["images"]) {
-    groups[{image["width"].get<int>(), image["height"].get<int>()}].push_back(image["name"].get<std::string>());
+  for (const IngestedImage& image : IngestReport::Read(ingest_dir / "ingest_report.json").images) {
+    groups[{image.width, image.height}].push_back(image.name);
   }
   return groups;
 }

@@ -103,6 +103,51 @@ void ReadAppearance(const Fields& fields, TrainReport::Appearance* appearance) {
 
 }  // namespace
 
+nlohmann::json IngestReport::ToJson() const {
+  nlohmann::json images_json = nlohmann::json::array(), skipped_json = nlohmann::json::array();
+  for (const IngestedImage& image : images) {
+    images_json.push_back({{"name", image.name},
+                           {"source", image.source},
+                           {"width", image.width},
+                           {"height", image.height},
+                           {"channels", image.channels},
+                           {"source_width", image.source_width},
+                           {"source_height", image.source_height},
+                           {"exif_orientation", image.orientation},
+                           {"from_cmyk", image.from_cmyk},
+                           {"fingerprint", image.fingerprint}});
+  }
+  for (const SkippedPhoto& skip : skipped) skipped_json.push_back({{"file", skip.file}, {"reason", skip.reason}});
+  return {{"input_folder", input_folder}, {"images", images_json}, {"skipped", skipped_json}};
+}
+
+IngestReport IngestReport::Read(const fs::path& file) {
+  const nlohmann::json json = ReadJsonFile(file);
+  const Fields fields(json, file, "ingest");
+  IngestReport report;
+  fields.Get("input_folder", &report.input_folder);
+  fields.ForEach("images", [&](const Fields& image) {
+    IngestedImage& out = report.images.emplace_back();
+    image.Get("name", &out.name);
+    image.Get("source", &out.source);
+    image.Get("width", &out.width);
+    image.Get("height", &out.height);
+    image.Get("channels", &out.channels);
+    image.Get("source_width", &out.source_width);
+    image.Get("source_height", &out.source_height);
+    image.Get("exif_orientation", &out.orientation);
+    image.Get("from_cmyk", &out.from_cmyk);
+    image.Get("fingerprint", &out.fingerprint);
+    if (out.width < 1 || out.height < 1) image.Fail("width", "and height must be positive");
+  });
+  fields.ForEach("skipped", [&](const Fields& skip) {
+    SkippedPhoto& out = report.skipped.emplace_back();
+    skip.Get("file", &out.file);
+    skip.Get("reason", &out.reason);
+  });
+  return report;
+}
+
 nlohmann::json SfmReport::ToJson() const {
   nlohmann::json models_json = nlohmann::json::array(), steps_json = nlohmann::json::array();
   for (const Model& m : models) models_json.push_back({{"path", m.path}, {"registered", m.registered}});

@@ -3,6 +3,7 @@
 // writes it with ToJson(), every reader reads it with Read(), so a field has one name and one type. A reader
 // meets a missing or mistyped field as a UserError that names the file and the field and says which stage to
 // rerun, never as an internal error at a distance.
+//   00_ingest/ingest_report.json IngestReport (its image-count check, the sfm stage's cameras by image size)
 //   10_sfm/sfm_report.json       SfmReport   (the sfm stage's registration check, report)
 //   30_train/train_report.json   TrainReport (render, report)
 //   35_splat/splat_report.json   SplatReport (render, its view renderer, report, splat_bench)
@@ -18,6 +19,31 @@
 #include <nlohmann/json.hpp>
 
 namespace p2n {
+
+// One photo as ingest wrote it to images/.
+struct IngestedImage {
+  std::string name;    // output file name inside images/
+  std::string source;  // input file name
+  int width = 0, height = 0, channels = 0;
+  int source_width = 0, source_height = 0;
+  int orientation = 1;  // EXIF (written "exif_orientation")
+  bool from_cmyk = false;
+  std::string fingerprint;  // of the decoded pixels: copies of one photo share it
+};
+
+// A file ingest left out, and why.
+struct SkippedPhoto {
+  std::string file, reason;
+};
+
+struct IngestReport {
+  std::string input_folder;
+  std::vector<IngestedImage> images;
+  std::vector<SkippedPhoto> skipped;
+
+  nlohmann::json ToJson() const;
+  static IngestReport Read(const std::filesystem::path& file);
+};
 
 struct SfmReport {
   size_t images_given = 0, registered = 0, points = 0;

@@ -12,6 +12,15 @@ namespace p2n::testing {
 namespace fs = std::filesystem;
 namespace {
 
+IngestReport SomeIngestReport() {
+  IngestReport report;
+  report.input_folder = "/photos";
+  report.images = {{"a.png", "a.jpg", 800, 600, 3, 4000, 3000, 6, false, "f1"},
+                   {"b.png", "b.tif", 800, 600, 3, 800, 600, 1, true, "f2"}};
+  report.skipped = {{"c.jpg", "not an image"}};
+  return report;
+}
+
 SfmReport SomeSfmReport() {
   SfmReport report;
   report.images_given = 12;
@@ -136,6 +145,13 @@ std::string ErrorAfterEdit(const fs::path& file, const nlohmann::json& written, 
 
 TEST_CASE("Reports between stages read back exactly what was written", "[reports]") {
   TempDir dir;
+  const IngestReport ingest = SomeIngestReport();
+  WriteJsonAtomic(dir.path() / "ingest_report.json", ingest.ToJson());
+  const IngestReport ingest_read = IngestReport::Read(dir.path() / "ingest_report.json");
+  CHECK(ingest_read.ToJson() == ingest.ToJson());
+  CHECK(ingest_read.images.at(0).orientation == 6);
+  CHECK(ingest_read.images.at(1).from_cmyk);
+
   const SfmReport sfm = SomeSfmReport();
   WriteJsonAtomic(dir.path() / "sfm_report.json", sfm.ToJson());
   const SfmReport sfm_read = SfmReport::Read(dir.path() / "sfm_report.json");
@@ -189,6 +205,14 @@ TEST_CASE("Reports between stages read back exactly what was written", "[reports
 
 TEST_CASE("A damaged report names its file, the field and the stage to rerun", "[reports]") {
   TempDir dir;
+  const fs::path ingest = dir.path() / "ingest_report.json";
+  const nlohmann::json ingest_json = SomeIngestReport().ToJson();
+  CHECK_THAT(
+      ErrorAfterEdit<IngestReport>(ingest, ingest_json, "/images/1/width", 0),
+      Catch::Contains("\"images[1].width\" and height must be positive") && Catch::Contains("photo2nerf ingest"));
+  CHECK_THAT(ErrorAfterEdit<IngestReport>(ingest, ingest_json, "/skipped/0/reason", 7),
+             Catch::Contains("\"skipped[0].reason\" has the wrong type (number)"));
+
   const fs::path sfm = dir.path() / "sfm_report.json";
   const nlohmann::json sfm_json = SomeSfmReport().ToJson();
   CHECK_THAT(ErrorAfterEdit<SfmReport>(sfm, sfm_json, "/registered", 13),
