@@ -22,6 +22,12 @@ nlohmann::json ReadIfExists(const fs::path& file) {
   return fs::exists(file) ? ReadJsonFile(file) : nlohmann::json::object();
 }
 
+// A typed report (stage_reports.h), or none when the file is not there.
+template <class Report>
+std::optional<Report> ReadReportIfExists(const fs::path& file) {
+  return fs::exists(file) ? std::optional(Report::Read(file)) : std::nullopt;
+}
+
 // A JSON value as text: floats with `digits` significant digits.
 std::string Number(const nlohmann::json& value, int digits = 4) {
   if (value.is_number_float()) return format("{:.{}g}", value.get<double>(), digits);
@@ -38,7 +44,7 @@ std::string Card(const std::string& value, const std::string& label) {
                 HtmlEscape(value), HtmlEscape(label));
 }
 
-std::string TrainingSection(const fs::path& train_dir) {
+std::string TrainingSection(const fs::path& train_dir, const std::optional<TrainReport>& train) {
   const std::string metrics = ReadTextFile(train_dir / "metrics.csv");
   std::string html = "<h2>Training: error against run time</h2>\n<div class=\"plots\">\n";
   html += SvgLinePlot({"held-out PSNR against training time", "training time (s)", "PSNR (dB)"},
@@ -46,8 +52,8 @@ std::string TrainingSection(const fs::path& train_dir) {
   html += SvgLinePlot({"training loss against training time", "training time (s)", "loss"},
                       {CsvSeries("training loss", metrics, 0, 2)});
   html += "</div>\n";
-  if (!fs::exists(train_dir / "train_report.json")) return html;
-  const TrainReport report = TrainReport::Read(train_dir / "train_report.json");
+  if (!train) return html;
+  const TrainReport& report = *train;
   const auto pixels = [](int count) { return count == 0 ? std::string("all") : format("{}", count); };
   html += format(
       "<p>{} steps in {:.1f} s of training; final held-out PSNR {} dB over {} {} views ({} pixels each); "
@@ -133,18 +139,18 @@ std::string CamerasSection(const StageContext& context, const ImportedDataset& d
                            const std::string& heldout_split) {
   std::string html = "<h2>Cameras</h2>\n";
   const Stage* sfm_stage = context.runner->Find("sfm");
-  const fs::path sfm_report =
-      sfm_stage ? context.workspace.StageDir(sfm_stage->folder()) / "sfm_report.json" : fs::path();
+  const std::optional<SfmReport> sfm =
+      sfm_stage ? ReadReportIfExists<SfmReport>(context.workspace.StageDir(sfm_stage->folder()) / "sfm_report.json")
+                : std::nullopt;
   const std::string dataset_kind = SourceDatasetKind(context.upstream_dirs.at("poses") / "transforms.json");
-  if (!sfm_report.empty() && fs::exists(sfm_report) && dataset_kind.empty()) {
-    const SfmReport sfm = SfmReport::Read(sfm_report);
+  if (sfm && dataset_kind.empty()) {
     html += format(
         "<p>COLMAP {}: {} of {} images registered ({:.0f}%), mean reprojection error {:.3g} px, {} sparse points, "
         "mean track length {:.3g}, {} matching.</p>\n",
-        HtmlEscape(sfm.colmap_version), sfm.registered, sfm.images_given, sfm.registered_percent,
-        sfm.mean_reprojection_error_px, sfm.points, sfm.mean_track_length, HtmlEscape(sfm.matcher));
+        HtmlEscape(sfm->colmap_version), sfm->registered, sfm->images_given, sfm->registered_percent,
+        sfm->mean_reprojection_error_px, sfm->points, sfm->mean_track_length, HtmlEscape(sfm->matcher));
     html += "<table><tr><th>COLMAP step</th><th>wall time</th></tr>\n";
-    for (const SfmReport::Step& step : sfm.steps)
+    for (const SfmReport::Step& step : sfm->steps)
       html += format("<tr><td>{}</td><td>{:.1f} s</td></tr>\n", HtmlEscape(step.step), step.wall_seconds);
     html += "</table>\n";
   } else {
@@ -170,7 +176,7 @@ std::string HeldoutSection(const fs::path& render_dir, const std::optional<EvalR
       "<h2>Held-out views</h2>\n<p>{} views of the {} split, never trained on: PSNR {} dB, SSIM {} "
       "on average. Error maps: mean absolute RGB error, black 0 to yellow {} and above.</p>\n",
       eval->views.size(), HtmlEscape(eval->split), Number(eval->psnr, 4), Number(eval->ssim, 3),
-      Number(std::optional<double>(eval->heat_map_max_error), 2));
+      format("{:.2g}", eval->heat_map_max_error));
   for (const HeldoutScore& view : eval->views) {
     const auto figure = [&](const std::string& uri, const std::string& caption) {
       return format("<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>", uri, HtmlEscape(caption),
@@ -196,11 +202,9 @@ void ReportStage::Run(StageContext& context) const {
   const fs::path render_dir = context.upstream_dirs.at("render"), export_dir = context.upstream_dirs.at("export");
   const ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
   const std::string heldout_split = HeldoutSplit(dataset);
-  const fs::path train_report = context.upstream_dirs.at("train") / "train_report.json";
   const std::optional<TrainReport> train =
-      fs::exists(train_report) ? std::optional(TrainReport::Read(train_report)) : std::nullopt;
-  const std::optional<EvalReport> eval =
-      fs::exists(render_dir / "eval.json") ? std::optional(EvalReport::Read(render_dir / "eval.json")) : std::nullopt;
+      ReadReportIfExists<TrainReport>(context.upstream_dirs.at("train") / "train_report.json");
+  const std::optional<EvalReport> eval = ReadReportIfExists<EvalReport>(render_dir / "eval.json");
   const nlohmann::json exported = ReadIfExists(export_dir / "export_report.json");
   const std::array<float, 3> background = DatasetBackground(transforms);
 
@@ -217,17 +221,16 @@ void ReportStage::Run(StageContext& context) const {
   if (exported.contains("mesh"))
     body += Card(format("{}", exported["mesh"]["triangles"].get<size_t>()), "mesh triangles");
   body += "</div>\n";
-  body += TrainingSection(context.upstream_dirs.at("train"));
+  body += TrainingSection(context.upstream_dirs.at("train"), train);
   body += SplatSection(context.upstream_dirs.at("splat"), train);
   body += StagesSection(context);
   body += CamerasSection(context, dataset, heldout_split);
   body += HeldoutSection(render_dir, eval, background, options.image_width);
-  if (fs::exists(render_dir / "render_report.json")) {
-    const PathReport path = PathReport::Read(render_dir / "render_report.json");
+  if (const std::optional<PathReport> path = ReadReportIfExists<PathReport>(render_dir / "render_report.json")) {
     const std::string how =
-        path.samples_per_ray ? format("{:.3g} samples per ray", *path.samples_per_ray) : "from the " + path.source;
+        path->samples_per_ray ? format("{:.3g} samples per ray", *path->samples_per_ray) : "from the " + path->source;
     body += format("<h2>New views</h2>\n<p>{} path, {} frames of {}x{} at {:.2f} frames per second ({}).</p>\n",
-                   HtmlEscape(path.kind), path.frames, path.width, path.height, path.frames_per_second, how);
+                   HtmlEscape(path->kind), path->frames, path->width, path->height, path->frames_per_second, how);
     const fs::path video = render_dir / "video.mp4";
     if (fs::exists(video)) {
       const std::string source = options.embed_video ? FileDataUri(video, "video/mp4") : "../40_render/video.mp4";

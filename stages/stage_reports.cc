@@ -42,10 +42,7 @@ class Fields {
       read(Fields(array[i], file_, stage_, format("{}{}[{}].", prefix_, key, i)));
   }
   // The object at `key`, to read further fields from.
-  Fields Object(const char* key) const {
-    if (!json_.contains(key)) Fail(key, "is missing");
-    return Fields(json_.at(key), file_, stage_, prefix_ + key + ".");
-  }
+  Fields Object(const char* key) const { return Fields(At(key), file_, stage_, prefix_ + key + "."); }
   bool Has(const char* key) const { return json_.contains(key) && !json_.at(key).is_null(); }
   const nlohmann::json& At(const char* key) const {
     if (!json_.contains(key)) Fail(key, "is missing");
