@@ -101,6 +101,10 @@ std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, doubl
 
 double DefaultStepScale(const NerfModel& model) { return model.space == SceneSpace::kBounded ? 0.5 : 1.0; }
 
+double StepScale(const NerfModel& model, const RenderOptions& options) {
+  return options.step_scale > 0 ? options.step_scale : DefaultStepScale(model);
+}
+
 double SamplingDistance(const NerfModel& model, const Ray& ray, double t) {
   switch (model.space) {
     case SceneSpace::kBounded:
@@ -126,7 +130,7 @@ void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std:
                 const RenderOptions& options, float* rgb, float* depth, float* opacity, RenderStats* stats) {
   options.Check();
   const auto start = std::chrono::steady_clock::now();
-  const double step = model.march_step * (options.step_scale > 0 ? options.step_scale : DefaultStepScale(model));
+  const double step = model.march_step * StepScale(model, options);
   std::atomic<size_t> marched{0}, evaluated{0};
   tbb::parallel_for(size_t{0}, (rays.size() + kChunkRays - 1) / kChunkRays, [&](size_t chunk) {
     FlushDenormalsOnThisThread();

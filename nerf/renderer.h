@@ -53,6 +53,9 @@ std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, doubl
 // of quality: +0.85 dB; a quarter adds about 0.2 dB more). In an unbounded one (real captures) it gains nothing
 // (fox and fern after 2 minutes: +0.00 and +0.03 dB), so the render samples at the training step there.
 double DefaultStepScale(const NerfModel& model);
+// The step RenderRays takes with `options`, as a multiple of the model's march step: options.step_scale, or
+// DefaultStepScale where it is 0.
+double StepScale(const NerfModel& model, const RenderOptions& options);
 
 // Distance along a ray (from its origin, world units) in the metric in which SampleRay's step is the same
 // everywhere, so that a length in it is a number of samples: the world distance in a bounded scene; in an

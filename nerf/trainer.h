@@ -109,7 +109,9 @@ class Trainer {
   StepResult StepOnBatch(const RayBatch& batch, double progress);
   RayBatch SampleBatch(int rays);
 
-  // PSNR of each held-out view, from `pixels_per_view` fixed random pixels of it (0: every pixel). `on_rays_done`
+  // PSNR of each held-out view, from `pixels_per_view` fixed random pixels of it (0: every pixel), rendered at the
+  // scene's default step (DefaultStepScale, as render.step_scale 0 renders; the render stage may be asked for
+  // another, so both reports state theirs). `on_rays_done`
   // is called as rays finish (from worker threads; an exception it throws, e.g. on Ctrl-C, stops the evaluation).
   // With `fitted`, also each view's PSNR as NeRF-W scores an image it never trained on: the colour transform
   // that best maps the render of the pixels in its left half onto the photo (least squares) applied to those in

@@ -350,6 +350,7 @@ void RenderStage::Run(StageContext& context) const {
   nlohmann::json summary = nlohmann::json::object();
   if (options.heldout) {
     EvalReport eval = RenderHeldout(renderer, dataset, context.output_dir);
+    if (renderer.source == "field") eval.step_scale = StepScale(model, render);
     eval.field_psnr = renderer.source == "field" ? eval.psnr : FieldPsnr(context);
     eval.splats_psnr = renderer.source == "splats"
                            ? eval.psnr

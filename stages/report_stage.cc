@@ -168,15 +168,27 @@ std::string CamerasSection(const StageContext& context, const ImportedDataset& d
   return html + SceneViewerHtml(cameras, points);
 }
 
+// Why the held-out PSNR here is not the training's: the render stage sampled the field at another spacing.
+std::string StepScaleNote(const EvalReport& eval, const std::optional<TrainReport>& train) {
+  if (!eval.step_scale || !train || !train->heldout_step_scale || !train->heldout_psnr ||
+      std::abs(*eval.step_scale - *train->heldout_step_scale) < 1e-9)
+    return "";
+  return format(
+      " The field was sampled at {:.3g} times its training step here (render.step_scale); the training's own "
+      "evaluation, {} dB, at {:.3g}.",
+      *eval.step_scale, Number(train->heldout_psnr), *train->heldout_step_scale);
+}
+
 std::string HeldoutSection(const fs::path& render_dir, const std::optional<EvalReport>& eval,
-                           const std::array<float, 3>& background, int image_width) {
+                           const std::optional<TrainReport>& train, const std::array<float, 3>& background,
+                           int image_width) {
   if (!eval || eval->views.empty())
     return "<h2>Held-out views</h2>\n<p>None rendered: no view was held out, or render.heldout is false.</p>\n";
   std::string html = format(
       "<h2>Held-out views</h2>\n<p>{} views of the {} split, never trained on: PSNR {} dB, SSIM {} "
-      "on average. Error maps: mean absolute RGB error, black 0 to yellow {} and above.</p>\n",
+      "on average.{} Error maps: mean absolute RGB error, black 0 to yellow {} and above.</p>\n",
       eval->views.size(), HtmlEscape(eval->split), Number(eval->psnr, 4), Number(eval->ssim, 3),
-      format("{:.2g}", eval->heat_map_max_error));
+      StepScaleNote(*eval, train), format("{:.2g}", eval->heat_map_max_error));
   for (const HeldoutScore& view : eval->views) {
     const auto figure = [&](const std::string& uri, const std::string& caption) {
       return format("<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>", uri, HtmlEscape(caption),
@@ -225,7 +237,7 @@ void ReportStage::Run(StageContext& context) const {
   body += SplatSection(context.upstream_dirs.at("splat"), train);
   body += StagesSection(context);
   body += CamerasSection(context, dataset, heldout_split);
-  body += HeldoutSection(render_dir, eval, background, options.image_width);
+  body += HeldoutSection(render_dir, eval, train, background, options.image_width);
   if (const std::optional<PathReport> path = ReadReportIfExists<PathReport>(render_dir / "render_report.json")) {
     const std::string how =
         path->samples_per_ray ? format("{:.3g} samples per ray", *path->samples_per_ray) : "from the " + path->source;

@@ -210,6 +210,7 @@ nlohmann::json TrainReport::ToJson() const {
   return {{"steps", steps},
           {"wall_seconds", wall_seconds},
           {"heldout_psnr", OrNull(heldout_psnr)},
+          {"heldout_step_scale", OrNull(heldout_step_scale)},
           {"heldout_views", heldout_views},
           {"heldout_split", heldout_split},
           {"heldout_pixels_per_view", PixelsPerView(heldout_pixels_per_view)},
@@ -250,6 +251,7 @@ TrainReport TrainReport::Read(const fs::path& file) {
   fields.Get("steps", &report.steps);
   fields.Get("wall_seconds", &report.wall_seconds);
   fields.Get("heldout_psnr", &report.heldout_psnr);
+  fields.Get("heldout_step_scale", &report.heldout_step_scale);
   fields.Get("heldout_views", &report.heldout_views);
   fields.Get("heldout_split", &report.heldout_split);
   report.heldout_pixels_per_view = ReadPixelsPerView(fields, "heldout_pixels_per_view");
@@ -368,6 +370,7 @@ nlohmann::json EvalReport::ToJson() const {
           {"ssim", OrNull(ssim)},
           {"seconds_per_view", seconds_per_view},
           {"samples_per_ray", OrNull(samples_per_ray)},
+          {"step_scale", OrNull(step_scale)},
           {"heat_map_max_error", heat_map_max_error},
           {"field_psnr", OrNull(field_psnr)},
           {"splats_psnr", OrNull(splats_psnr)}};
@@ -393,6 +396,7 @@ EvalReport EvalReport::Read(const fs::path& file) {
   fields.Get("ssim", &report.ssim);
   fields.Get("seconds_per_view", &report.seconds_per_view);
   fields.Get("samples_per_ray", &report.samples_per_ray);
+  fields.Get("step_scale", &report.step_scale);
   fields.Get("heat_map_max_error", &report.heat_map_max_error);
   fields.Get("field_psnr", &report.field_psnr);
   fields.Get("splats_psnr", &report.splats_psnr);

@@ -74,6 +74,9 @@ struct TrainReport {
   std::string heldout_split;
   int heldout_pixels_per_view = 0;     // 0: every pixel (written "all")
   std::optional<double> heldout_psnr;  // none without held-out views
+  // The sample spacing of that evaluation, as a multiple of the march step (render.step_scale's meaning); none in
+  // reports written before it was recorded.
+  std::optional<double> heldout_step_scale;
   // Each held-out photo scored as NeRF-W does (its colour transform fitted on its left half, PSNR on the right).
   std::optional<double> heldout_psnr_fitted;
   struct ViewPsnr {
@@ -147,6 +150,7 @@ struct EvalReport {
   std::optional<double> psnr, ssim;  // means over the views; none without views
   double seconds_per_view = 0;
   std::optional<double> samples_per_ray;  // none from the splats
+  std::optional<double> step_scale;       // the field's sample spacing (as TrainReport's); none from the splats
   double heat_map_max_error = 0;
   std::optional<double> field_psnr, splats_psnr;  // both sources' held-out PSNR, where known
 

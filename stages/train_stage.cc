@@ -8,6 +8,7 @@
 #include "nerf/float_image.h"
 #include "nerf/ngp_field.h"
 #include "nerf/plot.h"
+#include "nerf/renderer.h"
 #include "nerf/vanilla_field.h"
 #include "pipeline/cancel.h"
 #include "pipeline/errors.h"
@@ -147,6 +148,7 @@ TrainReport MakeTrainReport(Trainer& trainer, const TrainerOptions& trainer_opti
   report.heldout_views = data.heldout.size();
   report.heldout_pixels_per_view = options.final_eval_pixels;
   if (!psnrs.empty()) report.heldout_psnr = Mean(psnrs);
+  report.heldout_step_scale = DefaultStepScale(trainer.model());  // Trainer::HeldoutPsnr's
   for (size_t v = 0; v < psnrs.size(); ++v) report.heldout_per_view.push_back({data.heldout[v].name, psnrs[v]});
   report.evaluations_during_training = {eval_log.count, eval_log.seconds, options.eval_pixels};
   report.samples_per_ray_rendered = eval_stats.rays > 0 ? double(eval_stats.samples_evaluated) / eval_stats.rays : 0;

@@ -63,6 +63,7 @@ TEST_CASE("render stage: held-out PSNR and SSIM, path frames, depth, video, a wr
   REQUIRE(eval["views"].size() == 2);
   // The same model, cameras and pixels as training's final evaluation: the same PSNR (tiles reassembled right).
   CHECK(eval["psnr"].get<double>() == Approx(train["heldout_psnr"].get<double>()).margin(0.01));
+  CHECK(eval["step_scale"] == train["heldout_step_scale"]);
   CHECK(eval["ssim"].get<double>() > 0.2);
   CHECK(eval["ssim"].get<double>() <= 1.0);
   for (const nlohmann::json& view : eval["views"]) {

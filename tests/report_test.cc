@@ -92,6 +92,13 @@ TEST_CASE("report stage: a self-contained page with every section, drawn by head
   CHECK(PixelsNear(rgb, 0x1f, 0x77, 0xb4) > 300);  // the PSNR curve
   CHECK(PixelsNear(rgb, 0x1f, 0x5f, 0xbf) > 100);  // training cameras in the 3D view
   CHECK(PixelsNear(rgb, 0xe0, 0x70, 0x00) > 20);   // held-out cameras
+
+  // Rendered at another spacing than the training's evaluation, whose PSNR the page also shows: it says so.
+  CHECK_THAT(html, !Catch::Contains("times its training step"));
+  config.Set("render.step_scale", 0.25, "test");
+  setup.runner.Run(setup.workspace, config, {});
+  CHECK(ReadJsonFile(setup.dir / "ws" / "40_render" / "eval.json")["step_scale"] == 0.25);
+  CHECK_THAT(ReadText(page), Catch::Contains("sampled at 0.25 times its training step"));
 }
 
 TEST_CASE("report stage: a render drawn from the splats (no samples per ray) is reported as such", "[report]") {

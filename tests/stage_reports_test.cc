@@ -51,6 +51,7 @@ TrainReport SomeTrainReport() {
   report.heldout_pixels_per_view = 0;  // every pixel: "all"
   report.heldout_psnr = 27.25;
   report.heldout_psnr_fitted = 27.5;
+  report.heldout_step_scale = 0.5;
   report.heldout_per_view = {{"a.png", 27.0}, {"b.png", 27.5}};
   report.evaluations_during_training = {6, 1.5, 4096};
   report.samples_per_ray_rendered = 9.5;
@@ -174,6 +175,7 @@ TEST_CASE("Reports between stages read back exactly what was written", "[reports
   plain.appearance = {};
   plain.camera_refinement = {{"enabled", false}};
   plain.heldout_psnr.reset();
+  plain.heldout_step_scale.reset();  // as in reports written before it was recorded
   WriteJsonAtomic(dir.path() / "train_report.json", plain.ToJson());
   CHECK(TrainReport::Read(dir.path() / "train_report.json").ToJson() == plain.ToJson());
 
