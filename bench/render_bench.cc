@@ -25,8 +25,7 @@ int main(int argc, char** argv) {
   const std::filesystem::path ws = argv[1];
   const std::string out = argv[2];
   const size_t max_views = argc > 3 ? std::atoi(argv[3]) : 3;
-  std::string split;
-  p2n::TrainingData data = p2n::LoadTrainingData(ws / "20_poses" / "transforms.json", ws, &split);
+  p2n::TrainingData data = p2n::LoadTrainingData(p2n::LoadTransformsJson(ws / "20_poses" / "transforms.json", ws));
   if (data.heldout.size() > max_views) data.heldout.resize(max_views);
   const p2n::NerfModel model = p2n::LoadModel(ws / "30_train" / "model.bin");
   if (out == "--speed") {

@@ -25,14 +25,14 @@ int main(int argc, char** argv) {
   const size_t max_views = argc > 2 ? std::atoi(argv[2]) : 0;
   const int repeats = argc > 3 ? std::max(1, std::atoi(argv[3])) : 3;
   const std::filesystem::path transforms = ws / "20_poses" / "transforms.json";
-  std::string split;
-  p2n::TrainingData data = p2n::LoadTrainingData(transforms, ws, &split);
+  const p2n::ImportedDataset poses = p2n::LoadTransformsJson(transforms, ws);
+  p2n::TrainingData data = p2n::LoadTrainingData(poses);
   if (argc > 5 && std::string(argv[5]) == "train") data.heldout = data.train;
   if (max_views > 0 && data.heldout.size() > max_views) data.heldout.resize(max_views);
   const p2n::SplatReport report = p2n::SplatReport::Read(ws / "35_splat" / "splat_report.json");
-  const p2n::OutputFrame frame = p2n::MakeOutputFrame(report.frame, transforms);
+  const p2n::OutputFrame frame = p2n::MakeOutputFrame(report.frame, poses);
   const p2n::Gaussians<float> gaussians = p2n::ReadSplatPly(ws / "35_splat" / "splats.ply");
-  const std::array<float, 3> background = p2n::DatasetBackground(transforms);
+  const std::array<float, 3> background = poses.meta.Background();
   const double near = report.near;
 
   std::vector<double> seconds;

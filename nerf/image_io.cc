@@ -168,6 +168,15 @@ std::string PixelFingerprint(const OIIO::ImageBuf& image) {
   return sha1.digest();
 }
 
+std::pair<int, int> ImageFileSize(const std::filesystem::path& path, std::string* error) {
+  auto input = OIIO::ImageInput::open(path.string());
+  if (!input) {
+    *error = OIIO::geterror();
+    return {0, 0};
+  }
+  return {input->spec().width, input->spec().height};
+}
+
 std::string WriteImage(const OIIO::ImageBuf& image, const std::filesystem::path& path) {
   auto output = OIIO::ImageOutput::create(path.string());
   if (!output) return "cannot write '" + path.string() + "': " + OIIO::geterror();

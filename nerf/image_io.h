@@ -24,6 +24,9 @@ struct ReadImageResult {
 // Decodes the whole file. Any decoder complaint (a truncated JPEG decodes partly and only warns) is an error.
 ReadImageResult ReadImage(const std::filesystem::path& path);
 
+// The width and height the file declares (its header only); {0, 0} with `error` set when it cannot be read.
+std::pair<int, int> ImageFileSize(const std::filesystem::path& path, std::string* error);
+
 // Downsizes so that the longer side is at most `max_side` with an area filter; smaller images are returned as
 // they are. Float and half images are resized in float.
 OIIO::ImageBuf DownsizeToFit(const OIIO::ImageBuf& image, int max_side);

@@ -79,4 +79,9 @@ std::string LowerExtension(const fs::path& path) {
   return extension;
 }
 
+bool IsInside(const fs::path& root, const fs::path& path) {
+  const fs::path base = root.lexically_normal(), normal = path.lexically_normal();
+  return std::mismatch(base.begin(), base.end(), normal.begin(), normal.end()).first == base.end();
+}
+
 }  // namespace p2n

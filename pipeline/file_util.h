@@ -21,5 +21,7 @@ nlohmann::json ReadJsonFile(const std::filesystem::path& path);
 void SyncDirectory(const std::filesystem::path& path);
 // Lower-case extension without the dot ("JPG" -> "jpg").
 std::string LowerExtension(const std::filesystem::path& path);
+// Whether `path` lies inside the folder `root`, compared lexically (".." resolved, links not followed).
+bool IsInside(const std::filesystem::path& root, const std::filesystem::path& path);
 
 }  // namespace p2n

@@ -1,10 +1,9 @@
 #include "stages/dataset_import.h"
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cmath>
 
+#include "nerf/image_io.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
@@ -15,122 +14,26 @@ namespace p2n {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr double kRotationTolerance = 1e-3;
 const char* kBlenderSplits[] = {"train", "val", "test"};
 
 [[noreturn]] void Bad(const fs::path& file, const std::string& field, const std::string& problem) {
   throw UserError(format("'{}': {} {}", file.string(), field, problem));
 }
 
-void CheckCamera(const PinholeCamera& camera, const fs::path& file, const std::string& field) {
-  if (!camera.world_from_cam.allFinite()) Bad(file, field, "has a camera pose that is not finite");
-  const Eigen::Matrix3d r = camera.world_from_cam.topLeftCorner<3, 3>();
-  if ((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() > kRotationTolerance || r.determinant() < 0) {
-    Bad(file, field, "has a camera rotation that is not orthonormal (a scaled or mirrored matrix?)");
-  }
-  if (!(camera.fx > 0) || !(camera.fy > 0) || !std::isfinite(camera.fx) || !std::isfinite(camera.fy) ||
-      !std::isfinite(camera.cx) || !std::isfinite(camera.cy)) {
-    Bad(file, field, "has a focal length that is not a positive number");
-  }
-  if (camera.width <= 0 || camera.height <= 0) Bad(file, field, "has no image size");
-}
-
-// A path named in `file` relative to `base`, which must resolve inside `root`; refused when it leads outside.
-fs::path InsideDataset(const fs::path& root, const fs::path& relative_to, const fs::path& file,
-                       const std::string& relative, const std::string& field) {
-  const fs::path resolved = (relative_to / relative).lexically_normal();
-  const fs::path base = root.lexically_normal();
-  const auto [end, ignored] = std::mismatch(base.begin(), base.end(), resolved.begin(), resolved.end());
-  if (end != base.end() || fs::path(relative).is_absolute()) {
-    Bad(file, field, format("points outside the dataset folder ('{}'); refused", relative));
-  }
-  return resolved;
-}
-
-Eigen::Matrix4d Matrix(const nlohmann::json& rows, const fs::path& file, const std::string& field) {
-  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-  if (!rows.is_array() || rows.size() < 3) Bad(file, field, "is not a 4x4 (or 3x4) matrix");
-  for (size_t r = 0; r < rows.size() && r < 4; ++r) {
-    if (!rows[r].is_array() || rows[r].size() != 4) Bad(file, field, "is not a 4x4 (or 3x4) matrix");
-    for (int c = 0; c < 4; ++c) {
-      if (!rows[r][c].is_number()) Bad(file, field, "holds something that is not a number");
-      m(r, c) = rows[r][c].get<double>();
-    }
-  }
-  return m;
-}
-
-std::pair<int, int> ImageSize(const fs::path& image) {
-  auto input = OIIO::ImageInput::open(image.string());
-  if (!input) throw UserError(format("cannot read the image '{}': {}", image.string(), OIIO::geterror()));
-  return {input->spec().width, input->spec().height};
-}
-
 // One transforms.json (instant-ngp, nerfstudio, or one Blender split) into views.
-void ReadTransforms(const fs::path& root, const fs::path& file, const std::string& split, ImportedDataset* out) {
-  const nlohmann::json transforms = ReadJsonFile(file);
+TransformsMeta AddTransforms(const fs::path& root, const fs::path& file, const std::string& split,
+                             ImportedDataset* out) {
+  TransformsFile transforms = TransformsFile::Read(file, root, split);
   out->files.push_back(file);
-  if (!transforms.contains("frames") || !transforms["frames"].is_array()) Bad(file, "frames", "is missing");
-  size_t missing = 0;
-  for (size_t i = 0; i < transforms["frames"].size(); ++i) {
-    const nlohmann::json& frame = transforms["frames"][i];
-    const std::string field = format("frames[{}]", i);
-    const auto value = [&](const char* key) -> const nlohmann::json* {
-      if (frame.contains(key)) return &frame[key];
-      if (transforms.contains(key)) return &transforms[key];
-      return nullptr;
-    };
-    if (!frame.contains("file_path") || !frame["file_path"].is_string()) Bad(file, field + ".file_path", "is missing");
-    fs::path image =
-        InsideDataset(root, file.parent_path(), file, frame["file_path"].get<std::string>(), field + ".file_path");
-    if (!image.has_extension() && fs::exists(image.string() + ".png")) image += ".png";  // Blender leaves it out
-    if (!fs::exists(image)) {
-      ++missing;  // instant-ngp's fox lists 17 frames whose images are not shipped
-      continue;
-    }
+  for (CameraView& camera : transforms.views) {
     ImportedView view;
-    view.source = image;
-    view.view.split = frame.contains("split") ? frame["split"].get<std::string>() : split;  // ours has one
-    view.view.near = frame.value("near", -1.0);
-    view.view.far = frame.value("far", -1.0);
-    PinholeCamera& camera = view.view.camera;
-    camera.world_from_cam =
-        Matrix(frame.value("transform_matrix", nlohmann::json()), file, field + ".transform_matrix");
-    const auto [width, height] = value("w") && value("h")
-                                     ? std::pair<int, int>{value("w")->get<int>(), value("h")->get<int>()}
-                                     : ImageSize(image);
-    camera.width = width;
-    camera.height = height;
-    if (value("fl_x")) {
-      camera.fx = value("fl_x")->get<double>();
-      camera.fy = value("fl_y") ? value("fl_y")->get<double>() : camera.fx;
-    } else if (value("camera_angle_x")) {
-      camera.fx = camera.fy = 0.5 * width / std::tan(0.5 * value("camera_angle_x")->get<double>());
-    } else {
-      Bad(file, field, "has no focal length (fl_x or camera_angle_x)");
-    }
-    camera.cx = value("cx") ? value("cx")->get<double>() : 0.5 * width;
-    camera.cy = value("cy") ? value("cy")->get<double>() : 0.5 * height;
-    const char* distortion_keys[] = {"k1", "k2", "p1", "p2"};
-    for (int k = 0; k < 4; ++k)
-      view.distortion[k] = value(distortion_keys[k]) ? value(distortion_keys[k])->get<double>() : 0.0;
-    CheckCamera(camera, file, field);
-    out->files.push_back(image);
+    view.source = TransformsFile::ImagePath(file, camera);
+    view.view = std::move(camera);
+    out->files.push_back(view.source);
     out->views.push_back(std::move(view));
   }
-  if (missing > 0) {
-    out->warnings.push_back(
-        format("{}: {} frames name images that are not there; they are left out", file.string(), missing));
-  }
-}
-
-// ReadTransforms, with a JSON value of the wrong type reported as a user error naming the file.
-void ReadTransformsChecked(const fs::path& root, const fs::path& file, const std::string& split, ImportedDataset* out) {
-  try {
-    ReadTransforms(root, file, split, out);
-  } catch (const nlohmann::json::exception& e) {
-    throw UserError(format("'{}' has a value of the wrong type ({}); fix the file", file.string(), e.what()));
-  }
+  out->warnings.insert(out->warnings.end(), transforms.warnings.begin(), transforms.warnings.end());
+  return transforms.meta;
 }
 
 void LoadLlff(const fs::path& root, ImportedDataset* out) {
@@ -164,7 +67,9 @@ void LoadLlff(const fs::path& root, ImportedDataset* out) {
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 5; ++c) m(r, c) = row[5 * r + c];
     }
-    const auto [width, height] = ImageSize(files[i]);
+    std::string error;
+    const auto [width, height] = ImageFileSize(files[i], &error);
+    if (!error.empty()) Bad(files[i], "the image", "cannot be read: " + error);
     const double factor = m(1, 4) / width;  // full-resolution width over this folder's
     ImportedView view;
     view.source = files[i];
@@ -195,11 +100,13 @@ void LoadColmapProject(const fs::path& root, ImportedDataset* out) {
   for (const auto& [id, image] : model.images) {
     const ColmapCamera& colmap = model.cameras.at(image.camera_id);
     ImportedView view;
-    view.source = InsideDataset(root, root, sparse / "images", "images/" + image.name, format("image {}", id));
+    view.source = (root / "images" / image.name).lexically_normal();
+    if (!IsInside(root, view.source))
+      Bad(sparse, format("image {}", id), format("names 'images/{}', outside the dataset folder; refused", image.name));
     if (!fs::exists(view.source))
       Bad(sparse, format("image {}", id), format("names '{}', which is not there", view.source.string()));
     PinholeCamera& camera = view.view.camera;
-    camera = PinholeFromColmap(colmap, &view.distortion);
+    camera = PinholeFromColmap(colmap, &view.view.distortion);
     camera.world_from_cam = WorldFromOpenGlCamera(image.cam_from_world_rotation, image.cam_from_world_translation);
     CheckCamera(camera, sparse, format("image {}", id));
     out->files.push_back(view.source);
@@ -276,7 +183,7 @@ std::string DatasetKind(const fs::path& input) {
 ImportedDataset LoadTransformsJson(const fs::path& file, const fs::path& root) {
   ImportedDataset dataset;
   dataset.kind = "transforms.json";
-  ReadTransformsChecked(root, file, "train", &dataset);
+  dataset.meta = AddTransforms(root, file, "train", &dataset);
   if (dataset.views.empty()) throw UserError(format("'{}' has no view whose image exists", file.string()));
   return dataset;
 }
@@ -285,11 +192,11 @@ ImportedDataset LoadDataset(const fs::path& input) {
   ImportedDataset dataset;
   dataset.kind = DatasetKind(input);
   if (dataset.kind == "transforms.json") {
-    ReadTransformsChecked(input, input / "transforms.json", "train", &dataset);
+    AddTransforms(input, input / "transforms.json", "train", &dataset);
   } else if (dataset.kind == "blender") {
     for (const char* split : kBlenderSplits) {
       const fs::path file = input / (std::string("transforms_") + split + ".json");
-      if (fs::exists(file)) ReadTransformsChecked(input, file, split, &dataset);
+      if (fs::exists(file)) AddTransforms(input, file, split, &dataset);
     }
   } else if (dataset.kind == "llff") {
     LoadLlff(input, &dataset);

@@ -21,7 +21,6 @@ struct ImportedView {
   std::string name;                    // the image's file name in the stage's images/
   std::filesystem::path source;        // the image file, or empty when `pixels` holds the image
   OIIO::ImageBuf pixels;               // the image, for datasets that store pixels (.npz)
-  std::array<double, 4> distortion{};  // OpenCV k1, k2, p1, p2 of the image (zero: none)
 };
 
 struct ImportedDataset {
@@ -31,13 +30,14 @@ struct ImportedDataset {
   std::vector<std::array<uint8_t, 3>> colours;
   std::vector<std::filesystem::path> files;  // every file the result depends on (for the cache key)
   std::vector<std::string> warnings;
+  TransformsMeta meta;  // transforms.json's own fields (LoadTransformsJson); the defaults for other datasets
 };
 
 // The kind of dataset at `input` ("" for a plain photo folder).
 std::string DatasetKind(const std::filesystem::path& input);
 // Reads the cameras (not the pixels of image files) of a dataset; UserError naming the file and field.
 ImportedDataset LoadDataset(const std::filesystem::path& input);
-// One transforms.json (with its frames' split, near and far when it has them) whose image paths must stay
+// One transforms.json (with its frames' split, near and far and its meta fields) whose image paths must stay
 // inside `root`: a workspace reads its poses stage's file with root = the workspace.
 ImportedDataset LoadTransformsJson(const std::filesystem::path& file, const std::filesystem::path& root);
 

@@ -42,12 +42,14 @@ void ApplyCameraCorrections(const std::map<std::string, CameraCorrection>& corre
 // transforms.json of every view (the training ones as refined) in the files' frame, naming the images by their full
 // paths so that the file works from where it is.
 void WriteCameras(const fs::path& path, const ImportedDataset& dataset, const OutputFrame& frame, bool refined) {
-  std::vector<CameraView> views;
+  TransformsFile transforms;
   for (const ImportedView& view : dataset.views) {
-    views.push_back(frame.Camera(view.view));
-    views.back().file_path = fs::absolute(view.source).string();
+    transforms.views.push_back(frame.Camera(view.view));
+    transforms.views.back().file_path = fs::absolute(view.source).string();
   }
-  WriteTransformsJson(path, views, Normalization{}, {{"frame", frame.description}, {"cameras_refined", refined}});
+  transforms.meta.frame = frame.description;
+  transforms.meta.cameras_refined = refined;
+  transforms.Write(path);
 }
 
 std::vector<ColouredPoint> DepthPoints(const NerfModel& model, const ImportedDataset& dataset,
@@ -125,8 +127,8 @@ void ExportStage::Run(StageContext& context) const {
   const ExportOptions options = ReadOptions<ExportOptions>(context.config, "export");
   const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
   const NerfModel model = LoadTrainedModel(context.upstream_dirs.at("train") / "model.bin");
-  const OutputFrame frame = MakeOutputFrame(options.frame, transforms);
   ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
+  const OutputFrame frame = MakeOutputFrame(options.frame, dataset);
   const std::map<std::string, CameraCorrection> corrections =
       ReadCameraCorrections(context.upstream_dirs.at("train") / "train_report.json");
   ApplyCameraCorrections(corrections, &dataset);

@@ -79,6 +79,93 @@ std::map<std::string, std::string> ImportStage::ExternalInputs(const Workspace& 
   return inputs;
 }
 
+namespace {
+
+struct ImageCounts {
+  std::atomic<int> undistorted{0}, composited{0};
+};
+
+// Writes the dataset's images into `images` as the poses stage's are: undistorted, composited on the background
+// unless it is "keep", copied when nothing changed them; the views then name them and hold no distortion.
+void WriteImages(ImportedDataset& dataset, const ImportOptions& options, const fs::path& images, ImageCounts* counts) {
+  fs::create_directories(images);
+  Progress progress("import: images", static_cast<int64_t>(dataset.views.size()), "images");
+  tbb::parallel_for(size_t{0}, dataset.views.size(), [&](size_t i) {
+    ImportedView& view = dataset.views[i];
+    const PinholeCamera& camera = view.view.camera;
+    OIIO::ImageBuf image;
+    if (view.source.empty()) {
+      image = std::move(view.pixels);
+    } else {
+      ReadImageResult read = ReadImage(view.source);
+      if (!read.ok()) throw UserError(format("cannot use '{}': {}", view.source.string(), read.error));
+      image = std::move(read.image);
+    }
+    if (image.spec().width != camera.width || image.spec().height != camera.height) {
+      throw UserError(format("'{}' is {}x{} but the dataset declares {}x{}", view.source.string(), image.spec().width,
+                             image.spec().height, camera.width, camera.height));
+    }
+    bool changed = view.source.empty();
+    if (view.view.distortion != std::array<double, 4>{}) {
+      image = Undistort(image, camera, view.view.distortion);
+      view.view.distortion = {};
+      changed = true;
+      ++counts->undistorted;
+    }
+    if (options.background != "keep" && (image.spec().nchannels == 4 || image.spec().nchannels == 2)) {
+      image = Composite(image, options.background == "white" ? 1.0f : 0.0f);
+      changed = true;
+      ++counts->composited;
+    }
+    const std::string extension = LowerExtension(view.source);
+    if (!changed && (extension == "png" || extension == "jpg" || extension == "jpeg")) {
+      fs::copy_file(view.source, images / view.name, fs::copy_options::overwrite_existing);
+    } else {
+      if (fs::path(view.name).extension() != ".png") view.name = fs::path(view.name).replace_extension(".png").string();
+      view.view.file_path = "images/" + view.name;
+      const std::string error = WriteImage(image, images / view.name);
+      if (!error.empty()) throw UserError(error);
+    }
+    progress.Add();
+  });
+}
+
+// transforms.json of the dataset's cameras (normalised, with a held-out split unless the dataset has one) and
+// sparse_points.ply when it has points, as the poses stage writes them.
+Normalization WriteCameras(const ImportedDataset& dataset, const fs::path& input, const PosesOptions& poses,
+                           const ImportOptions& options, const fs::path& out) {
+  TransformsFile transforms;
+  for (const ImportedView& view : dataset.views) transforms.views.push_back(view.view);
+  std::vector<CameraView>& views = transforms.views;
+  const bool has_split =
+      std::any_of(views.begin(), views.end(), [](const CameraView& v) { return v.split != "train"; });
+  if (!has_split) AssignHoldout(&views, poses.holdout_every);
+  Normalization& normalization = transforms.meta.normalization;
+  if (poses.normalize) {
+    std::vector<Eigen::Vector3d> centres, ups, axes;
+    CameraFrames(views, &centres, &ups, &axes);
+    normalization = NormalizeScene(centres, ups, axes, dataset.points);
+    for (const std::string& warning : normalization.warnings) LogWarning("import: " + warning);
+  }
+  views = NormalizedViews(views, normalization);
+  transforms.meta.dataset_kind = dataset.kind;
+  transforms.meta.dataset_path = input.string();
+  if (options.background == "white") transforms.meta.background = {1, 1, 1};
+  if (options.background == "black") transforms.meta.background = {0, 0, 0};
+  transforms.Write(out / "transforms.json");
+  if (!dataset.points.empty()) {
+    std::vector<ColouredPoint> cloud;
+    for (size_t i = 0; i < dataset.points.size(); ++i) {
+      cloud.push_back({(normalization.normalized_from_world * dataset.points[i].homogeneous()).head<3>().cast<float>(),
+                       dataset.colours[i]});
+    }
+    WritePly(out / "sparse_points.ply", cloud);
+  }
+  return normalization;
+}
+
+}  // namespace
+
 void ImportStage::Run(StageContext& context) const {
   const PosesOptions poses = ReadOptions<PosesOptions>(context.config, "poses");
   const ImportOptions options = ReadOptions<ImportOptions>(context.config, "import");
@@ -86,80 +173,12 @@ void ImportStage::Run(StageContext& context) const {
   ImportedDataset dataset = LoadDataset(input);
   for (const std::string& warning : dataset.warnings) LogWarning("import: " + warning);
   LogInfo(format("import: {} dataset, {} views", dataset.kind, dataset.views.size()));
-  const fs::path images = context.output_dir / "images";
-  fs::create_directories(images);
-
-  std::atomic<int> undistorted{0}, composited{0};
-  {
-    Progress progress("import: images", static_cast<int64_t>(dataset.views.size()), "images");
-    tbb::parallel_for(size_t{0}, dataset.views.size(), [&](size_t i) {
-      ImportedView& view = dataset.views[i];
-      const PinholeCamera& camera = view.view.camera;
-      OIIO::ImageBuf image;
-      if (view.source.empty()) {
-        image = std::move(view.pixels);
-      } else {
-        ReadImageResult read = ReadImage(view.source);
-        if (!read.ok()) throw UserError(format("cannot use '{}': {}", view.source.string(), read.error));
-        image = std::move(read.image);
-      }
-      if (image.spec().width != camera.width || image.spec().height != camera.height) {
-        throw UserError(format("'{}' is {}x{} but the dataset declares {}x{}", view.source.string(), image.spec().width,
-                               image.spec().height, camera.width, camera.height));
-      }
-      bool changed = view.source.empty();
-      if (view.distortion != std::array<double, 4>{}) {
-        image = Undistort(image, camera, view.distortion);
-        changed = true;
-        ++undistorted;
-      }
-      if (options.background != "keep" && (image.spec().nchannels == 4 || image.spec().nchannels == 2)) {
-        image = Composite(image, options.background == "white" ? 1.0f : 0.0f);
-        changed = true;
-        ++composited;
-      }
-      if (!changed && (LowerExtension(view.source) == "png" || LowerExtension(view.source) == "jpg" ||
-                       LowerExtension(view.source) == "jpeg")) {
-        fs::copy_file(view.source, images / view.name, fs::copy_options::overwrite_existing);
-      } else {
-        if (fs::path(view.name).extension() != ".png")
-          view.name = fs::path(view.name).replace_extension(".png").string();
-        view.view.file_path = "images/" + view.name;
-        const std::string error = WriteImage(image, images / view.name);
-        if (!error.empty()) throw UserError(error);
-      }
-      progress.Add();
-    });
-  }
-
-  std::vector<CameraView> views;
-  for (const ImportedView& view : dataset.views) views.push_back(view.view);
-  const bool has_split =
-      std::any_of(views.begin(), views.end(), [](const CameraView& v) { return v.split != "train"; });
-  if (!has_split) AssignHoldout(&views, poses.holdout_every);
-  Normalization normalization;
-  if (poses.normalize) {
-    std::vector<Eigen::Vector3d> centres, ups, axes;
-    CameraFrames(views, &centres, &ups, &axes);
-    normalization = NormalizeScene(centres, ups, axes, dataset.points);
-    for (const std::string& warning : normalization.warnings) LogWarning("import: " + warning);
-  }
-  const nlohmann::json background = options.background == "white"   ? nlohmann::json{1, 1, 1}
-                                    : options.background == "black" ? nlohmann::json{0, 0, 0}
-                                                                    : nlohmann::json(nullptr);
-  WriteTransformsJson(context.output_dir / "transforms.json", views, normalization,
-                      {{"dataset", {{"kind", dataset.kind}, {"path", input.string()}}}, {"background", background}});
-  if (!dataset.points.empty()) {
-    std::vector<ColouredPoint> cloud;
-    for (size_t i = 0; i < dataset.points.size(); ++i) {
-      cloud.push_back({(normalization.normalized_from_world * dataset.points[i].homogeneous()).head<3>().cast<float>(),
-                       dataset.colours[i]});
-    }
-    WritePly(context.output_dir / "sparse_points.ply", cloud);
-  }
-  context.summary = {{"views", views.size()}, {"dataset", dataset.kind}};
-  LogInfo(format("import: {} views ({} undistorted, {} composited on {}), scene scale {:.4g}", views.size(),
-                 undistorted.load(), composited.load(), options.background, normalization.scale));
+  ImageCounts counts;
+  WriteImages(dataset, options, context.output_dir / "images", &counts);
+  const Normalization normalization = WriteCameras(dataset, input, poses, options, context.output_dir);
+  context.summary = {{"views", dataset.views.size()}, {"dataset", dataset.kind}};
+  LogInfo(format("import: {} views ({} undistorted, {} composited on {}), scene scale {:.4g}", dataset.views.size(),
+                 counts.undistorted.load(), counts.composited.load(), options.background, normalization.scale));
 }
 
 }  // namespace p2n

@@ -36,25 +36,17 @@ CameraView OutputFrame::Camera(const CameraView& view) const {
   return out;
 }
 
-// applied_transform (normalised_from_source, 3x4) of transforms.json, inverted when the source frame is asked for.
-OutputFrame MakeOutputFrame(const std::string& frame, const fs::path& transforms) {
+OutputFrame MakeOutputFrame(const std::string& frame, const ImportedDataset& poses) {
   OutputFrame out;
   out.name = frame;
   if (frame == "normalized") {
     out.description = "frame: normalized (the training frame of 20_poses/transforms.json)";
     return out;
   }
-  const nlohmann::json json = ReadJsonFile(transforms);
-  Eigen::Matrix4d normalized_from_source = Eigen::Matrix4d::Identity();
-  if (json.contains("applied_transform")) {
-    const nlohmann::json& a = json["applied_transform"];
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 4; ++c) normalized_from_source(r, c) = a.at(r).at(c).get<double>();
-    }
-  }
-  const Eigen::Matrix4d source_from_normalized = normalized_from_source.inverse();
-  if (!source_from_normalized.allFinite()) {
-    throw UserError(format("'{}': applied_transform cannot be inverted; rerun the poses stage", transforms.string()));
+  const Eigen::Matrix4d source_from_normalized = poses.meta.normalization.normalized_from_world.inverse();
+  if (!source_from_normalized.allFinite()) {  // files.front(): the transforms.json
+    throw UserError(
+        format("'{}': applied_transform cannot be inverted; rerun the poses stage", poses.files.front().string()));
   }
   out.rotation = source_from_normalized.topLeftCorner<3, 3>();
   out.translation = source_from_normalized.topRightCorner<3, 1>();

@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <string>
 
-#include "stages/transforms_json.h"
+#include "stages/dataset_import.h"
 
 namespace p2n {
 
@@ -29,8 +29,8 @@ struct OutputFrame {
   CameraView Camera(const CameraView& view) const;
 };
 
-// "normalized" or "source" (the inverse of transforms.json's applied_transform); UserError naming the file when
-// that cannot be inverted.
-OutputFrame MakeOutputFrame(const std::string& frame, const std::filesystem::path& transforms);
+// "normalized" or "source" (the inverse of the applied_transform of the poses stage's transforms.json, read by
+// LoadTransformsJson); UserError naming the file when that cannot be inverted.
+OutputFrame MakeOutputFrame(const std::string& frame, const ImportedDataset& poses);
 
 }  // namespace p2n

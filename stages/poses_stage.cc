@@ -86,7 +86,10 @@ void PosesStage::Run(StageContext& context) const {
     normalization = NormalizeScene(centres, ups, axes, points);
     for (const std::string& warning : normalization.warnings) LogWarning("poses: " + warning);
   }
-  WriteTransformsJson(context.output_dir / "transforms.json", views, normalization, nlohmann::json::object());
+  TransformsFile transforms;
+  transforms.views = NormalizedViews(views, normalization);
+  transforms.meta.normalization = normalization;
+  transforms.Write(context.output_dir / "transforms.json");
 
   std::vector<ColouredPoint> cloud;
   for (const auto& [id, point] : model.points) {

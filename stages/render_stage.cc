@@ -246,7 +246,7 @@ std::string DbText(const std::optional<double>& psnr) { return psnr ? format("{:
 // render.source resolved: auto takes the splats when their held-out PSNR is within kSplatPsnrMargin of the
 // field's (they render tens of times faster), else the field.
 ViewRenderer ChooseRenderer(const StageContext& context, const RenderStageOptions& options, const NerfModel& model,
-                            const RenderOptions& render) {
+                            const RenderOptions& render, const ImportedDataset& poses) {
   const SplatReport splats = SplatReport::Read(context.upstream_dirs.at("splat") / "splat_report.json");
   const bool bounded = model.space == SceneSpace::kBounded;
   if (options.source == "field") return FieldRenderer(model, render);
@@ -264,8 +264,7 @@ ViewRenderer ChooseRenderer(const StageContext& context, const RenderStageOption
                    DbText(splat_psnr), DbText(field_psnr)));
     return FieldRenderer(model, render);
   }
-  return SplatRenderer(context.upstream_dirs.at("splat"), context.upstream_dirs.at("poses") / "transforms.json",
-                       bounded);
+  return SplatRenderer(context.upstream_dirs.at("splat"), poses, bounded);
 }
 
 }  // namespace
@@ -345,7 +344,7 @@ void RenderStage::Run(StageContext& context) const {
   const ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
   RenderOptions render;
   render.step_scale = options.step_scale;
-  const ViewRenderer renderer = ChooseRenderer(context, options, model, render);
+  const ViewRenderer renderer = ChooseRenderer(context, options, model, render, dataset);
 
   nlohmann::json summary = nlohmann::json::object();
   if (options.heldout) {
@@ -364,7 +363,7 @@ void RenderStage::Run(StageContext& context) const {
     }
   }
   std::string kind = options.path;
-  if (kind == "auto") kind = SourceDatasetKind(transforms) == "llff" ? "spiral" : "orbit";
+  if (kind == "auto") kind = dataset.meta.dataset_kind == "llff" ? "spiral" : "orbit";
   if (kind != "none") {
     const ImportedView* first = &dataset.views.front();
     for (const ImportedView& view : dataset.views) {

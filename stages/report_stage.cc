@@ -142,8 +142,7 @@ std::string CamerasSection(const StageContext& context, const ImportedDataset& d
   const std::optional<SfmReport> sfm =
       sfm_stage ? ReadReportIfExists<SfmReport>(context.workspace.StageDir(sfm_stage->folder()) / "sfm_report.json")
                 : std::nullopt;
-  const std::string dataset_kind = SourceDatasetKind(context.upstream_dirs.at("poses") / "transforms.json");
-  if (sfm && dataset_kind.empty()) {
+  if (sfm && dataset.meta.dataset_kind.empty()) {
     html += format(
         "<p>COLMAP {}: {} of {} images registered ({:.0f}%), mean reprojection error {:.3g} px, {} sparse points, "
         "mean track length {:.3g}, {} matching.</p>\n",
@@ -155,7 +154,7 @@ std::string CamerasSection(const StageContext& context, const ImportedDataset& d
     html += "</table>\n";
   } else {
     html += format("<p>Cameras imported from a {} dataset (no structure from motion needed).</p>\n",
-                   HtmlEscape(dataset_kind));
+                   HtmlEscape(dataset.meta.dataset_kind));
   }
   std::vector<ViewerCamera> cameras;
   for (const ImportedView& view : dataset.views)
@@ -218,7 +217,7 @@ void ReportStage::Run(StageContext& context) const {
       ReadReportIfExists<TrainReport>(context.upstream_dirs.at("train") / "train_report.json");
   const std::optional<EvalReport> eval = ReadReportIfExists<EvalReport>(render_dir / "eval.json");
   const nlohmann::json exported = ReadIfExists(export_dir / "export_report.json");
-  const std::array<float, 3> background = DatasetBackground(transforms);
+  const std::array<float, 3> background = dataset.meta.Background();
 
   std::string body = "<h1>photo2nerf report</h1>\n";
   body += format(

@@ -95,8 +95,8 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
   const fs::path train_dir = context.upstream_dirs.at("train");
   const NerfModel model = LoadTrainedModel(train_dir / "model.bin");
-  std::string split;
-  setup.data = LoadTrainingData(transforms, context.workspace.root(), &split);
+  const ImportedDataset poses = LoadTransformsJson(transforms, context.workspace.root());
+  setup.data = LoadTrainingData(poses);
   setup.background = model.background;
   const std::map<std::string, CameraCorrection> corrections = ReadCameraCorrections(train_dir / "train_report.json");
   for (TrainView& view : setup.data.train) {
@@ -126,10 +126,10 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
     progress.Add(static_cast<int64_t>(cameras.size()));
   }
 
-  setup.frame = MakeOutputFrame(options.frame, transforms);
+  setup.frame = MakeOutputFrame(options.frame, poses);
   if (setup.frame.rotation.determinant() <= 0) {
     LogWarning("splat: the source frame is mirrored; splats.ply is written in the normalised frame");
-    setup.frame = MakeOutputFrame("normalized", transforms);
+    setup.frame = MakeOutputFrame("normalized", poses);
   }
   ApplySimilarity(setup.frame.rotation, setup.frame.translation, &setup.gaussians);
   for (auto* views : {&setup.data.train, &setup.data.heldout}) {

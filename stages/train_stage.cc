@@ -177,9 +177,8 @@ bool ModelIsFinite(NerfModel& model) {
 
 }  // namespace
 
-SceneSpace ResolveSceneSpace(const TrainOptions& options, const fs::path& transforms) {
+SceneSpace ResolveSceneSpace(const TrainOptions& options, const std::string& kind) {
   if (options.scene != "auto") return SceneSpaceFromName(options.scene);
-  const std::string kind = SourceDatasetKind(transforms);
   return kind == "blender" || kind == "npz" ? SceneSpace::kBounded : SceneSpace::kUnbounded;
 }
 
@@ -355,9 +354,11 @@ void TrainStage::Run(StageContext& context) const {
   setup.options = ReadOptions<TrainOptions>(context.config, "train");
   const TrainOptions& options = setup.options;
   const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
-  setup.data = LoadTrainingData(transforms, context.workspace.root(), &setup.heldout_split);
+  const ImportedDataset poses = LoadTransformsJson(transforms, context.workspace.root());
+  setup.heldout_split = HeldoutSplit(poses);
+  setup.data = LoadTrainingData(poses);
   const TrainingData& data = setup.data;
-  setup.trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, transforms));
+  setup.trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, poses.meta.dataset_kind));
   const bool has_alpha =
       std::any_of(data.train.begin(), data.train.end(), [](const TrainView& v) { return v.channels == 4; });
   setup.trainer.random_background = options.background == "random" || (options.background == "auto" && has_alpha);

@@ -91,7 +91,7 @@ struct TrainOptions {
 // The scene space train.scene asks for; auto: bounded for Blender and .npz data, else unbounded (also for LLFF
 // captures: on fern, 15 minutes of default, forward and unbounded are level within a run's noise: at 1, 2, 5, 10
 // and 15 minutes 19.77 / 20.88 / 21.83 / 22.34 / 22.52 dB against 19.77 / 20.73 / 21.74 / 22.24 / 22.44).
-SceneSpace ResolveSceneSpace(const TrainOptions& options, const std::filesystem::path& transforms);
+SceneSpace ResolveSceneSpace(const TrainOptions& options, const std::string& dataset_kind);
 
 // The trainer's options for these stage options (presets resolved) in a scene of this space.
 TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space);

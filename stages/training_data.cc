@@ -49,17 +49,18 @@ std::string HeldoutSplit(const ImportedDataset& dataset) {
   return has_test ? "test" : "val";
 }
 
-TrainingData LoadTrainingData(const fs::path& transforms, const fs::path& workspace_root, std::string* heldout_split) {
-  const ImportedDataset dataset = LoadTransformsJson(transforms, workspace_root);
+TrainingData LoadTrainingData(const ImportedDataset& poses) {
   TrainingData data;
-  data.background = DatasetBackground(transforms);
-  *heldout_split = HeldoutSplit(dataset);
+  data.background = poses.meta.Background();
+  const std::string heldout_split = HeldoutSplit(poses);
   std::vector<const ImportedView*> train, heldout;
-  for (const ImportedView& view : dataset.views) {
+  for (const ImportedView& view : poses.views) {
     if (view.view.split == "train") train.push_back(&view);
-    if (view.view.split == *heldout_split) heldout.push_back(&view);
+    if (view.view.split == heldout_split) heldout.push_back(&view);
   }
-  if (train.empty()) throw UserError(format("'{}' has no training view (split \"train\")", transforms.string()));
+  if (train.empty()) {  // files.front(): the transforms.json
+    throw UserError(format("'{}' has no training view (split \"train\")", poses.files.front().string()));
+  }
   data.train.resize(train.size());
   data.heldout.resize(heldout.size());
   Progress progress("train: loading images", static_cast<int64_t>(train.size() + heldout.size()), "images");
@@ -72,22 +73,6 @@ TrainingData LoadTrainingData(const fs::path& transforms, const fs::path& worksp
     progress.Add();
   });
   return data;
-}
-
-std::array<float, 3> DatasetBackground(const fs::path& transforms) {
-  const nlohmann::json json = ReadJsonFile(transforms);
-  std::array<float, 3> background{1, 1, 1};
-  if (json.contains("background") && json["background"].is_array() && json["background"].size() == 3) {
-    for (int c = 0; c < 3; ++c) background[c] = json["background"][c].get<float>();
-  }
-  return background;
-}
-
-std::string SourceDatasetKind(const fs::path& transforms) {
-  const nlohmann::json json = ReadJsonFile(transforms);
-  const bool has = json.contains("dataset") && json["dataset"].is_object() && json["dataset"].contains("kind") &&
-                   json["dataset"]["kind"].is_string();
-  return has ? json["dataset"]["kind"].get<std::string>() : "";
 }
 
 }  // namespace p2n

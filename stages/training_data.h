@@ -17,13 +17,9 @@ TrainView LoadTrainView(const ImportedView& imported);
 // The split held out for evaluation: "test" when any view has it, else "val".
 std::string HeldoutSplit(const ImportedDataset& dataset);
 
-// The training views ("train" split) and held-out views (the "test" split when it has images, else "val") of a
-// transforms.json whose images lie inside `root`, decoded to 8 bits; UserError naming a bad file.
-TrainingData LoadTrainingData(const std::filesystem::path& transforms, const std::filesystem::path& root,
-                              std::string* heldout_split);
-// The colour transparent images were composited on, as transforms.json records it (white when it does not).
-std::array<float, 3> DatasetBackground(const std::filesystem::path& transforms);
-// The kind of dataset the poses came from as transforms.json records it ("blender", "llff", ...; "" for photos).
-std::string SourceDatasetKind(const std::filesystem::path& transforms);
+// The training views ("train" split) and held-out views (HeldoutSplit's) of the poses stage's transforms.json
+// (LoadTransformsJson), decoded to 8 bits, with the background its images were composited on; UserError naming
+// a bad file.
+TrainingData LoadTrainingData(const ImportedDataset& poses);
 
 }  // namespace p2n

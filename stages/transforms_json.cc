@@ -1,13 +1,26 @@
 #include "stages/transforms_json.h"
 
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
 #include <cmath>
 
+#include "nerf/image_io.h"
+#include "pipeline/errors.h"
 #include "pipeline/file_util.h"
+#include "pipeline/format.h"
 
 namespace p2n {
+namespace fs = std::filesystem;
 namespace {
 
 constexpr double kUnitCubeRadius = 1.7320508075688772;  // half the diagonal of [-1, 1]^3
+constexpr double kRotationTolerance = 1e-3;
+const char* const kDistortionKeys[] = {"k1", "k2", "p1", "p2"};
+
+[[noreturn]] void Bad(const fs::path& file, const std::string& field, const std::string& problem) {
+  throw UserError(format("'{}': {} {}", file.string(), field, problem));
+}
 
 nlohmann::json MatrixJson(const Eigen::MatrixXd& m) {
   nlohmann::json rows = nlohmann::json::array();
@@ -17,6 +30,20 @@ nlohmann::json MatrixJson(const Eigen::MatrixXd& m) {
     rows.push_back(row);
   }
   return rows;
+}
+
+// A 4x4 or 3x4 matrix (the fourth row then 0 0 0 1).
+Eigen::Matrix4d Matrix(const nlohmann::json& rows, const fs::path& file, const std::string& field) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  if (!rows.is_array() || rows.size() < 3) Bad(file, field, "is not a 4x4 (or 3x4) matrix");
+  for (size_t r = 0; r < rows.size() && r < 4; ++r) {
+    if (!rows[r].is_array() || rows[r].size() != 4) Bad(file, field, "is not a 4x4 (or 3x4) matrix");
+    for (int c = 0; c < 4; ++c) {
+      if (!rows[r][c].is_number()) Bad(file, field, "holds something that is not a number");
+      m(r, c) = rows[r][c].get<double>();
+    }
+  }
+  return m;
 }
 
 nlohmann::json Intrinsics(const PinholeCamera& camera) {
@@ -31,7 +58,186 @@ nlohmann::json Intrinsics(const PinholeCamera& camera) {
           {"camera_angle_y", 2 * std::atan(camera.height / (2 * camera.fy))}};
 }
 
+bool SameIntrinsics(const PinholeCamera& a, const PinholeCamera& b) {
+  return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy;
+}
+
+nlohmann::json FrameJson(const CameraView& view, bool shared_intrinsics) {
+  nlohmann::json frame = {{"file_path", view.file_path},
+                          {"transform_matrix", MatrixJson(view.camera.world_from_cam)},
+                          {"split", view.split},
+                          {"near", view.near},
+                          {"far", view.far}};
+  if (!shared_intrinsics) frame.update(Intrinsics(view.camera));
+  for (int k = 0; k < 4; ++k) {
+    if (view.distortion[k] != 0) frame[kDistortionKeys[k]] = view.distortion[k];
+  }
+  return frame;
+}
+
+nlohmann::json MetaJson(const TransformsMeta& meta) {
+  const Normalization& n = meta.normalization;
+  nlohmann::json json = {{"aabb_scale", 1},
+                         {"applied_transform", MatrixJson(n.normalized_from_world.topRows<3>())},
+                         {"applied_scale", n.scale},
+                         {"normalization", {{"centre_from", n.centre_from}, {"up_from", n.up_from}}}};
+  if (!meta.dataset_kind.empty()) json["dataset"] = {{"kind", meta.dataset_kind}, {"path", meta.dataset_path}};
+  if (meta.background) json["background"] = *meta.background;
+  if (!meta.frame.empty()) json.update({{"frame", meta.frame}, {"cameras_refined", meta.cameras_refined}});
+  return json;
+}
+
+std::pair<int, int> ImageSize(const fs::path& image) {
+  std::string error;
+  const std::pair<int, int> size = ImageFileSize(image, &error);
+  if (!error.empty()) throw UserError(format("cannot read the image '{}': {}", image.string(), error));
+  return size;
+}
+
+// The view of frames[i], or none when its image is missing; intrinsics from the frame, else the top level.
+std::optional<CameraView> ReadFrame(const nlohmann::json& json, size_t i, const fs::path& file, const fs::path& root,
+                                    const std::string& split) {
+  const nlohmann::json& frame = json["frames"][i];
+  const std::string field = format("frames[{}]", i);
+  if (!frame.is_object()) Bad(file, field, "is not an object");
+  const auto value = [&](const char* key) -> const nlohmann::json* {
+    if (frame.contains(key)) return &frame[key];
+    if (json.contains(key)) return &json[key];
+    return nullptr;
+  };
+  if (!frame.contains("file_path") || !frame["file_path"].is_string()) Bad(file, field + ".file_path", "is missing");
+  CameraView view;
+  view.file_path = frame["file_path"].get<std::string>();
+  if (fs::path(view.file_path).is_absolute() || !IsInside(root, TransformsFile::ImagePath(file, view))) {
+    Bad(file, field + ".file_path", format("points outside the dataset folder ('{}'); refused", view.file_path));
+  }
+  fs::path image = TransformsFile::ImagePath(file, view);
+  if (!image.has_extension() && fs::exists(image.string() + ".png")) {  // Blender leaves it out
+    view.file_path += ".png";
+    image += ".png";
+  }
+  if (!fs::exists(image)) return std::nullopt;
+  view.split = frame.contains("split") ? frame["split"].get<std::string>() : split;
+  view.near = frame.value("near", -1.0);
+  view.far = frame.value("far", -1.0);
+  PinholeCamera& camera = view.camera;
+  camera.world_from_cam = Matrix(frame.value("transform_matrix", nlohmann::json()), file, field + ".transform_matrix");
+  std::tie(camera.width, camera.height) =
+      value("w") && value("h") ? std::pair<int, int>{value("w")->get<int>(), value("h")->get<int>()} : ImageSize(image);
+  if (value("fl_x")) {
+    camera.fx = value("fl_x")->get<double>();
+    camera.fy = value("fl_y") ? value("fl_y")->get<double>() : camera.fx;
+  } else if (value("camera_angle_x")) {
+    camera.fx = camera.fy = 0.5 * camera.width / std::tan(0.5 * value("camera_angle_x")->get<double>());
+  } else {
+    Bad(file, field, "has no focal length (fl_x or camera_angle_x)");
+  }
+  camera.cx = value("cx") ? value("cx")->get<double>() : 0.5 * camera.width;
+  camera.cy = value("cy") ? value("cy")->get<double>() : 0.5 * camera.height;
+  for (int k = 0; k < 4; ++k)
+    view.distortion[k] = value(kDistortionKeys[k]) ? value(kDistortionKeys[k])->get<double>() : 0.0;
+  CheckCamera(camera, file, field);
+  return view;
+}
+
+TransformsMeta ReadMeta(const nlohmann::json& json, const fs::path& file) {
+  TransformsMeta meta;
+  Normalization& n = meta.normalization;
+  if (json.contains("applied_transform"))
+    n.normalized_from_world = Matrix(json["applied_transform"], file, "applied_transform");
+  n.scale = json.value("applied_scale", 1.0);
+  if (json.contains("normalization")) {
+    n.centre_from = json["normalization"].value("centre_from", "");
+    n.up_from = json["normalization"].value("up_from", "");
+  }
+  if (json.contains("dataset")) {
+    meta.dataset_kind = json["dataset"].value("kind", "");
+    meta.dataset_path = json["dataset"].value("path", "");
+  }
+  if (json.contains("background") && !json["background"].is_null()) {
+    const nlohmann::json& rgb = json["background"];
+    if (!rgb.is_array() || rgb.size() != 3) Bad(file, "background", "must be three numbers (red, green, blue)");
+    meta.background = rgb.get<std::array<float, 3>>();
+  }
+  meta.frame = json.value("frame", "");
+  meta.cameras_refined = json.value("cameras_refined", false);
+  return meta;
+}
+
+TransformsFile ReadUnchecked(const fs::path& file, const fs::path& root, const std::string& split) {
+  const nlohmann::json json = ReadJsonFile(file);
+  if (!json.is_object()) Bad(file, "the file", "is not a JSON object");
+  if (!json.contains("frames") || !json["frames"].is_array()) Bad(file, "frames", "is missing");
+  TransformsFile out;
+  out.meta = ReadMeta(json, file);
+  size_t missing = 0;
+  for (size_t i = 0; i < json["frames"].size(); ++i) {
+    std::optional<CameraView> view = ReadFrame(json, i, file, root, split);
+    if (view) {
+      out.views.push_back(std::move(*view));
+    } else {
+      ++missing;
+    }
+  }
+  if (missing > 0) {
+    out.warnings.push_back(
+        format("{}: {} frames name images that are not there; they are left out", file.string(), missing));
+  }
+  return out;
+}
+
 }  // namespace
+
+void CheckCamera(const PinholeCamera& camera, const fs::path& file, const std::string& field) {
+  if (!camera.world_from_cam.allFinite()) Bad(file, field, "has a camera pose that is not finite");
+  const Eigen::Matrix3d r = camera.world_from_cam.topLeftCorner<3, 3>();
+  if ((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() > kRotationTolerance || r.determinant() < 0) {
+    Bad(file, field, "has a camera rotation that is not orthonormal (a scaled or mirrored matrix?)");
+  }
+  if (!(camera.fx > 0) || !(camera.fy > 0) || !std::isfinite(camera.fx) || !std::isfinite(camera.fy) ||
+      !std::isfinite(camera.cx) || !std::isfinite(camera.cy)) {
+    Bad(file, field, "has a focal length that is not a positive number");
+  }
+  if (camera.width <= 0 || camera.height <= 0) Bad(file, field, "has no image size");
+}
+
+void TransformsFile::Write(const fs::path& file) const {
+  const bool shared = std::all_of(views.begin(), views.end(), [&](const CameraView& view) {
+    return SameIntrinsics(view.camera, views.front().camera);
+  });
+  nlohmann::json json = shared && !views.empty() ? Intrinsics(views.front().camera) : nlohmann::json::object();
+  nlohmann::json frames = nlohmann::json::array();
+  for (const CameraView& view : views) frames.push_back(FrameJson(view, shared));
+  json["frames"] = frames;
+  json.update(MetaJson(meta));
+  WriteJsonAtomic(file, json);
+}
+
+TransformsFile TransformsFile::Read(const fs::path& file, const fs::path& root, const std::string& split) {
+  try {
+    return ReadUnchecked(file, root, split);
+  } catch (const nlohmann::json::exception& e) {
+    throw UserError(format("'{}' has a value of the wrong type ({}); fix the file", file.string(), e.what()));
+  }
+}
+
+fs::path TransformsFile::ImagePath(const fs::path& file, const CameraView& view) {
+  return (file.parent_path() / view.file_path).lexically_normal();
+}
+
+std::vector<CameraView> NormalizedViews(const std::vector<CameraView>& views, const Normalization& normalization) {
+  std::vector<CameraView> out = views;
+  for (CameraView& view : out) {
+    Eigen::Matrix4d& pose = view.camera.world_from_cam;
+    pose = normalization.normalized_from_world * pose;
+    pose.topLeftCorner<3, 3>() /= normalization.scale;  // a rotation again: the scale applies to positions only
+    // Unknown bounds: the unit cube as seen from the camera.
+    const double distance = pose.topRightCorner<3, 1>().norm();
+    view.near = view.near > 0 ? view.near * normalization.scale : std::max(0.01, distance - kUnitCubeRadius);
+    view.far = view.far > 0 ? view.far * normalization.scale : distance + kUnitCubeRadius;
+  }
+  return out;
+}
 
 void AssignHoldout(std::vector<CameraView>* views, int every) {
   for (size_t i = 0; i < views->size(); ++i) {
@@ -48,43 +254,6 @@ void CameraFrames(const std::vector<CameraView>& views, std::vector<Eigen::Vecto
     ups->push_back(view.camera.world_from_cam.block<3, 1>(0, 1));    // OpenGL +y
     axes->push_back(-view.camera.world_from_cam.block<3, 1>(0, 2));  // OpenGL cameras look down -z
   }
-}
-
-void WriteTransformsJson(const std::filesystem::path& path, const std::vector<CameraView>& views,
-                         const Normalization& normalization, const nlohmann::json& extra) {
-  const Eigen::Matrix4d& normalized_from_world = normalization.normalized_from_world;
-  const double scale = normalization.scale;
-  bool shared = true;
-  for (const CameraView& view : views) {
-    const PinholeCamera& a = view.camera;
-    const PinholeCamera& b = views.front().camera;
-    shared = shared && a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx &&
-             a.cy == b.cy;
-  }
-  nlohmann::json transforms = shared ? Intrinsics(views.front().camera) : nlohmann::json::object();
-  nlohmann::json frames = nlohmann::json::array();
-  for (const CameraView& view : views) {
-    Eigen::Matrix4d normalized_from_cam = normalized_from_world * view.camera.world_from_cam;
-    normalized_from_cam.topLeftCorner<3, 3>() /= scale;  // a rotation again: the scale applies to positions only
-    // Unknown bounds: the unit cube as seen from the camera.
-    const double distance = normalized_from_cam.topRightCorner<3, 1>().norm();
-    const double near = view.near > 0 ? view.near * scale : std::max(0.01, distance - kUnitCubeRadius);
-    const double far = view.far > 0 ? view.far * scale : distance + kUnitCubeRadius;
-    nlohmann::json frame = {{"file_path", view.file_path},
-                            {"transform_matrix", MatrixJson(normalized_from_cam)},
-                            {"split", view.split},
-                            {"near", near},
-                            {"far", far}};
-    if (!shared) frame.update(Intrinsics(view.camera));
-    frames.push_back(frame);
-  }
-  transforms["frames"] = frames;
-  transforms["aabb_scale"] = 1;
-  transforms["applied_transform"] = MatrixJson(normalized_from_world.topRows<3>());
-  transforms["applied_scale"] = scale;
-  transforms["normalization"] = {{"centre_from", normalization.centre_from}, {"up_from", normalization.up_from}};
-  transforms.update(extra);
-  WriteJsonAtomic(path, transforms);
 }
 
 }  // namespace p2n

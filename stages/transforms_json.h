@@ -1,13 +1,17 @@
 #pragma once
 // transforms.json, the cameras the NeRF trains from, in the layout instant-ngp and nerfstudio read: intrinsics
 // (fl_x, fl_y, cx, cy, w, h) at the top level when every view shares them, else per frame; frames with
-// file_path and transform_matrix (camera-to-world, OpenGL axes). Our extras: split, near, far per frame, and
-// applied_transform (3x4, normalised from the source world) with applied_scale.
+// file_path and transform_matrix (camera-to-world, OpenGL axes). Our extras: split, near, far per frame;
+// applied_transform (3x4, normalised from the source world) with applied_scale and how the normalisation was
+// chosen; the dataset imported and the background its images were composited on; the export's frame.
+// TransformsFile is the one place that writes and reads it: the poses, import and export stages write one, every
+// later stage reads the poses stage's, and the dataset importer reads instant-ngp's, nerfstudio's and Blender's.
 
 #include <Eigen/Core>
-#include <nlohmann/json.hpp>
 
+#include <array>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,15 +22,46 @@ namespace p2n {
 
 struct CameraView {
   std::string file_path;  // as written in transforms.json, relative to it
-  PinholeCamera camera;   // intrinsics and world_from_cam (OpenGL axes) in the source world
+  PinholeCamera camera;   // intrinsics and world_from_cam (OpenGL axes)
   std::string split = "train";
-  double near = -1, far = -1;  // in source-world units along the view; negative: unknown
+  double near = -1, far = -1;          // along the view, in the file's units; negative: unknown
+  std::array<double, 4> distortion{};  // OpenCV k1, k2, p1, p2 (a dataset's; ours are undistorted: zero)
 };
 
-// Normalises the views (when `normalize`) from their cameras and `points`, fills unknown near/far from the
-// unit cube, and writes transforms.json. `extra` is merged into the top level.
-void WriteTransformsJson(const std::filesystem::path& path, const std::vector<CameraView>& views,
-                         const Normalization& normalization, const nlohmann::json& extra);
+// The fields of transforms.json beyond its frames.
+struct TransformsMeta {
+  // applied_transform and applied_scale: the similarity from the source world (COLMAP's, or the dataset's) to
+  // the frame of the views; centre_from and up_from: how it was chosen ("" when it was not).
+  Normalization normalization;
+  std::string dataset_kind, dataset_path;  // the dataset imported ("blender", "llff", ...); empty for photos
+  // The colour transparent images were composited on when imported; none: not composited (white stands in).
+  std::optional<std::array<float, 3>> background;
+  std::string frame;             // the export's: which frame its cameras are in; empty otherwise
+  bool cameras_refined = false;  // the export's: the training cameras as camera refinement left them
+
+  std::array<float, 3> Background() const { return background.value_or(std::array<float, 3>{1, 1, 1}); }
+};
+
+struct TransformsFile {
+  std::vector<CameraView> views;
+  TransformsMeta meta;
+  std::vector<std::string> warnings;  // from Read: frames left out
+
+  // Writes the views as they are (see NormalizedViews) and the meta fields.
+  void Write(const std::filesystem::path& file) const;
+  // Reads ours, instant-ngp's, nerfstudio's or one Blender split's (`split` for frames that name none). Image
+  // paths must resolve inside `root`; frames whose image is missing are left out with a warning (instant-ngp's fox
+  // lists 17); a frame without w and h takes its image's size. Every camera is checked (CheckCamera). UserError
+  // naming the file and the field.
+  static TransformsFile Read(const std::filesystem::path& file, const std::filesystem::path& root,
+                             const std::string& split = "train");
+  // The image of a view, resolved against the file's folder.
+  static std::filesystem::path ImagePath(const std::filesystem::path& file, const CameraView& view);
+};
+
+// The views in the frame of `normalization`, with unknown near and far filled from the unit cube as each camera
+// sees it.
+std::vector<CameraView> NormalizedViews(const std::vector<CameraView>& views, const Normalization& normalization);
 
 // Marks every Nth view (0: none) as "val", the others "train"; views whose split is already "val" or "test"
 // keep it.
@@ -35,5 +70,9 @@ void AssignHoldout(std::vector<CameraView>* views, int every);
 // Centres, ups and viewing directions of the views, for NormalizeScene.
 void CameraFrames(const std::vector<CameraView>& views, std::vector<Eigen::Vector3d>* centres,
                   std::vector<Eigen::Vector3d>* ups, std::vector<Eigen::Vector3d>* axes);
+
+// UserError naming `file` and `field` unless the camera is usable: a finite pose with an orthonormal rotation,
+// positive finite focal lengths, an image size. Every dataset reader checks its cameras with it.
+void CheckCamera(const PinholeCamera& camera, const std::filesystem::path& file, const std::string& field);
 
 }  // namespace p2n

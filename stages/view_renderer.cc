@@ -65,7 +65,7 @@ RenderedView RenderSplatView(const Gaussians<float>& splats, const OutputFrame& 
 
 }  // namespace
 
-ViewRenderer SplatRenderer(const fs::path& splat_dir, const fs::path& transforms, bool bounded) {
+ViewRenderer SplatRenderer(const fs::path& splat_dir, const ImportedDataset& poses, bool bounded) {
   const fs::path file = splat_dir / "splats.ply";
   const SplatReport report = SplatReport::Read(splat_dir / "splat_report.json");
   std::shared_ptr<const Gaussians<float>> splats;
@@ -74,7 +74,7 @@ ViewRenderer SplatRenderer(const fs::path& splat_dir, const fs::path& transforms
   } catch (const std::runtime_error& error) {
     throw UserError(format("{}; rerun the splat stage (photo2nerf splat -w WORKSPACE --force)", error.what()));
   }
-  const OutputFrame frame = MakeOutputFrame(report.frame, transforms);
+  const OutputFrame frame = MakeOutputFrame(report.frame, poses);
   RasterOptions options;
   options.projection.near = report.near;
   ViewRenderer renderer;

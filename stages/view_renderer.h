@@ -11,6 +11,7 @@
 #include "nerf/camera.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
+#include "stages/dataset_import.h"
 
 namespace p2n {
 
@@ -28,8 +29,7 @@ struct ViewRenderer {
 // The field, rendered with `options` (its progress callback is replaced by each call's).
 ViewRenderer FieldRenderer(const NerfModel& model, const RenderOptions& options);
 // The splat stage's result in `splat_dir` (splats.ply, splat_report.json); UserError naming a file that cannot be
-// read. `transforms` is the poses stage's, for the splats' frame.
-ViewRenderer SplatRenderer(const std::filesystem::path& splat_dir, const std::filesystem::path& transforms,
-                           bool bounded);
+// read. `poses` is the poses stage's transforms.json (LoadTransformsJson), for the splats' frame.
+ViewRenderer SplatRenderer(const std::filesystem::path& splat_dir, const ImportedDataset& poses, bool bounded);
 
 }  // namespace p2n

@@ -120,6 +120,84 @@ TEST_CASE("import: a COLMAP project folder (images/ + sparse/0) keeps its camera
   CHECK(fs::exists(dir / "ws" / "20_poses" / "sparse_points.ply"));
 }
 
+TEST_CASE("transforms.json reads back exactly what was written: cameras, bounds, normalisation, meta", "[import]") {
+  TempDir dir;
+  OIIO::ImageBuf image(OIIO::ImageSpec(8, 6, 3, OIIO::TypeDesc::UINT8));
+  fs::create_directories(dir / "images");
+  for (const char* name : {"a.png", "b.png"}) REQUIRE(image.write((dir / "images" / name).string()));
+  TransformsFile written;
+  for (int i = 0; i < 2; ++i) {
+    CameraView& view = written.views.emplace_back();
+    view.file_path = i == 0 ? "images/a.png" : "images/b.png";
+    view.camera.width = 8;
+    view.camera.height = 6;
+    view.camera.fx = 10.25;
+    view.camera.fy = 10.5;
+    view.camera.cx = 4.125;
+    view.camera.cy = 2.875;
+    view.camera.world_from_cam.topLeftCorner<3, 3>() =
+        Eigen::AngleAxisd(0.3 * i + 0.1, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+    view.camera.world_from_cam.topRightCorner<3, 1>() = Eigen::Vector3d(0.5, -1.25, 2.0 + i);
+    view.split = i == 0 ? "train" : "val";
+    view.near = 0.125 + i;
+    view.far = 4.5 + i;
+  }
+  written.views[1].distortion = {0.01, -0.002, 0.0005, 0};
+  TransformsMeta& meta = written.meta;
+  meta.normalization.normalized_from_world.topRows<3>() << 0, -0.5, 0, 1, 0.5, 0, 0, 2, 0, 0, 0.5, 3;
+  meta.normalization.scale = 0.5;
+  meta.normalization.centre_from = "focus point";
+  meta.normalization.up_from = "camera up vectors";
+  meta.dataset_kind = "llff";
+  meta.dataset_path = "/data/fern";
+  meta.background = {0.0f, 0.25f, 1.0f};
+  meta.frame = "frame: source";
+  meta.cameras_refined = true;
+
+  const auto check_same = [&](const TransformsFile& read) {
+    REQUIRE(read.views.size() == 2);
+    for (size_t i = 0; i < 2; ++i) {
+      const CameraView &a = written.views[i], &b = read.views[i];
+      CHECK(b.file_path == a.file_path);
+      CHECK(b.split == a.split);
+      CHECK((b.near == a.near && b.far == a.far));
+      CHECK(b.distortion == a.distortion);
+      CHECK((b.camera.width == a.camera.width && b.camera.height == a.camera.height));
+      CHECK((b.camera.fx == a.camera.fx && b.camera.fy == a.camera.fy && b.camera.cx == a.camera.cx &&
+             b.camera.cy == a.camera.cy));
+      CHECK(b.camera.world_from_cam == a.camera.world_from_cam);
+    }
+    CHECK(read.meta.normalization.normalized_from_world == meta.normalization.normalized_from_world);
+    CHECK(read.meta.normalization.scale == meta.normalization.scale);
+    CHECK(read.meta.normalization.centre_from == meta.normalization.centre_from);
+    CHECK(read.meta.normalization.up_from == meta.normalization.up_from);
+    CHECK((read.meta.dataset_kind == meta.dataset_kind && read.meta.dataset_path == meta.dataset_path));
+    CHECK(read.meta.Background() == *meta.background);
+    CHECK((read.meta.frame == meta.frame && read.meta.cameras_refined == meta.cameras_refined));
+  };
+  written.Write(dir / "transforms.json");
+  check_same(TransformsFile::Read(dir / "transforms.json", dir.path()));
+  // Intrinsics per frame when the views differ.
+  written.views[1].camera.fx = 11;
+  written.Write(dir / "transforms.json");
+  check_same(TransformsFile::Read(dir / "transforms.json", dir.path()));
+  CHECK(ReadJsonFile(dir / "transforms.json")["frames"][1]["fl_x"] == 11.0);
+
+  // A file without our fields (instant-ngp's): no dataset, white, the identity.
+  WriteText(dir / "transforms.json", R"({"fl_x": 10, "w": 8, "h": 6, "frames": [{"file_path": "images/a.png",
+      "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]})");
+  const TransformsFile plain = TransformsFile::Read(dir / "transforms.json", dir.path(), "test");
+  CHECK(plain.meta.dataset_kind.empty());
+  CHECK_FALSE(plain.meta.background.has_value());
+  CHECK(plain.meta.Background() == std::array<float, 3>{1, 1, 1});
+  CHECK(plain.meta.normalization.normalized_from_world == Eigen::Matrix4d::Identity());
+  CHECK(plain.views.at(0).split == "test");
+  CHECK((plain.views[0].near < 0 && plain.views[0].far < 0));
+  WriteText(dir / "transforms.json", R"({"fl_x": 10, "w": 8, "h": 6, "background": [1, 1], "frames": []})");
+  CHECK_THROWS_WITH(TransformsFile::Read(dir / "transforms.json", dir.path()),
+                    Catch::Contains("transforms.json': background must be three numbers"));
+}
+
 TEST_CASE("import: broken and hostile datasets are refused, naming the file and field", "[import]") {
   TempDir dir;
   fs::create_directories(dir / "data");
@@ -177,7 +255,7 @@ TEST_CASE("import: the shared datasets (fox, lego, lego_200, fern)", "[import][d
     const ImportedDataset fox = LoadDataset(kData / "fox");
     CHECK(fox.kind == "transforms.json");
     CHECK(fox.views.size() == 50);
-    CHECK(fox.views[0].distortion[0] != 0.0);
+    CHECK(fox.views[0].view.distortion[0] != 0.0);
     CHECK(fox.warnings.size() == 1);
   }
   SECTION("Blender lego: the three splits") {

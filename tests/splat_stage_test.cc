@@ -26,7 +26,8 @@ TEST_CASE("splat stage: splats where the scene is, scored on the held-out views,
   CHECK(ReadTextFile(out / "metrics.csv").find("wall_seconds,step,splats,train_loss,heldout_psnr\n") == 0);
 
   // In the source frame, the splats lie where the normalised scene's unit box maps to.
-  const OutputFrame frame = MakeOutputFrame("source", setup.dir / "ws" / "20_poses" / "transforms.json");
+  const fs::path ws = setup.dir / "ws";
+  const OutputFrame frame = MakeOutputFrame("source", LoadTransformsJson(ws / "20_poses" / "transforms.json", ws));
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (size_t i = 0; i < splats.size(); ++i) {
     mean += Eigen::Vector3d(splats.positions[3 * i], splats.positions[3 * i + 1], splats.positions[3 * i + 2]);
