@@ -62,6 +62,12 @@ double Mean(const std::vector<double>& values) {
   return values.empty() ? std::nan("") : std::accumulate(values.begin(), values.end(), 0.0) / values.size();
 }
 
+double Quantile(std::vector<double> values, double q) {
+  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * (values.size() - 1) + 0.5));
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return values[k];
+}
+
 double Ssim(const FloatImage& a, const FloatImage& b) {
   CheckSameSize(a, b, "SSIM");
   constexpr double kC1 = 0.01 * 0.01, kC2 = 0.03 * 0.03;

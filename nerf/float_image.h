@@ -22,6 +22,8 @@ double Psnr(const FloatImage& a, const FloatImage& b);
 double PsnrOfMse(double mse);
 // The mean of per-view scores; NaN for none.
 double Mean(const std::vector<double>& values);
+// The q-quantile (0..1, nearest rank) of a non-empty list.
+double Quantile(std::vector<double> values, double q);
 // Structural similarity (Wang et al. 2004: 11x11 Gaussian window, sigma 1.5, K1 0.01, K2 0.03, peak 1) of
 // the luminance-free per-channel form, averaged over pixels and channels; std::invalid_argument when the sizes
 // differ.

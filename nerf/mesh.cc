@@ -13,6 +13,7 @@
 
 #include "nerf/config_check.h"
 #include "nerf/denormals.h"
+#include "nerf/float_image.h"
 
 namespace p2n {
 namespace {
@@ -20,11 +21,15 @@ namespace {
 using Matrix = RadianceField<float>::Matrix;
 
 constexpr size_t kBatch = 4096;
+constexpr size_t kMinCubePoints = 100;  // FitCube: fewer points leave the cube as it is
+constexpr double kCubeQuantile = 0.05;  // the cube spans these quantiles of the points along each axis ...
+constexpr double kCubeMargin = 1.2;     // ... its longest side widened by this factor
 
-// The centre of lattice cell (i, j, k) of n per side of the box [-1, 1]^3 (fractional indices interpolate).
-Eigen::Vector3d LatticePoint(int n, double i, double j, double k) {
-  const double spacing = 2.0 / n;
-  return Eigen::Vector3d(-1 + (i + 0.5) * spacing, -1 + (j + 0.5) * spacing, -1 + (k + 0.5) * spacing);
+// The centre of lattice cell (i, j, k) of n per side of the options' box (fractional indices interpolate).
+Eigen::Vector3d LatticePoint(const MeshOptions& options, double i, double j, double k) {
+  const double spacing = 2.0 / options.resolution;
+  const Eigen::Vector3d unit(-1 + (i + 0.5) * spacing, -1 + (j + 0.5) * spacing, -1 + (k + 0.5) * spacing);
+  return options.centre + options.half_size * unit;
 }
 
 // The level set threshold - density (negative inside) on the lattice, sampled slice by slice; empty space is
@@ -40,7 +45,7 @@ openvdb::FloatGrid::Ptr SampleLevelSet(const NerfModel& model, const MeshOptions
     std::vector<openvdb::Coord> coords;
     for (int j = 0; j < n; ++j) {
       for (int k = 0; k < n; ++k) {
-        const Eigen::Vector3d p = LatticePoint(n, i, j, k);
+        const Eigen::Vector3d p = LatticePoint(options, i, j, k);
         if (!model.occupancy.Occupied(FieldPoint(model, p))) continue;
         points.push_back(p);
         coords.emplace_back(i, j, k);
@@ -60,7 +65,7 @@ openvdb::FloatGrid::Ptr SampleLevelSet(const NerfModel& model, const MeshOptions
 }
 
 // The level set's zero crossing as triangles in world units, degenerate ones left out.
-Mesh Polygonize(const openvdb::FloatGrid& grid, int n) {
+Mesh Polygonize(const openvdb::FloatGrid& grid, const MeshOptions& options) {
   std::vector<openvdb::Vec3s> vertices;
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
@@ -69,8 +74,10 @@ Mesh Polygonize(const openvdb::FloatGrid& grid, int n) {
   mesh.positions.reserve(vertices.size());
   // Where the surface is cut by the box, the cap interpolates to the empty space beyond the last samples: it is
   // put on the box's face.
+  const Eigen::Vector3d low = options.centre.array() - options.half_size;
+  const Eigen::Vector3d high = options.centre.array() + options.half_size;
   for (const openvdb::Vec3s& v : vertices) {
-    mesh.positions.push_back(LatticePoint(n, v.x(), v.y(), v.z()).cwiseMax(-1.0).cwiseMin(1.0).cast<float>());
+    mesh.positions.push_back(LatticePoint(options, v.x(), v.y(), v.z()).cwiseMax(low).cwiseMin(high).cast<float>());
   }
   // OpenVDB orders a polygon's corners counter-clockwise seen from the side where the level set is positive
   // (outside).
@@ -127,6 +134,22 @@ void Shade(const NerfModel& model, double h, Mesh* mesh) {
 
 }  // namespace
 
+void FitCube(const std::vector<Eigen::Vector3d>& points, MeshOptions* options) {
+  if (points.size() < kMinCubePoints) return;
+  Eigen::Vector3d low, high;
+  for (int axis = 0; axis < 3; ++axis) {
+    std::vector<double> values;
+    values.reserve(points.size());
+    for (const Eigen::Vector3d& p : points) values.push_back(p[axis]);
+    low[axis] = std::max(-1.0, Quantile(values, kCubeQuantile));
+    high[axis] = std::min(1.0, Quantile(values, 1 - kCubeQuantile));
+  }
+  if ((high - low).minCoeff() <= 0) return;
+  options->half_size = std::min(1.0, 0.5 * kCubeMargin * (high - low).maxCoeff());
+  const double room = 1 - options->half_size;
+  options->centre = (0.5 * (low + high)).cwiseMax(-room).cwiseMin(room);
+}
+
 std::vector<float> DensitiesAt(const NerfModel& model, const std::vector<Eigen::Vector3d>& points) {
   std::vector<float> density(points.size(), 0.0f);
   tbb::parallel_for(size_t{0}, (points.size() + kBatch - 1) / kBatch, [&](size_t batch) {
@@ -151,14 +174,16 @@ void MeshOptions::Check() const {
   CheckField(resolution >= 8 && resolution <= 1024, "mesh", "resolution", "be 8..1024", resolution);
   CheckField(density_threshold > 0 && std::isfinite(density_threshold), "mesh", "density_threshold", "be positive",
              density_threshold);
+  CheckField(half_size > 0 && std::isfinite(half_size), "mesh", "half_size", "be positive", half_size);
+  CheckField(centre.allFinite(), "mesh", "centre", "be finite", centre.norm());
 }
 
 Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options,
                  const std::function<void(size_t)>& on_slices_done) {
   options.Check();
   const openvdb::FloatGrid::Ptr grid = SampleLevelSet(model, options, on_slices_done);
-  Mesh mesh = Polygonize(*grid, options.resolution);
-  Shade(model, 0.1 * 2.0 / options.resolution, &mesh);  // a tenth of a cell
+  Mesh mesh = Polygonize(*grid, options);
+  Shade(model, 0.1 * 2.0 * options.half_size / options.resolution, &mesh);  // a tenth of a cell
   return mesh;
 }
 

@@ -23,10 +23,19 @@ struct Mesh {
 struct MeshOptions {
   int resolution = 256;          // density samples along each side of the box
   float density_threshold = 25;  // the surface: where the density (1 / world unit) crosses this
+  // The box meshed: a cube of this centre and half size (world units); the scene box [-1, 1]^3 by default.
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double half_size = 1;
 
   // std::invalid_argument naming the field and its rule (ExtractMesh checks its options).
   void Check() const;
 };
+
+// Fits options' cube to where `points` lie (e.g. where the middle of the training views ends: the subject of an
+// unbounded capture): their 5th to 95th percentile along each axis, the longest side widened by a fifth, moved and
+// shrunk to stay inside the scene box [-1, 1]^3. The cube is left as it is for fewer than 100 points or when the
+// points lie outside the box.
+void FitCube(const std::vector<Eigen::Vector3d>& points, MeshOptions* options);
 
 // The field's densities (1 / world unit) at world points.
 std::vector<float> DensitiesAt(const NerfModel& model, const std::vector<Eigen::Vector3d>& points);

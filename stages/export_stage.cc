@@ -27,6 +27,9 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr size_t kMaxPoints = 2'000'000;
+constexpr size_t kMinFocusPoints = 100;   // fewer central depth points: the focus region is the whole box
+constexpr double kFocusQuantile = 0.05;   // the focus region spans these quantiles of the central points ...
+constexpr double kFocusMargin = 1.2;      // ... widened by this factor
 constexpr float kFallbackThreshold = 25;  // per normalised unit: what fits lego's surface
 
 // The training views' cameras as the field saw them: corrected where camera refinement moved them.
@@ -52,8 +55,13 @@ void WriteCameras(const fs::path& path, const ImportedDataset& dataset, const Ou
   transforms.Write(path);
 }
 
-std::vector<ColouredPoint> DepthPoints(const NerfModel& model, const ImportedDataset& dataset,
-                                       const ExportOptions& options) {
+// Where the training views' rays end, where they are opaque.
+struct DepthSamples {
+  std::vector<ColouredPoint> points;     // coloured, at most about kMaxPoints (every k-th)
+  std::vector<Eigen::Vector3d> central;  // every one from the middle half (in width and height) of each view
+};
+
+DepthSamples SampleDepths(const NerfModel& model, const ImportedDataset& dataset, const ExportOptions& options) {
   std::vector<const ImportedView*> views;
   size_t pixels = 0;
   for (const ImportedView& view : dataset.views) {
@@ -68,7 +76,7 @@ std::vector<ColouredPoint> DepthPoints(const NerfModel& model, const ImportedDat
     progress.Add(static_cast<int64_t>(n));
     ThrowIfCancelled();  // Ctrl-C stops within a tile
   };
-  std::vector<ColouredPoint> points;
+  DepthSamples samples;
   const double keep_every = std::max(1.0, double(pixels) / kMaxPoints);
   double next_keep = 0;
   size_t counter = 0;
@@ -78,36 +86,47 @@ std::vector<ColouredPoint> DepthPoints(const NerfModel& model, const ImportedDat
     for (int y = 0; y < camera.height; ++y) {
       for (int x = 0; x < camera.width; ++x) {
         const size_t i = size_t(y) * camera.width + x;
-        if (rendered.opacity.pixels[i] < options.points_opacity || counter++ < next_keep) continue;
-        next_keep += keep_every;
+        if (rendered.opacity.pixels[i] < options.points_opacity) continue;
         const Ray ray = CameraRay(camera, x + 0.5, y + 0.5);
         const Eigen::Vector3d p = ray.origin + rendered.depth.pixels[i] * ray.direction;
-        if (!p.allFinite() || (model.space == SceneSpace::kBounded && p.cwiseAbs().maxCoeff() > 1)) continue;
-        ColouredPoint point;
+        if (!p.allFinite()) continue;
+        if (4 * std::abs(2 * x + 1 - camera.width) < 2 * camera.width &&
+            4 * std::abs(2 * y + 1 - camera.height) < 2 * camera.height)
+          samples.central.push_back(p);
+        if (counter++ < next_keep) continue;
+        next_keep += keep_every;
+        if (model.space == SceneSpace::kBounded && p.cwiseAbs().maxCoeff() > 1) continue;
+        ColouredPoint& point = samples.points.emplace_back();
         point.position = p.cast<float>();
         for (int c = 0; c < 3; ++c) {
           point.rgb[c] =
               static_cast<uint8_t>(std::lround(255 * std::clamp(rendered.rgb.pixels[3 * i + c], 0.0f, 1.0f)));
         }
-        points.push_back(point);
       }
     }
   }
-  return points;
+  return samples;
 }
 
-// The mesh's resolution and threshold: export.threshold, or, when it is 0, SurfaceThreshold at the depth points
-// (the fixed kFallbackThreshold when no pixel of a training view is opaque).
-MeshOptions ChooseMeshOptions(const NerfModel& model, const ExportOptions& options,
-                              const std::vector<ColouredPoint>& depth_points) {
+// export.region resolved: "box" or "focus".
+std::string RegionKind(const NerfModel& model, const ExportOptions& options) {
+  if (options.region != "auto") return options.region;
+  return model.space == SceneSpace::kBounded ? "box" : "focus";
+}
+
+// The mesh's region, resolution and threshold: export.threshold, or, when it is 0, SurfaceThreshold at the depth
+// points inside the region (the fixed kFallbackThreshold when no pixel of a training view is opaque there).
+MeshOptions ChooseMeshOptions(const NerfModel& model, const ExportOptions& options, const DepthSamples& depths) {
   MeshOptions mesh;
   mesh.resolution = options.resolution;
+  if (RegionKind(model, options) == "focus") FitCube(depths.central, &mesh);
   mesh.density_threshold = static_cast<float>(options.threshold);
   if (options.threshold > 0) return mesh;
   std::vector<Eigen::Vector3d> surface;
-  for (const ColouredPoint& point : depth_points) {
+  for (const ColouredPoint& point : depths.points) {
     // Only what the mesh covers: beyond the box an unbounded field's densities are in contracted units.
-    if (point.position.cwiseAbs().maxCoeff() <= 1) surface.push_back(point.position.cast<double>());
+    const Eigen::Vector3d p = point.position.cast<double>();
+    if ((p - mesh.centre).cwiseAbs().maxCoeff() <= mesh.half_size) surface.push_back(p);
   }
   const float threshold = SurfaceThreshold(model, surface);
   mesh.density_threshold = threshold > 0 ? threshold : kFallbackThreshold;
@@ -133,10 +152,12 @@ void ExportStage::Run(StageContext& context) const {
       ReadCameraCorrections(context.upstream_dirs.at("train") / "train_report.json");
   ApplyCameraCorrections(corrections, &dataset);
   const bool auto_threshold = options.threshold == 0;
-  std::vector<ColouredPoint> points;
-  if (options.points || auto_threshold) points = DepthPoints(model, dataset, options);
+  const std::string region = RegionKind(model, options);
+  DepthSamples depths;
+  if (options.points || auto_threshold || region == "focus") depths = SampleDepths(model, dataset, options);
+  std::vector<ColouredPoint>& points = depths.points;
 
-  const MeshOptions mesh_options = ChooseMeshOptions(model, options, points);
+  const MeshOptions mesh_options = ChooseMeshOptions(model, options, depths);
   Mesh mesh;
   {
     Progress progress("export: density", options.resolution, "slices");
@@ -154,14 +175,16 @@ void ExportStage::Run(StageContext& context) const {
   }
   const std::vector<std::string> comments = {
       frame.description,
-      format("marching cubes at {}^3 samples of the box [-1, 1]^3 (normalised), density threshold "
-             "{:.4g}{}",
-             options.resolution, mesh_options.density_threshold, auto_threshold ? " (from the field)" : "")};
+      format("marching cubes at {}^3 samples of the cube of half size {:.4g} around ({:.4g}, {:.4g}, {:.4g}) "
+             "(normalised; the {}), density threshold {:.4g}{}",
+             options.resolution, mesh_options.half_size, mesh_options.centre.x(), mesh_options.centre.y(),
+             mesh_options.centre.z(), region == "box" ? "scene box" : "focus region", mesh_options.density_threshold,
+             auto_threshold ? " (from the field)" : "")};
   WriteMeshPly(context.output_dir / "mesh.ply", mesh, comments);
   if (options.obj) WriteMeshObj(context.output_dir / "mesh.obj", mesh, comments);
   if (mesh.triangles.empty()) {
     LogWarning(
-        format("export: the density never reaches {:.4g} inside the scene box: the mesh is empty; lower "
+        format("export: the density never reaches {:.4g} inside the region meshed: the mesh is empty; lower "
                "--export.threshold",
                mesh_options.density_threshold));
   }
@@ -176,7 +199,11 @@ void ExportStage::Run(StageContext& context) const {
                              {"misoriented_edges", edges.misoriented},
                              {"resolution", options.resolution},
                              {"threshold", mesh_options.density_threshold},
-                             {"threshold_from_field", auto_threshold}}},
+                             {"threshold_from_field", auto_threshold},
+                             {"region",
+                              {{"kind", region},
+                               {"centre", {mesh_options.centre.x(), mesh_options.centre.y(), mesh_options.centre.z()}},
+                               {"half_size", mesh_options.half_size}}}}},
                            {"frame", options.frame}};
   WriteCameras(context.output_dir / "transforms.json", dataset, frame, !corrections.empty());
   report["cameras"] = {{"file", "transforms.json"}, {"views", dataset.views.size()}, {"refined", !corrections.empty()}};

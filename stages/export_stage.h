@@ -1,8 +1,8 @@
 #pragma once
-// The export stage: a mesh of the trained scene's surface (marching cubes on the density inside the scene box,
-// coloured from the field), a coloured point cloud from the rendered depth of the training views, and the
-// cameras (transforms.json, the training ones as camera refinement left them), in COLMAP's (or the dataset's)
-// world frame or the normalised one; binary PLY (and OBJ when asked).
+// The export stage: a mesh of the trained scene's surface (marching cubes on the density inside the scene box, or
+// in an unbounded scene the part of it the views look at; coloured from the field), a coloured point cloud from the
+// rendered depth of the training views, and the cameras (transforms.json, the training ones as camera refinement left
+// them), in COLMAP's (or the dataset's) world frame or the normalised one; binary PLY (and OBJ when asked).
 
 #include <string>
 
@@ -18,6 +18,7 @@ struct ExportOptions {
   bool points = true;            // write points.ply
   int points_width = 200;        // the training views are rendered this wide for the point cloud
   double points_opacity = 0.95;  // pixels at least this opaque give points
+  std::string region = "auto";   // the cube meshed: box (the scene box), focus (what the views look at), auto
 
   template <class V>
   void Visit(V& v) {
@@ -35,6 +36,11 @@ struct ExportOptions {
     v("points", points, "write points.ply, a coloured point cloud from the rendered depth of the training views");
     v("points_width", points_width, "width the training views are rendered at for the point cloud", "pixels");
     v("points_opacity", points_opacity, "pixels at least this opaque give points");
+    v("region", region,
+      "the cube meshed: box (the whole scene box [-1, 1]^3), focus (around where the middle of the training views "
+      "ends: the subject, not the walls and floaters around it), auto: focus for unbounded and forward-facing "
+      "scenes, box for bounded ones",
+      "", OptionKind::kResult, {"auto", "box", "focus"});
   }
   void Check() const;
 };
@@ -43,7 +49,7 @@ class ExportStage : public Stage {
  public:
   std::string name() const override { return "export"; }
   std::string folder() const override { return "50_export"; }
-  int format_version() const override { return 3; }  // 3: the surface threshold from the field by default
+  int format_version() const override { return 4; }  // 4: the mesh covers the focus region by default
   std::vector<std::string> upstream() const override { return {"poses", "train"}; }
   void Run(StageContext& context) const override;
 };

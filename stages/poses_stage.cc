@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "nerf/camera.h"
+#include "nerf/float_image.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"

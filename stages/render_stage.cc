@@ -197,8 +197,11 @@ PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& datas
     ThrowIfCancelled();  // Ctrl-C stops within a tile
   };
   std::unique_ptr<VideoWriter> video;
-  if (options.video)
+  if (options.video) {
     video = std::make_unique<VideoWriter>(out / "video.mp4", cameras[0].width, cameras[0].height, options.fps);
+    if (video->codec() != "avc1")
+      LogWarning("render: no H.264 encoder; video.mp4 is MPEG-4 part 2, which browsers may not play");
+  }
   const PathRange path_range(dataset);
   double seconds = 0;
   size_t samples = 0, rays = 0;

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "pipeline/errors.h"
+#include "nerf/float_image.h"
 #include "stages/camera_geometry.h"
 
 namespace p2n {
@@ -28,12 +29,6 @@ Eigen::Vector3d Median(const std::vector<Eigen::Vector3d>& points) {
 }
 
 }  // namespace
-
-double Quantile(std::vector<double> values, double q) {
-  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * (values.size() - 1) + 0.5));
-  std::nth_element(values.begin(), values.begin() + k, values.end());
-  return values[k];
-}
 
 Normalization NormalizeScene(const std::vector<Eigen::Vector3d>& centres, const std::vector<Eigen::Vector3d>& ups,
                              const std::vector<Eigen::Vector3d>& axes, const std::vector<Eigen::Vector3d>& points) {

@@ -26,7 +26,4 @@ struct Normalization {
 Normalization NormalizeScene(const std::vector<Eigen::Vector3d>& centres, const std::vector<Eigen::Vector3d>& ups,
                              const std::vector<Eigen::Vector3d>& axes, const std::vector<Eigen::Vector3d>& points);
 
-// The q-quantile (0..1, nearest rank) of a non-empty list.
-double Quantile(std::vector<double> values, double q);
-
 }  // namespace p2n

@@ -7,7 +7,6 @@
 
 #include "pipeline/errors.h"
 #include "pipeline/format.h"
-#include "pipeline/log.h"
 
 namespace p2n {
 
@@ -36,8 +35,6 @@ VideoWriter::VideoWriter(const std::filesystem::path& path, int width, int heigh
                "(install Debian's libopencv-videoio406 with FFmpeg), or the folder is not writable",
                path.string()));
   }
-  if (codec_ != "avc1")
-    LogWarning(format("{}: no H.264 encoder; written as MPEG-4 part 2, which browsers may not play", path.string()));
 }
 
 VideoWriter::~VideoWriter() = default;

@@ -21,6 +21,7 @@ class VideoWriter {
   void Add(const FloatImage& frame);
   // Flushes and closes the file.
   void Close();
+  // "avc1" (H.264), or "mp4v" (MPEG-4 part 2, which browsers may not play) where FFmpeg has no H.264 encoder.
   const std::string& codec() const { return codec_; }
 
  private:

@@ -90,6 +90,58 @@ TEST_CASE("mesh: a surface cut by the box is closed by the box's faces, an empty
   CHECK_THROWS_AS(ExtractMesh(model, options), std::invalid_argument);
 }
 
+TEST_CASE("mesh: a smaller cube off the centre meshes only its part of the surface, at its own cell size", "[mesh]") {
+  const NerfModel model = SphereModel();
+  MeshOptions options;
+  options.resolution = 32;
+  options.density_threshold = kThreshold;
+  options.centre = Eigen::Vector3d(0.4, 0, 0);
+  options.half_size = 0.4;  // x in [0, 0.8], y and z in [-0.4, 0.4]: cuts the sphere of radius 0.6
+  const Mesh mesh = ExtractMesh(model, options);
+  REQUIRE(mesh.triangles.size() > 500);
+  CHECK(CountEdges(mesh).watertight());  // closed by the cube's faces
+  const float cell = 2.0f * 0.4f / options.resolution;
+  size_t on_sphere = 0;
+  for (const Eigen::Vector3f& p : mesh.positions) {
+    const Eigen::Vector3f local = p - Eigen::Vector3f(0.4f, 0, 0);
+    REQUIRE(local.cwiseAbs().maxCoeff() <= 0.4f + 1e-6f);
+    // Away from the cube's faces (the caps that close the mesh reach half a cell in), on the sphere.
+    if (local.cwiseAbs().maxCoeff() < 0.4f - cell) {
+      CHECK(std::abs(p.norm() - kRadius) < 0.1f * cell);
+      ++on_sphere;
+    }
+  }
+  CHECK(on_sphere > 100);
+  options.half_size = 0;
+  CHECK_THROWS_WITH(ExtractMesh(model, options), Catch::Contains("half_size"));
+}
+
+TEST_CASE("mesh: a cube fitted to points spans their bulk, inside the scene box, outliers ignored", "[mesh]") {
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 1000; ++i) {  // evenly in x in [0.1, 0.5], y in [-0.2, 0.2], z in [0, 0.2]
+    const double u = (i % 10 + 0.5) / 10, v = (i / 10 % 10 + 0.5) / 10, w = (i / 100 + 0.5) / 10;
+    points.emplace_back(0.1 + 0.4 * u, -0.2 + 0.4 * v, 0.2 * w);
+  }
+  for (int i = 0; i < 40; ++i) points.emplace_back(5.0, -3.0, 0.9);  // 4%: floaters and background
+  MeshOptions options;
+  FitCube(points, &options);
+  // The 5th to 95th percentile along x is about [0.12, 0.48]; half of it widened by 1.2 about 0.22.
+  CHECK(options.half_size == Approx(0.5 * 1.2 * 0.36).margin(0.02));
+  CHECK(options.centre.x() == Approx(0.3).margin(0.02));
+  CHECK(options.centre.y() == Approx(0.0).margin(0.02));
+  CHECK(options.centre.z() == Approx(0.1).margin(0.02));
+
+  // Near the box's face, the cube moves inwards; too few points leave it alone.
+  for (Eigen::Vector3d& p : points) p.x() += 0.6;  // the bulk reaches past x = 1
+  MeshOptions moved;
+  FitCube(points, &moved);
+  CHECK(moved.centre.x() + moved.half_size <= 1.0 + 1e-12);
+  CHECK(moved.half_size == Approx(options.half_size).margin(1e-9));
+  MeshOptions few;
+  FitCube(std::vector<Eigen::Vector3d>(points.begin(), points.begin() + 50), &few);
+  CHECK((few.half_size == 1.0 && few.centre == Eigen::Vector3d::Zero()));
+}
+
 TEST_CASE("mesh: the threshold chosen from the field puts the surface where the views see it", "[mesh]") {
   // The sphere's density ramps up from 0 at radius 0.6625 by 400 per unit inwards: no hard surface, so the
   // rendered depth lies some way inside; the mesh must follow it, not a fixed density.

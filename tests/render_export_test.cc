@@ -170,6 +170,15 @@ TEST_CASE("export stage: mesh and point cloud open in Assimp, finite, in the sou
   const fs::path out = setup.dir / "ws" / "50_export";
   const nlohmann::json report = ReadJsonFile(out / "export_report.json");
   REQUIRE(report["mesh"]["triangles"].get<size_t>() > 100);
+  // The small scene is unbounded (a transforms.json dataset): the mesh covers the cube the views look at, inside
+  // the scene box.
+  const nlohmann::json& region = report["mesh"]["region"];
+  CHECK(region["kind"] == "focus");
+  const double half_size = region["half_size"].get<double>();
+  CHECK((half_size > 0.05 && half_size <= 1.0));
+  const Eigen::Vector3d centre(region["centre"][0].get<double>(), region["centre"][1].get<double>(),
+                               region["centre"][2].get<double>());
+  CHECK(centre.cwiseAbs().maxCoeff() + half_size <= 1.0 + 1e-9);
 
   std::vector<aiVector3D> normalized;
   for (const char* file : {"mesh.ply", "mesh.obj"}) {
@@ -182,7 +191,7 @@ TEST_CASE("export stage: mesh and point cloud open in Assimp, finite, in the sou
     for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
       const aiVector3D& p = mesh->mVertices[v];
       REQUIRE((std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)));
-      CHECK(std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) <= 1.0f + 1e-5f);  // inside the scene box
+      CHECK((Eigen::Vector3d(p.x, p.y, p.z) - centre).cwiseAbs().maxCoeff() <= half_size + 1e-5);  // in the region
     }
     for (unsigned f = 0; f < mesh->mNumFaces; ++f) REQUIRE(mesh->mFaces[f].mNumIndices == 3);
     if (normalized.empty()) normalized.assign(mesh->mVertices, mesh->mVertices + mesh->mNumVertices);
@@ -210,6 +219,13 @@ TEST_CASE("export stage: mesh and point cloud open in Assimp, finite, in the sou
     const Eigen::Vector3d back = normalized_from_source * source.homogeneous();
     CHECK((back - Eigen::Vector3d(normalized[v].x, normalized[v].y, normalized[v].z)).norm() < 1e-4);
   }
+
+  // export.region box: the whole scene box.
+  config.Set("export.region", "box", "test");
+  setup.runner.Run(setup.workspace, config, Until("export"));
+  const nlohmann::json box = ReadJsonFile(out / "export_report.json")["mesh"]["region"];
+  CHECK(box["kind"] == "box");
+  CHECK(box["half_size"] == 1.0);
 }
 
 TEST_CASE("export stage: transforms.json holds the cameras, the training ones as camera refinement moved them",
