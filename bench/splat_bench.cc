@@ -12,7 +12,7 @@
 #include "pipeline/file_util.h"
 #include "splat/rasterizer.h"
 #include "splat/splat_ply.h"
-#include "stages/output_frame.h"
+#include "formats/output_frame.h"
 #include "stages/stage_reports.h"
 #include "stages/training_data.h"
 

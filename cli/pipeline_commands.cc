@@ -13,7 +13,7 @@
 #include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/runner.h"
-#include "stages/dataset_import.h"
+#include "formats/dataset_import.h"
 #include "stages/stage_reports.h"
 #include "stages/stages.h"
 

@@ -15,12 +15,12 @@
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
 #include "stages/camera_corrections.h"
-#include "stages/dataset_import.h"
-#include "stages/mesh_io.h"
-#include "stages/output_frame.h"
-#include "stages/ply.h"
+#include "formats/dataset_import.h"
+#include "formats/mesh_io.h"
+#include "formats/output_frame.h"
+#include "formats/ply.h"
 #include "stages/stage_io.h"
-#include "stages/transforms_json.h"
+#include "formats/transforms_json.h"
 
 namespace p2n {
 namespace fs = std::filesystem;

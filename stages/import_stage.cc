@@ -12,8 +12,8 @@
 #include "pipeline/hash.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
-#include "stages/dataset_import.h"
-#include "stages/ply.h"
+#include "formats/dataset_import.h"
+#include "formats/ply.h"
 #include "stages/poses_stage.h"
 
 namespace p2n {

@@ -9,10 +9,10 @@
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/log.h"
-#include "stages/colmap_model.h"
-#include "stages/ply.h"
-#include "stages/scene_normalization.h"
-#include "stages/transforms_json.h"
+#include "formats/colmap_model.h"
+#include "formats/ply.h"
+#include "formats/scene_normalization.h"
+#include "formats/transforms_json.h"
 
 namespace p2n {
 namespace fs = std::filesystem;

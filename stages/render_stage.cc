@@ -16,11 +16,11 @@
 #include "pipeline/hash.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
-#include "stages/dataset_import.h"
+#include "formats/dataset_import.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"
 #include "stages/training_data.h"
-#include "stages/video.h"
+#include "formats/video.h"
 #include "stages/view_renderer.h"
 
 namespace p2n {

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "nerf/camera.h"
-#include "stages/ply.h"
+#include "formats/ply.h"
 
 namespace p2n {
 

@@ -9,7 +9,7 @@
 #include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/runner.h"
-#include "stages/dataset_import.h"
+#include "formats/dataset_import.h"
 #include "stages/report_html.h"
 #include "stages/stage_reports.h"
 #include "stages/training_data.h"

@@ -11,9 +11,9 @@
 #include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/subprocess.h"
-#include "stages/camera_geometry.h"
+#include "formats/camera_geometry.h"
 #include "stages/colmap_flags.h"
-#include "stages/colmap_model.h"
+#include "formats/colmap_model.h"
 #include "stages/stage_reports.h"
 
 namespace p2n {

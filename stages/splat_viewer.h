@@ -9,7 +9,7 @@
 
 #include "nerf/trainer.h"
 #include "splat/gaussians.h"
-#include "stages/output_frame.h"
+#include "formats/output_frame.h"
 
 namespace p2n {
 

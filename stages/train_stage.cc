@@ -17,7 +17,7 @@
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
 #include "stages/camera_corrections.h"
-#include "stages/dataset_import.h"
+#include "formats/dataset_import.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"
 #include "stages/training_data.h"

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "nerf/trainer.h"
-#include "stages/dataset_import.h"
+#include "formats/dataset_import.h"
 
 namespace p2n {
 

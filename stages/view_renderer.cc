@@ -10,7 +10,7 @@
 #include "pipeline/format.h"
 #include "splat/rasterizer.h"
 #include "splat/splat_ply.h"
-#include "stages/output_frame.h"
+#include "formats/output_frame.h"
 #include "stages/stage_reports.h"
 
 namespace p2n {

@@ -11,7 +11,7 @@
 #include "nerf/camera.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
-#include "stages/dataset_import.h"
+#include "formats/dataset_import.h"
 
 namespace p2n {
 

@@ -6,7 +6,7 @@
 
 #include "pipeline/file_util.h"
 #include "pipeline/workspace.h"
-#include "stages/colmap_model.h"
+#include "formats/colmap_model.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {

@@ -7,8 +7,8 @@
 
 #include "pipeline/errors.h"
 #include "stages/colmap_flags.h"
-#include "stages/colmap_model.h"
-#include "stages/npy.h"
+#include "formats/colmap_model.h"
+#include "formats/npy.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {

@@ -10,8 +10,8 @@
 #include "nerf/synthetic_scene.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
-#include "stages/colmap_model.h"
-#include "stages/dataset_import.h"
+#include "formats/colmap_model.h"
+#include "formats/dataset_import.h"
 #include "stages/stages.h"
 #include "tests/test_util.h"
 

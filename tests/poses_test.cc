@@ -8,8 +8,8 @@
 
 #include "nerf/camera.h"
 #include "pipeline/errors.h"
-#include "stages/ply.h"
-#include "stages/scene_normalization.h"
+#include "formats/ply.h"
+#include "formats/scene_normalization.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {

@@ -6,7 +6,7 @@
 #include "pipeline/file_util.h"
 #include "splat/splat_ply.h"
 #include "stage_fixtures.h"
-#include "stages/output_frame.h"
+#include "formats/output_frame.h"
 
 namespace p2n::testing {
 namespace fs = std::filesystem;

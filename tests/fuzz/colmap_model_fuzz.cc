@@ -2,7 +2,7 @@
 #include <fstream>
 
 #include "pipeline/errors.h"
-#include "stages/colmap_model.h"
+#include "formats/colmap_model.h"
 #include "tests/fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -2,7 +2,7 @@
 #include <cstdlib>
 
 #include "pipeline/errors.h"
-#include "stages/ply.h"
+#include "formats/ply.h"
 #include "tests/fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

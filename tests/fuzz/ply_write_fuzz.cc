@@ -8,8 +8,8 @@
 #include <fstream>
 #include <iterator>
 
-#include "stages/mesh_io.h"
-#include "stages/ply.h"
+#include "formats/mesh_io.h"
+#include "formats/ply.h"
 #include "tests/fuzz/fuzz_util.h"
 
 namespace {

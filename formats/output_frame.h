@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <string>
 
-#include "stages/dataset_import.h"
+#include "formats/dataset_import.h"
 
 namespace p2n {
 

@@ -1,4 +1,4 @@
-#include "stages/transforms_json.h"
+#include "formats/transforms_json.h"
 
 #include <nlohmann/json.hpp>
 

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "stages/transforms_json.h"
+#include "formats/transforms_json.h"
 
 namespace p2n {
 

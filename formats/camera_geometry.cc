@@ -1,4 +1,4 @@
-#include "stages/camera_geometry.h"
+#include "formats/camera_geometry.h"
 
 #include <Eigen/Dense>
 

@@ -1,4 +1,4 @@
-#include "stages/dataset_import.h"
+#include "formats/dataset_import.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,8 +7,8 @@
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
-#include "stages/colmap_model.h"
-#include "stages/npy.h"
+#include "formats/colmap_model.h"
+#include "formats/npy.h"
 
 namespace p2n {
 namespace fs = std::filesystem;

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "nerf/camera.h"
-#include "stages/scene_normalization.h"
+#include "formats/scene_normalization.h"
 
 namespace p2n {
 

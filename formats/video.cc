@@ -1,4 +1,4 @@
-#include "stages/video.h"
+#include "formats/video.h"
 
 #include <opencv2/videoio.hpp>
 

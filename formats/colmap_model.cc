@@ -1,4 +1,4 @@
-#include "stages/colmap_model.h"
+#include "formats/colmap_model.h"
 
 #include <cmath>
 #include <cstring>

@@ -1,4 +1,4 @@
-#include "stages/ply.h"
+#include "formats/ply.h"
 
 #include <algorithm>
 #include <charconv>

@@ -1,4 +1,4 @@
-#include "stages/scene_normalization.h"
+#include "formats/scene_normalization.h"
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
@@ -8,7 +8,7 @@
 
 #include "pipeline/errors.h"
 #include "nerf/float_image.h"
-#include "stages/camera_geometry.h"
+#include "formats/camera_geometry.h"
 
 namespace p2n {
 namespace {

@@ -1,4 +1,4 @@
-#include "stages/output_frame.h"
+#include "formats/output_frame.h"
 
 #include <Eigen/Geometry>
 

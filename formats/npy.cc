@@ -1,4 +1,4 @@
-#include "stages/npy.h"
+#include "formats/npy.h"
 
 #include <zlib.h>
 

@@ -1,10 +1,10 @@
-#include "stages/mesh_io.h"
+#include "formats/mesh_io.h"
 
 #include <cstring>
 
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
-#include "stages/ply.h"
+#include "formats/ply.h"
 
 namespace p2n {
 
