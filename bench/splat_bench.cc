@@ -9,10 +9,10 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "formats/output_frame.h"
 #include "pipeline/file_util.h"
 #include "splat/rasterizer.h"
 #include "splat/splat_ply.h"
-#include "formats/output_frame.h"
 #include "stages/stage_reports.h"
 #include "stages/training_data.h"
 

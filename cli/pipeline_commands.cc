@@ -8,12 +8,12 @@
 
 #include "cli/cli_options.h"
 #include "cli/commands.h"
+#include "formats/dataset_import.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/runner.h"
-#include "formats/dataset_import.h"
 #include "stages/stage_reports.h"
 #include "stages/stages.h"
 

@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "formats/colmap_model.h"
+#include "formats/npy.h"
 #include "nerf/image_io.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
-#include "formats/colmap_model.h"
-#include "formats/npy.h"
 
 namespace p2n {
 namespace fs = std::filesystem;

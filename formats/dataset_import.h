@@ -17,10 +17,10 @@
 namespace p2n {
 
 struct ImportedView {
-  CameraView view;                     // world_from_cam and intrinsics in the dataset's world
-  std::string name;                    // the image's file name in the stage's images/
-  std::filesystem::path source;        // the image file, or empty when `pixels` holds the image
-  OIIO::ImageBuf pixels;               // the image, for datasets that store pixels (.npz)
+  CameraView view;               // world_from_cam and intrinsics in the dataset's world
+  std::string name;              // the image's file name in the stage's images/
+  std::filesystem::path source;  // the image file, or empty when `pixels` holds the image
+  OIIO::ImageBuf pixels;         // the image, for datasets that store pixels (.npz)
 };
 
 struct ImportedDataset {

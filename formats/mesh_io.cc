@@ -2,9 +2,9 @@
 
 #include <cstring>
 
+#include "formats/ply.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
-#include "formats/ply.h"
 
 namespace p2n {
 

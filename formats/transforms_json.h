@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "nerf/camera.h"
 #include "formats/scene_normalization.h"
+#include "nerf/camera.h"
 
 namespace p2n {
 

@@ -5,6 +5,11 @@
 #include <cmath>
 #include <map>
 
+#include "formats/dataset_import.h"
+#include "formats/mesh_io.h"
+#include "formats/output_frame.h"
+#include "formats/ply.h"
+#include "formats/transforms_json.h"
 #include "nerf/mesh.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
@@ -15,12 +20,7 @@
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
 #include "stages/camera_corrections.h"
-#include "formats/dataset_import.h"
-#include "formats/mesh_io.h"
-#include "formats/output_frame.h"
-#include "formats/ply.h"
 #include "stages/stage_io.h"
-#include "formats/transforms_json.h"
 
 namespace p2n {
 namespace fs = std::filesystem;

@@ -5,6 +5,8 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "formats/dataset_import.h"
+#include "formats/ply.h"
 #include "nerf/image_io.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
@@ -12,8 +14,6 @@
 #include "pipeline/hash.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
-#include "formats/dataset_import.h"
-#include "formats/ply.h"
 #include "stages/poses_stage.h"
 
 namespace p2n {

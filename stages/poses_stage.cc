@@ -3,16 +3,16 @@
 #include <algorithm>
 #include <cmath>
 
+#include "formats/colmap_model.h"
+#include "formats/ply.h"
+#include "formats/scene_normalization.h"
+#include "formats/transforms_json.h"
 #include "nerf/camera.h"
 #include "nerf/float_image.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/log.h"
-#include "formats/colmap_model.h"
-#include "formats/ply.h"
-#include "formats/scene_normalization.h"
-#include "formats/transforms_json.h"
 
 namespace p2n {
 namespace fs = std::filesystem;

@@ -5,6 +5,8 @@
 #include <limits>
 #include <numeric>
 
+#include "formats/dataset_import.h"
+#include "formats/video.h"
 #include "nerf/camera_path.h"
 #include "nerf/float_image.h"
 #include "nerf/nerf_model.h"
@@ -16,11 +18,9 @@
 #include "pipeline/hash.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
-#include "formats/dataset_import.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"
 #include "stages/training_data.h"
-#include "formats/video.h"
 #include "stages/view_renderer.h"
 
 namespace p2n {

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "nerf/camera.h"
 #include "formats/ply.h"
+#include "nerf/camera.h"
 
 namespace p2n {
 

@@ -3,13 +3,13 @@
 #include <cmath>
 #include <optional>
 
+#include "formats/dataset_import.h"
 #include "nerf/plot.h"
 #include "photo2nerf/version.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/runner.h"
-#include "formats/dataset_import.h"
 #include "stages/report_html.h"
 #include "stages/stage_reports.h"
 #include "stages/training_data.h"

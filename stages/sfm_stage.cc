@@ -5,15 +5,15 @@
 #include <algorithm>
 #include <set>
 
+#include "formats/camera_geometry.h"
+#include "formats/colmap_model.h"
 #include "pipeline/cancel.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/subprocess.h"
-#include "formats/camera_geometry.h"
 #include "stages/colmap_flags.h"
-#include "formats/colmap_model.h"
 #include "stages/stage_reports.h"
 
 namespace p2n {

@@ -3,6 +3,8 @@
 #include <chrono>
 #include <cmath>
 
+#include "formats/output_frame.h"
+#include "formats/ply.h"
 #include "nerf/binary_io.h"
 #include "nerf/plot.h"
 #include "nerf/renderer.h"
@@ -16,8 +18,6 @@
 #include "splat/splat_ply.h"
 #include "splat/splat_trainer.h"
 #include "stages/camera_corrections.h"
-#include "formats/output_frame.h"
-#include "formats/ply.h"
 #include "stages/splat_viewer.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"

@@ -7,9 +7,9 @@
 #include <filesystem>
 #include <string>
 
+#include "formats/output_frame.h"
 #include "nerf/trainer.h"
 #include "splat/gaussians.h"
-#include "formats/output_frame.h"
 
 namespace p2n {
 

@@ -1,7 +1,7 @@
 #include "stages/stages.h"
 
-#include "pipeline/format.h"
 #include "formats/dataset_import.h"
+#include "pipeline/format.h"
 #include "stages/export_stage.h"
 #include "stages/import_stage.h"
 #include "stages/ingest_stage.h"

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "formats/dataset_import.h"
 #include "nerf/appearance.h"
 #include "nerf/float_image.h"
 #include "nerf/ngp_field.h"
@@ -17,7 +18,6 @@
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
 #include "stages/camera_corrections.h"
-#include "formats/dataset_import.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"
 #include "stages/training_data.h"

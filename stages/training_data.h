@@ -6,8 +6,8 @@
 #include <filesystem>
 #include <string>
 
-#include "nerf/trainer.h"
 #include "formats/dataset_import.h"
+#include "nerf/trainer.h"
 
 namespace p2n {
 

@@ -5,12 +5,12 @@
 #include <memory>
 #include <stdexcept>
 
+#include "formats/output_frame.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "splat/rasterizer.h"
 #include "splat/splat_ply.h"
-#include "formats/output_frame.h"
 #include "stages/stage_reports.h"
 
 namespace p2n {

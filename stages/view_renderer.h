@@ -8,10 +8,10 @@
 #include <functional>
 #include <string>
 
+#include "formats/dataset_import.h"
 #include "nerf/camera.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
-#include "formats/dataset_import.h"
 
 namespace p2n {
 

@@ -4,9 +4,9 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <catch2/catch.hpp>
 
+#include "formats/colmap_model.h"
 #include "pipeline/file_util.h"
 #include "pipeline/workspace.h"
-#include "formats/colmap_model.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {

@@ -5,10 +5,10 @@
 #include <cstring>
 #include <fstream>
 
-#include "pipeline/errors.h"
-#include "stages/colmap_flags.h"
 #include "formats/colmap_model.h"
 #include "formats/npy.h"
+#include "pipeline/errors.h"
+#include "stages/colmap_flags.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {

@@ -7,11 +7,11 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 
+#include "formats/colmap_model.h"
+#include "formats/dataset_import.h"
 #include "nerf/synthetic_scene.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
-#include "formats/colmap_model.h"
-#include "formats/dataset_import.h"
 #include "stages/stages.h"
 #include "tests/test_util.h"
 

@@ -3,10 +3,10 @@
 
 #include <catch2/catch.hpp>
 
+#include "formats/output_frame.h"
 #include "pipeline/file_util.h"
 #include "splat/splat_ply.h"
 #include "stage_fixtures.h"
-#include "formats/output_frame.h"
 
 namespace p2n::testing {
 namespace fs = std::filesystem;
