@@ -21,6 +21,7 @@
 #include "pipeline/progress.h"
 #include "stages/camera_corrections.h"
 #include "stages/stage_io.h"
+#include "stages/stage_reports.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -189,37 +190,36 @@ void ExportStage::Run(StageContext& context) const {
                mesh_options.density_threshold));
   }
 
-  nlohmann::json report = {{"mesh",
-                            {{"file", "mesh.ply"},
-                             {"vertices", mesh.positions.size()},
-                             {"triangles", mesh.triangles.size()},
-                             {"watertight", watertight},
-                             {"border_edges", edges.border},
-                             {"non_manifold_edges", edges.non_manifold},
-                             {"misoriented_edges", edges.misoriented},
-                             {"resolution", options.resolution},
-                             {"threshold", mesh_options.density_threshold},
-                             {"threshold_from_field", auto_threshold},
-                             {"region",
-                              {{"kind", region},
-                               {"centre", {mesh_options.centre.x(), mesh_options.centre.y(), mesh_options.centre.z()}},
-                               {"half_size", mesh_options.half_size}}}}},
-                           {"frame", options.frame}};
+  ExportReport report;
+  report.mesh = {"mesh.ply",
+                 mesh.positions.size(),
+                 mesh.triangles.size(),
+                 watertight,
+                 edges.border,
+                 edges.non_manifold,
+                 edges.misoriented,
+                 options.resolution,
+                 mesh_options.density_threshold,
+                 auto_threshold,
+                 region,
+                 {mesh_options.centre.x(), mesh_options.centre.y(), mesh_options.centre.z()},
+                 mesh_options.half_size};
+  report.frame = options.frame;
   WriteCameras(context.output_dir / "transforms.json", dataset, frame, !corrections.empty());
-  report["cameras"] = {{"file", "transforms.json"}, {"views", dataset.views.size()}, {"refined", !corrections.empty()}};
+  report.cameras = {"transforms.json", dataset.views.size(), !corrections.empty()};
   if (options.points) {
     for (ColouredPoint& point : points) point.position = frame.Point(point.position);
     WritePly(context.output_dir / "points.ply", points,
              {frame.description,
               format("points where the rendered opacity of a training view is at least {}", options.points_opacity)});
-    report["points"] = {{"file", "points.ply"}, {"count", points.size()}};
+    report.points = ExportedPoints{"points.ply", points.size()};
   }
-  WriteJsonAtomic(context.output_dir / "export_report.json", report);
+  WriteJsonAtomic(context.output_dir / "export_report.json", report.ToJson());
   context.summary = {{"mesh_triangles", mesh.triangles.size()}, {"watertight", watertight}};
-  if (options.points) context.summary["points"] = report["points"]["count"];
+  if (report.points) context.summary["points"] = report.points->count;
   LogInfo(format("export: mesh of {} vertices and {} triangles ({}watertight) at density {:.4g}{}",
                  mesh.positions.size(), mesh.triangles.size(), watertight ? "" : "not ", mesh_options.density_threshold,
-                 options.points ? format(", {} points", report["points"]["count"].get<size_t>()) : ""));
+                 report.points ? format(", {} points", report.points->count) : ""));
 }
 
 }  // namespace p2n

@@ -18,10 +18,6 @@ namespace p2n {
 namespace fs = std::filesystem;
 namespace {
 
-nlohmann::json ReadIfExists(const fs::path& file) {
-  return fs::exists(file) ? ReadJsonFile(file) : nlohmann::json::object();
-}
-
 // A typed report (stage_reports.h), or none when the file is not there.
 template <class Report>
 std::optional<Report> ReadReportIfExists(const fs::path& file) {
@@ -201,6 +197,22 @@ std::string HeldoutSection(const fs::path& render_dir, const std::optional<EvalR
   return html;
 }
 
+std::string ExportSection(const ExportReport& exported) {
+  const ExportReport::Mesh& mesh = exported.mesh;
+  std::string html = format(
+      "<h2>Exports</h2>\n<p>Mesh <a href=\"../50_export/mesh.ply\">mesh.ply</a>: {} vertices, {} triangles, "
+      "{}watertight (marching cubes at {}^3 over {}, density threshold {:.4g}), in the {} frame.",
+      mesh.vertices, mesh.triangles, mesh.watertight ? "" : "not ", mesh.resolution,
+      mesh.region == "box" ? std::string("the scene box")
+                           : format("the region the photos look at (a cube of half size {:.3g})", mesh.half_size),
+      mesh.threshold, HtmlEscape(exported.frame));
+  if (exported.points) {
+    html +=
+        format(" Point cloud <a href=\"../50_export/points.ply\">points.ply</a>: {} points.", exported.points->count);
+  }
+  return html + "</p>\n";
+}
+
 }  // namespace
 
 void ReportOptions::Check() const {
@@ -216,7 +228,7 @@ void ReportStage::Run(StageContext& context) const {
   const std::optional<TrainReport> train =
       ReadReportIfExists<TrainReport>(context.upstream_dirs.at("train") / "train_report.json");
   const std::optional<EvalReport> eval = ReadReportIfExists<EvalReport>(render_dir / "eval.json");
-  const nlohmann::json exported = ReadIfExists(export_dir / "export_report.json");
+  const std::optional<ExportReport> exported = ReadReportIfExists<ExportReport>(export_dir / "export_report.json");
   const std::array<float, 3> background = dataset.meta.Background();
 
   std::string body = "<h1>photo2nerf report</h1>\n";
@@ -229,8 +241,7 @@ void ReportStage::Run(StageContext& context) const {
   body += Card(eval && eval->ssim ? format("{:.3f}", *eval->ssim) : "-", "held-out SSIM");
   body += Card(train ? format("{:.0f} s", train->wall_seconds) : "-", "training time");
   body += Card(format("{}", dataset.views.size()), "cameras");
-  if (exported.contains("mesh"))
-    body += Card(format("{}", exported["mesh"]["triangles"].get<size_t>()), "mesh triangles");
+  if (exported) body += Card(format("{}", exported->mesh.triangles), "mesh triangles");
   body += "</div>\n";
   body += TrainingSection(context.upstream_dirs.at("train"), train);
   body += SplatSection(context.upstream_dirs.at("splat"), train);
@@ -253,19 +264,7 @@ void ReportStage::Run(StageContext& context) const {
                      ImageDataUri(render_dir / "frames" / "0000.png", options.image_width));
     }
   }
-  if (exported.contains("mesh")) {
-    const nlohmann::json& mesh = exported["mesh"];
-    body += format(
-        "<h2>Exports</h2>\n<p>Mesh <a href=\"../50_export/mesh.ply\">mesh.ply</a>: {} vertices, {} triangles, "
-        "{}watertight (marching cubes at {}^3, density threshold {}), in the {} frame.",
-        Number(mesh["vertices"]), Number(mesh["triangles"]), mesh.value("watertight", false) ? "" : "not ",
-        Number(mesh["resolution"]), Number(mesh["threshold"]), HtmlEscape(exported.value("frame", "")));
-    if (exported.contains("points")) {
-      body += format(" Point cloud <a href=\"../50_export/points.ply\">points.ply</a>: {} points.",
-                     Number(exported["points"]["count"]));
-    }
-    body += "</p>\n";
-  }
+  if (exported) body += ExportSection(*exported);
   WriteFileAtomic(context.output_dir / "report.html", HtmlPage("photo2nerf report", body));
   context.summary = {{"report", (context.workspace.StageDir(folder()) / "report.html").string()}};
   LogInfo(format("report: {}", (context.workspace.StageDir(folder()) / "report.html").string()));

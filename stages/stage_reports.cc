@@ -440,4 +440,57 @@ PathReport PathReport::Read(const fs::path& render_report) {
   return report;
 }
 
+nlohmann::json ExportReport::ToJson() const {
+  nlohmann::json json = {
+      {"mesh",
+       {{"file", mesh.file},
+        {"vertices", mesh.vertices},
+        {"triangles", mesh.triangles},
+        {"watertight", mesh.watertight},
+        {"border_edges", mesh.border_edges},
+        {"non_manifold_edges", mesh.non_manifold_edges},
+        {"misoriented_edges", mesh.misoriented_edges},
+        {"resolution", mesh.resolution},
+        {"threshold", mesh.threshold},
+        {"threshold_from_field", mesh.threshold_from_field},
+        {"region", {{"kind", mesh.region}, {"centre", mesh.centre}, {"half_size", mesh.half_size}}}}},
+      {"frame", frame},
+      {"cameras", {{"file", cameras.file}, {"views", cameras.views}, {"refined", cameras.refined}}}};
+  if (points) json["points"] = {{"file", points->file}, {"count", points->count}};
+  return json;
+}
+
+ExportReport ExportReport::Read(const fs::path& file) {
+  const nlohmann::json json = ReadJsonFile(file);
+  const Fields fields(json, file, "export");
+  ExportReport report;
+  const Fields mesh = fields.Object("mesh");
+  mesh.Get("file", &report.mesh.file);
+  mesh.Get("vertices", &report.mesh.vertices);
+  mesh.Get("triangles", &report.mesh.triangles);
+  mesh.Get("watertight", &report.mesh.watertight);
+  mesh.Get("border_edges", &report.mesh.border_edges);
+  mesh.Get("non_manifold_edges", &report.mesh.non_manifold_edges);
+  mesh.Get("misoriented_edges", &report.mesh.misoriented_edges);
+  mesh.Get("resolution", &report.mesh.resolution);
+  mesh.Get("threshold", &report.mesh.threshold);
+  mesh.Get("threshold_from_field", &report.mesh.threshold_from_field);
+  const Fields region = mesh.Object("region");
+  region.Get("kind", &report.mesh.region);
+  region.Get("centre", &report.mesh.centre);
+  region.Get("half_size", &report.mesh.half_size);
+  fields.Get("frame", &report.frame);
+  const Fields cameras = fields.Object("cameras");
+  cameras.Get("file", &report.cameras.file);
+  cameras.Get("views", &report.cameras.views);
+  cameras.Get("refined", &report.cameras.refined);
+  if (fields.Has("points")) {
+    const Fields points = fields.Object("points");
+    ExportedPoints& out = report.points.emplace();
+    points.Get("file", &out.file);
+    points.Get("count", &out.count);
+  }
+  return report;
+}
+
 }  // namespace p2n

@@ -9,6 +9,7 @@
 //   35_splat/splat_report.json   SplatReport (render, its view renderer, report, splat_bench)
 //   40_render/eval.json          EvalReport  (report, the run summary)
 //   40_render/render_report.json PathReport, under "path" (report)
+//   50_export/export_report.json ExportReport (report)
 
 #include <array>
 #include <filesystem>
@@ -176,6 +177,37 @@ struct PathReport {
   // render_report.json holds {"path": ToJson()}.
   nlohmann::json ToJson() const;
   static PathReport Read(const std::filesystem::path& render_report);
+};
+
+// The export's point cloud (outside ExportReport for the reason PathVideo is outside PathReport).
+struct ExportedPoints {
+  std::string file;
+  size_t count = 0;
+};
+
+struct ExportReport {
+  struct Mesh {
+    std::string file;
+    size_t vertices = 0, triangles = 0;
+    bool watertight = false;
+    size_t border_edges = 0, non_manifold_edges = 0, misoriented_edges = 0;
+    int resolution = 0;
+    double threshold = 0;  // the density the surface crosses
+    bool threshold_from_field = false;
+    std::string region;  // box | focus: the cube meshed (normalised units) ...
+    std::array<double, 3> centre{};
+    double half_size = 1;
+  } mesh;
+  std::string frame;  // source | normalized
+  struct Cameras {
+    std::string file;
+    size_t views = 0;
+    bool refined = false;
+  } cameras;
+  std::optional<ExportedPoints> points;  // none with export.points false
+
+  nlohmann::json ToJson() const;
+  static ExportReport Read(const std::filesystem::path& file);
 };
 
 }  // namespace p2n

@@ -123,6 +123,15 @@ PathReport SomePathReport() {
   return report;
 }
 
+ExportReport SomeExportReport() {
+  ExportReport report;
+  report.mesh = {"mesh.ply", 1000, 1990, false, 4, 1, 0, 256, 21.5, true, "focus", {0.125, -0.25, 0.5}, 0.375};
+  report.frame = "source";
+  report.cameras = {"transforms.json", 50, true};
+  report.points = ExportedPoints{"points.ply", 12345};
+  return report;
+}
+
 // The UserError that reading `file` after replacing `key` of its JSON (a JSON pointer) by `value` throws.
 template <class Report>
 std::string ErrorAfterEdit(const fs::path& file, const nlohmann::json& written, const std::string& key,
@@ -203,6 +212,20 @@ TEST_CASE("Reports between stages read back exactly what was written", "[reports
   no_video.samples_per_ray.reset();
   WriteJsonAtomic(dir.path() / "render_report.json", {{"path", no_video.ToJson()}});
   CHECK_FALSE(PathReport::Read(dir.path() / "render_report.json").video.has_value());
+
+  const ExportReport exported = SomeExportReport();
+  WriteJsonAtomic(dir.path() / "export_report.json", exported.ToJson());
+  const ExportReport exported_read = ExportReport::Read(dir.path() / "export_report.json");
+  CHECK(exported_read.ToJson() == exported.ToJson());
+  CHECK(exported_read.mesh.centre[1] == -0.25);
+  ExportReport no_points = exported;
+  no_points.points.reset();
+  WriteJsonAtomic(dir.path() / "export_report.json", no_points.ToJson());
+  CHECK_FALSE(ExportReport::Read(dir.path() / "export_report.json").points.has_value());
+  CHECK_THAT(ErrorAfterEdit<ExportReport>(dir.path() / "export_report.json", exported.ToJson(), "/mesh/region/centre",
+                                          nlohmann::json::array({1, 2})),
+             Catch::Contains("export_report.json") && Catch::Contains("\"mesh.region.centre\"") &&
+                 Catch::Contains("photo2nerf export"));
 }
 
 TEST_CASE("A damaged report names its file, the field and the stage to rerun", "[reports]") {

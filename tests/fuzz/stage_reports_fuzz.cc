@@ -1,5 +1,5 @@
 // libFuzzer: the reports between stages (ingest_report.json, sfm_report.json, train_report.json,
-// splat_report.json, eval.json, render_report.json) as their readers read them: any input is read or refused with
+// splat_report.json, eval.json, render_report.json, export_report.json) as their readers read them: any input is read or refused with
 // a UserError.
 #include "pipeline/errors.h"
 #include "stages/stage_reports.h"
@@ -26,5 +26,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   TryRead<p2n::SplatReport>(file);
   TryRead<p2n::EvalReport>(file);
   TryRead<p2n::PathReport>(file);
+  TryRead<p2n::ExportReport>(file);
   return 0;
 }
