@@ -14,6 +14,7 @@
 #include "pipeline/log.h"
 #include "pipeline/subprocess.h"
 #include "stages/colmap_flags.h"
+#include "stages/matcher_choice.h"
 #include "stages/stage_reports.h"
 
 namespace p2n {
@@ -22,6 +23,11 @@ namespace {
 
 constexpr double kSuspiciousFocusAngleDeg = 20;  // correct orbit models stay near 8 (DESIGN.md §7)
 constexpr size_t kMaxNamesListed = 20;
+// The vocabulary tree, built from the photos themselves: a word per 64 features at most, clustered from up to 30
+// photos with a narrower, shallower k-means than COLMAP's defaults (branching 256, 11 iterations, every photo),
+// which took 175 s for fox's 50 photos on 2 cores; these settings took a third of that.
+constexpr size_t kFeaturesPerWord = 64;
+constexpr int kTreeBranching = 16, kTreeIterations = 5, kTreeMaxImages = 30;
 constexpr const char* kAdvice =
     "try --sfm.matcher exhaustive, more features (--sfm.max_num_features), a larger "
     "--sfm.max_image_size, or photos with more overlap";
@@ -30,6 +36,9 @@ constexpr const char* kAdvice =
 class StepRunner {
  public:
   StepRunner(fs::path log_dir, int total) : log_dir_(std::move(log_dir)), total_(total) {}
+
+  // For the step count in the log: `count` more steps than planned.
+  void AddSteps(int count) { total_ += count; }
 
   // Runs one step; returns its log. Failures throw ExternalToolError, unless `allow_failure`.
   fs::path Run(const std::string& step, const std::vector<std::string>& argv, bool allow_failure = false) {
@@ -120,7 +129,20 @@ struct ColmapRun {
     }
   }
 
-  void Match(const std::string& matcher) const {
+  // A vocabulary tree of the photos' own features, for matching by retrieval (COLMAP's pretrained trees are a
+  // download away; a few hundred photos' features are plenty to cluster).
+  fs::path BuildVocabularyTree(size_t photos) const {
+    const fs::path tree = out / "vocab_tree.bin";
+    const size_t words = std::clamp<size_t>(photos * options.max_num_features / kFeaturesPerWord, 256, 65536);
+    steps->Run("vocabulary tree",
+               {options.colmap, "vocab_tree_builder", "--database_path", database().string(), "--vocab_tree_path",
+                tree.string(), "--num_visual_words", std::to_string(words), "--branching",
+                std::to_string(kTreeBranching), "--num_iterations", std::to_string(kTreeIterations), "--max_num_images",
+                std::to_string(kTreeMaxImages), "--random_seed", seed});
+    return tree;
+  }
+
+  void Match(const std::string& matcher, size_t photos) const {
     std::vector<std::string> match = {options.colmap,
                                       matcher + "_matcher",
                                       "--database_path",
@@ -135,15 +157,23 @@ struct ColmapRun {
       match.insert(match.end(), {"--SequentialMatching.overlap", std::to_string(options.sequential_overlap),
                                  "--SequentialMatching.loop_detection", "0"});
     }
+    if (matcher == "vocab_tree") {
+      const fs::path tree = BuildVocabularyTree(photos);
+      match.insert(match.end(), {"--VocabTreeMatching.vocab_tree_path", tree.string(), "--VocabTreeMatching.num_images",
+                                 std::to_string(options.retrieval_neighbours + 1)});  // the photo itself comes first
+    }
     steps->Run(matcher + " matching", match);
   }
 
-  // Runs the mapper; returns the folder of the model with the most registered images (COLMAP's exit code says
-  // nothing about that) and lists every model in `models`. UserError when there is none.
-  fs::path MapLargestModel(size_t photos, std::vector<SfmReport::Model>* models) const {
-    const fs::path log = steps->Run("mapping",
+  // Runs the mapper (the step `step`) into out/`folder`; returns the folder of the model with the most registered
+  // images (COLMAP's exit code says nothing about that) and lists every model in `models`. UserError when there is
+  // none.
+  fs::path MapLargestModel(size_t photos, const std::string& step, const std::string& folder,
+                           std::vector<SfmReport::Model>* models) const {
+    fs::create_directories(out / folder);
+    const fs::path log = steps->Run(step,
                                     {options.colmap, "mapper", "--database_path", database().string(), "--image_path",
-                                     images.string(), "--output_path", (out / "sparse").string(), "--random_seed", seed,
+                                     images.string(), "--output_path", (out / folder).string(), "--random_seed", seed,
                                      "--Mapper.num_threads", threads, "--Mapper.min_model_size", "3"},
                                     /*allow_failure=*/true);
     if (!steps->last_ok()) {
@@ -158,7 +188,7 @@ struct ColmapRun {
     models->clear();
     fs::path chosen;
     size_t most = 0;
-    for (const fs::directory_entry& entry : fs::directory_iterator(out / "sparse")) {
+    for (const fs::directory_entry& entry : fs::directory_iterator(out / folder)) {
       if (!entry.is_directory()) continue;
       const size_t registered = ReadColmapModel(entry.path()).images.size();
       models->push_back({fs::relative(entry.path(), out).string(), registered});
@@ -252,11 +282,36 @@ void CheckRegistered(const SfmReport& report, double min_registered) {
              report.registered, report.images_given, 100 * fraction, 100 * min_registered, listed, kAdvice));
 }
 
+// Matches with *matcher and maps; when that registers less than sfm.min_registered of the photos (or nothing),
+// adds the other kind of matching (RetryMatcher) once and maps again, *matcher then naming both ("sequential +
+// vocab_tree"). Returns the chosen model's folder.
+fs::path MatchAndMap(const ColmapRun& colmap, const SfmOptions& options, size_t photos, std::string* matcher,
+                     std::vector<SfmReport::Model>* models) {
+  colmap.Match(*matcher, photos);
+  const std::string retry = options.matcher == "auto" ? RetryMatcher(*matcher, photos) : "";
+  std::string failure;
+  try {
+    const fs::path chosen = colmap.MapLargestModel(photos, "mapping", "sparse", models);
+    const size_t registered = ReadColmapModel(chosen).images.size();
+    if (retry.empty() || registered >= options.min_registered * photos) return chosen;
+    failure = format("registered {} of {} photos", registered, photos);
+  } catch (const UserError&) {
+    if (retry.empty()) throw;
+    failure = "reconstructed nothing";
+  }
+  LogWarning(format("sfm: {} matching {}; adding {} matching and mapping again", *matcher, failure, retry));
+  colmap.steps->AddSteps(retry == "vocab_tree" ? 3 : 2);
+  colmap.Match(retry, photos);
+  *matcher += " + " + retry;
+  return colmap.MapLargestModel(photos, "mapping again", "sparse_again", models);
+}
+
 }  // namespace
 
 void SfmOptions::Check() const {
   CheckOption(exhaustive_max_images >= 2, "sfm.exhaustive_max_images", "must be at least 2");
   CheckOption(sequential_overlap >= 1, "sfm.sequential_overlap", "must be at least 1");
+  CheckOption(retrieval_neighbours >= 1, "sfm.retrieval_neighbours", "must be at least 1");
   CheckOption(max_image_size >= 100, "sfm.max_image_size",
               format("must be at least 100 pixels, not {}", max_image_size));
   CheckOption(max_num_features >= 100, "sfm.max_num_features", "must be at least 100");
@@ -283,7 +338,6 @@ void SfmStage::Run(StageContext& context) const {
   const int threads = context.config.Get<int>("run.threads") > 0 ? context.config.Get<int>("run.threads") : -1;
   const fs::path out = context.output_dir;
   fs::create_directories(out / "logs");
-  fs::create_directories(out / "sparse");
   const ColmapVersion version = DetectColmapVersion(options.colmap, out / "logs" / "version.log");
   const fs::path images = context.upstream_dirs.at("ingest") / "images";
   const std::vector<std::string> names = ImageNames(images);
@@ -292,24 +346,24 @@ void SfmStage::Run(StageContext& context) const {
   const auto groups = ImagesBySize(context.upstream_dirs.at("ingest"));
   const bool camera_per_size = options.single_camera && groups.size() > 1;
   if (camera_per_size) LogInfo(format("sfm: the photos have {} sizes: one camera for each size", groups.size()));
-  const std::string matcher = options.matcher != "auto"                                         ? options.matcher
-                              : static_cast<int>(names.size()) <= options.exhaustive_max_images ? "exhaustive"
-                                                                                                : "sequential";
+  const std::string matcher =
+      options.matcher != "auto" ? options.matcher : AutoMatcher(names, options.exhaustive_max_images);
   LogInfo(format("sfm: COLMAP {}, {} photos, {} matching, features at {} px", version.ToString(), names.size(), matcher,
                  options.max_image_size));
-  StepRunner steps(out / "logs", (options.refine_principal_point ? 5 : 4) + (camera_per_size ? groups.size() - 1 : 0));
+  StepRunner steps(out / "logs", (options.refine_principal_point ? 5 : 4) + (camera_per_size ? groups.size() - 1 : 0) +
+                                     (matcher == "vocab_tree" ? 1 : 0));
   const ColmapRun colmap{
       options, ColmapFlagsFor(version), images, out, std::to_string(options.seed), std::to_string(threads), &steps};
 
   colmap.ExtractFeatures(camera_per_size ? groups : decltype(groups){});
-  colmap.Match(matcher);
   std::vector<SfmReport::Model> models;
-  const fs::path chosen = colmap.MapLargestModel(names.size(), &models);
+  std::string matching = matcher;
+  const fs::path chosen = MatchAndMap(colmap, options, names.size(), &matching, &models);
   const fs::path model_dir = options.refine_principal_point ? colmap.RefinePrincipalPoint(chosen) : chosen;
   const ColmapModel model = ReadColmapModel(model_dir);
   SfmReport report = ModelReport(model, names);
   report.colmap_version = version.ToString();
-  report.matcher = matcher;
+  report.matcher = matching;
   report.models = models;
   report.chosen_model = fs::relative(chosen, out).string();
   report.steps = steps.timings();

@@ -12,9 +12,10 @@ namespace p2n {
 struct SfmOptions {
   std::string camera_model = "OPENCV";  // COLMAP camera model of the photos
   bool single_camera = true;            // one camera shared by every photo
-  std::string matcher = "auto";         // auto: exhaustive up to exhaustive_max_images, else sequential
-  int exhaustive_max_images = 40;       // photos above which auto matching is sequential
+  std::string matcher = "auto";         // auto: AutoMatcher (matcher_choice.h)
+  int exhaustive_max_images = 40;       // photos above which auto matching of a numbered sequence is sequential
   int sequential_overlap = 12;          // neighbours each photo is matched with (sequential)
+  int retrieval_neighbours = 20;        // most similar photos each photo is matched with (vocab_tree)
   int max_image_size = 1024;            // longest side for feature extraction, pixels
   int max_num_features = 4096;          // features per photo at most
   bool refine_principal_point = true;   // a final bundle adjustment that also refines cx, cy
@@ -29,11 +30,17 @@ struct SfmOptions {
     v("single_camera", single_camera,
       "one camera shared by every photo (by every photo of one size, when they have several)");
     v("matcher", matcher,
-      "feature matching: auto (exhaustive for small sets, else sequential), exhaustive, or "
-      "sequential (photos in file-name order, as video frames)",
-      "", OptionKind::kResult, {"auto", "exhaustive", "sequential"});
-    v("exhaustive_max_images", exhaustive_max_images, "photos above which auto matching is sequential", "images");
+      "feature matching: exhaustive (every pair), sequential (neighbours in file-name order, as video frames or a "
+      "camera's counter), vocab_tree (the most similar photos, by a vocabulary tree built from them: any order), or "
+      "auto: exhaustive for small sets; above, sequential when the names are a numbered sequence, else exhaustive "
+      "up to 100 photos and vocab_tree beyond; when too few photos register, the other kind of matching is added "
+      "once and the mapping rerun",
+      "", OptionKind::kResult, {"auto", "exhaustive", "sequential", "vocab_tree"});
+    v("exhaustive_max_images", exhaustive_max_images,
+      "photos above which auto matching of a numbered sequence is sequential", "images");
     v("sequential_overlap", sequential_overlap, "neighbours each photo is matched with (sequential)", "images");
+    v("retrieval_neighbours", retrieval_neighbours, "most similar photos each photo is matched with (vocab_tree)",
+      "images");
     v("max_image_size", max_image_size, "longest image side for feature extraction", "px");
     v("max_num_features", max_num_features, "features per photo at most", "features");
     v("refine_principal_point", refine_principal_point, "final bundle adjustment that also refines cx, cy");

@@ -1,0 +1,69 @@
+#include "stages/matcher_choice.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+
+namespace p2n {
+namespace {
+
+constexpr double kMinNumbered = 0.9;      // share of names that must end in a number after the common prefix
+constexpr double kMinRegularSteps = 0.6;  // share of steps between sorted numbers equal to the commonest one
+constexpr size_t kMaxDigits = 18;         // longer digit runs are not counters
+
+struct Numbered {
+  std::string prefix;
+  uint64_t number = 0;
+};
+
+// "IMG_0412.JPG" -> {"IMG_", 412}; none when the stem does not end in digits.
+std::optional<Numbered> SplitNumber(const std::string& name) {
+  const std::string stem = std::filesystem::path(name).stem().string();
+  size_t start = stem.size();
+  while (start > 0 && std::isdigit(static_cast<unsigned char>(stem[start - 1]))) --start;
+  if (start == stem.size() || stem.size() - start > kMaxDigits) return std::nullopt;
+  return Numbered{stem.substr(0, start), std::stoull(stem.substr(start))};
+}
+
+}  // namespace
+
+bool LooksLikeFrameSequence(const std::vector<std::string>& names) {
+  if (names.size() < 3) return true;  // nothing to get wrong
+  std::map<std::string, std::vector<uint64_t>> by_prefix;
+  for (const std::string& name : names) {
+    if (const std::optional<Numbered> split = SplitNumber(name)) by_prefix[split->prefix].push_back(split->number);
+  }
+  const auto largest = std::max_element(by_prefix.begin(), by_prefix.end(),
+                                        [](const auto& a, const auto& b) { return a.second.size() < b.second.size(); });
+  if (largest == by_prefix.end() || largest->second.size() < kMinNumbered * names.size()) return false;
+  std::vector<uint64_t> numbers = largest->second;
+  std::sort(numbers.begin(), numbers.end());
+  std::map<uint64_t, size_t> steps;
+  for (size_t i = 1; i < numbers.size(); ++i) ++steps[numbers[i] - numbers[i - 1]];
+  size_t commonest = 0;
+  for (const auto& [step, count] : steps) commonest = std::max(commonest, count);
+  return commonest >= kMinRegularSteps * (numbers.size() - 1);
+}
+
+namespace {
+
+std::string Unordered(size_t photos) {
+  return static_cast<int>(photos) <= kRetrievalMinImages ? "exhaustive" : "vocab_tree";
+}
+
+}  // namespace
+
+std::string AutoMatcher(const std::vector<std::string>& names, int exhaustive_max_images) {
+  if (static_cast<int>(names.size()) <= exhaustive_max_images) return "exhaustive";
+  return LooksLikeFrameSequence(names) ? "sequential" : Unordered(names.size());
+}
+
+std::string RetryMatcher(const std::string& first, size_t photos) {
+  if (first == "exhaustive") return "";
+  return first == "sequential" ? Unordered(photos) : "sequential";
+}
+
+}  // namespace p2n

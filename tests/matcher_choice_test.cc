@@ -1,0 +1,57 @@
+// sfm.matcher auto: numbered sequences are matched sequentially, anything else by retrieval, small sets
+// exhaustively; and the matcher a failed first try adds.
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <random>
+
+#include "pipeline/format.h"
+#include "stages/matcher_choice.h"
+
+namespace p2n::testing {
+namespace {
+
+std::vector<std::string> Names(const std::string& pattern, int first, int count, int step = 1) {
+  std::vector<std::string> names;
+  for (int i = 0; i < count; ++i) names.push_back(format(pattern, first + i * step));
+  return names;
+}
+
+}  // namespace
+
+TEST_CASE("matcher choice: numbered sequences are sequential, unordered names are not", "[sfm]") {
+  CHECK(LooksLikeFrameSequence(Names("{:04d}.jpg", 1, 50)));            // fox
+  CHECK(LooksLikeFrameSequence(Names("frame_{:05d}.png", 0, 120, 5)));  // every 5th video frame
+  std::vector<std::string> phone = Names("IMG_{:04d}.JPG", 412, 60);
+  phone.erase(phone.begin() + 10, phone.begin() + 14);  // a few deleted shots
+  phone.push_back("notes.txt.jpg");                     // and one stray file
+  CHECK(LooksLikeFrameSequence(phone));
+
+  std::mt19937 random(5);
+  std::vector<std::string> hex, numbers, words;
+  for (int i = 0; i < 60; ++i) {
+    hex.push_back(format("{:08x}.jpg", random()));
+    numbers.push_back(format("{}.jpg", random() % 100000000));  // digits, but no regular step
+    words.push_back(format("photo by {} {}.jpg", i % 3 ? "ann" : "bob", static_cast<char>('a' + i % 26)));
+  }
+  CHECK_FALSE(LooksLikeFrameSequence(hex));
+  CHECK_FALSE(LooksLikeFrameSequence(numbers));
+  CHECK_FALSE(LooksLikeFrameSequence(words));
+
+  CHECK(AutoMatcher(Names("{:04d}.jpg", 1, 50), 40) == "sequential");
+  CHECK(AutoMatcher(std::vector<std::string>(hex.begin(), hex.begin() + 40), 40) == "exhaustive");
+  CHECK(AutoMatcher(hex, 40) == "exhaustive");  // 60 unordered: as cheap as retrieval
+  std::vector<std::string> many = hex;
+  for (int i = 0; i < 60; ++i) many.push_back(format("{:08x}.png", random()));
+  CHECK(AutoMatcher(many, 40) == "vocab_tree");
+}
+
+TEST_CASE("matcher choice: a failed first matching adds the other kind once", "[sfm]") {
+  CHECK(RetryMatcher("sequential", 60) == "exhaustive");
+  CHECK(RetryMatcher("sequential", 150) == "vocab_tree");
+  CHECK(RetryMatcher("vocab_tree", 150) == "sequential");
+  CHECK(RetryMatcher("exhaustive", 30).empty());  // its pairs contain every other matcher's
+}
+
+}  // namespace p2n::testing
