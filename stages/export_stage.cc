@@ -134,6 +134,57 @@ MeshOptions ChooseMeshOptions(const NerfModel& model, const ExportOptions& optio
   return mesh;
 }
 
+// Extracts the mesh (ChooseMeshOptions), writes mesh.ply (and mesh.obj) in `frame`; returns what the report says of
+// it.
+ExportReport::Mesh WriteMesh(const NerfModel& model, const ExportOptions& options, const DepthSamples& depths,
+                             const OutputFrame& frame, const fs::path& out) {
+  const MeshOptions mesh_options = ChooseMeshOptions(model, options, depths);
+  Mesh mesh;
+  {
+    Progress progress("export: density", options.resolution, "slices");
+    mesh = ExtractMesh(model, mesh_options, [&](size_t n) {
+      progress.Add(static_cast<int64_t>(n));
+      ThrowIfCancelled();
+    });
+  }
+  const MeshEdges edges = CountEdges(mesh);
+  for (Eigen::Vector3f& p : mesh.positions) p = frame.Point(p);
+  for (Eigen::Vector3f& n : mesh.normals) n = frame.Direction(n);
+  if (frame.rotation.determinant() < 0) {
+    for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
+  }
+  const std::string region = RegionKind(model, options);
+  const bool auto_threshold = options.threshold == 0;
+  const std::vector<std::string> comments = {
+      frame.description,
+      format("marching cubes at {}^3 samples of the cube of half size {:.4g} around ({:.4g}, {:.4g}, {:.4g}) "
+             "(normalised; the {}), density threshold {:.4g}{}",
+             options.resolution, mesh_options.half_size, mesh_options.centre.x(), mesh_options.centre.y(),
+             mesh_options.centre.z(), region == "box" ? "scene box" : "focus region", mesh_options.density_threshold,
+             auto_threshold ? " (from the field)" : "")};
+  WriteMeshPly(out / "mesh.ply", mesh, comments);
+  if (options.obj) WriteMeshObj(out / "mesh.obj", mesh, comments);
+  if (mesh.triangles.empty()) {
+    LogWarning(
+        format("export: the density never reaches {:.4g} inside the region meshed: the mesh is empty; lower "
+               "--export.threshold",
+               mesh_options.density_threshold));
+  }
+  return {"mesh.ply",
+          mesh.positions.size(),
+          mesh.triangles.size(),
+          edges.watertight(),
+          edges.border,
+          edges.non_manifold,
+          edges.misoriented,
+          options.resolution,
+          mesh_options.density_threshold,
+          auto_threshold,
+          region,
+          {mesh_options.centre.x(), mesh_options.centre.y(), mesh_options.centre.z()},
+          mesh_options.half_size};
+}
+
 }  // namespace
 
 void ExportOptions::Check() const {
@@ -152,62 +203,17 @@ void ExportStage::Run(StageContext& context) const {
   const std::map<std::string, CameraCorrection> corrections =
       ReadCameraCorrections(context.upstream_dirs.at("train") / "train_report.json");
   ApplyCameraCorrections(corrections, &dataset);
-  const bool auto_threshold = options.threshold == 0;
-  const std::string region = RegionKind(model, options);
   DepthSamples depths;
-  if (options.points || auto_threshold || region == "focus") depths = SampleDepths(model, dataset, options);
-  std::vector<ColouredPoint>& points = depths.points;
-
-  const MeshOptions mesh_options = ChooseMeshOptions(model, options, depths);
-  Mesh mesh;
-  {
-    Progress progress("export: density", options.resolution, "slices");
-    mesh = ExtractMesh(model, mesh_options, [&](size_t n) {
-      progress.Add(static_cast<int64_t>(n));
-      ThrowIfCancelled();
-    });
-  }
-  const MeshEdges edges = CountEdges(mesh);
-  const bool watertight = edges.watertight();
-  for (Eigen::Vector3f& p : mesh.positions) p = frame.Point(p);
-  for (Eigen::Vector3f& n : mesh.normals) n = frame.Direction(n);
-  if (frame.rotation.determinant() < 0) {
-    for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
-  }
-  const std::vector<std::string> comments = {
-      frame.description,
-      format("marching cubes at {}^3 samples of the cube of half size {:.4g} around ({:.4g}, {:.4g}, {:.4g}) "
-             "(normalised; the {}), density threshold {:.4g}{}",
-             options.resolution, mesh_options.half_size, mesh_options.centre.x(), mesh_options.centre.y(),
-             mesh_options.centre.z(), region == "box" ? "scene box" : "focus region", mesh_options.density_threshold,
-             auto_threshold ? " (from the field)" : "")};
-  WriteMeshPly(context.output_dir / "mesh.ply", mesh, comments);
-  if (options.obj) WriteMeshObj(context.output_dir / "mesh.obj", mesh, comments);
-  if (mesh.triangles.empty()) {
-    LogWarning(
-        format("export: the density never reaches {:.4g} inside the region meshed: the mesh is empty; lower "
-               "--export.threshold",
-               mesh_options.density_threshold));
-  }
+  if (options.points || options.threshold == 0 || RegionKind(model, options) == "focus")
+    depths = SampleDepths(model, dataset, options);
 
   ExportReport report;
-  report.mesh = {"mesh.ply",
-                 mesh.positions.size(),
-                 mesh.triangles.size(),
-                 watertight,
-                 edges.border,
-                 edges.non_manifold,
-                 edges.misoriented,
-                 options.resolution,
-                 mesh_options.density_threshold,
-                 auto_threshold,
-                 region,
-                 {mesh_options.centre.x(), mesh_options.centre.y(), mesh_options.centre.z()},
-                 mesh_options.half_size};
+  report.mesh = WriteMesh(model, options, depths, frame, context.output_dir);
   report.frame = options.frame;
   WriteCameras(context.output_dir / "transforms.json", dataset, frame, !corrections.empty());
   report.cameras = {"transforms.json", dataset.views.size(), !corrections.empty()};
   if (options.points) {
+    std::vector<ColouredPoint>& points = depths.points;
     for (ColouredPoint& point : points) point.position = frame.Point(point.position);
     WritePly(context.output_dir / "points.ply", points,
              {frame.description,
@@ -215,10 +221,11 @@ void ExportStage::Run(StageContext& context) const {
     report.points = ExportedPoints{"points.ply", points.size()};
   }
   WriteJsonAtomic(context.output_dir / "export_report.json", report.ToJson());
-  context.summary = {{"mesh_triangles", mesh.triangles.size()}, {"watertight", watertight}};
+  const ExportReport::Mesh& mesh = report.mesh;
+  context.summary = {{"mesh_triangles", mesh.triangles}, {"watertight", mesh.watertight}};
   if (report.points) context.summary["points"] = report.points->count;
-  LogInfo(format("export: mesh of {} vertices and {} triangles ({}watertight) at density {:.4g}{}",
-                 mesh.positions.size(), mesh.triangles.size(), watertight ? "" : "not ", mesh_options.density_threshold,
+  LogInfo(format("export: mesh of {} vertices and {} triangles ({}watertight) at density {:.4g}{}", mesh.vertices,
+                 mesh.triangles, mesh.watertight ? "" : "not ", mesh.threshold,
                  report.points ? format(", {} points", report.points->count) : ""));
 }
 

@@ -35,6 +35,9 @@ std::string Number(const std::optional<double>& value, int digits = 4) {
   return value ? format("{:.{}g}", *value, digits) : "-";
 }
 
+// A link from the report's folder to `file` in a sibling stage's folder `dir` (an upstream_dirs entry).
+std::string Link(const fs::path& dir, const std::string& file) { return "../" + dir.filename().string() + "/" + file; }
+
 std::string Card(const std::string& value, const std::string& label) {
   return format("<div class=\"card\"><div class=\"value\">{}</div><div class=\"label\">{}</div></div>\n",
                 HtmlEscape(value), HtmlEscape(label));
@@ -88,10 +91,10 @@ std::string SplatSection(const fs::path& splat_dir, const std::optional<TrainRep
   }
   std::string html = "<h2>Splats: error against optimisation time</h2>\n";
   html += format(
-      "<p><a href=\"../35_splat/viewer.html\"><b>Open the scene in the live viewer</b></a> (viewer.html, {:.1f} MB, "
+      "<p><a href=\"{}\"><b>Open the scene in the live viewer</b></a> (viewer.html, {:.1f} MB, "
       "works offline in any browser with WebGL 2: drag to orbit, right-drag to pan, wheel or pinch to zoom, W A S D "
       "to fly, the training cameras in its menu).</p>\n",
-      report.viewer_bytes / 1e6);
+      Link(splat_dir, "viewer.html"), report.viewer_bytes / 1e6);
   html += "<div class=\"plots\">\n";
   html += SvgLinePlot({"splats: held-out PSNR against optimisation time", "optimisation time (s)", "PSNR (dB)"},
                       {CsvSeries("held-out PSNR (dB)", ReadTextFile(splat_dir / "metrics.csv"), 0, 4)});
@@ -99,12 +102,12 @@ std::string SplatSection(const fs::path& splat_dir, const std::optional<TrainRep
   html += format(
       "<p>The field baked into {} 3D Gaussian splats (spherical harmonics of degree {}; {} placed from the {}, "
       "then optimised for {:.0f} s, {} steps): held-out PSNR {} dB and SSIM {} (the field: {} dB), {:.3f} s per "
-      "held-out view on the CPU. <a href=\"../35_splat/splats.ply\">splats.ply</a> ({:.1f} MB) is in the standard 3D "
+      "held-out view on the CPU. <a href=\"{}\">splats.ply</a> ({:.1f} MB) is in the standard 3D "
       "Gaussian Splatting layout, {}; SuperSplat, the PlayCanvas and three.js splat viewers open it as it is.</p>\n",
       report.splats, report.sh_degree, report.initial_splats, report.init == "sparse" ? "sparse points" : "field",
       report.seconds, report.steps, Number(report.heldout_psnr), Number(report.heldout_ssim, 3),
-      Number(train ? train->heldout_psnr : std::nullopt), report.seconds_per_view, report.file_bytes / 1e6,
-      HtmlEscape(report.frame_description));
+      Number(train ? train->heldout_psnr : std::nullopt), report.seconds_per_view, Link(splat_dir, "splats.ply"),
+      report.file_bytes / 1e6, HtmlEscape(report.frame_description));
   return html;
 }
 
@@ -197,18 +200,18 @@ std::string HeldoutSection(const fs::path& render_dir, const std::optional<EvalR
   return html;
 }
 
-std::string ExportSection(const ExportReport& exported) {
+std::string ExportSection(const fs::path& export_dir, const ExportReport& exported) {
   const ExportReport::Mesh& mesh = exported.mesh;
   std::string html = format(
-      "<h2>Exports</h2>\n<p>Mesh <a href=\"../50_export/mesh.ply\">mesh.ply</a>: {} vertices, {} triangles, "
+      "<h2>Exports</h2>\n<p>Mesh <a href=\"{}\">mesh.ply</a>: {} vertices, {} triangles, "
       "{}watertight (marching cubes at {}^3 over {}, density threshold {:.4g}), in the {} frame.",
-      mesh.vertices, mesh.triangles, mesh.watertight ? "" : "not ", mesh.resolution,
+      Link(export_dir, "mesh.ply"), mesh.vertices, mesh.triangles, mesh.watertight ? "" : "not ", mesh.resolution,
       mesh.region == "box" ? std::string("the scene box")
                            : format("the region the photos look at (a cube of half size {:.3g})", mesh.half_size),
       mesh.threshold, HtmlEscape(exported.frame));
   if (exported.points) {
-    html +=
-        format(" Point cloud <a href=\"../50_export/points.ply\">points.ply</a>: {} points.", exported.points->count);
+    html += format(" Point cloud <a href=\"{}\">points.ply</a>: {} points.", Link(export_dir, "points.ply"),
+                   exported.points->count);
   }
   return html + "</p>\n";
 }
@@ -255,7 +258,7 @@ void ReportStage::Run(StageContext& context) const {
                    HtmlEscape(path->kind), path->frames, path->width, path->height, path->frames_per_second, how);
     const fs::path video = render_dir / "video.mp4";
     if (fs::exists(video)) {
-      const std::string source = options.embed_video ? FileDataUri(video, "video/mp4") : "../40_render/video.mp4";
+      const std::string source = options.embed_video ? FileDataUri(video, "video/mp4") : Link(render_dir, "video.mp4");
       body +=
           format("<video id=\"path-video\" controls loop muted autoplay playsinline src=\"{}\" width=\"{}\"></video>\n",
                  source, options.image_width);
@@ -264,7 +267,7 @@ void ReportStage::Run(StageContext& context) const {
                      ImageDataUri(render_dir / "frames" / "0000.png", options.image_width));
     }
   }
-  if (exported) body += ExportSection(*exported);
+  if (exported) body += ExportSection(export_dir, *exported);
   WriteFileAtomic(context.output_dir / "report.html", HtmlPage("photo2nerf report", body));
   context.summary = {{"report", (context.workspace.StageDir(folder()) / "report.html").string()}};
   LogInfo(format("report: {}", (context.workspace.StageDir(folder()) / "report.html").string()));
