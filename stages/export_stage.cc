@@ -28,9 +28,6 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr size_t kMaxPoints = 2'000'000;
-constexpr size_t kMinFocusPoints = 100;   // fewer central depth points: the focus region is the whole box
-constexpr double kFocusQuantile = 0.05;   // the focus region spans these quantiles of the central points ...
-constexpr double kFocusMargin = 1.2;      // ... widened by this factor
 constexpr float kFallbackThreshold = 25;  // per normalised unit: what fits lego's surface
 
 // The training views' cameras as the field saw them: corrected where camera refinement moved them.
@@ -56,10 +53,17 @@ void WriteCameras(const fs::path& path, const ImportedDataset& dataset, const Ou
   transforms.Write(path);
 }
 
+// export.region resolved: "box" or "focus".
+std::string RegionKind(const NerfModel& model, const ExportOptions& options) {
+  if (options.region != "auto") return options.region;
+  return model.space == SceneSpace::kBounded ? "box" : "focus";
+}
+
 // Where the training views' rays end, where they are opaque.
 struct DepthSamples {
-  std::vector<ColouredPoint> points;     // coloured, at most about kMaxPoints (every k-th)
-  std::vector<Eigen::Vector3d> central;  // every one from the middle half (in width and height) of each view
+  std::vector<ColouredPoint> points;  // coloured, at most about kMaxPoints (every k-th)
+  // Every one from the middle half (in width and height) of each view; only for the focus region (FitCube).
+  std::vector<Eigen::Vector3d> central;
 };
 
 DepthSamples SampleDepths(const NerfModel& model, const ImportedDataset& dataset, const ExportOptions& options) {
@@ -78,6 +82,7 @@ DepthSamples SampleDepths(const NerfModel& model, const ImportedDataset& dataset
     ThrowIfCancelled();  // Ctrl-C stops within a tile
   };
   DepthSamples samples;
+  const bool want_central = RegionKind(model, options) == "focus";
   const double keep_every = std::max(1.0, double(pixels) / kMaxPoints);
   double next_keep = 0;
   size_t counter = 0;
@@ -91,7 +96,7 @@ DepthSamples SampleDepths(const NerfModel& model, const ImportedDataset& dataset
         const Ray ray = CameraRay(camera, x + 0.5, y + 0.5);
         const Eigen::Vector3d p = ray.origin + rendered.depth.pixels[i] * ray.direction;
         if (!p.allFinite()) continue;
-        if (4 * std::abs(2 * x + 1 - camera.width) < 2 * camera.width &&
+        if (want_central && 4 * std::abs(2 * x + 1 - camera.width) < 2 * camera.width &&
             4 * std::abs(2 * y + 1 - camera.height) < 2 * camera.height)
           samples.central.push_back(p);
         if (counter++ < next_keep) continue;
@@ -107,12 +112,6 @@ DepthSamples SampleDepths(const NerfModel& model, const ImportedDataset& dataset
     }
   }
   return samples;
-}
-
-// export.region resolved: "box" or "focus".
-std::string RegionKind(const NerfModel& model, const ExportOptions& options) {
-  if (options.region != "auto") return options.region;
-  return model.space == SceneSpace::kBounded ? "box" : "focus";
 }
 
 // The mesh's region, resolution and threshold: export.threshold, or, when it is 0, SurfaceThreshold at the depth

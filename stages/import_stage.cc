@@ -62,25 +62,6 @@ OIIO::ImageBuf Composite(const OIIO::ImageBuf& image, float background) {
   return out;
 }
 
-}  // namespace
-
-std::map<std::string, std::string> ImportStage::ExternalInputs(const Workspace& workspace, const Config&) const {
-  const fs::path input = Input(workspace);
-  std::vector<fs::path> files;
-  try {
-    files = LoadDataset(input).files;
-  } catch (const UserError&) {
-    return {{"dataset " + input.string(), "unreadable"}};  // Run() says why
-  }
-  const std::vector<std::string> digests = Sha1OfFiles(files);
-  std::map<std::string, std::string> inputs;
-  for (size_t i = 0; i < files.size(); ++i)
-    inputs["file " + fs::relative(files[i], input.has_extension() ? input.parent_path() : input).string()] = digests[i];
-  return inputs;
-}
-
-namespace {
-
 struct ImageCounts {
   std::atomic<int> undistorted{0}, composited{0};
 };
@@ -165,6 +146,21 @@ Normalization WriteCameras(const ImportedDataset& dataset, const fs::path& input
 }
 
 }  // namespace
+
+std::map<std::string, std::string> ImportStage::ExternalInputs(const Workspace& workspace, const Config&) const {
+  const fs::path input = Input(workspace);
+  std::vector<fs::path> files;
+  try {
+    files = LoadDataset(input).files;
+  } catch (const UserError&) {
+    return {{"dataset " + input.string(), "unreadable"}};  // Run() says why
+  }
+  const std::vector<std::string> digests = Sha1OfFiles(files);
+  std::map<std::string, std::string> inputs;
+  for (size_t i = 0; i < files.size(); ++i)
+    inputs["file " + fs::relative(files[i], input.has_extension() ? input.parent_path() : input).string()] = digests[i];
+  return inputs;
+}
 
 void ImportStage::Run(StageContext& context) const {
   const PosesOptions poses = ReadOptions<PosesOptions>(context.config, "poses");
