@@ -11,7 +11,7 @@ namespace p2n {
 namespace {
 
 constexpr double kMinNumbered = 0.9;      // share of names that must end in a number after the common prefix
-constexpr double kMinRegularSteps = 0.6;  // share of steps between sorted numbers equal to the commonest one
+constexpr uint64_t kMaxMedianStep = 2;     // the median step between sorted numbers, in commonest steps
 constexpr size_t kMaxDigits = 18;         // longer digit runs are not counters
 
 struct Numbered {
@@ -41,11 +41,24 @@ bool LooksLikeFrameSequence(const std::vector<std::string>& names) {
   if (largest == by_prefix.end() || largest->second.size() < kMinNumbered * names.size()) return false;
   std::vector<uint64_t> numbers = largest->second;
   std::sort(numbers.begin(), numbers.end());
-  std::map<uint64_t, size_t> steps;
-  for (size_t i = 1; i < numbers.size(); ++i) ++steps[numbers[i] - numbers[i - 1]];
-  size_t commonest = 0;
-  for (const auto& [step, count] : steps) commonest = std::max(commonest, count);
-  return commonest >= kMinRegularSteps * (numbers.size() - 1);
+  std::vector<uint64_t> steps;
+  std::map<uint64_t, size_t> counts;
+  for (size_t i = 1; i < numbers.size(); ++i) {
+    steps.push_back(numbers[i] - numbers[i - 1]);
+    ++counts[steps.back()];
+  }
+  // The commonest step (the smallest of equals) is the sequence's own; frames left out (blurred, deleted) make
+  // some steps longer, but the median stays within a few of it. Numbers with no relation step anyhow.
+  uint64_t commonest = 0;
+  size_t most = 0;
+  for (const auto& [step, count] : counts) {
+    if (count > most) {
+      commonest = step;
+      most = count;
+    }
+  }
+  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+  return commonest > 0 && steps[steps.size() / 2] <= kMaxMedianStep * commonest;
 }
 
 namespace {

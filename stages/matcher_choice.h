@@ -12,7 +12,9 @@
 namespace p2n {
 
 // Whether the names read as one numbered sequence: (nearly) all end in a number after one common prefix, and the
-// numbers, sorted, mostly step by the same amount (frames 1, 2, 3 or 5, 10, 15; a camera's counter).
+// numbers, sorted, step by about the same amount (frames 1, 2, 3 or 5, 10, 15; a camera's counter): the median
+// step at most twice the commonest, so that frames left out of a video (fox: 0001 0002 0003 0004 0006 ... 0115)
+// still read as a sequence.
 bool LooksLikeFrameSequence(const std::vector<std::string>& names);
 
 // Up to this many unordered photos, exhaustive matching costs about what retrieval does and finds every pair: on
