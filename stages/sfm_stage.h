@@ -17,7 +17,7 @@ struct SfmOptions {
   int sequential_overlap = 12;          // neighbours each photo is matched with (sequential)
   int retrieval_neighbours = 20;        // most similar photos each photo is matched with (vocab_tree)
   int max_image_size = 1024;            // longest side for feature extraction, pixels
-  int max_num_features = 4096;          // features per photo at most
+  int max_num_features = 2048;          // features per photo at most (README: 4096 against 2048)
   bool refine_principal_point = true;   // a final bundle adjustment that also refines cx, cy
   double min_registered = 0.5;          // fraction of photos that must be registered
   int seed = 0;                         // COLMAP's random seed
@@ -42,7 +42,10 @@ struct SfmOptions {
     v("retrieval_neighbours", retrieval_neighbours, "most similar photos each photo is matched with (vocab_tree)",
       "images");
     v("max_image_size", max_image_size, "longest image side for feature extraction", "px");
-    v("max_num_features", max_num_features, "features per photo at most", "features");
+    v("max_num_features", max_num_features,
+      "features per photo at most (CPU matching costs the square of it; 2048 matched fox in 66 s against 176 s for "
+      "4096, with cameras as accurate)",
+      "features");
     v("refine_principal_point", refine_principal_point, "final bundle adjustment that also refines cx, cy");
     v("min_registered", min_registered, "fraction of photos that must be registered, else an error", "",
       OptionKind::kCheck);
