@@ -10,9 +10,9 @@
 namespace p2n {
 namespace {
 
-constexpr double kMinNumbered = 0.9;      // share of names that must end in a number after the common prefix
-constexpr uint64_t kMaxMedianStep = 2;     // the median step between sorted numbers, in commonest steps
-constexpr size_t kMaxDigits = 18;         // longer digit runs are not counters
+constexpr double kMinNumbered = 0.9;    // share of names that must end in a number after the common prefix
+constexpr uint64_t kMaxMedianStep = 2;  // the median step between sorted numbers, in commonest steps
+constexpr size_t kMaxDigits = 18;       // longer digit runs are not counters
 
 struct Numbered {
   std::string prefix;

@@ -24,9 +24,9 @@ TEST_CASE("matcher choice: numbered sequences are sequential, unordered names ar
   CHECK(LooksLikeFrameSequence(Names("{:04d}.jpg", 1, 50)));
   // fox's photos: frames of a video with the blurred ones left out (steps of 1 to 4, once 18)
   std::vector<std::string> fox;
-  for (int frame : {1,  2,  3,  4,  6,  7,  8,  9,  12, 14, 18, 19, 21, 22, 25, 26, 27,
-                    29, 30, 31, 33, 34, 35, 39, 42, 44, 45, 46, 49, 52, 54, 72, 73, 74,
-                    76, 77, 78, 81, 84, 85, 89, 90, 94, 97, 103, 105, 107, 108, 110, 115}) {
+  for (int frame :
+       {1,  2,  3,  4,  6,  7,  8,  9,  12, 14, 18, 19, 21, 22, 25, 26, 27, 29, 30, 31,  33,  34,  35,  39,  42,
+        44, 45, 46, 49, 52, 54, 72, 73, 74, 76, 77, 78, 81, 84, 85, 89, 90, 94, 97, 103, 105, 107, 108, 110, 115}) {
     fox.push_back(format("{:04d}.jpg", frame));
   }
   CHECK(LooksLikeFrameSequence(fox));
