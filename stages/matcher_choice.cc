@@ -49,14 +49,9 @@ bool LooksLikeFrameSequence(const std::vector<std::string>& names) {
   }
   // The commonest step (the smallest of equals) is the sequence's own; frames left out (blurred, deleted) make
   // some steps longer, but the median stays within a few of it. Numbers with no relation step anyhow.
-  uint64_t commonest = 0;
-  size_t most = 0;
-  for (const auto& [step, count] : counts) {
-    if (count > most) {
-      commonest = step;
-      most = count;
-    }
-  }
+  const uint64_t commonest = std::max_element(counts.begin(), counts.end(), [](const auto& a, const auto& b) {
+                               return a.second < b.second;
+                             })->first;
   std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
   return commonest > 0 && steps[steps.size() / 2] <= kMaxMedianStep * commonest;
 }
