@@ -3,6 +3,8 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <chrono>
+#include <functional>
 #include <set>
 
 #include "formats/camera_geometry.h"
@@ -14,6 +16,7 @@
 #include "pipeline/log.h"
 #include "pipeline/subprocess.h"
 #include "stages/colmap_flags.h"
+#include "stages/feature_matching.h"
 #include "stages/matcher_choice.h"
 #include "stages/stage_reports.h"
 
@@ -52,6 +55,15 @@ class StepRunner {
     timings_.push_back({step, fs::relative(log, log_dir_.parent_path()).string(), result.wall_seconds});
     ThrowIfCancelled();
     return log;
+  }
+  // Runs one step of our own, in this process; its log is the stage's.
+  void RunHere(const std::string& step, const std::function<void()>& work) {
+    ++index_;
+    LogInfo(format("sfm: {} ({}/{})", step, index_, total_));
+    const auto start = std::chrono::steady_clock::now();
+    work();
+    timings_.push_back({step, fs::relative(log_dir_ / "photo2nerf.log", log_dir_.parent_path()).string(),
+                        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()});
   }
   bool last_ok() const { return last_ok_; }
   const std::vector<SfmReport::Step>& timings() const { return timings_; }
@@ -142,7 +154,15 @@ struct ColmapRun {
     return tree;
   }
 
+  // COLMAP's matcher finds the raw matches of exhaustive and sequential matching in the database (ours, see
+  // feature_matching.h) and only verifies them; it matches by retrieval itself.
   void Match(const std::string& matcher, size_t photos) const {
+    if (matcher != "vocab_tree") {
+      steps->RunHere("descriptor matching", [&] {
+        MatchIntoDatabase(database(), matcher == "exhaustive" ? ExhaustivePairs(photos)
+                                                              : SequentialPairs(photos, options.sequential_overlap));
+      });
+    }
     std::vector<std::string> match = {options.colmap,
                                       matcher + "_matcher",
                                       "--database_path",
@@ -300,7 +320,7 @@ fs::path MatchAndMap(const ColmapRun& colmap, const SfmOptions& options, size_t 
     failure = "reconstructed nothing";
   }
   LogWarning(format("sfm: {} matching {}; adding {} matching and mapping again", *matcher, failure, retry));
-  colmap.steps->AddSteps(retry == "vocab_tree" ? 3 : 2);
+  colmap.steps->AddSteps(3);  // the vocabulary tree or our descriptor matching, COLMAP's matching, mapping
   colmap.Match(retry, photos);
   *matcher += " + " + retry;
   return colmap.MapLargestModel(photos, "mapping again", "sparse_again", models);
@@ -351,7 +371,7 @@ void SfmStage::Run(StageContext& context) const {
   LogInfo(format("sfm: COLMAP {}, {} photos, {} matching, features at {} px", version.ToString(), names.size(), matcher,
                  options.max_image_size));
   StepRunner steps(out / "logs", (options.refine_principal_point ? 5 : 4) + (camera_per_size ? groups.size() - 1 : 0) +
-                                     (matcher == "vocab_tree" ? 1 : 0));
+                                     1);  // the vocabulary tree or our descriptor matching
   const ColmapRun colmap{
       options, ColmapFlagsFor(version), images, out, std::to_string(options.seed), std::to_string(threads), &steps};
 

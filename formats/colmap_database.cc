@@ -1,0 +1,126 @@
+#include "formats/colmap_database.h"
+
+#include <sqlite3.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "pipeline/errors.h"
+#include "pipeline/format.h"
+
+namespace p2n {
+namespace {
+
+constexpr uint64_t kMaxNumImages = 2147483647;  // COLMAP's pair ids: id1 * kMaxNumImages + id2, id1 < id2
+
+// A prepared statement, finalised when it goes out of scope.
+class Statement {
+ public:
+  Statement(sqlite3* db, const std::filesystem::path& path, const char* sql) : path_(path) {
+    if (sqlite3_prepare_v2(db, sql, -1, &statement_, nullptr) != SQLITE_OK) Fail(db, sql);
+  }
+  ~Statement() { sqlite3_finalize(statement_); }
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
+
+  sqlite3_stmt* get() const { return statement_; }
+  // SQLITE_ROW or SQLITE_DONE; anything else throws.
+  int Step() {
+    const int code = sqlite3_step(statement_);
+    if (code != SQLITE_ROW && code != SQLITE_DONE) Fail(sqlite3_db_handle(statement_), sqlite3_sql(statement_));
+    return code;
+  }
+
+ private:
+  [[noreturn]] void Fail(sqlite3* db, const char* sql) const {
+    throw ExternalToolError(format("COLMAP's database '{}': '{}' failed: {}", path_.string(), sql, sqlite3_errmsg(db)));
+  }
+
+  std::filesystem::path path_;
+  sqlite3_stmt* statement_ = nullptr;
+};
+
+void Execute(sqlite3* db, const std::filesystem::path& path, const char* sql) {
+  Statement statement(db, path, sql);
+  statement.Step();
+}
+
+}  // namespace
+
+uint64_t ColmapPairId(uint32_t image_id1, uint32_t image_id2) {
+  if (image_id1 > image_id2) std::swap(image_id1, image_id2);
+  return kMaxNumImages * image_id1 + image_id2;
+}
+
+ColmapDatabase::ColmapDatabase(const std::filesystem::path& path) : path_(path) {
+  if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE, nullptr) != SQLITE_OK) {
+    const std::string why = db_ != nullptr ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    throw ExternalToolError(format("cannot open COLMAP's database '{}': {}", path.string(), why));
+  }
+}
+
+ColmapDatabase::~ColmapDatabase() { sqlite3_close(db_); }
+
+std::vector<ColmapDatabaseImage> ColmapDatabase::Images() const {
+  Statement statement(db_, path_, "SELECT image_id, name FROM images");
+  std::vector<ColmapDatabaseImage> images;
+  while (statement.Step() == SQLITE_ROW) {
+    const unsigned char* name = sqlite3_column_text(statement.get(), 1);
+    images.push_back({static_cast<uint32_t>(sqlite3_column_int64(statement.get(), 0)),
+                      name != nullptr ? reinterpret_cast<const char*>(name) : ""});
+  }
+  // As std::string orders them, which is COLMAP's order for sequential matching.
+  std::sort(images.begin(), images.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
+  return images;
+}
+
+SiftDescriptors ColmapDatabase::Descriptors(uint32_t image_id) const {
+  Statement statement(db_, path_, "SELECT rows, cols, data FROM descriptors WHERE image_id = ?");
+  sqlite3_bind_int64(statement.get(), 1, image_id);
+  if (statement.Step() != SQLITE_ROW) return SiftDescriptors(128, 0);
+  const int64_t rows = sqlite3_column_int64(statement.get(), 0), cols = sqlite3_column_int64(statement.get(), 1);
+  const void* data = sqlite3_column_blob(statement.get(), 2);
+  const int64_t bytes = sqlite3_column_bytes(statement.get(), 2);
+  if (rows < 0 || cols != 128 || bytes != rows * cols || (rows > 0 && data == nullptr)) {
+    throw ExternalToolError(
+        format("COLMAP's database '{}': image {}'s descriptors are {} x {} with {} bytes, not rows x 128 uint8 values; "
+               "delete the sfm stage's folder and run it again",
+               path_.string(), image_id, rows, cols, bytes));
+  }
+  SiftDescriptors descriptors(128, rows);
+  if (rows > 0) std::memcpy(descriptors.data(), data, bytes);
+  return descriptors;
+}
+
+bool ColmapDatabase::HasMatches(uint32_t image_id1, uint32_t image_id2) const {
+  Statement statement(db_, path_, "SELECT 1 FROM matches WHERE pair_id = ?");
+  sqlite3_bind_int64(statement.get(), 1, static_cast<sqlite3_int64>(ColmapPairId(image_id1, image_id2)));
+  return statement.Step() == SQLITE_ROW;
+}
+
+void ColmapDatabase::WriteMatches(const std::vector<std::pair<std::pair<uint32_t, uint32_t>, FeatureMatches>>& pairs) {
+  Execute(db_, path_, "BEGIN TRANSACTION");
+  {
+    Statement insert(db_, path_, "INSERT INTO matches(pair_id, rows, cols, data) VALUES(?, ?, 2, ?)");
+    std::vector<uint32_t> data;
+    for (const auto& [ids, matches] : pairs) {
+      const bool swap = ids.first > ids.second;
+      data.clear();
+      for (const auto& [a, b] : matches) data.insert(data.end(), {swap ? b : a, swap ? a : b});
+      sqlite3_reset(insert.get());
+      sqlite3_bind_int64(insert.get(), 1, static_cast<sqlite3_int64>(ColmapPairId(ids.first, ids.second)));
+      sqlite3_bind_int64(insert.get(), 2, static_cast<sqlite3_int64>(matches.size()));
+      if (data.empty()) {
+        sqlite3_bind_zeroblob(insert.get(), 3, 0);  // a pair without matches has a row too, as COLMAP writes it
+      } else {
+        sqlite3_bind_blob(insert.get(), 3, data.data(), static_cast<int>(data.size() * sizeof(uint32_t)),
+                          SQLITE_TRANSIENT);
+      }
+      insert.Step();
+    }
+  }
+  Execute(db_, path_, "COMMIT");
+}
+
+}  // namespace p2n

@@ -1,0 +1,54 @@
+#pragma once
+// COLMAP's database (database.db, SQLite): the images' names and SIFT descriptors read, raw feature matches
+// written, in COLMAP's layout (DESIGN.md §7), so that COLMAP's own matchers find the matches there and only verify
+// them. Errors name the database and the record and are ExternalToolError: COLMAP wrote the file.
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+struct sqlite3;
+
+namespace p2n {
+
+// One descriptor a column: COLMAP stores a feature's 128 bytes in a row, which is this matrix's column.
+using SiftDescriptors = Eigen::Matrix<uint8_t, 128, Eigen::Dynamic>;
+
+// (feature index in the first image, feature index in the second).
+using FeatureMatches = std::vector<std::pair<uint32_t, uint32_t>>;
+
+struct ColmapDatabaseImage {
+  uint32_t id = 0;
+  std::string name;
+};
+
+class ColmapDatabase {
+ public:
+  // Opens an existing database for reading and writing; ExternalToolError when it cannot.
+  explicit ColmapDatabase(const std::filesystem::path& path);
+  ~ColmapDatabase();
+  ColmapDatabase(const ColmapDatabase&) = delete;
+  ColmapDatabase& operator=(const ColmapDatabase&) = delete;
+
+  // Every image, by name.
+  std::vector<ColmapDatabaseImage> Images() const;
+  // An image's descriptors (none when it has no row); ExternalToolError when the row is not rows x 128 bytes.
+  SiftDescriptors Descriptors(uint32_t image_id) const;
+  // Whether the pair has a row of raw matches (in either order).
+  bool HasMatches(uint32_t image_id1, uint32_t image_id2) const;
+  // Writes the pairs' raw matches (COLMAP's pair id and order: the smaller image id first) in one transaction.
+  void WriteMatches(const std::vector<std::pair<std::pair<uint32_t, uint32_t>, FeatureMatches>>& pairs);
+
+ private:
+  std::filesystem::path path_;
+  sqlite3* db_ = nullptr;
+};
+
+// COLMAP's id of an unordered image pair.
+uint64_t ColmapPairId(uint32_t image_id1, uint32_t image_id2);
+
+}  // namespace p2n

@@ -1,0 +1,144 @@
+#include "stages/feature_matching.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "pipeline/cancel.h"
+#include "pipeline/progress.h"
+
+namespace p2n {
+namespace {
+
+constexpr float kSimilarityNorm = 1.0f / (512.0f * 512.0f);  // COLMAP scales descriptors to a length of 512
+constexpr Eigen::Index kBlockColumns = 1024;                 // similarities computed a block of b at a time
+
+// The best and second best similarity of one feature, as COLMAP's brute-force matcher keeps them: the best is
+// the first of equals, and a similarity must exceed 0 to count.
+struct BestTwo {
+  float best = 0, second = 0;
+  int index = -1;
+  // The index of the match, or -1 when the distance or the ratio test rejects it.
+  int Match(const SiftMatchRules& rules) const {
+    if (index < 0) return -1;
+    const float angle = std::acos(std::min(kSimilarityNorm * best, 1.0f));
+    if (angle > rules.max_distance) return -1;
+    const float second_angle = std::acos(std::min(kSimilarityNorm * second, 1.0f));
+    return angle >= rules.max_ratio * second_angle ? -1 : index;
+  }
+};
+
+// The best two of a column of n similarities.
+BestTwo BestOfColumn(const float* column, Eigen::Index n) {
+  const Eigen::Map<const Eigen::VectorXf> values(column, n);
+  BestTwo result;
+  result.best = values.maxCoeff();
+  if (!(result.best > 0)) return {};
+  Eigen::Index first = 0;
+  while (column[first] != result.best) ++first;
+  result.index = static_cast<int>(first);
+  if (first > 0) result.second = values.head(first).maxCoeff();
+  if (first + 1 < n) result.second = std::max(result.second, values.tail(n - first - 1).maxCoeff());
+  return result;
+}
+
+// Every row's best two over the columns seen so far, updated a column at a time without branches (the same
+// result as BestTwo's rule taken in column order), so that the loop over rows vectorises.
+struct RowBests {
+  std::vector<float> best, second;
+  std::vector<int> index;
+  explicit RowBests(Eigen::Index rows) : best(rows, 0.0f), second(rows, 0.0f), index(rows, -1) {}
+  void Add(const float* column, int j) {
+    const size_t rows = best.size();
+    float* __restrict b = best.data();
+    float* __restrict s = second.data();
+    int* __restrict k = index.data();
+    for (size_t i = 0; i < rows; ++i) {
+      const float value = column[i];
+      s[i] = std::max(s[i], std::min(value, b[i]));
+      k[i] = value > b[i] ? j : k[i];
+      b[i] = std::max(b[i], value);
+    }
+  }
+  BestTwo operator[](size_t i) const { return {best[i], second[i], index[i]}; }
+};
+
+}  // namespace
+
+FeatureMatches MatchSiftDescriptors(const SiftDescriptors& a, const SiftDescriptors& b, const SiftMatchRules& rules) {
+  const Eigen::Index n1 = a.cols(), n2 = b.cols();
+  if (n1 == 0 || n2 == 0) return {};
+  const Eigen::MatrixXf fa = a.cast<float>();
+  RowBests best12(n1);
+  std::vector<BestTwo> best21(n2);
+  Eigen::MatrixXf similarity;
+  for (Eigen::Index j0 = 0; j0 < n2; j0 += kBlockColumns) {
+    const Eigen::Index width = std::min(kBlockColumns, n2 - j0);
+    similarity.noalias() = fa.transpose() * b.middleCols(j0, width).cast<float>();
+    for (Eigen::Index j = 0; j < width; ++j) {
+      best12.Add(similarity.col(j).data(), static_cast<int>(j0 + j));
+      best21[j0 + j] = BestOfColumn(similarity.col(j).data(), n1);
+    }
+  }
+  FeatureMatches matches;
+  for (Eigen::Index i = 0; i < n1; ++i) {
+    const int j = best12[i].Match(rules);
+    if (j < 0) continue;
+    if (rules.cross_check && best21[j].Match(rules) != i) continue;
+    matches.emplace_back(static_cast<uint32_t>(i), static_cast<uint32_t>(j));
+  }
+  return matches;
+}
+
+std::vector<std::pair<size_t, size_t>> ExhaustivePairs(size_t images) {
+  std::vector<std::pair<size_t, size_t>> pairs;
+  for (size_t i = 0; i < images; ++i) {
+    for (size_t j = i + 1; j < images; ++j) pairs.emplace_back(i, j);
+  }
+  return pairs;
+}
+
+std::vector<std::pair<size_t, size_t>> SequentialPairs(size_t images, int overlap) {
+  std::set<size_t> offsets;
+  for (int k = 0; k < overlap; ++k) {
+    if (k > 0) offsets.insert(k);
+    if (k < 62) offsets.insert(size_t{1} << k);
+  }
+  std::vector<std::pair<size_t, size_t>> pairs;
+  for (size_t i = 0; i < images; ++i) {
+    for (const size_t offset : offsets) {
+      if (offset < images - i) pairs.emplace_back(i, i + offset);
+    }
+  }
+  return pairs;
+}
+
+size_t MatchIntoDatabase(const std::filesystem::path& database, const std::vector<std::pair<size_t, size_t>>& pairs) {
+  ColmapDatabase db(database);
+  const std::vector<ColmapDatabaseImage> images = db.Images();
+  std::vector<std::pair<size_t, size_t>> todo;
+  for (const auto& [i, j] : pairs) {
+    if (i < images.size() && j < images.size() && !db.HasMatches(images[i].id, images[j].id)) todo.emplace_back(i, j);
+  }
+  std::map<size_t, SiftDescriptors> descriptors;
+  for (const auto& [i, j] : todo) {
+    for (const size_t k : {i, j}) {
+      if (!descriptors.count(k)) descriptors[k] = db.Descriptors(images[k].id);
+    }
+  }
+  std::vector<std::pair<std::pair<uint32_t, uint32_t>, FeatureMatches>> results(todo.size());
+  Progress progress("sfm: matching descriptors", static_cast<int64_t>(todo.size()), "pairs");
+  tbb::parallel_for(size_t{0}, todo.size(), [&](size_t p) {
+    ThrowIfCancelled();
+    const auto [i, j] = todo[p];
+    results[p] = {{images[i].id, images[j].id}, MatchSiftDescriptors(descriptors.at(i), descriptors.at(j))};
+    progress.Add();
+  });
+  db.WriteMatches(results);
+  return todo.size();
+}
+
+}  // namespace p2n
