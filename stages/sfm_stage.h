@@ -13,7 +13,7 @@ struct SfmOptions {
   std::string camera_model = "OPENCV";  // COLMAP camera model of the photos
   bool single_camera = true;            // one camera shared by every photo
   std::string matcher = "auto";         // auto: AutoMatcher (matcher_choice.h)
-  int exhaustive_max_images = 40;       // photos above which auto matching of a numbered sequence is sequential
+  int exhaustive_max_images = 100;      // photos above which auto matching is sequential or by retrieval
   int sequential_overlap = 12;          // neighbours each photo is matched with (sequential)
   int retrieval_neighbours = 20;        // most similar photos each photo is matched with (vocab_tree)
   int max_image_size = 1024;            // longest side for feature extraction, pixels
@@ -32,12 +32,12 @@ struct SfmOptions {
     v("matcher", matcher,
       "feature matching: exhaustive (every pair), sequential (neighbours in file-name order, as video frames or a "
       "camera's counter), vocab_tree (the most similar photos, by a vocabulary tree built from them: any order), or "
-      "auto: exhaustive for small sets; above, sequential when the names are a numbered sequence, else exhaustive "
-      "up to 100 photos and vocab_tree beyond; when too few photos register, the other kind of matching is added "
-      "once and the mapping rerun",
+      "auto: exhaustive up to sfm.exhaustive_max_images photos; above, sequential when the names are a numbered "
+      "sequence, else vocab_tree; when too few photos register, the other kind of matching is added once and the "
+      "mapping rerun",
       "", OptionKind::kResult, {"auto", "exhaustive", "sequential", "vocab_tree"});
     v("exhaustive_max_images", exhaustive_max_images,
-      "photos above which auto matching of a numbered sequence is sequential", "images");
+      "photos above which auto matching is sequential (numbered names) or by retrieval (others)", "images");
     v("sequential_overlap", sequential_overlap, "neighbours each photo is matched with (sequential)", "images");
     v("retrieval_neighbours", retrieval_neighbours, "most similar photos each photo is matched with (vocab_tree)",
       "images");
