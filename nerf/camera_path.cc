@@ -1,5 +1,6 @@
 #include "nerf/camera_path.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -25,8 +26,11 @@ std::vector<PinholeCamera> OrbitPath(const PinholeCamera& reference, const Camer
   if (!(options.radius > 0)) throw std::invalid_argument("an orbit's radius must be positive");
   std::vector<PinholeCamera> path;
   const double elevation = options.elevation_deg * kPi / 180;
+  if (!(options.sweep_deg > 0)) throw std::invalid_argument("an orbit's sweep must be positive");
   for (int i = 0; i < options.frames; ++i) {
-    const double azimuth = 2 * kPi * i / options.frames;
+    const double phase = 2 * kPi * i / options.frames;
+    const double sweep = options.sweep_deg >= 360 ? phase : options.sweep_deg * kPi / 180 * 0.5 * (1 - std::cos(phase));
+    const double azimuth = options.start_deg * kPi / 180 + sweep;
     const Eigen::Vector3d position =
         options.radius * Eigen::Vector3d(std::cos(elevation) * std::cos(azimuth),
                                          std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
@@ -66,6 +70,25 @@ std::vector<PinholeCamera> SpiralPath(const std::vector<PinholeCamera>& cameras,
     path.push_back(WithPose(reference, LookAtPose(position, focus)));
   }
   return path;
+}
+
+void CapturedArc(const std::vector<PinholeCamera>& cameras, double max_gap_deg, double* start_deg, double* sweep_deg) {
+  std::vector<double> azimuths;
+  for (const PinholeCamera& camera : cameras) {
+    const Eigen::Vector3d position = camera.world_from_cam.block<3, 1>(0, 3);
+    azimuths.push_back(std::fmod(std::atan2(position.y(), position.x()) * 180 / kPi + 360, 360));
+  }
+  std::sort(azimuths.begin(), azimuths.end());
+  double widest = 0, after = 0;
+  for (size_t i = 0; i < azimuths.size(); ++i) {
+    const double next = i + 1 < azimuths.size() ? azimuths[i + 1] : azimuths.front() + 360;
+    if (next - azimuths[i] > widest) {
+      widest = next - azimuths[i];
+      after = std::fmod(next, 360);
+    }
+  }
+  *start_deg = widest > max_gap_deg ? after : 0;
+  *sweep_deg = widest > max_gap_deg ? 360 - widest : 360;
 }
 
 void MeanCameraPlacement(const std::vector<PinholeCamera>& cameras, double* radius, double* elevation_deg) {

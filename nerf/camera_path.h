@@ -13,11 +13,20 @@ struct CameraPathOptions {
   int frames = 60;
   double elevation_deg = 30;  // orbit: height above the horizontal plane through the centre
   double radius = 3;          // orbit: distance from the centre; spiral: amplitude as a multiple of the cameras' spread
+  // orbit: the azimuths covered (degrees about +z from +x): from start_deg through sweep_deg; 360 goes round once,
+  // less goes there and back (easing at the ends, so that the video loops).
+  double start_deg = 0;
+  double sweep_deg = 360;
 };
 
 // `frames` cameras with the intrinsics of `reference` on a circle about the z axis through the origin, all
-// looking at the origin; frame 0 is at azimuth 0 (+x).
+// looking at the origin; frame 0 is at azimuth start_deg.
 std::vector<PinholeCamera> OrbitPath(const PinholeCamera& reference, const CameraPathOptions& options);
+
+// The arc of azimuths (about the z axis) where `cameras` stand: from the camera after the widest gap between
+// neighbours round to the one before it. When no gap is wider than `max_gap_deg`, the cameras surround the centre:
+// start 0, sweep 360.
+void CapturedArc(const std::vector<PinholeCamera>& cameras, double max_gap_deg, double* start_deg, double* sweep_deg);
 
 // `frames` cameras with the intrinsics of `reference` moving on an elliptical spiral (two turns, moving in and
 // out along the viewing direction) around the mean of `cameras`' positions, in the plane of their mean image

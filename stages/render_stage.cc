@@ -29,6 +29,27 @@ namespace {
 
 constexpr float kHeatMapMaxError = 0.2f;  // mean absolute error over RGB shown as the brightest colour
 constexpr double kSplatPsnrMargin = 0.5;  // dB: render.source auto takes splats this close to the field
+// The orbit: all the way round when the photos leave no gap wider than this between neighbours (a view from the
+// middle of such a gap is within half of it of a photo); else over the arc they cover, there and back.
+constexpr double kOrbitMaxGapDeg = 60;
+// render.path auto: photos within an arc narrower than this were taken from one side (forward-facing, as
+// LLFF's): a spiral in front of them. An orbit sweeps at least this much.
+constexpr double kForwardArcDeg = 30;
+
+std::vector<PinholeCamera> DatasetCameras(const ImportedDataset& dataset) {
+  std::vector<PinholeCamera> cameras;
+  for (const ImportedView& view : dataset.views) cameras.push_back(view.view.camera);
+  return cameras;
+}
+
+// render.path resolved: auto is a spiral for LLFF data and photos taken from one side, else an orbit.
+std::string PathKind(const RenderStageOptions& options, const ImportedDataset& dataset) {
+  if (options.path != "auto") return options.path;
+  if (dataset.meta.dataset_kind == "llff") return "spiral";
+  double start = 0, sweep = 0;
+  CapturedArc(DatasetCameras(dataset), kOrbitMaxGapDeg, &start, &sweep);
+  return sweep < kForwardArcDeg ? "spiral" : "orbit";
+}
 
 // Image writes fail for the user's reasons (a full disk, permissions): UserError naming the file.
 void Save(const FloatImage& image, const fs::path& path, bool sixteen_bits = false) {
@@ -137,8 +158,7 @@ EvalReport RenderHeldout(const ViewRenderer& renderer, const ImportedDataset& da
 std::vector<PinholeCamera> PathCameras(const RenderStageOptions& options, const std::string& kind,
                                        const ImportedDataset& dataset, const PinholeCamera& reference) {
   if (kind == "file") return ReadCameraPath(options.path_file, reference);
-  std::vector<PinholeCamera> cameras;
-  for (const ImportedView& view : dataset.views) cameras.push_back(view.view.camera);
+  const std::vector<PinholeCamera> cameras = DatasetCameras(dataset);
   CameraPathOptions path;
   path.frames = options.frames;
   if (kind == "spiral") {
@@ -151,6 +171,11 @@ std::vector<PinholeCamera> PathCameras(const RenderStageOptions& options, const 
   MeanCameraPlacement(cameras, &radius, &elevation);
   path.radius = options.radius > 0 ? options.radius : radius;
   path.elevation_deg = options.elevation == "auto" ? elevation : std::stod(options.elevation);
+  CapturedArc(cameras, kOrbitMaxGapDeg, &path.start_deg, &path.sweep_deg);
+  if (path.sweep_deg < kForwardArcDeg) {  // photos from one side, orbited on request
+    path.start_deg -= 0.5 * (kForwardArcDeg - path.sweep_deg);
+    path.sweep_deg = kForwardArcDeg;
+  }
   return OrbitPath(reference, path);
 }
 
@@ -365,8 +390,7 @@ void RenderStage::Run(StageContext& context) const {
                      eval.views.size(), renderer.source, *eval.psnr, *eval.ssim, eval.seconds_per_view));
     }
   }
-  std::string kind = options.path;
-  if (kind == "auto") kind = dataset.meta.dataset_kind == "llff" ? "spiral" : "orbit";
+  const std::string kind = PathKind(options, dataset);
   if (kind != "none") {
     const ImportedView* first = &dataset.views.front();
     for (const ImportedView& view : dataset.views) {

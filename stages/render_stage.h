@@ -19,7 +19,7 @@ inline constexpr int kDefaultMaxPathWidth = 320;
 struct RenderStageOptions {
   bool heldout = true;             // render and evaluate the held-out views
   std::string source = "auto";     // field | splats | auto: the splats when they score within 0.5 dB of the field
-  std::string path = "auto";       // orbit | spiral | file | none; auto: spiral for LLFF captures, else orbit
+  std::string path = "auto";       // orbit | spiral | file | none; auto: spiral for LLFF data and one-sided captures
   std::string path_file;           // cameras of the path (transforms.json layout) when path = file
   int frames = 60;                 // frames of an orbit or spiral
   int width = 0;                   // path frames' width in pixels (height by the aspect); 0: the photos',
@@ -41,8 +41,9 @@ struct RenderStageOptions {
       "splats when their held-out PSNR is within 0.5 dB of the field's, else the field",
       "", OptionKind::kResult, {"auto", "field", "splats"});
     v("path", path,
-      "camera path: orbit, spiral (in front of the capture), file, none; auto: spiral for LLFF "
-      "captures, else orbit",
+      "camera path: orbit (round the centre, over the arc of directions the photos were taken from, there and "
+      "back; all the way round when they surround it), spiral (in front of the capture), file, none; auto: spiral "
+      "for LLFF data and for photos taken from one side (within 30 degrees), else orbit",
       "", OptionKind::kResult, {"auto", "orbit", "spiral", "file", "none"});
     v("path_file", path_file,
       "cameras of the path when render.path is file (transforms.json layout, e.g. an "
@@ -76,7 +77,7 @@ class RenderStage : public Stage {
   std::string name() const override { return "render"; }
   std::string folder() const override { return "40_render"; }
   // 2: renders from the splats when they are as good; 3: eval.json and render_report.json as stage_reports.h types them
-  int format_version() const override { return 3; }
+  int format_version() const override { return 4; }  // 4: the orbit keeps to the photos' arc
   std::vector<std::string> upstream() const override { return {"poses", "train", "splat"}; }
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
   void Run(StageContext& context) const override;

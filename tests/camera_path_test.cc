@@ -34,6 +34,50 @@ TEST_CASE("camera paths: an orbit circles the centre at its radius and elevation
   CHECK_THROWS_AS(OrbitPath(reference, options), std::invalid_argument);
 }
 
+TEST_CASE("camera paths: the arc the photos cover, and an orbit there and back over it", "[path]") {
+  const auto ring = [](std::vector<double> azimuths_deg) {
+    std::vector<PinholeCamera> cameras;
+    for (const double a : azimuths_deg) {
+      const double r = a * M_PI / 180;
+      cameras.push_back(LookAtCamera({2 * std::cos(r), 2 * std::sin(r), 0.5}, {0, 0, 0}, 40, 30, 50));
+    }
+    return cameras;
+  };
+  double start = -1, sweep = -1;
+  CapturedArc(ring({40, 10, 100, 70}), 60, &start, &sweep);  // a quarter of the circle, in any order
+  CHECK(start == Approx(10));
+  CHECK(sweep == Approx(90));
+  CapturedArc(ring({350, 20, 5}), 60, &start, &sweep);  // across azimuth 0
+  CHECK(start == Approx(350));
+  CHECK(sweep == Approx(30));
+  CapturedArc(ring({0, 50, 100, 150, 200, 250, 300}), 60, &start, &sweep);  // all round: gaps of 50 and 60 degrees
+  CHECK(start == 0);
+  CHECK(sweep == 360);
+
+  const PinholeCamera reference = LookAtCamera({3, 0, 1}, {0, 0, 0}, 80, 60, 50);
+  CameraPathOptions options;
+  options.frames = 20;
+  options.radius = 2;
+  options.start_deg = 350;
+  options.sweep_deg = 30;
+  const std::vector<PinholeCamera> path = OrbitPath(reference, options);
+  REQUIRE(path.size() == 20);
+  const auto azimuth = [&](int i) {
+    const Eigen::Vector3d p = path[i].world_from_cam.block<3, 1>(0, 3);
+    return std::atan2(p.y(), p.x()) * 180 / M_PI;  // 350 is -10 here
+  };
+  CHECK(azimuth(0) == Approx(-10));
+  CHECK(azimuth(10) == Approx(20));  // the far end halfway
+  for (int i = 1; i < 20; ++i) {
+    CHECK(azimuth(i) > -10);
+    CHECK(azimuth(i) < 20 + 1e-9);
+    CHECK(azimuth(i) == Approx(azimuth(20 - i)));  // back the same way
+    CHECK(Project(path[i], Eigen::Vector3d::Zero()).isApprox(Eigen::Vector2d(path[i].cx, path[i].cy), 1e-9));
+  }
+  options.sweep_deg = 0;
+  CHECK_THROWS_AS(OrbitPath(reference, options), std::invalid_argument);
+}
+
 TEST_CASE("camera paths: a spiral stays near the capture and looks at its focus", "[path]") {
   std::vector<PinholeCamera> capture;
   for (int i = 0; i < 9; ++i)
