@@ -155,12 +155,17 @@ struct ColmapRun {
   }
 
   // COLMAP's matcher finds the raw matches of exhaustive and sequential matching in the database (ours, see
-  // feature_matching.h) and only verifies them; it matches by retrieval itself.
+  // feature_matching.h) and only verifies them; it matches by retrieval itself, and every pair we could not (a
+  // database we cannot read, as another COLMAP version might write it).
   void Match(const std::string& matcher, size_t photos) const {
     if (matcher != "vocab_tree") {
       steps->RunHere("descriptor matching", [&] {
-        MatchIntoDatabase(database(), matcher == "exhaustive" ? ExhaustivePairs(photos)
-                                                              : SequentialPairs(photos, options.sequential_overlap));
+        try {
+          MatchIntoDatabase(database(), matcher == "exhaustive" ? ExhaustivePairs(photos)
+                                                                : SequentialPairs(photos, options.sequential_overlap));
+        } catch (const ExternalToolError& e) {
+          LogWarning(format("sfm: COLMAP matches the photos itself (slower): {}", e.what()));
+        }
       });
     }
     std::vector<std::string> match = {options.colmap,
@@ -370,8 +375,9 @@ void SfmStage::Run(StageContext& context) const {
       options.matcher != "auto" ? options.matcher : AutoMatcher(names, options.exhaustive_max_images);
   LogInfo(format("sfm: COLMAP {}, {} photos, {} matching, features at {} px", version.ToString(), names.size(), matcher,
                  options.max_image_size));
-  StepRunner steps(out / "logs", (options.refine_principal_point ? 5 : 4) + (camera_per_size ? groups.size() - 1 : 0) +
-                                     1);  // the vocabulary tree or our descriptor matching
+  // Extraction (one per image size), the vocabulary tree or our matching, COLMAP's matching, mapping, the
+  // principal point's adjustment, undistortion.
+  StepRunner steps(out / "logs", (options.refine_principal_point ? 6 : 5) + (camera_per_size ? groups.size() - 1 : 0));
   const ColmapRun colmap{
       options, ColmapFlagsFor(version), images, out, std::to_string(options.seed), std::to_string(threads), &steps};
 
