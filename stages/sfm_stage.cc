@@ -45,8 +45,7 @@ class StepRunner {
 
   // Runs one step; returns its log. Failures throw ExternalToolError, unless `allow_failure`.
   fs::path Run(const std::string& step, const std::vector<std::string>& argv, bool allow_failure = false) {
-    ++index_;
-    LogInfo(format("sfm: {} ({}/{})", step, index_, total_));
+    Announce(step);
     std::string file = step;
     std::replace(file.begin(), file.end(), ' ', '_');
     const fs::path log = log_dir_ / (file + ".log");
@@ -58,8 +57,7 @@ class StepRunner {
   }
   // Runs one step of our own, in this process; its log is the stage's.
   void RunHere(const std::string& step, const std::function<void()>& work) {
-    ++index_;
-    LogInfo(format("sfm: {} ({}/{})", step, index_, total_));
+    Announce(step);
     const auto start = std::chrono::steady_clock::now();
     work();
     timings_.push_back({step, fs::relative(log_dir_ / "photo2nerf.log", log_dir_.parent_path()).string(),
@@ -69,6 +67,11 @@ class StepRunner {
   const std::vector<SfmReport::Step>& timings() const { return timings_; }
 
  private:
+  void Announce(const std::string& step) {
+    ++index_;
+    LogInfo(format("sfm: {} ({}/{})", step, index_, total_));
+  }
+
   fs::path log_dir_;
   int total_;
   int index_ = 0;
