@@ -9,12 +9,13 @@
 
 #include "pipeline/cancel.h"
 #include "pipeline/progress.h"
+#include "stages/descriptor_similarity.h"
 
 namespace p2n {
 namespace {
 
 constexpr float kSimilarityNorm = 1.0f / (512.0f * 512.0f);  // COLMAP scales descriptors to a length of 512
-constexpr Eigen::Index kBlockColumns = 1024;                 // similarities computed a block of b at a time
+constexpr Eigen::Index kBlockColumns = 96;  // similarities computed a block of b at a time (in the cache)
 
 // The best and second best similarity of one feature, as COLMAP's brute-force matcher keeps them: the best is
 // the first of equals, and a similarity must exceed 0 to count.
@@ -31,17 +32,33 @@ struct BestTwo {
   }
 };
 
-// The best two of a column of n similarities.
-BestTwo BestOfColumn(const float* column, Eigen::Index n) {
-  const Eigen::Map<const Eigen::VectorXf> values(column, n);
+// Adds a similarity to the best two so far (the second counts a value equal to the best).
+void AddToBestTwo(float value, float* best, float* second) {
+  *second = std::max(*second, std::min(value, *best));
+  *best = std::max(*best, value);
+}
+
+// The best two of a column of n similarities: in 16 lanes first (vector instructions), then across the lanes;
+// the best's index (the first of equals) only when the values pass `rules`, else -1.
+BestTwo BestOfColumn(const float* column, Eigen::Index n, const SiftMatchRules& rules) {
+  using Lanes = Eigen::Array<float, 16, 1>;
+  Lanes best = Lanes::Zero(), second = Lanes::Zero();
+  Eigen::Index i = 0;
+  for (; i + Lanes::SizeAtCompileTime <= n; i += Lanes::SizeAtCompileTime) {
+    const Eigen::Map<const Lanes> values(column + i);
+    second = second.max(values.min(best));
+    best = best.max(values);
+  }
   BestTwo result;
-  result.best = values.maxCoeff();
+  for (int l = 0; l < Lanes::SizeAtCompileTime; ++l) {
+    AddToBestTwo(best[l], &result.best, &result.second);
+    AddToBestTwo(second[l], &result.best, &result.second);
+  }
+  for (; i < n; ++i) AddToBestTwo(column[i], &result.best, &result.second);
   if (!(result.best > 0)) return {};
-  Eigen::Index first = 0;
-  while (column[first] != result.best) ++first;
-  result.index = static_cast<int>(first);
-  if (first > 0) result.second = values.head(first).maxCoeff();
-  if (first + 1 < n) result.second = std::max(result.second, values.tail(n - first - 1).maxCoeff());
+  result.index = 0;  // a stand-in: Match() judges the values
+  if (result.Match(rules) < 0) return {};
+  result.index = static_cast<int>(std::find(column, column + n, result.best) - column);
   return result;
 }
 
@@ -71,16 +88,18 @@ struct RowBests {
 FeatureMatches MatchSiftDescriptors(const SiftDescriptors& a, const SiftDescriptors& b, const SiftMatchRules& rules) {
   const Eigen::Index n1 = a.cols(), n2 = b.cols();
   if (n1 == 0 || n2 == 0) return {};
-  const Eigen::MatrixXf fa = a.cast<float>();
+  const DescriptorSimilarity similarities(a);
+  const Eigen::Index stride = similarities.stride();
   RowBests best12(n1);
   std::vector<BestTwo> best21(n2);
-  Eigen::MatrixXf similarity;
+  std::vector<float> block(static_cast<size_t>(stride) * std::min(kBlockColumns, n2));
   for (Eigen::Index j0 = 0; j0 < n2; j0 += kBlockColumns) {
     const Eigen::Index width = std::min(kBlockColumns, n2 - j0);
-    similarity.noalias() = fa.transpose() * b.middleCols(j0, width).cast<float>();
+    similarities.Block(b, j0, width, block.data());
     for (Eigen::Index j = 0; j < width; ++j) {
-      best12.Add(similarity.col(j).data(), static_cast<int>(j0 + j));
-      best21[j0 + j] = BestOfColumn(similarity.col(j).data(), n1);
+      const float* column = block.data() + j * stride;
+      best12.Add(column, static_cast<int>(j0 + j));
+      best21[j0 + j] = BestOfColumn(column, n1, rules);
     }
   }
   FeatureMatches matches;

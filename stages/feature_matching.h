@@ -2,7 +2,7 @@
 // SIFT descriptors matched in-process, for COLMAP to verify. COLMAP 3.8's CPU matcher finds each feature's two
 // nearest neighbours with a FLANN kd-tree that it builds again for every pair: on the demo's photos 95% of its
 // matching time, with geometric verification the rest. Here every pair's similarities are one exact matrix
-// product (descriptors are bytes, so float sums of their products are exact), judged by COLMAP's rules: the
+// product of the bytes (DescriptorSimilarity: byte products with AVX-512 VNNI), judged by COLMAP's rules: the
 // angle between descriptors at most max_distance, below max_ratio of the second best's, and the best both ways.
 // The raw matches go into COLMAP's database, where its exhaustive and sequential matchers find them and only
 // verify them (DESIGN.md §7).

@@ -10,6 +10,7 @@
 
 #include "formats/colmap_database.h"
 #include "pipeline/errors.h"
+#include "stages/descriptor_similarity.h"
 #include "stages/feature_matching.h"
 #include "tests/test_util.h"
 
@@ -143,7 +144,7 @@ TEST_CASE("SIFT matching finds shuffled, noisy copies and rejects the rest, as C
   const SiftDescriptors a = RandomDescriptors(300, &rng);
   std::vector<int> permutation;
   // Noise of 6 per byte moves a descriptor by about 0.13 rad; unrelated ones are about 0.9 rad apart.
-  const SiftDescriptors b = Shuffled(a, 1100, 6.0, &permutation, &rng);  // b spans two of the 1024-column blocks
+  const SiftDescriptors b = Shuffled(a, 1100, 6.0, &permutation, &rng);  // b spans many column blocks, the last partial
   const FeatureMatches matches = MatchSiftDescriptors(a, b);
   CHECK(matches.size() >= 295);
   for (const auto& [i, j] : matches) CHECK(int(j) == permutation[i]);
@@ -166,6 +167,34 @@ TEST_CASE("SIFT matching finds shuffled, noisy copies and rejects the rest, as C
   SECTION("no features, no matches") {
     CHECK(MatchSiftDescriptors(SiftDescriptors(128, 0), b).empty());
     CHECK(MatchSiftDescriptors(a, SiftDescriptors(128, 0)).empty());
+  }
+}
+
+TEST_CASE("descriptor similarities are the exact integer dot products, at any size and byte value",
+          "[feature_matching]") {
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> byte(0, 255);
+  INFO("VNNI: " << DescriptorSimilarity::UsesVnni());
+  for (const int rows : {1, 63, 64, 65, 130}) {
+    SiftDescriptors a(128, rows), b(128, 17);
+    for (uint8_t& value : a.reshaped()) value = static_cast<uint8_t>(byte(rng));
+    for (uint8_t& value : b.reshaped()) value = static_cast<uint8_t>(byte(rng));
+    a.col(0).setConstant(255);  // the largest product sum: 128 * 255 * 255
+    b.col(1).setConstant(255);
+    b.col(2).setZero();
+    const Eigen::MatrixXi exact = a.cast<int>().transpose() * b.cast<int>();
+    const DescriptorSimilarity similarity(a);
+    REQUIRE(similarity.stride() >= rows);
+    for (const auto& [first, width] : {std::pair<int, int>{0, 17}, {3, 7}, {16, 1}}) {
+      std::vector<float> out(static_cast<size_t>(similarity.stride()) * width);
+      similarity.Block(b, first, width, out.data());
+      for (int j = 0; j < width; ++j) {
+        for (int i = 0; i < rows; ++i) {
+          INFO("rows " << rows << ", column " << first + j << ", row " << i);
+          CHECK(out[size_t(j) * similarity.stride() + i] == static_cast<float>(exact(i, first + j)));
+        }
+      }
+    }
   }
 }
 
