@@ -1,7 +1,9 @@
 #include "nerf/camera_path.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 
 namespace p2n {
@@ -27,9 +29,12 @@ std::vector<PinholeCamera> OrbitPath(const PinholeCamera& reference, const Camer
   std::vector<PinholeCamera> path;
   const double elevation = options.elevation_deg * kPi / 180;
   if (!(options.sweep_deg > 0)) throw std::invalid_argument("an orbit's sweep must be positive");
+  const bool round = options.sweep_deg >= 360;
   for (int i = 0; i < options.frames; ++i) {
-    const double phase = 2 * kPi * i / options.frames;
-    const double sweep = options.sweep_deg >= 360 ? phase : options.sweep_deg * kPi / 180 * 0.5 * (1 - std::cos(phase));
+    // An arc's way back passes the cameras of the way there exactly (frame frames - i is frame i), so that the
+    // render stage draws each of them once.
+    const double phase = 2 * kPi * (round ? i : std::min(i, options.frames - i)) / options.frames;
+    const double sweep = round ? phase : options.sweep_deg * kPi / 180 * 0.5 * (1 - std::cos(phase));
     const double azimuth = options.start_deg * kPi / 180 + sweep;
     const Eigen::Vector3d position =
         options.radius * Eigen::Vector3d(std::cos(elevation) * std::cos(azimuth),
@@ -70,6 +75,18 @@ std::vector<PinholeCamera> SpiralPath(const std::vector<PinholeCamera>& cameras,
     path.push_back(WithPose(reference, LookAtPose(position, focus)));
   }
   return path;
+}
+
+std::vector<size_t> FirstOfEqualCameras(const std::vector<PinholeCamera>& cameras) {
+  using Key = std::array<double, 22>;
+  std::map<Key, size_t> first;
+  std::vector<size_t> result;
+  for (const PinholeCamera& camera : cameras) {
+    Key key = {double(camera.width), double(camera.height), camera.fx, camera.fy, camera.cx, camera.cy};
+    std::copy_n(camera.world_from_cam.data(), 16, key.begin() + 6);
+    result.push_back(first.emplace(key, result.size()).first->second);
+  }
+  return result;
 }
 
 void CapturedArc(const std::vector<PinholeCamera>& cameras, double max_gap_deg, double* start_deg, double* sweep_deg) {

@@ -14,7 +14,7 @@ struct CameraPathOptions {
   double elevation_deg = 30;  // orbit: height above the horizontal plane through the centre
   double radius = 3;          // orbit: distance from the centre; spiral: amplitude as a multiple of the cameras' spread
   // orbit: the azimuths covered (degrees about +z from +x): from start_deg through sweep_deg; 360 goes round once,
-  // less goes there and back (easing at the ends, so that the video loops).
+  // less goes there and back (easing at the ends, so that the video loops; frame frames - i repeats frame i).
   double start_deg = 0;
   double sweep_deg = 360;
 };
@@ -22,6 +22,9 @@ struct CameraPathOptions {
 // `frames` cameras with the intrinsics of `reference` on a circle about the z axis through the origin, all
 // looking at the origin; frame 0 is at azimuth start_deg.
 std::vector<PinholeCamera> OrbitPath(const PinholeCamera& reference, const CameraPathOptions& options);
+
+// For each camera, the index of the first one equal to it (size, intrinsics and pose exactly): a path's repeats.
+std::vector<size_t> FirstOfEqualCameras(const std::vector<PinholeCamera>& cameras);
 
 // The arc of azimuths (about the z axis) where `cameras` stand: from the camera after the widest gap between
 // neighbours round to the one before it. When no gap is wider than `max_gap_deg`, the cameras surround the centre:

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numeric>
 
 #include "formats/dataset_import.h"
@@ -228,11 +229,27 @@ PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& datas
       LogWarning("render: no H.264 encoder; video.mp4 is MPEG-4 part 2, which browsers may not play");
   }
   const PathRange path_range(dataset);
+  const std::vector<size_t> original = FirstOfEqualCameras(cameras);
+  std::vector<size_t> last_use(cameras.size());
+  for (size_t f = 0; f < cameras.size(); ++f) last_use[original[f]] = f;
+  std::map<size_t, RenderedView> kept;  // frames that a later one repeats, until then
   double seconds = 0;
-  size_t samples = 0, rays = 0;
+  size_t samples = 0, rays = 0, rendered = 0;
   for (size_t f = 0; f < cameras.size(); ++f) {
-    const Eigen::Vector2d range = path_range.For(cameras[f]);
-    const RenderedView frame = renderer.render(cameras[f], range[0], range[1], on_pixels_done);
+    RenderedView frame;
+    if (original[f] == f) {
+      const Eigen::Vector2d range = path_range.For(cameras[f]);
+      frame = renderer.render(cameras[f], range[0], range[1], on_pixels_done);
+      seconds += frame.stats.seconds;
+      samples += frame.stats.samples_evaluated;
+      rays += frame.stats.rays;
+      ++rendered;
+      if (last_use[f] > f) kept[f] = frame;
+    } else {
+      frame = kept.at(original[f]);
+      if (last_use[original[f]] == f) kept.erase(original[f]);
+      on_pixels_done(size_t(cameras[f].width) * cameras[f].height);
+    }
     const std::string name = format("{:04d}", f);
     Save(frame.rgb, out / "frames" / (name + ".png"));
     if (options.exr) Save(frame.rgb, out / "frames" / (name + ".exr"));
@@ -244,17 +261,15 @@ PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& datas
       if (options.exr) Save(frame.depth, out / "depth" / (name + ".exr"));
     }
     if (video && frame.rgb.width == cameras[0].width && frame.rgb.height == cameras[0].height) video->Add(frame.rgb);
-    seconds += frame.stats.seconds;
-    samples += frame.stats.samples_evaluated;
-    rays += frame.stats.rays;
   }
   PathReport report;
   report.source = renderer.source;
   report.frames = static_cast<int>(cameras.size());
   report.width = cameras[0].width;
   report.height = cameras[0].height;
-  report.seconds_per_frame = seconds / cameras.size();
-  report.frames_per_second = cameras.size() / std::max(seconds, 1e-9);
+  report.rendered_frames = static_cast<int>(rendered);
+  report.seconds_per_frame = seconds / rendered;
+  report.frames_per_second = rendered / std::max(seconds, 1e-9);
   if (renderer.source == "field") report.samples_per_ray = double(samples) / std::max<size_t>(rays, 1);
   report.depth_png_max = depth_max;
   if (video) {
@@ -407,8 +422,11 @@ void RenderStage::Run(StageContext& context) const {
     WriteJsonAtomic(context.output_dir / "render_report.json", {{"path", path.ToJson()}});
     summary["frames"] = path.frames;
     summary["frames_per_second"] = path.frames_per_second;
-    LogInfo(format("render: {} path from the {}, {} frames of {}x{} at {:.2f} frames per second", kind, renderer.source,
-                   path.frames, path.width, path.height, path.frames_per_second));
+    const std::string repeats = path.rendered_frames < path.frames
+                                    ? format(" ({} drawn, the way back repeats them)", path.rendered_frames)
+                                    : "";
+    LogInfo(format("render: {} path from the {}, {} frames of {}x{}{} at {:.2f} frames per second", kind,
+                   renderer.source, path.frames, path.width, path.height, repeats, path.frames_per_second));
   }
   context.summary = summary;
 }

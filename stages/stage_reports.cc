@@ -407,6 +407,7 @@ nlohmann::json PathReport::ToJson() const {
   nlohmann::json json = {{"source", source},
                          {"kind", kind},
                          {"frames", frames},
+                         {"rendered_frames", rendered_frames},
                          {"width", width},
                          {"height", height},
                          {"seconds_per_frame", seconds_per_frame},
@@ -424,6 +425,7 @@ PathReport PathReport::Read(const fs::path& render_report) {
   fields.Get("source", &report.source);
   fields.Get("kind", &report.kind);
   fields.Get("frames", &report.frames);
+  fields.Get("rendered_frames", &report.rendered_frames);
   fields.Get("width", &report.width);
   fields.Get("height", &report.height);
   fields.Get("seconds_per_frame", &report.seconds_per_frame);

@@ -169,10 +169,11 @@ struct PathVideo {
 struct PathReport {
   std::string source, kind;  // field | splats; orbit | spiral | file
   int frames = 0, width = 0, height = 0;
-  double seconds_per_frame = 0, frames_per_second = 0;
-  std::optional<double> samples_per_ray;  // none from the splats
-  double depth_png_max = 0;               // the depth that 65535 stands for in the depth PNGs
-  std::optional<PathVideo> video;         // none when no encoder could write one
+  int rendered_frames = 0;  // the others repeat an earlier frame's camera (an arc's way back)
+  double seconds_per_frame = 0, frames_per_second = 0;  // of the rendered frames
+  std::optional<double> samples_per_ray;                // none from the splats
+  double depth_png_max = 0;                             // the depth that 65535 stands for in the depth PNGs
+  std::optional<PathVideo> video;                       // none when no encoder could write one
 
   // render_report.json holds {"path": ToJson()}.
   nlohmann::json ToJson() const;

@@ -71,9 +71,14 @@ TEST_CASE("camera paths: the arc the photos cover, and an orbit there and back o
   for (int i = 1; i < 20; ++i) {
     CHECK(azimuth(i) > -10);
     CHECK(azimuth(i) < 20 + 1e-9);
-    CHECK(azimuth(i) == Approx(azimuth(20 - i)));  // back the same way
+    CHECK(path[i].world_from_cam == path[20 - i].world_from_cam);  // back the same way, exactly
     CHECK(Project(path[i], Eigen::Vector3d::Zero()).isApprox(Eigen::Vector2d(path[i].cx, path[i].cy), 1e-9));
   }
+  const std::vector<size_t> first = FirstOfEqualCameras(path);
+  for (int i = 0; i < 20; ++i) CHECK(first[i] == static_cast<size_t>(std::min(i, 20 - i)));
+  options.sweep_deg = 360;  // all round: no repeats
+  const std::vector<size_t> round = FirstOfEqualCameras(OrbitPath(reference, options));
+  for (size_t i = 0; i < round.size(); ++i) CHECK(round[i] == i);
   options.sweep_deg = 0;
   CHECK_THROWS_AS(OrbitPath(reference, options), std::invalid_argument);
 }

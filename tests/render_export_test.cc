@@ -100,6 +100,19 @@ TEST_CASE("render stage: held-out PSNR and SSIM, path frames, depth, video, a wr
   // Editing the path file makes the result stale.
   WriteText(setup.dir / "path.json", ReadText(setup.dir / "path.json") + "\n");
   CHECK(setup.Status(config, "render").state == StageState::kStale);
+
+  // A path that comes back to a camera draws it once: the same files.
+  const std::vector<PinholeCamera> path = ReadCameraPath(out / "path.json", PinholeCamera{});
+  WriteCameraPath(setup.dir / "path.json", {path[0], path[1], path[0], path[1]});
+  setup.runner.Run(setup.workspace, config, Until("render"));
+  const nlohmann::json repeated = ReadJsonFile(out / "render_report.json")["path"];
+  CHECK(repeated["frames"] == 4);
+  CHECK(repeated["rendered_frames"] == 2);
+  CHECK(Sha1OfFile(out / "frames" / "0001.png") == first_frame);
+  for (const char* folder : {"frames", "depth", "opacity"}) {
+    CHECK(Sha1OfFile(out / folder / "0002.png") == Sha1OfFile(out / folder / "0000.png"));
+    CHECK(Sha1OfFile(out / folder / "0003.png") == Sha1OfFile(out / folder / "0001.png"));
+  }
 }
 
 TEST_CASE("render stage: from the splats, with both PSNRs in eval.json, refused when there are none", "[render]") {

@@ -113,6 +113,7 @@ PathReport SomePathReport() {
   report.source = "field";
   report.kind = "orbit";
   report.frames = 60;
+  report.rendered_frames = 31;
   report.width = 320;
   report.height = 240;
   report.seconds_per_frame = 0.5;
