@@ -50,12 +50,14 @@ class Mlp {
   // `d_input` is not null, writes dL/d(input).
   void Backward(const Cache& cache, const Matrix& d_output, T* d_params, Matrix* d_input) const;
 
- private:
+  // Where each layer's weights (outputs x inputs, column-major) and biases are in params().
   struct Layer {
     int inputs, outputs;
     size_t weight_offset, bias_offset;
   };
+  const std::vector<Layer>& layers() const { return layers_; }
 
+ private:
   MlpConfig config_;
   std::vector<Layer> layers_;
   std::vector<T> params_;

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <utility>
 
 #include "nerf/config_check.h"
+#include "nerf/mlp_bf16.h"
 #include "nerf/spherical_harmonics.h"
 
 namespace p2n {
@@ -76,19 +78,41 @@ void NgpField<T>::Forward(const Matrix& positions, const Matrix& directions, Mat
 template <typename T>
 void NgpField<T>::ForwardEncoded(const Matrix& positions, Matrix encoded, const Matrix& directions, Matrix* density,
                                  Matrix* rgb, Cache* cache) const {
-  const Eigen::Index n = positions.cols();
   cache->positions = positions;
   cache->encoded = std::move(encoded);
   cache->mlps.resize(2);
   density_mlp_.Forward(cache->encoded, &cache->hidden, &cache->mlps[0]);
   ExpDensity<T>(cache->hidden, density);
-  cache->colour_in.resize(config_.geometry_features + kSphericalHarmonicsCount, n);
-  cache->colour_in.topRows(config_.geometry_features) = cache->hidden.bottomRows(config_.geometry_features);
+  ColourInput(cache->hidden, directions, &cache->colour_in);
+  colour_mlp_.Forward(cache->colour_in, rgb, &cache->mlps[1]);
+}
+
+template <typename T>
+void NgpField<T>::ColourInput(const Matrix& hidden, const Matrix& directions, Matrix* colour_in) const {
+  const Eigen::Index n = hidden.cols();
+  colour_in->resize(config_.geometry_features + kSphericalHarmonicsCount, n);
+  colour_in->topRows(config_.geometry_features) = hidden.bottomRows(config_.geometry_features);
   for (Eigen::Index i = 0; i < n; ++i) {
     SphericalHarmonics(directions(0, i), directions(1, i), directions(2, i),
-                       cache->colour_in.col(i).data() + config_.geometry_features);
+                       colour_in->col(i).data() + config_.geometry_features);
   }
-  colour_mlp_.Forward(cache->colour_in, rgb, &cache->mlps[1]);
+}
+
+template <typename T>
+void NgpField<T>::Render(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb) const {
+  if constexpr (std::is_same_v<T, float>) {
+    if (Bf16Mlp::Available()) {
+      Matrix encoded, hidden(density_mlp_.config().outputs, positions.cols()), colour_in;
+      grid_.Forward(positions, &encoded);
+      Bf16Mlp(density_mlp_).Forward(encoded.data(), encoded.cols(), hidden.data());
+      ExpDensity<T>(hidden, density);
+      ColourInput(hidden, directions, &colour_in);
+      rgb->resize(3, positions.cols());
+      Bf16Mlp(colour_mlp_).Forward(colour_in.data(), colour_in.cols(), rgb->data());
+      return;
+    }
+  }
+  RadianceField<T>::Render(positions, directions, density, rgb);
 }
 
 template <typename T>

@@ -39,6 +39,7 @@ class NgpField : public RadianceField<T> {
                Cache* cache) const override;
   void ForwardEncoded(const Matrix& positions, Matrix encoded, const Matrix& directions, Matrix* density, Matrix* rgb,
                       Cache* cache) const override;
+  void Render(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb) const override;
   void Density(const Matrix& positions, Matrix* density) const override;
   void Backward(const Cache& cache, const Matrix& d_density, const Matrix& d_rgb, T* d_dense,
                 Matrix* d_encoded) const override;
@@ -50,6 +51,10 @@ class NgpField : public RadianceField<T> {
   Mlp<T>& colour_mlp() { return colour_mlp_; }
 
  private:
+  // The colour network's input: the density network's geometry features (below its first row, the log-density)
+  // over the view directions' spherical harmonics.
+  void ColourInput(const Matrix& hidden, const Matrix& directions, Matrix* colour_in) const;
+
   NgpFieldConfig config_;
   HashGridEncoding<T> grid_;
   Mlp<T> density_mlp_, colour_mlp_;

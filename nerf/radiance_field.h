@@ -57,6 +57,12 @@ class RadianceField {
     (void)encoded;
     Forward(positions, directions, density, rgb, cache);
   }
+  // Forward() for rendering: no cache for Backward(), and possibly in lower precision (NgpField<float>: its
+  // networks in bfloat16 products where the CPU has them, outputs within about 1% of Forward()'s).
+  virtual void Render(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb) const {
+    Cache cache;
+    Forward(positions, directions, density, rgb, &cache);
+  }
   // Density alone (for the occupancy grid and meshes).
   virtual void Density(const Matrix& positions, Matrix* density) const = 0;
   // Given dL/d(density) and dL/d(rgb): adds dL/d(dense parameters) into `d_dense` (the blocks of DenseParams()

@@ -145,7 +145,6 @@ void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std:
       chunk_marched += samples[r].size();
     }
     Eigen::MatrixXf positions, directions, density, colour;
-    RadianceField<float>::Cache cache;
     std::vector<std::pair<size_t, size_t>> round;  // (ray, sample)
     for (size_t width = 8;; width = std::min<size_t>(width * 2, 128)) {
       round.clear();
@@ -162,7 +161,7 @@ void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std:
             FieldPoint(model, ray.origin + samples[round[i].first][round[i].second].t * ray.direction).cast<float>();
         directions.col(i) = ray.direction.cast<float>();
       }
-      model.field->Forward(positions, directions, &density, &colour, &cache);
+      model.field->Render(positions, directions, &density, &colour);
       for (size_t i = 0; i < round.size(); ++i) {
         const auto [r, k] = round[i];
         next[r] = k + 1;
