@@ -4,8 +4,10 @@
 // reference render (spacing / 8, no termination) and against the photos. Writes OUT.csv and OUT.png.
 // With --speed instead of OUT: renders the held-out views as the render stage does and prints the seconds per
 // view, samples per ray, samples (field evaluations) per second and the PSNR against the photos, at the render
-// stage's sample spacing or STEP_SCALE times the model's march step.
-// Usage: render_bench WORKSPACE OUT|--speed [VIEWS] [STEP_SCALE]
+// stage's sample spacing or STEP_SCALE times the model's march step, rays stopped below MIN_TRANSMITTANCE (the
+// renderer's default unless given); --speed-float the same with the networks' float pass (the training one)
+// instead of the bfloat16 one, for comparison.
+// Usage: render_bench WORKSPACE OUT|--speed|--speed-float [VIEWS] [STEP_SCALE] [MIN_TRANSMITTANCE]
 
 #include <chrono>
 #include <cmath>
@@ -17,9 +19,34 @@
 #include "nerf/renderer.h"
 #include "stages/training_data.h"
 
+namespace {
+
+// A field rendered with its training pass: Render() as RadianceField's default, everything else the field's.
+class FloatRendering : public p2n::RadianceField<float> {
+ public:
+  explicit FloatRendering(std::unique_ptr<p2n::RadianceField<float>> field) : field_(std::move(field)) {}
+  nlohmann::json Config() const override { return field_->Config(); }
+  void Forward(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb,
+               Cache* cache) const override {
+    field_->Forward(positions, directions, density, rgb, cache);
+  }
+  void Density(const Matrix& positions, Matrix* density) const override { field_->Density(positions, density); }
+  void Backward(const Cache& cache, const Matrix& d_density, const Matrix& d_rgb, float* d_dense,
+                Matrix* d_encoded) const override {
+    field_->Backward(cache, d_density, d_rgb, d_dense, d_encoded);
+  }
+  std::vector<p2n::ParamBlock<float>> DenseParams() override { return field_->DenseParams(); }
+
+ private:
+  std::unique_ptr<p2n::RadianceField<float>> field_;
+};
+
+}  // namespace
+
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: render_bench WORKSPACE OUT|--speed [VIEWS] [STEP_SCALE]\n");
+    std::fprintf(stderr,
+                 "usage: render_bench WORKSPACE OUT|--speed|--speed-float [VIEWS] [STEP_SCALE] [MIN_TRANSMITTANCE]\n");
     return 1;
   }
   const std::filesystem::path ws = argv[1];
@@ -27,10 +54,12 @@ int main(int argc, char** argv) {
   const size_t max_views = argc > 3 ? std::atoi(argv[3]) : 3;
   p2n::TrainingData data = p2n::LoadTrainingData(p2n::LoadTransformsJson(ws / "20_poses" / "transforms.json", ws));
   if (data.heldout.size() > max_views) data.heldout.resize(max_views);
-  const p2n::NerfModel model = p2n::LoadModel(ws / "30_train" / "model.bin");
-  if (out == "--speed") {
+  p2n::NerfModel model = p2n::LoadModel(ws / "30_train" / "model.bin");
+  if (out == "--speed" || out == "--speed-float") {
+    if (out == "--speed-float") model.field = std::make_unique<FloatRendering>(std::move(model.field));
     p2n::RenderOptions options;
     options.step_scale = argc > 4 ? std::atof(argv[4]) : 0.0;
+    if (argc > 5) options.min_transmittance = static_cast<float>(std::atof(argv[5]));
     p2n::RenderStats total;
     double psnr = 0;
     for (const p2n::TrainView& view : data.heldout) {
