@@ -206,6 +206,30 @@ struct PathRange {
   }
 };
 
+// Path frame `name`'s images, and the video's next frame when it has the video's size (`first` is the path's
+// first camera), each on one core.
+void WriteFrame(const RenderedView& frame, const std::string& name, const RenderStageOptions& options, double depth_max,
+                const fs::path& out, VideoWriter* video, const PinholeCamera& first) {
+  tbb::parallel_invoke(
+      [&] {
+        Save(frame.rgb, out / "frames" / (name + ".png"));
+        if (options.exr) Save(frame.rgb, out / "frames" / (name + ".exr"));
+      },
+      [&] {
+        if (!options.depth) return;
+        FloatImage depth = frame.depth;
+        for (float& d : depth.pixels) d = static_cast<float>(d / depth_max);
+        Save(depth, out / "depth" / (name + ".png"), /*sixteen_bits=*/true);
+        if (options.exr) Save(frame.depth, out / "depth" / (name + ".exr"));
+      },
+      [&] {
+        if (options.depth) Save(frame.opacity, out / "opacity" / (name + ".png"));
+      },
+      [&] {
+        if (video && frame.rgb.width == first.width && frame.rgb.height == first.height) video->Add(frame.rgb);
+      });
+}
+
 PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& dataset,
                       const std::vector<PinholeCamera>& cameras, const RenderStageOptions& options,
                       const fs::path& out) {
@@ -256,27 +280,7 @@ PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& datas
       if (last_use[original[f]] == f) kept.erase(original[f]);
       on_pixels_done(size_t(cameras[f].width) * cameras[f].height);
     }
-    const std::string name = format("{:04d}", f);
-    // Each on one core: side by side.
-    tbb::parallel_invoke(
-        [&] {
-          Save(frame.rgb, out / "frames" / (name + ".png"));
-          if (options.exr) Save(frame.rgb, out / "frames" / (name + ".exr"));
-        },
-        [&] {
-          if (!options.depth) return;
-          FloatImage depth = frame.depth;
-          for (float& d : depth.pixels) d = static_cast<float>(d / depth_max);
-          Save(depth, out / "depth" / (name + ".png"), /*sixteen_bits=*/true);
-          if (options.exr) Save(frame.depth, out / "depth" / (name + ".exr"));
-        },
-        [&] {
-          if (options.depth) Save(frame.opacity, out / "opacity" / (name + ".png"));
-        },
-        [&] {
-          if (video && frame.rgb.width == cameras[0].width && frame.rgb.height == cameras[0].height)
-            video->Add(frame.rgb);
-        });
+    WriteFrame(frame, format("{:04d}", f), options, depth_max, out, video.get(), cameras[0]);
   }
   PathReport report;
   report.source = renderer.source;
@@ -438,9 +442,8 @@ void RenderStage::Run(StageContext& context) const {
     WriteJsonAtomic(context.output_dir / "render_report.json", {{"path", path.ToJson()}});
     summary["frames"] = path.frames;
     summary["frames_per_second"] = path.frames_per_second;
-    const std::string repeats = path.rendered_frames < path.frames
-                                    ? format(" ({} drawn, the way back repeats them)", path.rendered_frames)
-                                    : "";
+    const std::string repeats =
+        path.rendered_frames < path.frames ? format(" ({} drawn, the others repeat them)", path.rendered_frames) : "";
     LogInfo(format("render: {} path from the {}, {} frames of {}x{}{} at {:.2f} frames per second", kind,
                    renderer.source, path.frames, path.width, path.height, repeats, path.frames_per_second));
   }

@@ -255,7 +255,7 @@ void ReportStage::Run(StageContext& context) const {
     std::string how =
         path->samples_per_ray ? format("{:.3g} samples per ray", *path->samples_per_ray) : "from the " + path->source;
     if (path->rendered_frames < path->frames)
-      how += format("; {} drawn, the way back repeats them", path->rendered_frames);
+      how += format("; {} drawn, the others repeat them", path->rendered_frames);
     body += format("<h2>New views</h2>\n<p>{} path, {} frames of {}x{} at {:.2f} frames per second ({}).</p>\n",
                    HtmlEscape(path->kind), path->frames, path->width, path->height, path->frames_per_second, how);
     const fs::path video = render_dir / "video.mp4";
