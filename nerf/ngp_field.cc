@@ -107,7 +107,7 @@ void NgpField<T>::Render(const Matrix& positions, const Matrix& directions, Matr
       Bf16Mlp(density_mlp_).Forward(encoded.data(), encoded.cols(), hidden.data());
       ExpDensity<T>(hidden, density);
       ColourInput(hidden, directions, &colour_in);
-      rgb->resize(3, positions.cols());
+      rgb->resize(colour_mlp_.config().outputs, positions.cols());
       Bf16Mlp(colour_mlp_).Forward(colour_in.data(), colour_in.cols(), rgb->data());
       return;
     }
