@@ -22,14 +22,15 @@ constexpr Eigen::Index kBlockColumns = 96;  // similarities computed a block of 
 struct BestTwo {
   float best = 0, second = 0;
   int index = -1;
-  // The index of the match, or -1 when the distance or the ratio test rejects it.
-  int Match(const SiftMatchRules& rules) const {
-    if (index < 0) return -1;
+  // Whether the values pass the distance and the ratio test.
+  bool Passes(const SiftMatchRules& rules) const {
     const float angle = std::acos(std::min(kSimilarityNorm * best, 1.0f));
-    if (angle > rules.max_distance) return -1;
+    if (angle > rules.max_distance) return false;
     const float second_angle = std::acos(std::min(kSimilarityNorm * second, 1.0f));
-    return angle >= rules.max_ratio * second_angle ? -1 : index;
+    return angle < rules.max_ratio * second_angle;
   }
+  // The index of the match, or -1 when there is none or a test rejects it.
+  int Match(const SiftMatchRules& rules) const { return index >= 0 && Passes(rules) ? index : -1; }
 };
 
 // Adds a similarity to the best two so far (the second counts a value equal to the best).
@@ -55,9 +56,7 @@ BestTwo BestOfColumn(const float* column, Eigen::Index n, const SiftMatchRules& 
     AddToBestTwo(second[l], &result.best, &result.second);
   }
   for (; i < n; ++i) AddToBestTwo(column[i], &result.best, &result.second);
-  if (!(result.best > 0)) return {};
-  result.index = 0;  // a stand-in: Match() judges the values
-  if (result.Match(rules) < 0) return {};
+  if (!(result.best > 0) || !result.Passes(rules)) return {};
   result.index = static_cast<int>(std::find(column, column + n, result.best) - column);
   return result;
 }
