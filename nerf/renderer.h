@@ -18,8 +18,11 @@ namespace p2n {
 struct RenderOptions {
   // Sample spacing = the model's march step x this; 0: DefaultStepScale(model).
   double step_scale = 0;
-  float min_transmittance = 1e-4f;  // rays stop below it (0: never)
-  size_t max_samples = 4096;        // per ray
+  // Rays stop below it (0: never). 1e-3 leaves out at most a quarter of an 8-bit level of colour: against 1e-4,
+  // render_bench saves 5-6% of the time on lego and fox at the same PSNR (to 0.01 dB) on lego, fox and fern.
+  // Training and its evaluations keep the trainer's (TrainerOptions::min_transmittance).
+  float min_transmittance = 1e-3f;
+  size_t max_samples = 4096;  // per ray
   // Depth images hold the median depth (where the opacity first reaches one half; robust to haze in front of a
   // surface and to the mix at its edges) instead of the expected one.
   bool median_depth = false;
