@@ -61,21 +61,31 @@ std::string RegionKind(const NerfModel& model, const ExportOptions& options) {
 
 // Where the training views' rays end, where they are opaque.
 struct DepthSamples {
-  std::vector<ColouredPoint> points;  // coloured, at most about kMaxPoints (every k-th)
+  std::vector<ColouredPoint> points;  // coloured, one per opaque pixel (at most about kMaxPoints)
   // Every one from the middle half (in width and height) of each view; only for the focus region (FitCube).
   std::vector<Eigen::Vector3d> central;
 };
 
+// The pixels of `cameras` scaled to `width`.
+size_t PixelsAt(const std::vector<PinholeCamera>& cameras, int width) {
+  size_t pixels = 0;
+  for (const PinholeCamera& camera : cameras) {
+    const PinholeCamera scaled = ScaledCamera(camera, width);
+    pixels += size_t(scaled.width) * scaled.height;
+  }
+  return pixels;
+}
+
 DepthSamples SampleDepths(const NerfModel& model, const ImportedDataset& dataset, const ExportOptions& options) {
   std::vector<const ImportedView*> views;
-  size_t pixels = 0;
+  std::vector<PinholeCamera> cameras;
   for (const ImportedView& view : dataset.views) {
     if (view.view.split != "train") continue;
     views.push_back(&view);
-    const PinholeCamera camera = ScaledCamera(view.view.camera, options.points_width);
-    pixels += size_t(camera.width) * camera.height;
+    cameras.push_back(view.view.camera);
   }
-  Progress progress("export: point cloud", static_cast<int64_t>(pixels), "pixels");
+  const int width = PointCloudWidth(cameras, options.points_width, kMaxPoints);
+  Progress progress("export: point cloud", static_cast<int64_t>(PixelsAt(cameras, width)), "pixels");
   RenderOptions render;
   render.on_rays_done = [&](size_t n) {
     progress.Add(static_cast<int64_t>(n));
@@ -83,11 +93,8 @@ DepthSamples SampleDepths(const NerfModel& model, const ImportedDataset& dataset
   };
   DepthSamples samples;
   const bool want_central = RegionKind(model, options) == "focus";
-  const double keep_every = std::max(1.0, double(pixels) / kMaxPoints);
-  double next_keep = 0;
-  size_t counter = 0;
   for (const ImportedView* view : views) {
-    const PinholeCamera camera = ScaledCamera(view->view.camera, options.points_width);
+    const PinholeCamera camera = ScaledCamera(view->view.camera, width);
     const RenderedView rendered = RenderView(model, camera, view->view.near, view->view.far, render);
     for (int y = 0; y < camera.height; ++y) {
       for (int x = 0; x < camera.width; ++x) {
@@ -99,8 +106,6 @@ DepthSamples SampleDepths(const NerfModel& model, const ImportedDataset& dataset
         if (want_central && 4 * std::abs(2 * x + 1 - camera.width) < 2 * camera.width &&
             4 * std::abs(2 * y + 1 - camera.height) < 2 * camera.height)
           samples.central.push_back(p);
-        if (counter++ < next_keep) continue;
-        next_keep += keep_every;
         if (model.space == SceneSpace::kBounded && p.cwiseAbs().maxCoeff() > 1) continue;
         ColouredPoint& point = samples.points.emplace_back();
         point.position = p.cast<float>();
@@ -185,6 +190,12 @@ ExportReport::Mesh WriteMesh(const NerfModel& model, const ExportOptions& option
 }
 
 }  // namespace
+
+int PointCloudWidth(const std::vector<PinholeCamera>& cameras, int width, size_t max_pixels) {
+  const size_t pixels = PixelsAt(cameras, width);
+  if (pixels <= max_pixels) return width;
+  return std::max(1, static_cast<int>(width * std::sqrt(double(max_pixels) / double(pixels))));
+}
 
 void ExportOptions::Check() const {
   CheckOption(resolution >= 8 && resolution <= 1024, "export.resolution", "must be 8..1024");

@@ -5,7 +5,9 @@
 // them), in COLMAP's (or the dataset's) world frame or the normalised one; binary PLY (and OBJ when asked).
 
 #include <string>
+#include <vector>
 
+#include "nerf/camera.h"
 #include "pipeline/stage.h"
 
 namespace p2n {
@@ -16,7 +18,7 @@ struct ExportOptions {
   std::string frame = "source";  // source: COLMAP's world (or the dataset's); normalized: the training frame
   bool obj = false;              // also write mesh.obj
   bool points = true;            // write points.ply
-  int points_width = 200;        // the training views are rendered this wide for the point cloud
+  int points_width = 200;        // the training views are rendered this wide for the point cloud (at most 2 M pixels)
   double points_opacity = 0.95;  // pixels at least this opaque give points
   std::string region = "auto";   // the cube meshed: box (the scene box), focus (what the views look at), auto
 
@@ -34,7 +36,8 @@ struct ExportOptions {
       "", OptionKind::kResult, {"source", "normalized"});
     v("obj", obj, "also write the mesh as mesh.obj");
     v("points", points, "write points.ply, a coloured point cloud from the rendered depth of the training views");
-    v("points_width", points_width, "width the training views are rendered at for the point cloud", "pixels");
+    v("points_width", points_width,
+      "width the training views are rendered at for the point cloud (narrower beyond 2 M pixels in all)", "pixels");
     v("points_opacity", points_opacity, "pixels at least this opaque give points");
     v("region", region,
       "the cube meshed: box (the whole scene box [-1, 1]^3), focus (around where the middle of the training views "
@@ -45,11 +48,15 @@ struct ExportOptions {
   void Check() const;
 };
 
+// The width the training views are rendered at for the point cloud: `width`, or narrower where the `cameras` would
+// give more than `max_pixels` pixels in all (a pixel gives at most one point, so no more are rendered than kept).
+int PointCloudWidth(const std::vector<PinholeCamera>& cameras, int width, size_t max_pixels);
+
 class ExportStage : public Stage {
  public:
   std::string name() const override { return "export"; }
   std::string folder() const override { return "50_export"; }
-  int format_version() const override { return 4; }  // 4: the mesh covers the focus region by default
+  int format_version() const override { return 5; }  // 5: the point cloud rendered at most 2 M pixels
   std::vector<std::string> upstream() const override { return {"poses", "train"}; }
   void Run(StageContext& context) const override;
 };

@@ -29,7 +29,7 @@ constexpr size_t kMaxNamesListed = 20;
 // The mapper's global bundle adjustments stop when the cost changes by less than this fraction (COLMAP's default 0
 // runs each to its iteration limit), as 3D Gaussian Splatting's and nerfstudio's COLMAP scripts do: the final
 // bundle adjustment refines the cameras anyway. Three runs each (`photo2nerf run PHOTOS -w WS --until poses`):
-// fox mapping and adjustment 36.5 -> 31.7 s (medians), fern 10.4 -> 8.6 s, camera rotations as close to the
+// fox mapping and adjustment 36.5 -> 31.7 s (medians), fern 10.0 -> 8.5 s, camera rotations as close to the
 // references (fox 0.033-0.043 against 0.033-0.045 deg, fern 0.39-0.50 against 0.40-0.43 deg).
 constexpr const char* kGlobalBaTolerance = "1e-6";
 // The vocabulary tree, built from the photos themselves: a word per 64 features at most, clustered from up to 30

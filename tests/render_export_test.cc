@@ -20,6 +20,7 @@
 #include "pipeline/hash.h"
 #include "stage_fixtures.h"
 #include "stages/camera_corrections.h"
+#include "stages/export_stage.h"
 #include "stages/render_stage.h"
 
 namespace p2n::testing {
@@ -239,6 +240,23 @@ TEST_CASE("export stage: mesh and point cloud open in Assimp, finite, in the sou
   const nlohmann::json box = ReadJsonFile(out / "export_report.json")["mesh"]["region"];
   CHECK(box["kind"] == "box");
   CHECK(box["half_size"] == 1.0);
+}
+
+TEST_CASE("export stage: the point cloud's views are rendered no larger than the points it keeps", "[export]") {
+  PinholeCamera photo;
+  photo.width = 1080;  // fox's photos: portrait
+  photo.height = 1920;
+  photo.fx = photo.fy = 1500;
+  photo.cx = 540;
+  photo.cy = 960;
+  const std::vector<PinholeCamera> few(3, photo), many(43, photo);
+  CHECK(PointCloudWidth(few, 200, 2'000'000) == 200);  // 3 x 200 x 356 pixels: all kept
+  const int width = PointCloudWidth(many, 200, 2'000'000);
+  const PinholeCamera scaled = ScaledCamera(photo, width);
+  const size_t pixels = 43 * size_t(scaled.width) * scaled.height;
+  CHECK(pixels <= 2'000'000);
+  CHECK(pixels > 1'950'000);  // no narrower than it must be
+  CHECK(PointCloudWidth(many, 200, 10) >= 1);
 }
 
 TEST_CASE("export stage: transforms.json holds the cameras, the training ones as camera refinement moved them",
