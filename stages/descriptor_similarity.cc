@@ -10,10 +10,10 @@
 namespace p2n {
 namespace {
 
+#ifdef P2N_DESCRIPTOR_VNNI
 constexpr int kDims = 128, kGroups = kDims / 4;  // a 32-bit lane sums the products of 4 dimensions
 constexpr Eigen::Index kLanes = 16, kRowTile = 4 * kLanes;
 
-#ifdef P2N_DESCRIPTOR_VNNI
 // Accumulates the 64 rows from `packed` (4 blocks of 16) against kColumns columns of b (as signed bytes, b - 128)
 // and writes their products, adding the rows' bias back. Four row registers and 4 x kColumns accumulators.
 template <int kColumns>
