@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "stages/descriptor_similarity.h"
 #include "stages/feature_matching.h"
 
 int main(int argc, char** argv) {
@@ -33,7 +34,8 @@ int main(int argc, char** argv) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   size_t matches = 0;
   for (const size_t n : found) matches += n;
-  std::printf("%zu images (%.0f features each), %zu pairs in %.2f s: %.1f pairs/s, %zu matches\n", images.size(),
-              double(features) / images.size(), pairs.size(), seconds, pairs.size() / seconds, matches);
+  std::printf("%zu images (%.0f features each), %zu pairs in %.2f s: %.1f pairs/s, %zu matches (%s)\n", images.size(),
+              double(features) / images.size(), pairs.size(), seconds, pairs.size() / seconds, matches,
+              p2n::DescriptorSimilarity::Instructions());
   return 0;
 }

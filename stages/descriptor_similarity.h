@@ -1,8 +1,8 @@
 #pragma once
 // The dot products of SIFT descriptors (bytes) of one image with those of another, exactly, as floats (integers
-// below 2^24). With AVX-512 VNNI (a -march=native build on a CPU that has it) as byte products summed four at a
-// time into 32-bit lanes: four times the multiply-adds per instruction of a float matrix product, the same
-// numbers; elsewhere as a float matrix product.
+// below 2^24), as integer products summed into 32-bit lanes where a -march=native build has the instructions: with
+// AVX-512 VNNI four byte products at a time (four times the multiply-adds per instruction of a float matrix
+// product), with AVX2 two 16-bit ones; elsewhere as a float matrix product. The same numbers on every path.
 
 #include <Eigen/Core>
 
@@ -23,14 +23,16 @@ class DescriptorSimilarity {
   // out[j * stride() + i] = a_i . b_(first + j) for i < a.cols(), j < width (the padding rows are written too).
   void Block(const SiftDescriptors& b, Eigen::Index first, Eigen::Index width, float* out) const;
 
-  // Whether Block() uses VNNI in this build.
-  static bool UsesVnni();
+  // What Block() computes with in this build: "AVX-512 VNNI", "AVX2" or "float".
+  static const char* Instructions();
 
  private:
   Eigen::Index rows_, stride_;
-  std::vector<uint8_t> packed_;    // VNNI: per 16 rows, per 4 of the 128 dimensions, 16 x 4 bytes
-  std::vector<int32_t> row_bias_;  // VNNI: 128 times each row's sum (the products read b - 128, signed)
-  Eigen::MatrixXf a_float_;        // otherwise
+  // Integer paths: per block of a register's lanes of rows, per group of the dimensions one 32-bit word holds (4
+  // bytes, or 2 of 16 bits), a word a row; and what each row's products need added back (VNNI: 128 times its sum).
+  std::vector<uint32_t> packed_;
+  std::vector<int32_t> row_bias_;
+  Eigen::MatrixXf a_float_;  // the float path
 };
 
 }  // namespace p2n

@@ -174,7 +174,7 @@ TEST_CASE("descriptor similarities are the exact integer dot products, at any si
           "[feature_matching]") {
   std::mt19937 rng(11);
   std::uniform_int_distribution<int> byte(0, 255);
-  INFO("VNNI: " << DescriptorSimilarity::UsesVnni());
+  INFO("instructions: " << DescriptorSimilarity::Instructions());
   for (const int rows : {1, 63, 64, 65, 130}) {
     SiftDescriptors a(128, rows), b(128, 17);
     for (uint8_t& value : a.reshaped()) value = static_cast<uint8_t>(byte(rng));
