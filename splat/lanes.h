@@ -1,7 +1,9 @@
 #pragma once
-// The rasterizer's lanes: one tile row of 16 pixels as one value of GCC's vector extensions (one AVX-512
-// register of floats, two of AVX2), so that blending a splat into a row is a handful of vector instructions
-// whether or not the auto-vectoriser sees it. Masks are the lane-wise comparisons' results (all bits set or none).
+// The rasterizer's lanes: a strip of a tile row's pixels as one value of GCC's vector extensions, one register of
+// floats (16 with AVX-512, else 8: a row's blend state is seven such values, and 16 lanes on AVX2 would take two
+// registers each, more than its 16 hold), so that blending a splat into a strip is a handful of vector
+// instructions whether or not the auto-vectoriser sees it. Masks are the lane-wise comparisons' results (all bits
+// set or none).
 
 #include <cmath>
 #include <cstdint>
@@ -9,7 +11,11 @@
 
 namespace p2n::lanes {
 
+#ifdef __AVX512F__
 inline constexpr int kLanes = 16;
+#else
+inline constexpr int kLanes = 8;
+#endif
 
 template <typename T>
 struct Types;
@@ -34,7 +40,7 @@ inline V<T> Splat(T value) {
   return V<T>{} + value;
 }
 
-// 0, 1, ..., 15.
+// 0, 1, ..., kLanes - 1.
 template <typename T>
 inline V<T> Iota() {
   V<T> v;

@@ -19,8 +19,9 @@ namespace {
 constexpr double kMaxAlpha = 0.99;
 constexpr double kMinAlpha = 1.0 / 255.0;
 constexpr double kMinTransmittance = 1e-4;
-using lanes::kLanes;  // a tile's row of pixels is blended at once, one lane per pixel
-static_assert(kLanes == kSplatTileSize);
+using lanes::kLanes;  // a strip of a tile's row of pixels is blended at once, one lane per pixel
+static_assert(kSplatTileSize % kLanes == 0);
+constexpr int kStrips = kSplatTileSize / kLanes;  // strips a tile row
 template <typename T>
 using V = lanes::V<T>;
 template <typename T>
@@ -56,7 +57,7 @@ struct Footprint {
   }
 };
 
-// A row's blend, front to back.
+// A strip's blend, front to back.
 template <typename T>
 struct RowForward {
   V<T> transmittance, red, green, blue, depth;
@@ -64,7 +65,7 @@ struct RowForward {
   M<T> count;   // splats up to and including the last blended
 };
 
-// Blends the tile's splats front to back into the row of pixels (x0 + lane, py), the first `lanes` of them.
+// Blends the tile's splats front to back into the strip of pixels (x0 + lane, py), the first `lanes` of them.
 template <typename T>
 void BlendRow(const TileSplats<T>& splats, T x0, T py, int lanes, RowForward<T>* row) {
   const V<T> px = x0 + lanes::Iota<T>();
@@ -91,7 +92,7 @@ void BlendRow(const TileSplats<T>& splats, T x0, T py, int lanes, RowForward<T>*
   }
 }
 
-// A row's backward pass: each lane walks its splats back to front from its last contributor.
+// A strip's backward pass: each lane walks its splats back to front from its last contributor.
 template <typename T>
 struct RowBackward {
   V<T> transmittance, final_transmittance, background_dot;
@@ -233,19 +234,21 @@ void Rasterizer<T>::Blend() {
     const size_t begin = tile_begin_[tile];
     TileSplats<T>& splats = local.local();
     Gather(splats_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
-    const int lanes = std::min(kLanes, width - x0);
     RowForward<T> row;
     for (int y = ty * kSplatTileSize; y < std::min(height, (ty + 1) * kSplatTileSize); ++y) {
-      BlendRow(splats, T(x0) + T(0.5), T(y) + T(0.5), lanes, &row);
-      for (int l = 0; l < lanes; ++l) {
-        const size_t pixel = static_cast<size_t>(y) * width + x0 + l;
-        const T t = row.transmittance[l];
-        rgb_[3 * pixel] = row.red[l] + t * background[0];
-        rgb_[3 * pixel + 1] = row.green[l] + t * background[1];
-        rgb_[3 * pixel + 2] = row.blue[l] + t * background[2];
-        transmittance_[pixel] = t;
-        depth_[pixel] = row.depth[l];
-        contributors_[pixel] = static_cast<uint32_t>(row.count[l]);
+      for (int xs = x0; xs < std::min(width, x0 + kSplatTileSize); xs += kLanes) {
+        const int lanes = std::min(kLanes, width - xs);
+        BlendRow(splats, T(xs) + T(0.5), T(y) + T(0.5), lanes, &row);
+        for (int l = 0; l < lanes; ++l) {
+          const size_t pixel = static_cast<size_t>(y) * width + xs + l;
+          const T t = row.transmittance[l];
+          rgb_[3 * pixel] = row.red[l] + t * background[0];
+          rgb_[3 * pixel + 1] = row.green[l] + t * background[1];
+          rgb_[3 * pixel + 2] = row.blue[l] + t * background[2];
+          transmittance_[pixel] = t;
+          depth_[pixel] = row.depth[l];
+          contributors_[pixel] = static_cast<uint32_t>(row.count[l]);
+        }
       }
     }
   });
@@ -264,30 +267,38 @@ void Rasterizer<T>::Backward(const std::vector<T>& d_rgb, Gaussians<T>* grads, s
     const size_t begin = tile_begin_[tile];
     TileSplats<T>& splats = tile_splats.local();
     Gather(splats_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
-    const int lanes = std::min(kLanes, width - x0);
-    // Every row of the tile at once, back to front: each splat's gradient is summed over the tile in lanes, then
-    // added to its total once.
+    // Every strip of the tile at once, back to front: each splat's gradient is summed over the tile in lanes, then
+    // added to its total once. Strip s is row s / kStrips, pixels from x0 + kLanes (s % kStrips).
     const int y0 = ty * kSplatTileSize, rows = std::min(kSplatTileSize, height - y0);
-    std::array<RowBackward<T>, kSplatTileSize> row;
-    std::array<uint32_t, kSplatTileSize> row_most{};
+    const int strips = std::min(kStrips, (width - x0 + kLanes - 1) / kLanes);
+    std::array<RowBackward<T>, kSplatTileSize * kStrips> strip;
+    std::array<uint32_t, kSplatTileSize * kStrips> strip_most{};
     for (int r = 0; r < rows; ++r) {
-      for (int l = 0; l < kLanes; ++l) {
-        const size_t pixel = static_cast<size_t>(y0 + r) * width + x0 + std::min(l, lanes - 1);
-        const T* g = &d_rgb[3 * pixel];
-        const uint32_t count = l < lanes ? contributors_[pixel] : 0;
-        row[r].count[l] = static_cast<Lane<T>>(count);
-        row[r].transmittance[l] = row[r].final_transmittance[l] = transmittance_[pixel];
-        row[r].g_red[l] = g[0], row[r].g_green[l] = g[1], row[r].g_blue[l] = g[2];
-        row[r].background_dot[l] = background[0] * g[0] + background[1] * g[1] + background[2] * g[2];
-        row_most[r] = std::max(row_most[r], count);
+      for (int k = 0; k < strips; ++k) {
+        RowBackward<T>& row = strip[r * kStrips + k];
+        const int xs = x0 + k * kLanes, lanes = std::min(kLanes, width - xs);
+        for (int l = 0; l < kLanes; ++l) {
+          const size_t pixel = static_cast<size_t>(y0 + r) * width + xs + std::min(l, lanes - 1);
+          const T* g = &d_rgb[3 * pixel];
+          const uint32_t count = l < lanes ? contributors_[pixel] : 0;
+          row.count[l] = static_cast<Lane<T>>(count);
+          row.transmittance[l] = row.final_transmittance[l] = transmittance_[pixel];
+          row.g_red[l] = g[0], row.g_green[l] = g[1], row.g_blue[l] = g[2];
+          row.background_dot[l] = background[0] * g[0] + background[1] * g[1] + background[2] * g[2];
+          strip_most[r * kStrips + k] = std::max(strip_most[r * kStrips + k], count);
+        }
       }
     }
-    const uint32_t most = *std::max_element(row_most.begin(), row_most.end());
-    const V<T> px = T(x0) + T(0.5) + lanes::Iota<T>();
+    const uint32_t most = *std::max_element(strip_most.begin(), strip_most.end());
+    std::array<V<T>, kStrips> px;
+    for (int k = 0; k < kStrips; ++k) px[k] = T(x0 + k * kLanes) + T(0.5) + lanes::Iota<T>();
     for (size_t e = most; e-- > 0;) {
       LaneGradient<T> gradient;
       for (int r = 0; r < rows; ++r) {
-        if (e < row_most[r]) BackwardSplat(splats[e], e, px, T(y0 + r) + T(0.5), &row[r], &gradient);
+        for (int k = 0; k < strips; ++k) {
+          const int i = r * kStrips + k;
+          if (e < strip_most[i]) BackwardSplat(splats[e], e, px[k], T(y0 + r) + T(0.5), &strip[i], &gradient);
+        }
       }
       const Splat2D<T> d = gradient.Sum();
       Splat2D<T>& out = splat_grads[entries_[begin + e]];
