@@ -159,11 +159,14 @@ void HashGridEncoding<T>::GroupCorners(const Level& level, const Matrix& input, 
   double coordinate[kGroup];
   for (int d = 0; d < 3; ++d) {
     const T* p = input.data() + first * 3 + d;
+    // As in Corners(): clamped to [0, 1]. (Clamping in the loop that reads the points, with std::clamp, or to both
+    // bounds in one loop keeps GCC 12 from vectorising these loops without AVX-512.)
     for (int i = 0; i < count; ++i) coordinate[i] = static_cast<double>(p[3 * i]);
+    for (int i = 0; i < count; ++i) coordinate[i] = std::max(0.0, coordinate[i]);
+    for (int i = 0; i < count; ++i) coordinate[i] = std::min(coordinate[i], 1.0);
     for (int i = 0; i < count; ++i) {
-      // As in Corners(); the position is at least 0, so truncation is its floor. (Clamping the coordinate
-      // before it is a double, or with std::clamp, keeps GCC 12 from vectorising the loop.)
-      const double position = std::min(std::max(0.0, coordinate[i]), 1.0) * level.scale;
+      // The position is at least 0, so truncation is its floor.
+      const double position = coordinate[i] * level.scale;
       const int32_t cell = static_cast<int32_t>(position);
       base[d][i] = static_cast<uint32_t>(cell);
       fraction[d][i] = static_cast<T>(position - cell);
