@@ -5,8 +5,8 @@
 // With --speed instead of OUT: renders the held-out views as the render stage does and prints the seconds per
 // view, samples per ray, samples (field evaluations) per second and the PSNR against the photos, at the render
 // stage's sample spacing or STEP_SCALE times the model's march step, rays stopped below MIN_TRANSMITTANCE (the
-// renderer's default unless given); --speed-float the same with the networks' float pass (the training one)
-// instead of the bfloat16 one, for comparison.
+// renderer's default unless given); --speed-float the same with the networks' training pass (Mlp's, Eigen's
+// matrix products) instead of the rendering one (RenderMlp), for comparison.
 // Usage: render_bench WORKSPACE OUT|--speed|--speed-float [VIEWS] [STEP_SCALE] [MIN_TRANSMITTANCE]
 
 #include <chrono>

@@ -6,7 +6,7 @@
 #include <utility>
 
 #include "nerf/config_check.h"
-#include "nerf/mlp_bf16.h"
+#include "nerf/render_mlp.h"
 #include "nerf/spherical_harmonics.h"
 
 namespace p2n {
@@ -101,14 +101,14 @@ void NgpField<T>::ColourInput(const Matrix& hidden, const Matrix& directions, Ma
 template <typename T>
 void NgpField<T>::Render(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb) const {
   if constexpr (std::is_same_v<T, float>) {
-    if (Bf16Mlp::Available()) {
+    if (RenderMlp::Available()) {
       Matrix encoded, hidden(density_mlp_.config().outputs, positions.cols()), colour_in;
       grid_.Forward(positions, &encoded);
-      Bf16Mlp(density_mlp_).Forward(encoded.data(), encoded.cols(), hidden.data());
+      RenderMlp(density_mlp_).Forward(encoded.data(), encoded.cols(), hidden.data());
       ExpDensity<T>(hidden, density);
       ColourInput(hidden, directions, &colour_in);
       rgb->resize(colour_mlp_.config().outputs, positions.cols());
-      Bf16Mlp(colour_mlp_).Forward(colour_in.data(), colour_in.cols(), rgb->data());
+      RenderMlp(colour_mlp_).Forward(colour_in.data(), colour_in.cols(), rgb->data());
       return;
     }
   }

@@ -57,8 +57,8 @@ class RadianceField {
     (void)encoded;
     Forward(positions, directions, density, rgb, cache);
   }
-  // Forward() for rendering: no cache for Backward(), and possibly in lower precision (NgpField<float>: its
-  // networks in bfloat16 products where the CPU has them, outputs within about 1% of Forward()'s).
+  // Forward() for rendering: no cache for Backward(), and possibly faster and in lower precision (NgpField<float>:
+  // its networks through RenderMlp where the CPU has AVX-512 BF16 or AVX2, outputs within about 1% of Forward()'s).
   virtual void Render(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb) const {
     Cache cache;
     Forward(positions, directions, density, rgb, &cache);
