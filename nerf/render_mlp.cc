@@ -13,9 +13,8 @@
 namespace p2n {
 namespace {
 
-constexpr Eigen::Index kBlockSamples = 192;  // samples taken through every layer at a time (in the cache)
-
 #ifdef P2N_RENDER_MLP
+constexpr Eigen::Index kBlockSamples = 192;  // samples taken through every layer at a time (in the cache)
 #if defined(__AVX512BF16__) && defined(__AVX512BW__) && defined(__AVX512VL__)
 // bfloat16 pairs: a 32-bit word holds two inputs' values, and vdpbf16ps adds both products to a float lane.
 struct Kernel {

@@ -10,9 +10,8 @@
 namespace p2n {
 namespace {
 
-constexpr int kDims = 128;
-
 #ifdef P2N_DESCRIPTOR_SIMD
+constexpr int kDims = 128;
 // The integer kernels read both sides as 32-bit words, each holding kPerWord dimensions of one descriptor: a's
 // packed per block of kLanes rows (the lanes of one register) and per group of kPerWord dimensions, b's one word a
 // group, broadcast to every lane.
