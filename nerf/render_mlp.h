@@ -33,7 +33,7 @@ class RenderMlp {
  private:
   struct Layer {
     int inputs, outputs;
-    int groups, row_blocks;       // input groups (of the values one broadcast holds), output blocks of a register's rows
+    int groups, row_blocks;  // input groups (of the values one broadcast holds), output blocks of a register's rows
     std::vector<uint32_t> words;  // [group][row (row_blocks * lanes)]: a group of inputs' weights in one word
     std::vector<float> bias;      // row_blocks * lanes
   };

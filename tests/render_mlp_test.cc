@@ -7,8 +7,8 @@
 #include <cmath>
 #include <random>
 
-#include "nerf/render_mlp.h"
 #include "nerf/ngp_field.h"
+#include "nerf/render_mlp.h"
 
 using namespace p2n;
 
@@ -31,9 +31,9 @@ TEST_CASE("rendering networks: the float pass's outputs, exactly where bfloat16 
   std::uniform_int_distribution<int> eighths(-8, 8);
   // One layer (its sums are of exact products, so exact in float), at odd sizes: an odd input count, outputs that
   // fill no row block, more than four row blocks; and a last block of samples that fills no tile.
-  for (const MlpConfig config : {MlpConfig{31, 3, 64, 0, OutputActivation::kSigmoid},
-                                 MlpConfig{32, 16, 64, 0, OutputActivation::kNone},
-                                 MlpConfig{5, 80, 64, 0, OutputActivation::kRelu}}) {
+  for (const MlpConfig config :
+       {MlpConfig{31, 3, 64, 0, OutputActivation::kSigmoid}, MlpConfig{32, 16, 64, 0, OutputActivation::kNone},
+        MlpConfig{5, 80, 64, 0, OutputActivation::kRelu}}) {
     Mlp<float> mlp(config, 3);
     MakeWeightsCoarse(&mlp);
     const Eigen::Index n = 2 * 192 + 7;
