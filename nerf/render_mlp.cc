@@ -34,10 +34,11 @@ struct Kernel {
     return static_cast<uint16_t>((bits + 0x7fff + ((bits >> 16) & 1)) >> 16);
   }
   static uint32_t Word(const float* values) { return Value(values[0]) | uint32_t{Value(values[1])} << 16; }
+  using Weights = __m512bh;
   static Acc Load(const float* p) { return _mm512_loadu_ps(p); }
-  static Acc MulAdd(Acc acc, const uint32_t* weights, uint32_t input) {
-    return _mm512_dpbf16_ps(acc, (__m512bh)_mm512_loadu_si512(weights),
-                            (__m512bh)_mm512_set1_epi32(static_cast<int32_t>(input)));
+  static Weights LoadWeights(const uint32_t* p) { return (__m512bh)_mm512_loadu_si512(p); }
+  static Acc MulAdd(Acc acc, Weights weights, uint32_t input) {
+    return _mm512_dpbf16_ps(acc, weights, (__m512bh)_mm512_set1_epi32(static_cast<int32_t>(input)));
   }
   // ReLU of a block of rows, as the next layer's inputs (bfloat16, two to a word).
   static void StoreHidden(Acc acc, uint32_t* out) {
@@ -64,11 +65,13 @@ struct Kernel {
     std::memcpy(&bits, values, 4);
     return bits;
   }
+  using Weights = __m256;
   static Acc Load(const float* p) { return _mm256_loadu_ps(p); }
-  static Acc MulAdd(Acc acc, const uint32_t* weights, uint32_t input) {
+  static Weights LoadWeights(const uint32_t* p) { return _mm256_loadu_ps(reinterpret_cast<const float*>(p)); }
+  static Acc MulAdd(Acc acc, Weights weights, uint32_t input) {
     float x;
     std::memcpy(&x, &input, 4);
-    return _mm256_fmadd_ps(_mm256_loadu_ps(reinterpret_cast<const float*>(weights)), _mm256_set1_ps(x), acc);
+    return _mm256_fmadd_ps(weights, _mm256_set1_ps(x), acc);
   }
   static void StoreHidden(Acc acc, uint32_t* out) {
     _mm256_storeu_ps(reinterpret_cast<float*>(out), _mm256_max_ps(acc, _mm256_setzero_ps()));
@@ -97,10 +100,13 @@ template <int kRows, int kSamples = Kernel::Samples(kRows)>
     for (int c = 0; c < kSamples; ++c) acc[r][c] = b;
   }
   for (int g = 0; g < groups; ++g) {
-    const uint32_t* w = weights + size_t(g) * row_stride + first_block * kLanes;
+    typename Kernel::Weights w[kRows];
+    for (int r = 0; r < kRows; ++r) {
+      w[r] = Kernel::LoadWeights(weights + size_t(g) * row_stride + (first_block + r) * kLanes);
+    }
     for (int c = 0; c < kSamples; ++c) {
       const uint32_t x = in[c * stride + g];
-      for (int r = 0; r < kRows; ++r) acc[r][c] = Kernel::MulAdd(acc[r][c], w + r * kLanes, x);
+      for (int r = 0; r < kRows; ++r) acc[r][c] = Kernel::MulAdd(acc[r][c], w[r], x);
     }
   }
   for (int c = 0; c < kSamples; ++c) {
