@@ -9,8 +9,8 @@ bash scripts/install_deps.sh
 if ! dpkg-query -W -f='${Status}' clang libclang-rt-14-dev 2>/dev/null | grep -q "install ok installed"; then
   ${SUDO:-} apt-get install -y -qq --no-install-recommends clang libclang-rt-14-dev
 fi
-flags="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
-cmake -S . -B build-fuzz -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo -DP2N_NATIVE=OFF \
+flags="-O1 -gline-tables-only -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
+cmake -S . -B build-fuzz -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=None -DP2N_NATIVE=OFF \
   -DP2N_BUILD_TESTS=OFF -DP2N_FUZZ=ON -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
   > /dev/null
 targets=(colmap_database colmap_model image model npy ply ply_write splat_ply stage_reports train_report transforms)
