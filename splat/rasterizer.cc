@@ -39,6 +39,22 @@ void Gather(const std::vector<Splat2D<T>>& splats, const uint32_t* ids, size_t n
   for (size_t e = 0; e < n; ++e) (*tile)[e] = splats[ids[e]];
 }
 
+// The half width and height (pixels) of the box outside which splat `s` is never blended, within `radius` (3
+// standard deviations of its widest axis); false when it is blended nowhere. Footprint blends a pixel only where
+// opacity e^(-m^2 / 2) >= kMinAlpha, m being the pixel's Mahalanobis distance, so within the ellipse
+// m^2 <= 2 ln(opacity / kMinAlpha), whose box has half sides sqrt(m^2 sxx) and sqrt(m^2 syy) (s = the conic's
+// inverse, the 2D covariance). A faint or thin splat skips the tiles its 3-sigma square would have given it and
+// draws nothing different (the bound has 1% to spare against rounding).
+template <typename T>
+bool DrawnExtent(const Splat2D<T>& s, T radius, T* half_x, T* half_y) {
+  const T m2 = T(2.02) * std::log(s.opacity / T(kMinAlpha));
+  if (!(m2 > 0)) return false;
+  const T det = s.conic_a * s.conic_c - s.conic_b * s.conic_b;  // > 0: the covariance's inverse
+  *half_x = std::min(radius, std::sqrt(m2 * s.conic_c / det));
+  *half_y = std::min(radius, std::sqrt(m2 * s.conic_a / det));
+  return true;
+}
+
 // A splat's offset, weight and alpha at the pixel centres (px[lane], py); the lanes where it is blended (before
 // the transmittance test).
 template <typename T>
@@ -174,31 +190,39 @@ void Rasterizer<T>::Project() {
   const size_t n = gaussians_->size();
   splats_.resize(n);
   rects_.assign(n, Rect{});
+  blended_.assign(n, Rect{});
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t i = range.begin(); i < range.end(); ++i) {
       T depth = 0, radius = 0;
       if (!ProjectGaussian(*gaussians_, i, camera_, options_.projection, &splats_[i], &depth, &radius)) continue;
-      const auto tile = [](T v) { return static_cast<int>(std::floor(v / kSplatTileSize)); };
-      const T x = splats_[i].x, y = splats_[i].y;
-      Rect r;
-      // Clamp in T before converting: a huge or far Gaussian must not overflow int.
-      r.x0 = tile(std::clamp(x - radius, T(0), T(camera_.width)));
-      r.y0 = tile(std::clamp(y - radius, T(0), T(camera_.height)));
-      r.x1 = std::min(tiles_x_, tile(std::clamp(x + radius, T(-1), T(camera_.width))) + 1);
-      r.y1 = std::min(tiles_y_, tile(std::clamp(y + radius, T(-1), T(camera_.height))) + 1);
-      if (r.x0 < r.x1 && r.y0 < r.y1) rects_[i] = r;
+      rects_[i] = TileRect(splats_[i], radius, radius);
+      T half_x = 0, half_y = 0;
+      if (!rects_[i].Empty() && DrawnExtent(splats_[i], radius, &half_x, &half_y)) {
+        blended_[i] = TileRect(splats_[i], half_x, half_y);
+      }
     }
   });
+}
+
+// The tiles under the box of half sides half_x, half_y about the splat's centre; empty outside the image.
+template <typename T>
+typename Rasterizer<T>::Rect Rasterizer<T>::TileRect(const Splat2D<T>& s, T half_x, T half_y) const {
+  const auto tile = [](T v) { return static_cast<int>(std::floor(v / kSplatTileSize)); };
+  Rect r;
+  // Clamp in T before converting: a huge or far Gaussian must not overflow int.
+  r.x0 = tile(std::clamp(s.x - half_x, T(0), T(camera_.width)));
+  r.y0 = tile(std::clamp(s.y - half_y, T(0), T(camera_.height)));
+  r.x1 = std::min(tiles_x_, tile(std::clamp(s.x + half_x, T(-1), T(camera_.width))) + 1);
+  r.y1 = std::min(tiles_y_, tile(std::clamp(s.y + half_y, T(-1), T(camera_.height))) + 1);
+  return r.Empty() ? Rect{} : r;
 }
 
 template <typename T>
 void Rasterizer<T>::BinAndSort() {
   const size_t tiles = static_cast<size_t>(tiles_x_) * tiles_y_;
   tile_begin_.assign(tiles + 1, 0);
-  drawn_ = 0;
-  for (const Rect& r : rects_) {
-    if (r.x0 >= r.x1) continue;
-    ++drawn_;
+  drawn_ = std::count_if(rects_.begin(), rects_.end(), [](const Rect& r) { return !r.Empty(); });
+  for (const Rect& r : blended_) {
     for (int ty = r.y0; ty < r.y1; ++ty) {
       for (int tx = r.x0; tx < r.x1; ++tx) ++tile_begin_[ty * tiles_x_ + tx + 1];
     }
@@ -206,8 +230,8 @@ void Rasterizer<T>::BinAndSort() {
   for (size_t t = 0; t < tiles; ++t) tile_begin_[t + 1] += tile_begin_[t];
   entries_.resize(tile_begin_[tiles]);
   std::vector<size_t> next(tile_begin_.begin(), tile_begin_.end() - 1);
-  for (size_t i = 0; i < rects_.size(); ++i) {
-    const Rect& r = rects_[i];
+  for (size_t i = 0; i < blended_.size(); ++i) {
+    const Rect& r = blended_[i];
     for (int ty = r.y0; ty < r.y1; ++ty) {
       for (int tx = r.x0; tx < r.x1; ++tx) entries_[next[ty * tiles_x_ + tx]++] = static_cast<uint32_t>(i);
     }
@@ -310,7 +334,7 @@ void Rasterizer<T>::Backward(const std::vector<T>& d_rgb, Gaussians<T>* grads, s
   if (screen_grads) screen_grads->resize(2 * n, T(0));
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t i = range.begin(); i < range.end(); ++i) {
-      if (rects_[i].x0 >= rects_[i].x1) continue;
+      if (rects_[i].Empty()) continue;
       Splat2D<T> sum;
       for (const auto& buffer : local) {
         const Splat2D<T>& b = buffer[i];

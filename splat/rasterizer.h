@@ -1,10 +1,11 @@
 #pragma once
 // The tile-based rasterizer of 3D Gaussian Splatting on the CPU, and its backward pass in closed form.
-// Forward: project every Gaussian (projection.h), list it in each 16x16 tile its 3-sigma square touches, sort
-// each tile's list by depth, and blend front to back per pixel: alpha = min(0.99, opacity · exp(-½ dᵀ Σ₂⁻¹ d)),
-// skipping alpha < 1/255 and stopping before the transmittance falls below 1e-4; the background fills what
-// remains. Backward: each pixel walks its list again back to front from its last contributor, recovering the
-// transmittance by division. Tiles are TBB tasks.
+// Forward: project every Gaussian (projection.h), list it in each 16x16 tile where it can be blended (under its
+// 3-sigma square and the box of the ellipse where its alpha reaches 1/255), sort each tile's list by depth, and
+// blend front to back per pixel: alpha = min(0.99, opacity · exp(-½ dᵀ Σ₂⁻¹ d)), skipping alpha < 1/255 and
+// stopping before the transmittance falls below 1e-4; the background fills what remains. Backward: each pixel
+// walks its list again back to front from its last contributor, recovering the transmittance by division. Tiles
+// are TBB tasks.
 
 #include <array>
 #include <vector>
@@ -40,7 +41,7 @@ class Rasterizer {
   // Gaussians drawn (in front of the near plane, finite), and tile-list entries.
   size_t drawn() const { return drawn_; }
   size_t tile_entries() const { return entries_.size(); }
-  bool IsDrawn(size_t i) const { return rects_[i].x0 < rects_[i].x1; }
+  bool IsDrawn(size_t i) const { return !rects_[i].Empty(); }
 
   // Adds to `grads` (shaped like the Gaussians) the gradient of a loss whose gradient with respect to rgb() is
   // `d_rgb`. With `screen_grads`, adds to it the gradient with respect to each Gaussian's 2D mean (2 per
@@ -50,8 +51,10 @@ class Rasterizer {
  private:
   struct Rect {
     int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // tiles [x0, x1) x [y0, y1); empty when not drawn
+    bool Empty() const { return x0 >= x1 || y0 >= y1; }
   };
   void Project();
+  Rect TileRect(const Splat2D<T>& s, T half_x, T half_y) const;
   void BinAndSort();
   void Blend();
 
@@ -60,7 +63,8 @@ class Rasterizer {
   SplatCamera<T> camera_;
   int tiles_x_ = 0, tiles_y_ = 0;
   std::vector<Splat2D<T>> splats_;
-  std::vector<Rect> rects_;
+  std::vector<Rect> rects_;    // the tiles under each Gaussian's 3-sigma square (drawn: any)
+  std::vector<Rect> blended_;  // within those, the tiles where it can be blended: those it is listed in
   size_t drawn_ = 0;
   std::vector<size_t> tile_begin_;  // tiles_x · tiles_y + 1 offsets into entries_
   std::vector<uint32_t> entries_;   // Gaussian indices, each tile's sorted front to back

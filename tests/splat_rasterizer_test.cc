@@ -107,6 +107,45 @@ TEST_CASE("A splat's centre pixel blends its colour by its opacity over the back
   CHECK(rasterizer.drawn() == 1);
 }
 
+TEST_CASE("A faint or thin splat is listed only in the tiles where it is blended, and blended in all of them",
+          "[splat]") {
+  // One splat stretched along the image's diagonal: its 3-sigma square covers every tile, its ellipse far fewer.
+  const PinholeCamera camera = LookingAtOrigin(128, 128, 100, {0, 0, 4});
+  Gaussians<double> g;
+  g.sh_degree = 0;
+  g.Resize(1);
+  g.rotations[0] = std::cos(M_PI / 8), g.rotations[3] = std::sin(M_PI / 8);  // 45 degrees about the view axis
+  g.log_scales[0] = std::log(0.8), g.log_scales[1] = g.log_scales[2] = std::log(0.02);
+  for (int c = 0; c < 3; ++c) g.sh_dc[c] = 0.3;
+  size_t previous_entries = 8 * 8 + 1;  // the 3-sigma square: every tile
+  for (const double opacity : {0.99, 0.02}) {
+    INFO("opacity " << opacity);
+    g.opacity_logits[0] = Logit(opacity);
+    Rasterizer<double> rasterizer;
+    rasterizer.Forward(g, camera, RasterOptions{});
+    CHECK(rasterizer.drawn() == 1);
+    CHECK(rasterizer.tile_entries() < previous_entries);
+    previous_entries = rasterizer.tile_entries();
+    // Every pixel against the splat's alpha there, drawn from the same projection (ignoring the tiles).
+    Splat2D<double> s;
+    double depth = 0, radius = 0;
+    REQUIRE(ProjectGaussian(g, 0, SplatCamera<double>::From(camera), RasterOptions{}.projection, &s, &depth, &radius));
+    int blended = 0;
+    for (int y = 0; y < camera.height; ++y) {
+      for (int x = 0; x < camera.width; ++x) {
+        const double dx = s.x - (x + 0.5), dy = s.y - (y + 0.5);
+        const double power = -0.5 * (s.conic_a * dx * dx + s.conic_c * dy * dy) - s.conic_b * dx * dy;
+        const double alpha = std::min(opacity * std::exp(power), 0.99);
+        const double expected = alpha >= 1.0 / 255 ? alpha : 0.0;
+        blended += expected > 0;
+        INFO("pixel " << x << ", " << y);
+        REQUIRE(1 - rasterizer.transmittance()[y * camera.width + x] == Approx(expected).margin(1e-12));
+      }
+    }
+    CHECK(blended > 100);
+  }
+}
+
 TEST_CASE("Opaque splats hide what lies behind them, whatever their order in memory", "[splat]") {
   const PinholeCamera camera = LookingAtOrigin(16, 16, 20, {0, 0, 4});
   Gaussians<double> g;
