@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (clang, AddressSanitizer + UndefinedBehaviorSanitizer) and runs each for a fixed
-# time on a copy of its seed corpus (tests/fuzz/corpus/TARGET); prints executions and findings per target.
+# time on a copy of its seed corpus (tests/fuzz/corpus/TARGET), as many at once as there are cores; prints
+# executions and findings per target.
 # Crashing inputs are kept in build-fuzz/artifacts/. Usage: scripts/fuzz.sh [SECONDS_PER_TARGET (default 60)]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -16,8 +17,11 @@ cmake -S . -B build-fuzz -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYP
 targets=(colmap_database colmap_model image model npy ply ply_write splat_ply stage_reports train_report transforms)
 cmake --build build-fuzz -j"$(nproc)" --target "${targets[@]/%/_fuzz}"
 mkdir -p build-fuzz/artifacts
-status=0
-for target in "${targets[@]}"; do
+rm -f build-fuzz/*.result
+
+# Fuzzes one target; writes its line of the summary to build-fuzz/TARGET.result.
+fuzz_target() {
+  local target="$1" work log result
   work=$(mktemp -d)
   cp tests/fuzz/corpus/"$target"/* "$work"/
   log=build-fuzz/"$target".log
@@ -26,11 +30,22 @@ for target in "${targets[@]}"; do
     result="no findings"
   else
     result="FINDING (see $log and build-fuzz/artifacts/)"
-    status=1
   fi
   printf '%-14s %12s executions in %ss, corpus %s: %s\n' "$target" \
     "$(grep -o 'stat::number_of_executed_units: [0-9]*' "$log" | awk '{print $2}')" "$seconds" \
-    "$(ls "$work" | wc -l)" "$result"
+    "$(ls "$work" | wc -l)" "$result" > build-fuzz/"$target".result
   rm -rf "$work"
+}
+
+# Each fuzzer runs on one core: as many at once as there are cores, the summary in the targets' order.
+for target in "${targets[@]}"; do
+  while [ "$(jobs -rp | wc -l)" -ge "$(nproc)" ]; do wait -n || true; done
+  fuzz_target "$target" &
+done
+wait
+status=0
+for target in "${targets[@]}"; do
+  cat build-fuzz/"$target".result
+  grep -q "no findings" build-fuzz/"$target".result || status=1
 done
 exit $status
