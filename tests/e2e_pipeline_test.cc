@@ -40,6 +40,8 @@ TEST_CASE("photo2nerf run: photos to report with real COLMAP, then everything fr
                                             "600",
                                             "--splat.steps",
                                             "60",
+                                            "--splat.init_width",
+                                            "64",
                                             "--render.frames",
                                             "8",
                                             "--render.width",
