@@ -244,6 +244,26 @@ void Rasterizer<T>::BinAndSort() {
   });
 }
 
+// Lists each splat's entries in the tile lists in the order of its tiles (row by row) in slots_, the splat's from
+// slot_begin_[i]. A splat's tiles are its blended_ rectangle, so its k-th tile's slot is known without a search,
+// and each slot is written once.
+template <typename T>
+void Rasterizer<T>::ListEntriesBySplat() const {
+  slot_begin_.assign(blended_.size() + 1, 0);
+  for (size_t i = 0; i < blended_.size(); ++i) {
+    const Rect& r = blended_[i];
+    slot_begin_[i + 1] = slot_begin_[i] + size_t(r.x1 - r.x0) * (r.y1 - r.y0);
+  }
+  slots_.resize(entries_.size());
+  tbb::parallel_for(0, tiles_x_ * tiles_y_, [&](int tile) {
+    const int tx = tile % tiles_x_, ty = tile / tiles_x_;
+    for (size_t p = tile_begin_[tile]; p < tile_begin_[tile + 1]; ++p) {
+      const Rect& r = blended_[entries_[p]];
+      slots_[slot_begin_[entries_[p]] + size_t(ty - r.y0) * (r.x1 - r.x0) + (tx - r.x0)] = static_cast<uint32_t>(p);
+    }
+  });
+}
+
 template <typename T>
 void Rasterizer<T>::Blend() {
   const int width = camera_.width, height = camera_.height;
@@ -282,17 +302,17 @@ template <typename T>
 void Rasterizer<T>::Backward(const std::vector<T>& d_rgb, Gaussians<T>* grads, std::vector<T>* screen_grads) const {
   const int width = camera_.width, height = camera_.height;
   const size_t n = gaussians_->size();
-  tbb::enumerable_thread_specific<std::vector<Splat2D<T>>> local([n] { return std::vector<Splat2D<T>>(n); });
+  entry_grads_.resize(entries_.size());
   const T background[3] = {T(options_.background[0]), T(options_.background[1]), T(options_.background[2])};
   tbb::enumerable_thread_specific<TileSplats<T>> tile_splats;
   tbb::parallel_for(0, tiles_x_ * tiles_y_, [&](int tile) {
-    std::vector<Splat2D<T>>& splat_grads = local.local();
     const int tx = tile % tiles_x_, ty = tile / tiles_x_, x0 = tx * kSplatTileSize;
     const size_t begin = tile_begin_[tile];
     TileSplats<T>& splats = tile_splats.local();
     Gather(splats_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
     // Every strip of the tile at once, back to front: each splat's gradient is summed over the tile in lanes, then
-    // added to its total once. Strip s is row s / kStrips, pixels from x0 + kLanes (s % kStrips).
+    // kept for the tile's entry (summed over the splat's tiles below, in their order). Strip s is row s / kStrips,
+    // pixels from x0 + kLanes (s % kStrips).
     const int y0 = ty * kSplatTileSize, rows = std::min(kSplatTileSize, height - y0);
     const int strips = std::min(kStrips, (width - x0 + kLanes - 1) / kLanes);
     std::array<RowBackward<T>, kSplatTileSize * kStrips> strip;
@@ -324,20 +344,19 @@ void Rasterizer<T>::Backward(const std::vector<T>& d_rgb, Gaussians<T>* grads, s
           if (e < strip_most[i]) BackwardSplat(splats[e], e, px[k], T(y0 + r) + T(0.5), &strip[i], &gradient);
         }
       }
-      const Splat2D<T> d = gradient.Sum();
-      Splat2D<T>& out = splat_grads[entries_[begin + e]];
-      out.x += d.x, out.y += d.y, out.conic_a += d.conic_a, out.conic_b += d.conic_b, out.conic_c += d.conic_c;
-      out.opacity += d.opacity;
-      for (int c = 0; c < 3; ++c) out.rgb[c] += d.rgb[c];
+      entry_grads_[begin + e] = gradient.Sum();
     }
+    std::fill(entry_grads_.begin() + begin + most, entry_grads_.begin() + tile_begin_[tile + 1], Splat2D<T>{});
   });
+  ListEntriesBySplat();
   if (screen_grads) screen_grads->resize(2 * n, T(0));
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t i = range.begin(); i < range.end(); ++i) {
       if (rects_[i].Empty()) continue;
+      // Its tiles' gradients in the order of the tiles: the same sum whatever thread took which tile.
       Splat2D<T> sum;
-      for (const auto& buffer : local) {
-        const Splat2D<T>& b = buffer[i];
+      for (size_t k = slot_begin_[i]; k < slot_begin_[i + 1]; ++k) {
+        const Splat2D<T>& b = entry_grads_[slots_[k]];
         sum.x += b.x, sum.y += b.y, sum.conic_a += b.conic_a, sum.conic_b += b.conic_b, sum.conic_c += b.conic_c;
         sum.opacity += b.opacity;
         for (int c = 0; c < 3; ++c) sum.rgb[c] += b.rgb[c];

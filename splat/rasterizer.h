@@ -45,7 +45,8 @@ class Rasterizer {
 
   // Adds to `grads` (shaped like the Gaussians) the gradient of a loss whose gradient with respect to rgb() is
   // `d_rgb`. With `screen_grads`, adds to it the gradient with respect to each Gaussian's 2D mean (2 per
-  // Gaussian, pixels), which densification reads.
+  // Gaussian, pixels), which densification reads. The same sums whatever the number of threads; one call at a time
+  // (it keeps buffers between calls).
   void Backward(const std::vector<T>& d_rgb, Gaussians<T>* grads, std::vector<T>* screen_grads = nullptr) const;
 
  private:
@@ -57,6 +58,7 @@ class Rasterizer {
   Rect TileRect(const Splat2D<T>& s, T half_x, T half_y) const;
   void BinAndSort();
   void Blend();
+  void ListEntriesBySplat() const;
 
   const Gaussians<T>* gaussians_ = nullptr;
   RasterOptions options_;
@@ -70,6 +72,11 @@ class Rasterizer {
   std::vector<uint32_t> entries_;   // Gaussian indices, each tile's sorted front to back
   std::vector<T> rgb_, transmittance_, depth_;
   std::vector<uint32_t> contributors_;  // per pixel: entries of its tile up to and including its last blended
+  // Backward's, kept between calls for their memory: each tile entry's gradient, and the entries by splat
+  // (ListEntriesBySplat).
+  mutable std::vector<Splat2D<T>> entry_grads_;
+  mutable std::vector<size_t> slot_begin_;
+  mutable std::vector<uint32_t> slots_;
 };
 
 extern template class Rasterizer<float>;
