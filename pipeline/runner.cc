@@ -170,6 +170,7 @@ std::vector<StageRun> Runner::Run(const Workspace& workspace, const Config& conf
     if (statuses[i].state == StageState::kBlocked) throw UserError(statuses[i].reasons.front());
   }
   std::vector<StageRun> runs;
+  RunMemo memo;
   for (size_t i = first; i <= last; ++i) {
     ThrowIfCancelled();
     const StageStatus& status = statuses[i];
@@ -189,7 +190,7 @@ std::vector<StageRun> Runner::Run(const Workspace& workspace, const Config& conf
     const auto start = std::chrono::steady_clock::now();
     {
       const ProgressPrefixScope prefix(position);
-      RunOne(workspace, config, status);
+      RunOne(workspace, config, status, &memo);
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     LogInfo(format("{}: done in {:.2f} s", name, seconds));
@@ -198,7 +199,8 @@ std::vector<StageRun> Runner::Run(const Workspace& workspace, const Config& conf
   return runs;
 }
 
-void Runner::RunOne(const Workspace& workspace, const Config& config, const StageStatus& status) const {
+void Runner::RunOne(const Workspace& workspace, const Config& config, const StageStatus& status,
+                    RunMemo* memo) const {
   const Stage& stage = *status.stage;
   const fs::path staging = workspace.StagingDir(stage.folder());
   const fs::path final_dir = workspace.StageDir(stage.folder());
@@ -215,7 +217,8 @@ void Runner::RunOne(const Workspace& workspace, const Config& config, const Stag
                        nlohmann::json::object(),
                        status.expected_key,
                        workspace.ResumeDir(stage.folder()),
-                       this};
+                       this,
+                       memo};
   for (const std::string& up : stage.upstream()) context.upstream_dirs[up] = workspace.StageDir(Get(up).folder());
   const auto start = std::chrono::steady_clock::now();
   stage.Run(context);

@@ -59,7 +59,7 @@ class Runner {
   size_t IndexOf(std::string_view name) const;
   // Whether stage `i` depends on stage `j`, directly or not.
   bool DependsOn(size_t i, size_t j) const;
-  void RunOne(const Workspace& workspace, const Config& config, const StageStatus& status) const;
+  void RunOne(const Workspace& workspace, const Config& config, const StageStatus& status, RunMemo* memo) const;
 
   std::vector<std::unique_ptr<Stage>> stages_;
 };

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "pipeline/options.h"
+#include "pipeline/run_memo.h"
 #include "pipeline/workspace.h"
 
 namespace p2n {
@@ -29,6 +30,7 @@ struct StageContext {
   // Where the stage may keep state across a kill (checkpoints; tag them with `key`); removed on completion.
   std::filesystem::path resume_dir;
   const Runner* runner = nullptr;  // the stage table this stage runs in (for a report of every stage)
+  RunMemo* memo = nullptr;         // what earlier stages of this run kept for later ones; null outside a run
 };
 
 class Stage {

@@ -163,8 +163,8 @@ namespace {
 
 // The training views rendered small, with their median depths.
 struct DepthViews {
-  std::vector<PinholeCamera> cameras;
-  std::vector<RenderedView> renders;
+  const std::vector<PinholeCamera>& cameras;
+  const std::vector<RenderedView>& renders;
 
   // How many views other than `self` see `p` at its distance from them (within kDepthTolerance of it), counting
   // up to `enough`: a point that only its own view puts there is a floater of that view's depth, not a surface.
@@ -246,15 +246,11 @@ void AddViewPoints(const NerfModel& model, const DepthViews& views, size_t v, do
 
 }  // namespace
 
-Gaussians<float> GaussiansFromField(const NerfModel& model, const std::vector<TrainView>& views,
-                                    const FieldInitOptions& options, const RenderOptions& render) {
-  DepthViews depth_views;
-  for (const TrainView& view : views) {
-    depth_views.cameras.push_back(ScaledCamera(view.camera, options.width));
-    depth_views.renders.push_back(RenderView(model, depth_views.cameras.back(), view.near, view.far, render));
-  }
-  std::vector<std::vector<SurfacePoint>> per_view(views.size());
-  tbb::parallel_for(size_t(0), views.size(), [&](size_t v) {
+Gaussians<float> GaussiansFromRenders(const NerfModel& model, const std::vector<PinholeCamera>& cameras,
+                                      const std::vector<RenderedView>& renders, const FieldInitOptions& options) {
+  const DepthViews depth_views{cameras, renders};
+  std::vector<std::vector<SurfacePoint>> per_view(cameras.size());
+  tbb::parallel_for(size_t(0), cameras.size(), [&](size_t v) {
     AddViewPoints(model, depth_views, v, options.min_opacity, options.min_views, &per_view[v]);
   });
   std::vector<SurfacePoint> points;

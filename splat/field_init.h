@@ -12,26 +12,26 @@
 #include <vector>
 
 #include "nerf/nerf_model.h"
+#include "nerf/renderer.h"
 #include "nerf/trainer.h"
 #include "splat/gaussians.h"
 
 namespace p2n {
 
 struct FieldInitOptions {
-  int width = 200;                 // the training views are rendered this wide
   double min_opacity = 0.5;        // pixels at least this opaque give points
   int min_views = 2;               // ... if at least this many views (their own included) see them at that depth
   size_t max_gaussians = 100'000;  // the cells grow until there are at most this many
   int sh_degree = 3;               // of the Gaussians made (the higher coefficients start at zero)
 };
 
-// `views`: cameras and near/far in the field's (normalised) frame; their pixels are not read. `render` is passed
-// to RenderView (its on_rays_done can report progress or stop the work). The Gaussians are in the same frame.
-Gaussians<float> GaussiansFromField(const NerfModel& model, const std::vector<TrainView>& views,
-                                    const FieldInitOptions& options, const RenderOptions& render);
+// `renders[i]`: `model`'s image of `cameras[i]` with median depths (RenderOptions::median_depth), cameras in the
+// field's (normalised) frame, small (stages/view_renders.h). The Gaussians are in the same frame.
+Gaussians<float> GaussiansFromRenders(const NerfModel& model, const std::vector<PinholeCamera>& cameras,
+                                      const std::vector<RenderedView>& renders, const FieldInitOptions& options);
 
 // The same from given points (each with a colour in [0, 1] and the world size of a pixel there): what
-// GaussiansFromField does after rendering, and what an initialisation from sparse points uses.
+// GaussiansFromRenders does after reading the renders, and what an initialisation from sparse points uses.
 struct SurfacePoint {
   Eigen::Vector3d position;
   Eigen::Vector3f rgb;

@@ -22,6 +22,7 @@
 #include "stages/camera_corrections.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"
+#include "stages/view_renders.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -59,7 +60,7 @@ std::string RegionKind(const NerfModel& model, const ExportOptions& options) {
   return model.space == SceneSpace::kBounded ? "box" : "focus";
 }
 
-// Where the training views' rays end, where they are opaque.
+// Where the training views' rays end (their median depth), where they are opaque.
 struct DepthSamples {
   std::vector<ColouredPoint> points;  // coloured, one per opaque pixel (at most about kMaxPoints)
   // Every one from the middle half (in width and height) of each view; only for the focus region (FitCube).
@@ -76,26 +77,23 @@ size_t PixelsAt(const std::vector<PinholeCamera>& cameras, int width) {
   return pixels;
 }
 
-DepthSamples SampleDepths(const NerfModel& model, const ImportedDataset& dataset, const ExportOptions& options) {
-  std::vector<const ImportedView*> views;
+DepthSamples SampleDepths(const StageContext& context, const fs::path& model_file, const NerfModel& model,
+                          const ImportedDataset& dataset, const ExportOptions& options) {
+  std::vector<TrainView> views;  // the training views' cameras, without their pixels
   std::vector<PinholeCamera> cameras;
   for (const ImportedView& view : dataset.views) {
     if (view.view.split != "train") continue;
-    views.push_back(&view);
+    views.push_back({view.view.camera, view.view.near, view.view.far, 3, {}, view.source.filename().string()});
     cameras.push_back(view.view.camera);
   }
   const int width = PointCloudWidth(cameras, options.points_width, kMaxPoints);
-  Progress progress("export: point cloud", static_cast<int64_t>(PixelsAt(cameras, width)), "pixels");
-  RenderOptions render;
-  render.on_rays_done = [&](size_t n) {
-    progress.Add(static_cast<int64_t>(n));
-    ThrowIfCancelled();  // Ctrl-C stops within a tile
-  };
+  const std::shared_ptr<const ViewRenders> views_rendered =
+      RenderViewsSmall(context, model_file, model, views, width, "export: point cloud");
   DepthSamples samples;
   const bool want_central = RegionKind(model, options) == "focus";
-  for (const ImportedView* view : views) {
-    const PinholeCamera camera = ScaledCamera(view->view.camera, width);
-    const RenderedView rendered = RenderView(model, camera, view->view.near, view->view.far, render);
+  for (size_t v = 0; v < views.size(); ++v) {
+    const PinholeCamera& camera = views_rendered->cameras[v];
+    const RenderedView& rendered = views_rendered->renders[v];
     for (int y = 0; y < camera.height; ++y) {
       for (int x = 0; x < camera.width; ++x) {
         const size_t i = size_t(y) * camera.width + x;
@@ -207,7 +205,8 @@ void ExportOptions::Check() const {
 void ExportStage::Run(StageContext& context) const {
   const ExportOptions options = ReadOptions<ExportOptions>(context.config, "export");
   const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
-  const NerfModel model = LoadTrainedModel(context.upstream_dirs.at("train") / "model.bin");
+  const fs::path model_file = context.upstream_dirs.at("train") / "model.bin";
+  const NerfModel model = LoadTrainedModel(model_file);
   ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
   const OutputFrame frame = MakeOutputFrame(options.frame, dataset);
   const std::map<std::string, CameraCorrection> corrections =
@@ -215,7 +214,7 @@ void ExportStage::Run(StageContext& context) const {
   ApplyCameraCorrections(corrections, &dataset);
   DepthSamples depths;
   if (options.points || options.threshold == 0 || RegionKind(model, options) == "focus")
-    depths = SampleDepths(model, dataset, options);
+    depths = SampleDepths(context, model_file, model, dataset, options);
 
   ExportReport report;
   report.mesh = WriteMesh(model, options, depths, frame, context.output_dir);

@@ -56,7 +56,8 @@ class ExportStage : public Stage {
  public:
   std::string name() const override { return "export"; }
   std::string folder() const override { return "50_export"; }
-  int format_version() const override { return 5; }  // 5: the point cloud rendered at most 2 M pixels
+  // 5: the point cloud rendered at most 2 M pixels; 6: at the median depth (the splat stage's renders)
+  int format_version() const override { return 6; }
   std::vector<std::string> upstream() const override { return {"poses", "train"}; }
   void Run(StageContext& context) const override;
 };

@@ -23,6 +23,7 @@
 #include "stages/stage_reports.h"
 #include "stages/train_stage.h"
 #include "stages/training_data.h"
+#include "stages/view_renders.h"
 
 namespace p2n {
 
@@ -105,7 +106,6 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   }
 
   FieldInitOptions init;
-  init.width = options.init_width;
   // At most one splat per kPixelsPerSplat training pixels: small photos do not resolve more (3D Gaussian
   // Splatting ends with about one per 100 to 300).
   size_t pixels = 0;
@@ -115,15 +115,12 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   if (options.init == "sparse") {
     setup.gaussians = GaussiansFromSparseFile(context.upstream_dirs.at("poses") / "sparse_points.ply", init);
   } else {
-    Progress progress("splat: placing splats from the field", static_cast<int64_t>(setup.data.train.size()), "views");
-    RenderOptions render;
-    render.on_rays_done = [](size_t) { ThrowIfCancelled(); };
-    render.median_depth = true;
     std::vector<TrainView> cameras;  // the views without their pixels
     for (const TrainView& view : setup.data.train)
       cameras.push_back({view.camera, view.near, view.far, 3, {}, view.name});
-    setup.gaussians = GaussiansFromField(model, cameras, init, render);
-    progress.Add(static_cast<int64_t>(cameras.size()));
+    const std::shared_ptr<const ViewRenders> renders = RenderViewsSmall(
+        context, train_dir / "model.bin", model, cameras, options.init_width, "splat: placing splats from the field");
+    setup.gaussians = GaussiansFromRenders(model, renders->cameras, renders->renders, init);
   }
 
   setup.frame = MakeOutputFrame(options.frame, poses);

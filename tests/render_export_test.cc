@@ -13,6 +13,7 @@
 #include <cmath>
 #include <map>
 
+#include "formats/dataset_import.h"
 #include "nerf/camera_refinement.h"
 #include "nerf/float_image.h"
 #include "pipeline/file_util.h"
@@ -22,6 +23,9 @@
 #include "stages/camera_corrections.h"
 #include "stages/export_stage.h"
 #include "stages/render_stage.h"
+#include "stages/stage_io.h"
+#include "stages/training_data.h"
+#include "stages/view_renders.h"
 
 namespace p2n::testing {
 namespace fs = std::filesystem;
@@ -257,6 +261,45 @@ TEST_CASE("export stage: the point cloud's views are rendered no larger than the
   CHECK(pixels <= 2'000'000);
   CHECK(pixels > 1'950'000);  // no narrower than it must be
   CHECK(PointCloudWidth(many, 200, 10) >= 1);
+}
+
+TEST_CASE("the training views rendered small: once a run for the splat and export stages, the same when run alone",
+          "[export]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(30);
+  config.Set("splat.init_width", 32, "test");  // the export's points_width: the two stages want the same renders
+  setup.runner.Run(setup.workspace, config, Until("train"));
+  const fs::path ws = setup.dir / "ws", model_file = ws / "30_train" / "model.bin";
+  const NerfModel model = LoadTrainedModel(model_file);
+  std::vector<TrainView> views = LoadTrainingData(LoadTransformsJson(ws / "20_poses" / "transforms.json", ws)).train;
+  for (TrainView& view : views) view.pixels.clear();
+
+  RunMemo memo;
+  StageContext context{setup.dir / "out", setup.workspace, config, {}, {}, "", setup.dir / "resume", nullptr, &memo};
+  const auto renders = RenderViewsSmall(context, model_file, model, views, 24, "test");
+  REQUIRE(renders->renders.size() == views.size());
+  CHECK(renders->cameras[0].width == 24);
+  CHECK(RenderViewsSmall(context, model_file, model, views, 24, "test") == renders);  // found, not rendered again
+  CHECK(RenderViewsSmall(context, model_file, model, views, 16, "test") != renders);  // another width
+  std::vector<TrainView> moved = views;
+  moved[3].camera.world_from_cam(0, 3) += 1e-3;
+  CHECK(RenderViewsSmall(context, model_file, model, moved, 24, "test") != renders);  // another camera
+  context.memo = nullptr;  // a stage run alone renders them itself: the same pixels and median depths
+  const auto alone = RenderViewsSmall(context, model_file, model, views, 24, "test");
+  CHECK(alone != renders);
+  for (size_t v = 0; v < views.size(); ++v) {
+    CHECK(alone->renders[v].rgb.pixels == renders->renders[v].rgb.pixels);
+    CHECK(alone->renders[v].depth.pixels == renders->renders[v].depth.pixels);
+  }
+
+  // Through the runner: the export after the splat stage in one run writes the points it writes alone.
+  setup.runner.Run(setup.workspace, config, Until("export"));
+  const std::string points = ReadTextFile(ws / "50_export" / "points.ply");
+  RunRequest export_alone = Until("export");
+  export_alone.from = "export";
+  export_alone.force = {"export"};
+  setup.runner.Run(setup.workspace, config, export_alone);
+  CHECK(ReadTextFile(ws / "50_export" / "points.ply") == points);
 }
 
 TEST_CASE("export stage: transforms.json holds the cameras, the training ones as camera refinement moved them",

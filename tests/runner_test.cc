@@ -32,6 +32,30 @@ struct Fixture {
   std::vector<int> Counts() { return {RunCount(counters, "a"), RunCount(counters, "b"), RunCount(counters, "c")}; }
 };
 
+// Records what the stages before it kept in the run's memo, and keeps its own name there.
+class MemoStage : public Stage {
+ public:
+  MemoStage(std::string name, std::vector<std::string> upstream, std::vector<std::string>* seen)
+      : name_(std::move(name)), upstream_(std::move(upstream)), seen_(seen) {}
+  std::string name() const override { return name_; }
+  int format_version() const override { return 1; }
+  std::vector<std::string> upstream() const override { return upstream_; }
+  std::vector<std::string> option_sections() const override { return {}; }
+  void Run(StageContext& context) const override {
+    REQUIRE(context.memo != nullptr);
+    for (const std::string& up : upstream_) {
+      if (const auto kept = context.memo->Find<std::string>(up)) seen_->push_back(name_ + " found " + *kept);
+    }
+    CHECK(context.memo->Find<int>(name_) == nullptr);  // nothing of another type under a key
+    context.memo->Keep(name_, std::make_shared<const std::string>(name_));
+  }
+
+ private:
+  std::string name_;
+  std::vector<std::string> upstream_;
+  std::vector<std::string>* seen_;
+};
+
 std::vector<StageState> States(const std::vector<StageStatus>& statuses) {
   std::vector<StageState> states;
   for (const StageStatus& status : statuses) states.push_back(status.state);
@@ -58,6 +82,22 @@ constexpr StageState kFresh = StageState::kFresh;
 constexpr StageState kStale = StageState::kStale;
 
 }  // namespace
+
+TEST_CASE("the stages of one run share its memo, and another run starts with an empty one", "[runner]") {
+  Fixture f;
+  std::vector<std::string> seen;
+  std::vector<std::unique_ptr<Stage>> stages;
+  stages.push_back(std::make_unique<MemoStage>("first", std::vector<std::string>{}, &seen));
+  stages.push_back(std::make_unique<MemoStage>("second", std::vector<std::string>{"first"}, &seen));
+  const Runner runner(std::move(stages));
+  runner.Run(f.workspace, f.config, {});
+  CHECK(seen == std::vector<std::string>{"second found first"});
+  RunRequest second_alone;
+  second_alone.from = "second";
+  second_alone.force = {"second"};
+  runner.Run(f.workspace, f.config, second_alone);
+  CHECK(seen.size() == 1);  // ran, and found nothing
+}
 
 TEST_CASE("a second run runs nothing", "[runner]") {
   Fixture f;
