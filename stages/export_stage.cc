@@ -28,7 +28,6 @@ namespace p2n {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr size_t kMaxPoints = 2'000'000;
 constexpr float kFallbackThreshold = 25;  // per normalised unit: what fits lego's surface
 
 // The training views' cameras as the field saw them: corrected where camera refinement moved them.
@@ -62,33 +61,20 @@ std::string RegionKind(const NerfModel& model, const ExportOptions& options) {
 
 // Where the training views' rays end (their median depth), where they are opaque.
 struct DepthSamples {
-  std::vector<ColouredPoint> points;  // coloured, one per opaque pixel (at most about kMaxPoints)
+  std::vector<ColouredPoint> points;  // coloured, one per opaque pixel (at most kMaxSmallViewPixels)
   // Every one from the middle half (in width and height) of each view; only for the focus region (FitCube).
   std::vector<Eigen::Vector3d> central;
 };
 
-// The pixels of `cameras` scaled to `width`.
-size_t PixelsAt(const std::vector<PinholeCamera>& cameras, int width) {
-  size_t pixels = 0;
-  for (const PinholeCamera& camera : cameras) {
-    const PinholeCamera scaled = ScaledCamera(camera, width);
-    pixels += size_t(scaled.width) * scaled.height;
-  }
-  return pixels;
-}
-
 DepthSamples SampleDepths(const StageContext& context, const fs::path& model_file, const NerfModel& model,
                           const ImportedDataset& dataset, const ExportOptions& options) {
   std::vector<TrainView> views;  // the training views' cameras, without their pixels
-  std::vector<PinholeCamera> cameras;
   for (const ImportedView& view : dataset.views) {
     if (view.view.split != "train") continue;
     views.push_back({view.view.camera, view.view.near, view.view.far, 3, {}, view.source.filename().string()});
-    cameras.push_back(view.view.camera);
   }
-  const int width = PointCloudWidth(cameras, options.points_width, kMaxPoints);
   const std::shared_ptr<const ViewRenders> views_rendered =
-      RenderViewsSmall(context, model_file, model, views, width, "export: point cloud");
+      RenderViewsSmall(context, model_file, model, views, options.points_width, "export: point cloud");
   DepthSamples samples;
   const bool want_central = RegionKind(model, options) == "focus";
   for (size_t v = 0; v < views.size(); ++v) {
@@ -188,12 +174,6 @@ ExportReport::Mesh WriteMesh(const NerfModel& model, const ExportOptions& option
 }
 
 }  // namespace
-
-int PointCloudWidth(const std::vector<PinholeCamera>& cameras, int width, size_t max_pixels) {
-  const size_t pixels = PixelsAt(cameras, width);
-  if (pixels <= max_pixels) return width;
-  return std::max(1, static_cast<int>(width * std::sqrt(double(max_pixels) / double(pixels))));
-}
 
 void ExportOptions::Check() const {
   CheckOption(resolution >= 8 && resolution <= 1024, "export.resolution", "must be 8..1024");

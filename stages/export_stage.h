@@ -7,7 +7,6 @@
 #include <string>
 #include <vector>
 
-#include "nerf/camera.h"
 #include "pipeline/stage.h"
 
 namespace p2n {
@@ -47,10 +46,6 @@ struct ExportOptions {
   }
   void Check() const;
 };
-
-// The width the training views are rendered at for the point cloud: `width`, or narrower where the `cameras` would
-// give more than `max_pixels` pixels in all (a pixel gives at most one point, so no more are rendered than kept).
-int PointCloudWidth(const std::vector<PinholeCamera>& cameras, int width, size_t max_pixels);
 
 class ExportStage : public Stage {
  public:

@@ -37,7 +37,9 @@ struct SplatOptions {
       "where the first splats come from: field (its surfaces, seen by the training views) or sparse (COLMAP's "
       "sparse points, as 3D Gaussian Splatting starts; for comparison)",
       "", OptionKind::kResult, {"field", "sparse"});
-    v("init_width", init_width, "width the training views are rendered at to place the first splats", "pixels");
+    v("init_width", init_width,
+      "width the training views are rendered at to place the first splats (narrower beyond 2 M pixels in all)",
+      "pixels");
     v("max_gaussians", max_gaussians, "splats placed from the field (densification may add as many again)");
     v("coarse", coarse,
       "share of the optimisation time spent on the photos at half size (four times the steps; coarse to fine)");
@@ -61,7 +63,8 @@ class SplatStage : public Stage {
  public:
   std::string name() const override { return "splat"; }
   std::string folder() const override { return "35_splat"; }
-  int format_version() const override { return 2; }  // 2: the SSIM term
+  // 2: the SSIM term; 3: placed from at most 2 M pixels (the export's renders)
+  int format_version() const override { return 3; }
   std::vector<std::string> upstream() const override { return {"poses", "train"}; }
   void Run(StageContext& context) const override;
 };

@@ -1,5 +1,8 @@
 #include "stages/view_renders.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "pipeline/cancel.h"
 #include "pipeline/hash.h"
 #include "pipeline/progress.h"
@@ -19,20 +22,37 @@ std::string RendersKey(const std::filesystem::path& model_file, const std::vecto
   return hasher.HexDigest();
 }
 
+// The pixels of `cameras` scaled to `width`.
+size_t PixelsAt(const std::vector<PinholeCamera>& cameras, int width) {
+  size_t pixels = 0;
+  for (const PinholeCamera& camera : cameras) {
+    const PinholeCamera scaled = ScaledCamera(camera, width);
+    pixels += size_t(scaled.width) * scaled.height;
+  }
+  return pixels;
+}
+
 }  // namespace
+
+int SmallViewsWidth(const std::vector<PinholeCamera>& cameras, int width, size_t max_pixels) {
+  const size_t pixels = PixelsAt(cameras, width);
+  if (pixels <= max_pixels) return width;
+  return std::max(1, static_cast<int>(width * std::sqrt(double(max_pixels) / double(pixels))));
+}
 
 std::shared_ptr<const ViewRenders> RenderViewsSmall(const StageContext& context, const std::filesystem::path& model_file,
                                                     const NerfModel& model, const std::vector<TrainView>& views,
                                                     int width, const std::string& label) {
+  std::vector<PinholeCamera> cameras;
+  for (const TrainView& view : views) cameras.push_back(view.camera);
+  width = SmallViewsWidth(cameras, width);
   const std::string key = context.memo != nullptr ? RendersKey(model_file, views, width) : "";
   if (context.memo != nullptr) {
     if (auto found = context.memo->Find<ViewRenders>(key)) return found;
   }
   auto result = std::make_shared<ViewRenders>();
-  for (const TrainView& view : views) result->cameras.push_back(ScaledCamera(view.camera, width));
-  size_t pixels = 0;
-  for (const PinholeCamera& camera : result->cameras) pixels += size_t(camera.width) * camera.height;
-  Progress progress(label, static_cast<int64_t>(pixels), "pixels");
+  for (const PinholeCamera& camera : cameras) result->cameras.push_back(ScaledCamera(camera, width));
+  Progress progress(label, static_cast<int64_t>(PixelsAt(cameras, width)), "pixels");
   RenderOptions render;
   render.median_depth = true;
   render.on_rays_done = [&](size_t n) {

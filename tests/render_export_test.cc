@@ -246,7 +246,7 @@ TEST_CASE("export stage: mesh and point cloud open in Assimp, finite, in the sou
   CHECK(box["half_size"] == 1.0);
 }
 
-TEST_CASE("export stage: the point cloud's views are rendered no larger than the points it keeps", "[export]") {
+TEST_CASE("the training views rendered small: no more pixels than points kept", "[export]") {
   PinholeCamera photo;
   photo.width = 1080;  // fox's photos: portrait
   photo.height = 1920;
@@ -254,13 +254,13 @@ TEST_CASE("export stage: the point cloud's views are rendered no larger than the
   photo.cx = 540;
   photo.cy = 960;
   const std::vector<PinholeCamera> few(3, photo), many(43, photo);
-  CHECK(PointCloudWidth(few, 200, 2'000'000) == 200);  // 3 x 200 x 356 pixels: all kept
-  const int width = PointCloudWidth(many, 200, 2'000'000);
+  CHECK(SmallViewsWidth(few, 200) == 200);  // 3 x 200 x 356 pixels: all kept
+  const int width = SmallViewsWidth(many, 200, 2'000'000);
   const PinholeCamera scaled = ScaledCamera(photo, width);
   const size_t pixels = 43 * size_t(scaled.width) * scaled.height;
   CHECK(pixels <= 2'000'000);
   CHECK(pixels > 1'950'000);  // no narrower than it must be
-  CHECK(PointCloudWidth(many, 200, 10) >= 1);
+  CHECK(SmallViewsWidth(many, 200, 10) >= 1);
 }
 
 TEST_CASE("the training views rendered small: once a run for the splat and export stages, the same when run alone",
