@@ -199,8 +199,7 @@ std::vector<StageRun> Runner::Run(const Workspace& workspace, const Config& conf
   return runs;
 }
 
-void Runner::RunOne(const Workspace& workspace, const Config& config, const StageStatus& status,
-                    RunMemo* memo) const {
+void Runner::RunOne(const Workspace& workspace, const Config& config, const StageStatus& status, RunMemo* memo) const {
   const Stage& stage = *status.stage;
   const fs::path staging = workspace.StagingDir(stage.folder());
   const fs::path final_dir = workspace.StageDir(stage.folder());

@@ -115,11 +115,9 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   if (options.init == "sparse") {
     setup.gaussians = GaussiansFromSparseFile(context.upstream_dirs.at("poses") / "sparse_points.ply", init);
   } else {
-    std::vector<TrainView> cameras;  // the views without their pixels
-    for (const TrainView& view : setup.data.train)
-      cameras.push_back({view.camera, view.near, view.far, 3, {}, view.name});
-    const std::shared_ptr<const ViewRenders> renders = RenderViewsSmall(
-        context, train_dir / "model.bin", model, cameras, options.init_width, "splat: placing splats from the field");
+    const std::shared_ptr<const ViewRenders> renders =
+        RenderViewsSmall(context, train_dir / "model.bin", model, setup.data.train, options.init_width,
+                         "splat: placing splats from the field");
     setup.gaussians = GaussiansFromRenders(model, renders->cameras, renders->renders, init);
   }
 

@@ -40,14 +40,16 @@ int SmallViewsWidth(const std::vector<PinholeCamera>& cameras, int width, size_t
   return std::max(1, static_cast<int>(width * std::sqrt(double(max_pixels) / double(pixels))));
 }
 
-std::shared_ptr<const ViewRenders> RenderViewsSmall(const StageContext& context, const std::filesystem::path& model_file,
-                                                    const NerfModel& model, const std::vector<TrainView>& views,
-                                                    int width, const std::string& label) {
+std::shared_ptr<const ViewRenders> RenderViewsSmall(const StageContext& context,
+                                                    const std::filesystem::path& model_file, const NerfModel& model,
+                                                    const std::vector<TrainView>& views, int width,
+                                                    const std::string& label) {
   std::vector<PinholeCamera> cameras;
   for (const TrainView& view : views) cameras.push_back(view.camera);
   width = SmallViewsWidth(cameras, width);
-  const std::string key = context.memo != nullptr ? RendersKey(model_file, views, width) : "";
+  std::string key;
   if (context.memo != nullptr) {
+    key = RendersKey(model_file, views, width);
     if (auto found = context.memo->Find<ViewRenders>(key)) return found;
   }
   auto result = std::make_shared<ViewRenders>();

@@ -28,9 +28,10 @@ struct ViewRenders {
 };
 
 // `views` (cameras and near/far in the field's frame; their pixels are not read) rendered `width` pixels wide
-// (SmallViewsWidth) by `model`, read from `model_file`. `label` names the work on the progress line ("splat: placing splats").
-std::shared_ptr<const ViewRenders> RenderViewsSmall(const StageContext& context, const std::filesystem::path& model_file,
-                                                    const NerfModel& model, const std::vector<TrainView>& views,
-                                                    int width, const std::string& label);
+// (SmallViewsWidth) by `model`, read from `model_file`. `label` names the work on the progress line.
+std::shared_ptr<const ViewRenders> RenderViewsSmall(const StageContext& context,
+                                                    const std::filesystem::path& model_file, const NerfModel& model,
+                                                    const std::vector<TrainView>& views, int width,
+                                                    const std::string& label);
 
 }  // namespace p2n
