@@ -28,9 +28,18 @@ void SplatTrainerOptions::Check() const {
 }
 
 SplatTrainer::SplatTrainer(Gaussians<float> gaussians, const SplatScene& scene, const SplatTrainerOptions& options)
-    : gaussians_(std::move(gaussians)), scene_(scene), options_(options), random_(options.seed) {
+    : gaussians_(std::move(gaussians)),
+      scene_(scene),
+      background_(scene.background),
+      background_adam_(AdamOptions{options.colour_lr, 0.9, 0.999, 1e-15}, 3),
+      options_(options),
+      random_(options.seed) {
   options_.Check();
   if (scene_.views == nullptr || scene_.views->empty()) throw std::invalid_argument("SplatTrainer: no training views");
+  for (const TrainView& view : *scene_.views) {
+    if (scene_.learn_background && view.channels == 4)
+      throw std::invalid_argument("SplatTrainer: a background learnt behind photos with alpha (" + view.name + ")");
+  }
   gaussians_.ForEachArray([&](const std::vector<float>& values, int per) {
     adams_.emplace_back(AdamOptions{1e-3, 0.9, 0.999, 1e-15}, values.size(), std::max(per, 1));
   });
@@ -66,14 +75,14 @@ double SplatTrainer::Step() {
   RasterOptions raster;
   raster.projection.near = scene_.near;
   raster.projection.sh_degree = ShDegree();
-  for (int c = 0; c < 3; ++c) raster.background[c] = scene_.background[c];
+  for (int c = 0; c < 3; ++c) raster.background[c] = background_[c];
   rasterizer_.Forward(gaussians_, view.camera, raster);
 
   // (1 - w) L1 + w (1 - SSIM) against the photo on the background (w: options_.ssim_weight).
   const std::vector<float>& rgb = rasterizer_.rgb();
   std::vector<float> photo(rgb.size()), d_rgb(rgb.size());
   for (size_t i = 0; i < rgb.size() / 3; ++i) {
-    for (int c = 0; c < 3; ++c) photo[3 * i + c] = view.OnBackground(i, c, scene_.background[c]);
+    for (int c = 0; c < 3; ++c) photo[3 * i + c] = view.OnBackground(i, c, background_[c]);
   }
   const float weight = static_cast<float>(options_.ssim_weight);
   double loss = 0;
@@ -95,6 +104,7 @@ double SplatTrainer::Step() {
   grads.SetZero();
   std::vector<float> screen;
   rasterizer_.Backward(d_rgb, &grads, &screen);
+  if (scene_.learn_background) StepBackground(d_rgb);
 
   // Screen-space gradients in normalised device units (as the reference's threshold is), for densification.
   const float half_width = 0.5f * view.camera.width, half_height = 0.5f * view.camera.height;
@@ -121,6 +131,18 @@ double SplatTrainer::Step() {
   const int densify_last = static_cast<int>(options_.densify_until * options_.steps);
   if (step_ >= options_.densify_from && step_ <= densify_last && step_ % options_.densify_interval == 0) Densify();
   return loss;
+}
+
+// The background shows through each pixel by what the splats leave of it: its gradient is the sum of the pixels'
+// colour gradients times their transmittance.
+void SplatTrainer::StepBackground(const std::vector<float>& d_rgb) {
+  const std::vector<float>& transmittance = rasterizer_.transmittance();
+  float gradient[3] = {0, 0, 0};
+  for (size_t i = 0; i < transmittance.size(); ++i) {
+    for (int c = 0; c < 3; ++c) gradient[c] += d_rgb[3 * i + c] * transmittance[i];
+  }
+  background_adam_.Step(background_.data(), gradient);
+  for (float& value : background_) value = std::clamp(value, 0.0f, 1.0f);
 }
 
 void SplatTrainer::Densify() {
@@ -186,6 +208,8 @@ void SplatTrainer::Save(BinaryWriter* writer) const {
   writer->Put<int32_t>(gaussians_.sh_degree);
   gaussians_.ForEachArray([&](const std::vector<float>& values, int) { writer->PutVector(values); });
   for (const Adam<float>& adam : adams_) adam.Save(writer);
+  writer->PutVector(std::vector<float>(background_.begin(), background_.end()));
+  background_adam_.Save(writer);
   writer->PutVector(screen_gradient_sum_);
   writer->PutVector(screen_gradient_count_);
   std::vector<uint64_t> order(order_.begin(), order_.end());
@@ -212,6 +236,9 @@ void SplatTrainer::Load(BinaryReader* reader) {
     adams_.emplace_back(AdamOptions{1e-3, 0.9, 0.999, 1e-15}, values.size(), std::max(per, 1));
     adams_.back().Load(reader);
   });
+  const std::vector<float> background = reader->GetVector<float>(3);
+  std::copy(background.begin(), background.end(), background_.begin());
+  background_adam_.Load(reader);
   screen_gradient_sum_ = reader->GetVector<float>(count);
   screen_gradient_count_ = reader->GetVector<uint32_t>(count);
   const std::vector<uint64_t> order = reader->GetVector<uint64_t>();

@@ -1,9 +1,10 @@
 #pragma once
 // Optimises Gaussians against posed photos (3D Gaussian Splatting's recipe, sized for a CPU): one training view
-// per step, rendered whole by the rasterizer, a loss of L1 and SSIM against the photo on the known background,
+// per step, rendered whole by the rasterizer, a loss of L1 and SSIM against the photo on the background,
 // Adam with a learning rate per parameter (the means' decaying exponentially and scaled by the scene's extent), the
 // spherical harmonics' degrees joining one at a time, and densification: Gaussians whose mean the loss pulls hard
-// across the screen are cloned when small and split in two when large, transparent ones are pruned.
+// across the screen are cloned when small and split in two when large, transparent ones are pruned. Behind photos
+// without alpha the colour behind every splat is learnt with them (SplatScene::learn_background).
 
 #include <array>
 #include <cstdint>
@@ -47,9 +48,12 @@ struct SplatTrainerOptions {
 // the scene's extent (a radius around the cameras, for learning rates and densification) and the near plane.
 struct SplatScene {
   const std::vector<TrainView>* views = nullptr;
-  std::array<float, 3> background{1, 1, 1};
+  std::array<float, 3> background{1, 1, 1};  // the first, when learnt
   double extent = 1;
   double near = 0.01;
+  // Learn the colour behind every splat (what lies beyond them: a sky, a far wall) with them; only for photos
+  // without alpha, whose pixels do not depend on it.
+  bool learn_background = false;
 };
 
 class SplatTrainer {
@@ -63,6 +67,7 @@ class SplatTrainer {
   void SetViews(const std::vector<TrainView>* views);
   int step() const { return step_; }
   const Gaussians<float>& gaussians() const { return gaussians_; }
+  const std::array<float, 3>& background() const { return background_; }
   // The SH degree in use at this step.
   int ShDegree() const;
 
@@ -73,10 +78,13 @@ class SplatTrainer {
  private:
   double PositionLearningRate() const;
   void Densify();
+  void StepBackground(const std::vector<float>& d_rgb);
   const TrainView& NextView();
 
   Gaussians<float> gaussians_;
   SplatScene scene_;
+  std::array<float, 3> background_;
+  Adam<float> background_adam_;
   SplatTrainerOptions options_;
   static constexpr size_t kShRestArray = 5;  // sh_rest's place in Gaussians::ForEachArray's order
   std::vector<Adam<float>> adams_;           // one per parameter array, in Gaussians::ForEachArray's order

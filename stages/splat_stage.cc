@@ -1,5 +1,6 @@
 #include "stages/splat_stage.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -139,8 +140,8 @@ struct Scores {
   std::vector<double> psnr, ssim;
   double seconds_per_view = 0;
 };
-Scores Evaluate(const Gaussians<float>& gaussians, const SplatSetup& setup, double near, size_t max_views,
-                bool with_ssim) {
+Scores Evaluate(const Gaussians<float>& gaussians, const std::array<float, 3>& background, const SplatSetup& setup,
+                double near, size_t max_views, bool with_ssim) {
   Scores scores;
   const size_t views = max_views == 0 ? setup.data.heldout.size() : std::min(max_views, setup.data.heldout.size());
   double seconds = 0;
@@ -148,9 +149,9 @@ Scores Evaluate(const Gaussians<float>& gaussians, const SplatSetup& setup, doub
     ThrowIfCancelled();
     const TrainView& view = setup.data.heldout[v];
     const auto start = std::chrono::steady_clock::now();
-    const FloatImage image = RenderSplats(gaussians, view.camera, setup.background, near);
+    const FloatImage image = RenderSplats(gaussians, view.camera, background, near);
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const FloatImage photo = PhotoOnBackground(view, setup.background);
+    const FloatImage photo = PhotoOnBackground(view, background);
     scores.psnr.push_back(Psnr(image, photo));
     if (with_ssim) scores.ssim.push_back(Ssim(image, photo));
   }
@@ -223,7 +224,8 @@ void OptimiseUntilDone(SplatTrainer& trainer, const SplatSetup& setup, const Spl
     state->seconds += std::chrono::duration<double>(Clock::now() - start).count();
     progress.Add(budget > 0 ? static_cast<int64_t>(state->seconds) - whole_before : 1);
     if (state->seconds >= next_eval || done()) {
-      const Scores scores = Evaluate(trainer.gaussians(), setup, near, kMaxEvalViewsDuringTraining, false);
+      const Scores scores =
+          Evaluate(trainer.gaussians(), trainer.background(), setup, near, kMaxEvalViewsDuringTraining, false);
       state->metrics += format("{:.3f},{},{},{:.6g},{:.4f}\n", state->seconds, trainer.step(),
                                trainer.gaussians().size(), state->loss_sum / state->loss_steps, Mean(scores.psnr));
       state->loss_sum = 0;
@@ -261,7 +263,10 @@ void SplatStage::Run(StageContext& context) const {
   trainer_options.seed = static_cast<uint64_t>(options.seed);
   trainer_options.max_gaussians = 2 * static_cast<size_t>(options.max_gaussians);
   trainer_options.ssim_weight = options.ssim_weight;
-  const SplatScene scene{&setup.data.train, setup.background, setup.extent, near};
+  SplatScene scene{&setup.data.train, setup.background, setup.extent, near};
+  scene.learn_background =
+      options.background == "auto" && std::none_of(setup.data.train.begin(), setup.data.train.end(),
+                                                   [](const TrainView& view) { return view.channels == 4; });
   SplatTrainer trainer(setup.gaussians, scene, trainer_options);
   RunState state;
   const fs::path checkpoint = context.resume_dir / "checkpoint.bin";
@@ -269,7 +274,7 @@ void SplatStage::Run(StageContext& context) const {
   if (resumed_from > 0) LogInfo(format("splat: resumed at step {} from {}", resumed_from, checkpoint.string()));
   OptimiseUntilDone(trainer, setup, options, budget, near, checkpoint, context.key, &state);
 
-  const Scores scores = Evaluate(trainer.gaussians(), setup, near, 0, true);
+  const Scores scores = Evaluate(trainer.gaussians(), trainer.background(), setup, near, 0, true);
   WriteOrExplain([&] {
     WriteSplatPly(out / "splats.ply", trainer.gaussians(),
                   {setup.frame.description,
@@ -281,7 +286,7 @@ void SplatStage::Run(StageContext& context) const {
     if (!root.has_filename()) root = root.parent_path();  // "ws/" -> "ws"
     const std::string scene = root.filename().string();
     viewer_bytes = WriteSplatViewer(out / "viewer.html", "photo2nerf: " + scene, trainer.gaussians(), setup.data,
-                                    setup.frame, setup.background, near);
+                                    setup.frame, trainer.background(), near);
   });
   const std::string metrics = "wall_seconds,step,splats,train_loss,heldout_psnr\n" + state.metrics;
   WriteFileAtomic(out / "metrics.csv", metrics);
@@ -311,7 +316,7 @@ void SplatStage::Run(StageContext& context) const {
   report.frame = setup.frame.name;
   report.frame_description = setup.frame.description;
   report.near = near;
-  report.background = setup.background;
+  report.background = trainer.background();
   report.file_bytes = fs::file_size(out / "splats.ply");
   report.viewer_bytes = viewer_bytes;
   WriteJsonAtomic(out / "splat_report.json", report.ToJson());

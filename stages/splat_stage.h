@@ -21,6 +21,7 @@ struct SplatOptions {
   int max_gaussians = 100'000;  // of the first; densification may double it. Fewer: more steps for the time
   double coarse = 0.75;         // share of the optimisation on the photos at half size
   double ssim_weight = 0.1;     // the loss: (1 - w) L1 + w (1 - SSIM)
+  std::string background = "auto";  // auto: learnt behind photos without alpha, else the field's; fixed: the field's
   std::string frame = "source";
   double eval_interval = 20;  // seconds of optimisation between held-out evaluations
   double checkpoint_interval = 60;
@@ -45,6 +46,10 @@ struct SplatOptions {
       "share of the optimisation time spent on the photos at half size (four times the steps; coarse to fine)");
     v("ssim_weight", ssim_weight,
       "weight of the structural dissimilarity (1 - SSIM) in the loss, the rest L1 (3D Gaussian Splatting uses 0.2)");
+    v("background", background,
+      "the colour behind the splats: auto (learnt with them where the photos have no alpha: what lies beyond the "
+      "splats, a sky or a far wall; the field's where the photos were composited on it) or fixed (the field's)",
+      "", OptionKind::kResult, {"auto", "fixed"});
     v("frame", frame,
       "coordinates of splats.ply: source (COLMAP's world, or the dataset's) or normalized (the training frame)", "",
       OptionKind::kResult, {"source", "normalized"});
@@ -63,8 +68,8 @@ class SplatStage : public Stage {
  public:
   std::string name() const override { return "splat"; }
   std::string folder() const override { return "35_splat"; }
-  // 2: the SSIM term; 3: placed from at most 2 M pixels (the export's renders)
-  int format_version() const override { return 3; }
+  // 2: the SSIM term; 3: placed from at most 2 M pixels (the export's renders); 4: the background learnt (auto)
+  int format_version() const override { return 4; }
   std::vector<std::string> upstream() const override { return {"poses", "train"}; }
   void Run(StageContext& context) const override;
 };

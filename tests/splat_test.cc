@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -43,14 +44,15 @@ Gaussians<float> RandomSplats(int count, int degree, uint64_t seed) {
   return g;
 }
 
-// Views of the origin from a ring of cameras, their pixels rendered from `truth`.
-std::vector<TrainView> ViewsOf(const Gaussians<float>& truth, int count) {
+// Views of the origin from a ring of cameras, their pixels rendered from `truth` over `background`.
+std::vector<TrainView> ViewsOf(const Gaussians<float>& truth, int count,
+                               const std::array<float, 3>& background = {1, 1, 1}) {
   std::vector<TrainView> views;
   for (int v = 0; v < count; ++v) {
     const double angle = 2 * M_PI * v / count;
     TrainView view;
     view.camera = CameraAt({2.5 * std::cos(angle), 2.5 * std::sin(angle), 0.8});
-    const FloatImage image = RenderSplats(truth, view.camera, {1, 1, 1}, 0.01);
+    const FloatImage image = RenderSplats(truth, view.camera, background, 0.01);
     for (const float value : image.pixels)
       view.pixels.push_back(static_cast<uint8_t>(std::lround(255 * std::clamp(value, 0.0f, 1.0f))));
     views.push_back(std::move(view));
@@ -284,6 +286,51 @@ TEST_CASE("Splat optimisation fits photos, and a resumed run continues as an uni
   REQUIRE(resumed.gaussians().size() == whole.gaussians().size());
   CHECK(resumed.step() == whole.step());
   CHECK(psnr(resumed.gaussians()) == Approx(after).margin(0.05));
+}
+
+TEST_CASE("Splat optimisation learns the colour behind the splats from photos without alpha, and resumes it",
+          "[splat]") {
+  const Gaussians<float> truth = RandomSplats(30, 0, 5);
+  const std::array<float, 3> sky = {0.3f, 0.5f, 0.7f};
+  const std::vector<TrainView> views = ViewsOf(truth, 8, sky);  // opaque photos: the sky shows around the splats
+  SplatScene scene{&views, {1, 1, 1}, 2.5, 0.01};
+  SplatTrainerOptions options;
+  options.steps = 120;
+  const auto psnr = [&](const SplatTrainer& trainer) {
+    double sum = 0;
+    for (const TrainView& view : views) {
+      sum += Psnr(RenderSplats(trainer.gaussians(), view.camera, trainer.background(), 0.01),
+                  PhotoOnBackground(view, trainer.background()));
+    }
+    return sum / views.size();
+  };
+  SplatTrainer fixed(truth, scene, options);
+  scene.learn_background = true;
+  SplatTrainer learnt(truth, scene, options);
+  for (int s = 0; s < options.steps; ++s) fixed.Step(), learnt.Step();
+  CHECK(fixed.background() == std::array<float, 3>{1, 1, 1});
+  for (int c = 0; c < 3; ++c) CHECK(learnt.background()[c] == Approx(sky[c]).margin(0.02));
+  INFO("PSNR with the background fixed " << psnr(fixed) << ", learnt " << psnr(learnt));
+  CHECK(psnr(learnt) > psnr(fixed) + 3);
+
+  // A resumed run carries on from the background it had.
+  SplatTrainer first(truth, scene, options);
+  for (int s = 0; s < 50; ++s) first.Step();
+  BinaryWriter writer;
+  first.Save(&writer);
+  SplatTrainer resumed(truth, scene, options);
+  BinaryReader reader(writer.buffer(), "checkpoint");
+  resumed.Load(&reader);
+  CHECK(resumed.background() == first.background());
+  for (int s = 50; s < options.steps; ++s) resumed.Step();
+  for (int c = 0; c < 3; ++c) CHECK(resumed.background()[c] == Approx(learnt.background()[c]).margin(1e-3));
+
+  // Photos with alpha were composited on a known background: it is not learnt.
+  std::vector<TrainView> with_alpha = views;
+  with_alpha[2].channels = 4;
+  with_alpha[2].name = "cut_out.png";
+  scene.views = &with_alpha;
+  CHECK_THROWS_WITH(SplatTrainer(truth, scene, options), Catch::Contains("cut_out.png"));
 }
 
 }  // namespace p2n::testing

@@ -24,7 +24,9 @@ function base64Bytes(text) {
 
 const renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true });
 renderer.setPixelRatio(nativeSize ? 1 : Math.min(window.devicePixelRatio, 2));
-renderer.setClearColor(new THREE.Color(...scene.background), 1);
+// The background is a colour of the photos (sRGB), as the splats' colours are; three.js would take plain numbers
+// for linear ones and brighten them on the way out.
+renderer.setClearColor(new THREE.Color().setRGB(...scene.background, THREE.SRGBColorSpace), 1);
 const world = new THREE.Scene();
 world.add(new SparkRenderer({ renderer }));
 const splats = new SplatMesh({
