@@ -36,9 +36,11 @@ SplatTrainer::SplatTrainer(Gaussians<float> gaussians, const SplatScene& scene, 
       random_(options.seed) {
   options_.Check();
   if (scene_.views == nullptr || scene_.views->empty()) throw std::invalid_argument("SplatTrainer: no training views");
-  for (const TrainView& view : *scene_.views) {
-    if (scene_.learn_background && view.channels == 4)
-      throw std::invalid_argument("SplatTrainer: a background learnt behind photos with alpha (" + view.name + ")");
+  if (scene_.learn_background) {
+    for (const TrainView& view : *scene_.views) {
+      if (view.channels == 4)
+        throw std::invalid_argument("SplatTrainer: a background learnt behind photos with alpha (" + view.name + ")");
+    }
   }
   gaussians_.ForEachArray([&](const std::vector<float>& values, int per) {
     adams_.emplace_back(AdamOptions{1e-3, 0.9, 0.999, 1e-15}, values.size(), std::max(per, 1));

@@ -1,6 +1,5 @@
 #include "stages/splat_stage.h"
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -264,9 +263,7 @@ void SplatStage::Run(StageContext& context) const {
   trainer_options.max_gaussians = 2 * static_cast<size_t>(options.max_gaussians);
   trainer_options.ssim_weight = options.ssim_weight;
   SplatScene scene{&setup.data.train, setup.background, setup.extent, near};
-  scene.learn_background =
-      options.background == "auto" && std::none_of(setup.data.train.begin(), setup.data.train.end(),
-                                                   [](const TrainView& view) { return view.channels == 4; });
+  scene.learn_background = options.background == "auto" && !AnyWithAlpha(setup.data.train);
   SplatTrainer trainer(setup.gaussians, scene, trainer_options);
   RunState state;
   const fs::path checkpoint = context.resume_dir / "checkpoint.bin";

@@ -359,9 +359,8 @@ void TrainStage::Run(StageContext& context) const {
   setup.data = LoadTrainingData(poses);
   const TrainingData& data = setup.data;
   setup.trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, poses.meta.dataset_kind));
-  const bool has_alpha =
-      std::any_of(data.train.begin(), data.train.end(), [](const TrainView& v) { return v.channels == 4; });
-  setup.trainer.random_background = options.background == "random" || (options.background == "auto" && has_alpha);
+  setup.trainer.random_background =
+      options.background == "random" || (options.background == "auto" && AnyWithAlpha(data.train));
   Trainer trainer(setup.trainer, data);
   const double budget = ResolvedTimeBudget(options);
   LogInfo(format("train: {} field, {} scene, preset {}, {} training and {} held-out ({}) views, {}", options.field,
