@@ -128,6 +128,15 @@ Trainer::Trainer(const TrainerOptions& options, const TrainingData& data) : opti
   if (Encoding<float>* grid = model_.field->TrainableEncoding()) {
     grid_adam_ = std::make_unique<Adam<float>>(adam, grid->num_params(), grid->entry_size());
   }
+  if (options.learn_background) {
+    for (const TrainView& view : data.train) {
+      if (view.channels == 4) {
+        throw std::invalid_argument("training view " + view.name +
+                                    " has alpha: it was composited on a known background, which is not learnt");
+      }
+    }
+    background_adam_ = std::make_unique<Adam<float>>(adam, 3);
+  }
   if (options.appearance) {
     appearance_ = IdentityAppearance(data.train.size());
     appearance_grads_.assign(appearance_.size(), 0.0f);
@@ -195,7 +204,7 @@ RayBatch Trainer::SampleBatch(int rays) {
     batch.views[r] = static_cast<int>(draw.view);
     for (int c = 0; c < 3; ++c) {
       const float background =
-          options_.random_background && view.channels == 4 ? static_cast<float>(unit(random)) : data_.background[c];
+          options_.random_background && view.channels == 4 ? static_cast<float>(unit(random)) : model_.background[c];
       batch.background(c, r) = background;
       batch.target(c, r) = view.OnBackground(pixel, c, background);
     }
@@ -238,6 +247,7 @@ struct Trainer::Chunk {
   std::vector<size_t> offsets;    // the first sample of each ray, and one past the last
   Eigen::Index first_sample = 0;  // in the whole batch
   std::vector<float> d_dense, d_appearance, d_poses;
+  std::array<float, 3> d_background{};
   std::vector<Eigen::Index> used;             // the samples before early termination (the ones with gradients)
   Eigen::MatrixXf used_positions, d_encoded;  // of those
   double d_encoded_magnitude = 0;             // the sum of |d_encoded|
@@ -324,6 +334,7 @@ void Trainer::BackpropagateChunk(const RayBatch& batch, const std::vector<Ray>& 
       const float d_out[3] = {d_rgb[0], d_rgb[1], d_rgb[2]};
       AppearanceBackward(&appearance_[params], result.rgb, d_out, &chunk->d_appearance[params], d_rgb);
     }
+    for (int ch = 0; ch < 3; ++ch) chunk->d_background[ch] += d_rgb[ch] * result.transmittance;
     for (size_t k = 0; k < result.used; ++k) chunk->used.push_back(static_cast<Eigen::Index>(o + k));
     if (segments.count == 0) continue;
     CompositeBackward(segments, background, result, d_rgb, 0.0f, 0.0f, d_density.data() + o, d_colour.data() + 3 * o);
@@ -437,6 +448,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
       for (size_t k = 0; k < dense_count_; ++k) d_dense[k] += chunks[c].d_dense[k];
     }
     for (size_t k = 0; k < chunks[c].d_appearance.size(); ++k) appearance_grads_[k] += chunks[c].d_appearance[k];
+    for (int ch = 0; ch < 3; ++ch) background_grads_[ch] += chunks[c].d_background[ch];
   }
   result.loss /= static_cast<double>(std::max<size_t>(rays.size(), 1));
   ++step_;
@@ -446,11 +458,14 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     result.problem = "a network gradient is not finite";
   } else if (!AllFinite(appearance_grads_)) {
     result.problem = "an appearance gradient is not finite";
+  } else if (!AllFinite(background_grads_)) {
+    result.problem = "the background's gradient is not finite";
   } else if (!(d_encoded_magnitude < 0.5 * std::numeric_limits<float>::max())) {
     result.problem = "a hash-grid gradient is not finite";
   }
   if (!result.problem.empty()) {
     std::fill(appearance_grads_.begin(), appearance_grads_.end(), 0.0f);
+    background_grads_.fill(0.0f);
     result.skipped = true;
     ++skipped_;
     return result;
@@ -491,6 +506,13 @@ void Trainer::UpdateParameters(double learning_rate, const float* d_dense, bool 
     appearance_adam_->StepSparse(appearance_.data(), appearance_grads_.data());
     CentreAppearance(&appearance_);
   }
+  // The background keeps the first rate throughout: three values with a clean gradient, and a field that would
+  // otherwise learn the sky as haze in front of it while the background catches up.
+  if (background_adam_) {
+    background_adam_->Step(model_.background.data(), background_grads_.data());
+    for (float& value : model_.background) value = std::clamp(value, 0.0f, 1.0f);
+  }
+  background_grads_.fill(0.0f);
   if (refine && AllFinite(pose_grads_)) {
     pose_adam_->set_learning_rate(kPoseRateShare * learning_rate);
     pose_adam_->StepSparse(poses_.data(), pose_grads_.data());

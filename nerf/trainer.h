@@ -69,10 +69,13 @@ struct TrainerOptions {
   double distortion_weight = 0;
   float min_transmittance = 1e-4f;
   bool random_background = false;  // RGBA images: a random background per ray (learns transparency)
-  bool appearance = false;         // a colour transform per training image (appearance.h)
-  bool refine_cameras = false;     // a pose correction per training image (camera_refinement.h)
-  int refine_warmup = 100;         // steps before the corrections learn (a younger field's gradients mislead)
-  bool error_sampling = false;     // pixels drawn by the error map (error_map.h), their losses weighted
+  // Images without alpha: the colour behind the scene is learnt with it (a sky, a wall out of reach), starting
+  // from the data's background; refused where a training image has alpha (it was composited on a known colour).
+  bool learn_background = false;
+  bool appearance = false;      // a colour transform per training image (appearance.h)
+  bool refine_cameras = false;  // a pose correction per training image (camera_refinement.h)
+  int refine_warmup = 100;      // steps before the corrections learn (a younger field's gradients mislead)
+  bool error_sampling = false;  // pixels drawn by the error map (error_map.h), their losses weighted
   uint64_t seed = 0;
 
   // std::invalid_argument naming the field and its rule (the Trainer checks its options).
@@ -160,6 +163,8 @@ class Trainer {
   std::unique_ptr<Adam<float>> grid_adam_;
   std::vector<float> appearance_, appearance_grads_;
   std::unique_ptr<Adam<float>> appearance_adam_;
+  std::array<float, 3> background_grads_{};
+  std::unique_ptr<Adam<float>> background_adam_;  // with options.learn_background
   std::vector<float> poses_, pose_grads_;
   std::unique_ptr<Adam<float>> pose_adam_;
   std::vector<Eigen::Vector3d> centres_;  // the training cameras' centres, as given

@@ -1,6 +1,6 @@
 // The trainer's checkpoints (trainer.h: SaveCheckpoint, LoadCheckpoint): magic, the options that must match, the
-// model, the step counters, every optimiser's moments, the per-view appearance and camera corrections, and the
-// error map.
+// model (with its background), the step counters, every optimiser's moments, the per-view appearance and camera
+// corrections, and the error map.
 
 #include "nerf/trainer.h"
 
@@ -19,6 +19,7 @@ nlohmann::json CheckpointIdentity(const TrainerOptions& options) {
           {"appearance", options.appearance},
           {"refine_cameras", options.refine_cameras},
           {"error_sampling", options.error_sampling},
+          {"learn_background", options.learn_background},
           {"seed", options.seed}};
 }
 
@@ -34,6 +35,7 @@ void Trainer::SaveCheckpoint(BinaryWriter* writer) const {
   writer->Put<uint64_t>(model_.occupancy.cursor());
   for (const Adam<float>& adam : dense_adams_) adam.Save(writer);
   if (grid_adam_) grid_adam_->Save(writer);
+  if (background_adam_) background_adam_->Save(writer);
   if (appearance_adam_) {
     writer->PutVector(appearance_);
     appearance_adam_->Save(writer);
@@ -56,6 +58,7 @@ void Trainer::LoadCheckpoint(BinaryReader* reader) {
   model.occupancy.set_cursor(reader->Get<uint64_t>());
   for (Adam<float>& adam : dense_adams_) adam.Load(reader);
   if (grid_adam_) grid_adam_->Load(reader);
+  if (background_adam_) background_adam_->Load(reader);
   std::vector<float> appearance;
   if (appearance_adam_) {
     appearance = reader->GetVector<float>(appearance_.size());

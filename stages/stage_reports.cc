@@ -24,6 +24,14 @@ class Fields {
     if (!json_.contains(key)) Fail(key, "is missing");
     Convert(key, json_.at(key), value);
   }
+  // Exactly N numbers.
+  template <class T, size_t N>
+  void Get(const char* key, std::array<T, N>* value) const {
+    std::vector<T> values;
+    Get(key, &values);
+    if (values.size() != N) Fail(key, "must be " + std::to_string(N) + " numbers");
+    std::copy(values.begin(), values.end(), value->begin());
+  }
   // Missing or null: none.
   template <class T>
   void Get(const char* key, std::optional<T>* value) const {
@@ -239,7 +247,8 @@ nlohmann::json TrainReport::ToJson() const {
             {"appearance", trainer.appearance},
             {"refine_cameras", trainer.refine_cameras},
             {"error_sampling", trainer.error_sampling},
-            {"random_background", trainer.random_background}}},
+            {"background", trainer.background},
+            {"background_colour", trainer.background_colour}}},
           {"appearance", appearance_json},
           {"camera_refinement", camera_refinement}};
 }
@@ -281,7 +290,8 @@ TrainReport TrainReport::Read(const fs::path& file) {
   trainer.Get("appearance", &report.trainer.appearance);
   trainer.Get("refine_cameras", &report.trainer.refine_cameras);
   trainer.Get("error_sampling", &report.trainer.error_sampling);
-  trainer.Get("random_background", &report.trainer.random_background);
+  trainer.Get("background", &report.trainer.background);
+  trainer.Get("background_colour", &report.trainer.background_colour);
   ReadAppearance(fields.Object("appearance"), &report.appearance);
   fields.Get("camera_refinement", &report.camera_refinement);
   const Fields refinement = fields.Object("camera_refinement");
@@ -341,10 +351,7 @@ SplatReport SplatReport::Read(const fs::path& file) {
   fields.Get("frame", &report.frame);
   fields.Get("frame_description", &report.frame_description);
   fields.Get("near", &report.near);
-  std::vector<float> background;
-  fields.Get("background", &background);
-  if (background.size() != 3) fields.Fail("background", "must be 3 numbers");
-  std::copy(background.begin(), background.end(), report.background.begin());
+  fields.Get("background", &report.background);
   fields.Get("file_bytes", &report.file_bytes);
   fields.Get("viewer_bytes", &report.viewer_bytes);
   if (report.frame != "normalized" && report.frame != "source") fields.Fail("frame", "must be normalized or source");

@@ -96,7 +96,9 @@ struct TrainReport {
     double march_step = 0, learning_rate = 0, distortion_weight = 0;
     size_t batch_samples = 0;
     std::string scene;  // bounded | unbounded | forward
-    bool appearance = false, refine_cameras = false, error_sampling = false, random_background = false;
+    bool appearance = false, refine_cameras = false, error_sampling = false;
+    std::string background;                     // random (behind images with alpha) | learnt | fixed
+    std::array<double, 3> background_colour{};  // behind the scene after training (the learnt one, or the fixed)
   } trainer;
   struct AppearanceView {
     std::string view;

@@ -156,10 +156,18 @@ TrainReport MakeTrainReport(Trainer& trainer, const TrainerOptions& trainer_opti
   const NerfModel& model = trainer.model();
   report.occupied_fraction = model.occupancy.OccupiedFraction();
   report.field = model.field->Config();
-  report.trainer = {
-      trainer_options.march_step,     trainer_options.learning_rate,         trainer_options.distortion_weight,
-      trainer_options.batch_samples,  SceneSpaceName(trainer_options.space), trainer_options.appearance,
-      trainer_options.refine_cameras, trainer_options.error_sampling,        trainer_options.random_background};
+  report.trainer = {trainer_options.march_step,
+                    trainer_options.learning_rate,
+                    trainer_options.distortion_weight,
+                    trainer_options.batch_samples,
+                    SceneSpaceName(trainer_options.space),
+                    trainer_options.appearance,
+                    trainer_options.refine_cameras,
+                    trainer_options.error_sampling,
+                    trainer_options.random_background  ? "random"
+                    : trainer_options.learn_background ? "learnt"
+                                                       : "fixed",
+                    {model.background[0], model.background[1], model.background[2]}};
   report.appearance = AppearanceReport(trainer, data);
   return report;
 }
@@ -359,8 +367,15 @@ void TrainStage::Run(StageContext& context) const {
   setup.data = LoadTrainingData(poses);
   const TrainingData& data = setup.data;
   setup.trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, poses.meta.dataset_kind));
-  setup.trainer.random_background =
-      options.background == "random" || (options.background == "auto" && AnyWithAlpha(data.train));
+  const bool alpha = AnyWithAlpha(data.train);
+  if (options.background == "learnt" && alpha) {
+    throw UserError(
+        format("train.background is learnt, but the photos in {} have alpha: they were composited on a "
+               "known colour, which must stay; use auto or fixed",
+               transforms.string()));
+  }
+  setup.trainer.random_background = options.background == "random" || (options.background == "auto" && alpha);
+  setup.trainer.learn_background = options.background == "learnt" || (options.background == "auto" && !alpha);
   Trainer trainer(setup.trainer, data);
   const double budget = ResolvedTimeBudget(options);
   LogInfo(format("train: {} field, {} scene, preset {}, {} training and {} held-out ({}) views, {}", options.field,

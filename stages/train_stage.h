@@ -24,7 +24,7 @@ struct TrainOptions {
   int hash_table_log2 = 0;         // log2 of the hash-grid entries per level (ngp); 0: the preset's
   double learning_rate = 0;        // 0: the field's (ngp 1e-2, vanilla 5e-4)
   std::string loss = "mse";
-  std::string background = "auto";     // auto: random for images with alpha, else the dataset's colour
+  std::string background = "auto";     // auto: random for images with alpha, else learnt
   std::string distortion = "auto";     // weight of the distortion loss; auto: by the scene (train_stage.cc)
   std::string appearance = "off";      // a colour transform per training photo (on, off)
   std::string refine_cameras = "off";  // a pose correction per training photo (on, off; ngp only)
@@ -55,8 +55,10 @@ struct TrainOptions {
     v("hash_table_log2", hash_table_log2, "log2 of the hash-grid entries per level (ngp); 0: the preset's");
     v("learning_rate", learning_rate, "Adam learning rate; 0: the field's (ngp 1e-2, vanilla 5e-4)");
     v("loss", loss, "photometric loss", "", OptionKind::kResult, {"mse", "huber"});
-    v("background", background, "auto: random behind images with alpha, else the dataset's background colour", "",
-      OptionKind::kResult, {"auto", "random", "fixed"});
+    v("background", background,
+      "the colour behind the scene; auto: random behind photos with alpha (they learn transparency), learnt for "
+      "photos without (a sky, a far wall); fixed: the dataset's background colour",
+      "", OptionKind::kResult, {"auto", "random", "learnt", "fixed"});
     v("distortion", distortion,
       "weight of the distortion loss, which gathers each ray's weight into one place (against haze and floaters); "
       "auto: the weight measured best on real captures for unbounded scenes, 0 for bounded ones");
@@ -102,7 +104,7 @@ class TrainStage : public Stage {
  public:
   std::string name() const override { return "train"; }
   std::string folder() const override { return "30_train"; }
-  int format_version() const override { return 2; }  // 2: unbounded scenes march with 128 samples by default
+  int format_version() const override { return 3; }  // 3: photos without alpha learn the background
   std::vector<std::string> upstream() const override { return {"poses"}; }
   void Run(StageContext& context) const override;
 };

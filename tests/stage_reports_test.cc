@@ -58,7 +58,7 @@ TrainReport SomeTrainReport() {
   report.render_seconds_per_view = 0.25;
   report.occupied_fraction = 0.125;
   report.field = {{"otype", "ngp"}};
-  report.trainer = {0.0135, 0.01, 0.002, 65536, "unbounded", true, true, false, false};
+  report.trainer = {0.0135, 0.01, 0.002, 65536, "unbounded", true, true, false, "learnt", {0.25, 0.5, 0.75}};
   report.appearance = {true, 0.875, 1.125, {{"a.png", 0.875, std::vector<float>(12, 0.5f)}}};
   report.camera_refinement = {{"enabled", true},
                               {"rotation_degrees_median", 0.125},
@@ -257,6 +257,8 @@ TEST_CASE("A damaged report names its file, the field and the stage to rerun", "
              Catch::Contains("\"evaluations_during_training.pixels_per_view\" must be \"all\" or a positive count"));
   CHECK_THAT(ErrorAfterEdit<TrainReport>(train, train_json, "/camera_refinement/shift_max", nullptr),
              Catch::Contains("\"camera_refinement.shift_max\" must be a number, not null"));
+  CHECK_THAT(ErrorAfterEdit<TrainReport>(train, train_json, "/trainer/background_colour", nlohmann::json::array()),
+             Catch::Contains("\"trainer.background_colour\" must be 3 numbers"));
   CHECK_THAT(ErrorAfterEdit<TrainReport>(train, train_json, "/appearance/per_view/0/transform", "identity"),
              Catch::Contains("\"appearance.per_view[0].transform\" has the wrong type (string)"));
 

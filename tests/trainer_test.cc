@@ -22,9 +22,10 @@ namespace {
 
 constexpr int kSize = 40;
 
-// The view of a sphere of radius 0.5 at the origin, coloured 0.5 + 0.5 * normal, over white, or with a wall
+// The view of a sphere of radius 0.5 at the origin, coloured 0.5 + 0.5 * normal, over `sky`, or with a wall
 // behind it (the plane x = -1.5, in stripes).
-TrainView SphereView(double angle, double height, bool wall = false) {
+TrainView SphereView(double angle, double height, bool wall = false,
+                     const Eigen::Vector3d& sky = Eigen::Vector3d::Ones()) {
   TrainView view;
   view.camera = LookAtCamera(Eigen::Vector3d(2.5 * std::cos(angle), 2.5 * std::sin(angle), height),
                              Eigen::Vector3d::Zero(), kSize, kSize, 45);
@@ -33,7 +34,7 @@ TrainView SphereView(double angle, double height, bool wall = false) {
     for (int x = 0; x < kSize; ++x) {
       const Ray ray = CameraRay(view.camera, x + 0.5, y + 0.5);
       const double b = ray.origin.dot(ray.direction), c = ray.origin.squaredNorm() - 0.25;
-      Eigen::Vector3d colour = Eigen::Vector3d::Ones();
+      Eigen::Vector3d colour = sky;
       if (wall && ray.direction.x() < 0) {
         const Eigen::Vector3d p = ray.origin + (-1.5 - ray.origin.x()) / ray.direction.x() * ray.direction;
         colour = Eigen::Vector3d(0.5 + 0.4 * std::sin(4 * p.y()), 0.5 + 0.4 * std::sin(3 * p.z()), 0.3);
@@ -49,10 +50,12 @@ TrainView SphereView(double angle, double height, bool wall = false) {
   return view;
 }
 
-TrainingData SphereScene() {
+TrainingData SphereScene(const Eigen::Vector3d& sky = Eigen::Vector3d::Ones()) {
   TrainingData data;
-  for (int i = 0; i < 24; ++i) data.train.push_back(SphereView(2 * M_PI * i / 24, i % 2 == 0 ? 0.8 : -0.5));
-  for (int i = 0; i < 3; ++i) data.heldout.push_back(SphereView(2 * M_PI * (i + 0.5) / 3, 0.3));
+  for (int i = 0; i < 24; ++i) {
+    data.train.push_back(SphereView(2 * M_PI * i / 24, i % 2 == 0 ? 0.8 : -0.5, false, sky));
+  }
+  for (int i = 0; i < 3; ++i) data.heldout.push_back(SphereView(2 * M_PI * (i + 0.5) / 3, 0.3, false, sky));
   return data;
 }
 
@@ -148,6 +151,7 @@ TEST_CASE("a run resumed from a checkpoint reaches exactly the parameters of an 
   // All or none: each has its own state to resume.
   options.refine_cameras = options.appearance;
   options.error_sampling = options.appearance;
+  options.learn_background = options.appearance;
   options.refine_warmup = 10;
   Trainer straight(options, data);
   for (int step = 0; step < 40; ++step) straight.Step(step / 40.0);
@@ -166,6 +170,7 @@ TEST_CASE("a run resumed from a checkpoint reaches exactly the parameters of an 
   CHECK((Parameters(resumed.model()) == Parameters(straight.model())));
   CHECK(resumed.appearance() == straight.appearance());
   CHECK(resumed.camera_corrections() == straight.camera_corrections());
+  CHECK(resumed.model().background == straight.model().background);
 
   // A checkpoint of other options is refused.
   TrainerOptions other = options;
@@ -346,6 +351,38 @@ TEST_CASE("per-image appearance learns each photo's exposure and keeps it out of
   }
   INFO("held-out PSNR without appearance " << psnr[0] << " dB, with " << psnr[1] << " dB");
   CHECK(psnr[1] > psnr[0] + 2);
+}
+
+TEST_CASE("the background learnt behind photos without alpha: the sky's colour, and a better field", "[trainer]") {
+  // The sphere before a sky of (0.3, 0.5, 0.7); the data's background is white, as for any photo without alpha.
+  const Eigen::Vector3d sky(0.3, 0.5, 0.7);
+  const TrainingData data = SphereScene(sky);
+  double psnr[2];
+  for (const bool learn : {false, true}) {
+    TrainerOptions options = SmallOptions();
+    options.learn_background = learn;
+    Trainer trainer(options, data);
+    for (int step = 0; step < 300; ++step) REQUIRE_FALSE(trainer.Step(step / 300.0).skipped);
+    psnr[learn] = Mean(trainer.HeldoutPsnr(0));
+    const std::array<float, 3>& background = trainer.model().background;
+    INFO("background (" << background[0] << ", " << background[1] << ", " << background[2] << ")");
+    for (int c = 0; c < 3; ++c) CHECK(background[c] == Approx(learn ? sky[c] : 1.0).margin(0.05));
+  }
+  INFO("held-out PSNR with the background fixed " << psnr[0] << " dB, learnt " << psnr[1] << " dB");
+  CHECK(psnr[1] > psnr[0] + 2);
+
+  // Photos with alpha were composited on a known colour: it is not learnt.
+  TrainingData with_alpha = SphereScene();
+  TrainView& view = with_alpha.train[3];
+  view.channels = 4;
+  std::vector<uint8_t> rgba;
+  for (size_t i = 0; i < view.pixels.size(); i += 3)
+    rgba.insert(rgba.end(), {view.pixels[i], view.pixels[i + 1], view.pixels[i + 2], 255});
+  view.pixels = rgba;
+  view.name = "alpha.png";
+  TrainerOptions options = SmallOptions();
+  options.learn_background = true;
+  CHECK_THROWS_WITH(Trainer(options, with_alpha), Catch::Contains("alpha.png") && Catch::Contains("alpha"));
 }
 
 TEST_CASE("camera refinement moves perturbed training cameras back towards the truth", "[trainer]") {
