@@ -17,7 +17,7 @@ struct ExportOptions {
   std::string frame = "source";  // source: COLMAP's world (or the dataset's); normalized: the training frame
   bool obj = false;              // also write mesh.obj
   bool points = true;            // write points.ply
-  int points_width = 200;        // the training views are rendered this wide for the point cloud (at most 2 M pixels)
+  int points_width = 128;        // the training views are rendered this wide for the point cloud (at most 2 M pixels)
   double points_opacity = 0.95;  // pixels at least this opaque give points
   std::string region = "auto";   // the cube meshed: box (the scene box), focus (what the views look at), auto
 

@@ -17,7 +17,7 @@ struct SplatOptions {
   int steps = 0;           // stop after this many steps; 0: no step limit
   int sh_degree = 3;
   std::string init = "field";   // field | sparse: where the first Gaussians come from
-  int init_width = 200;         // training views rendered this wide to place the first Gaussians
+  int init_width = 128;         // training views rendered this wide to place the first Gaussians
   int max_gaussians = 100'000;  // of the first; densification may double it. Fewer: more steps for the time
   double coarse = 0.75;         // share of the optimisation on the photos at half size
   double ssim_weight = 0.1;     // the loss: (1 - w) L1 + w (1 - SSIM)
