@@ -40,11 +40,12 @@ void WritePly(const std::filesystem::path& path, const std::vector<ColouredPoint
   data.insert(data.find("element"), PlyComments(comments));
   const size_t header = data.size();
   data.resize(header + points.size() * kRecordSize);
-  char* out = data.data() + header;
-  for (const ColouredPoint& point : points) {
+  const size_t first = LeadingRecord(points.size(), [&](size_t i) { return points[i].position.x(); });
+  for (size_t i = 0; i < points.size(); ++i) {
+    const ColouredPoint& point = points[i == 0 ? first : i == first ? 0 : i];
+    char* out = data.data() + header + i * kRecordSize;
     std::memcpy(out, point.position.data(), 3 * sizeof(float));
     std::memcpy(out + 3 * sizeof(float), point.rgb.data(), 3);
-    out += kRecordSize;
   }
   WriteFileAtomic(path, data);
 }
