@@ -1,5 +1,6 @@
 #include "stages/report_stage.h"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -65,6 +66,15 @@ std::string TrainingSection(const fs::path& train_dir, const std::optional<Train
       "<p>Distortion loss weight {:.4g}; {} held-out evaluations during training ({} pixels per view) took "
       "{:.1f} s.</p>\n",
       report.trainer.distortion_weight, evals.count, pixels(evals.pixels_per_view), evals.seconds);
+  if (report.trainer.background == "learnt") {
+    const std::array<double, 3>& c = report.trainer.background_colour;
+    const auto byte = [](double v) { return static_cast<int>(std::lround(255 * std::clamp(v, 0.0, 1.0))); };
+    html += format(
+        "<p>The colour behind the scene (what no ray reaches: a sky, a far wall) was learnt with the field: "
+        "<span style=\"display:inline-block;width:2em;border:1px solid #888;background:rgb({},{},{})\">&nbsp;</span> "
+        "({:.2f}, {:.2f}, {:.2f}).</p>\n",
+        byte(c[0]), byte(c[1]), byte(c[2]), c[0], c[1], c[2]);
+  }
   if (report.appearance.enabled) {
     html += format(
         "<p>Each training photo has its own colour transform (exposure, white balance): it makes white "

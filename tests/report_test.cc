@@ -58,6 +58,12 @@ TEST_CASE("report stage: a self-contained page with every section, drawn by head
   CHECK(Count(html, "data:image/jpeg;base64,") >= 6);  // 2 held-out views: photo, render, error map
   CHECK(Count(html, "data:video/mp4;base64,") == 1);
   CHECK_THAT(html, Catch::Contains("12 cameras in the normalised frame"));
+  // Photos without alpha: the page shows the colour the field learnt behind the scene.
+  const nlohmann::json background =
+      ReadJsonFile(setup.dir / "ws" / "30_train" / "train_report.json")["trainer"]["background_colour"];
+  CHECK_THAT(html, Catch::Contains("was learnt with the field") &&
+                       Catch::Contains(format("({:.2f}, {:.2f}, {:.2f})", background[0].get<double>(),
+                                              background[1].get<double>(), background[2].get<double>())));
   CHECK_THAT(html, Catch::Contains("mesh.ply"));
   // Self-contained: nothing is loaded from elsewhere.
   CHECK_FALSE(std::regex_search(html, std::regex(R"((src|href)\s*=\s*"(https?:)?//)")));
