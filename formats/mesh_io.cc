@@ -19,11 +19,9 @@ void WriteMeshPly(const std::filesystem::path& path, const Mesh& mesh, const std
   constexpr size_t kVertexSize = 6 * sizeof(float) + 3, kFaceSize = 1 + 3 * sizeof(int32_t);
   size_t at = data.size();
   data.resize(at + mesh.positions.size() * kVertexSize + mesh.triangles.size() * kFaceSize);
-  // Vertices `first` and 0 trade places (LeadingRecord): `slot` is a vertex's place in the file.
   const size_t first = LeadingRecord(mesh.positions.size(), [&](size_t v) { return mesh.positions[v].x(); });
-  const auto slot = [first](size_t v) { return v == 0 ? first : v == first ? 0 : v; };
   for (size_t place = 0; place < mesh.positions.size(); ++place) {
-    const size_t v = slot(place);
+    const size_t v = TradedPlace(place, first);
     std::memcpy(&data[at], mesh.positions[v].data(), 3 * sizeof(float));
     std::memcpy(&data[at + 3 * sizeof(float)], mesh.normals[v].data(), 3 * sizeof(float));
     std::memcpy(&data[at + 6 * sizeof(float)], mesh.colours[v].data(), 3);
@@ -32,7 +30,7 @@ void WriteMeshPly(const std::filesystem::path& path, const Mesh& mesh, const std
   for (const auto& triangle : mesh.triangles) {
     data[at] = 3;
     for (int k = 0; k < 3; ++k) {
-      const int32_t index = static_cast<int32_t>(slot(triangle[k]));
+      const int32_t index = static_cast<int32_t>(TradedPlace(triangle[k], first));
       std::memcpy(&data[at + 1 + k * sizeof(int32_t)], &index, sizeof(int32_t));
     }
     at += kFaceSize;

@@ -42,7 +42,7 @@ void WritePly(const std::filesystem::path& path, const std::vector<ColouredPoint
   data.resize(header + points.size() * kRecordSize);
   const size_t first = LeadingRecord(points.size(), [&](size_t i) { return points[i].position.x(); });
   for (size_t i = 0; i < points.size(); ++i) {
-    const ColouredPoint& point = points[i == 0 ? first : i == first ? 0 : i];
+    const ColouredPoint& point = points[TradedPlace(i, first)];
     char* out = data.data() + header + i * kRecordSize;
     std::memcpy(out, point.position.data(), 3 * sizeof(float));
     std::memcpy(out + 3 * sizeof(float), point.rgb.data(), 3);

@@ -41,5 +41,7 @@ size_t LeadingRecord(size_t count, FirstValue first_value) {
   }
   return 0;
 }
+// With records 0 and `first` trading places: the record at place i of the file, and the place of record i.
+inline size_t TradedPlace(size_t i, size_t first) { return i == 0 ? first : i == first ? 0 : i; }
 
 }  // namespace p2n

@@ -25,9 +25,6 @@ bool SameFloat(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 
 // Whether Assimp may skip this byte right after the header: a line end, a space or a NUL.
 bool Skippable(char byte) { return byte == 0 || byte == ' ' || (byte >= '\t' && byte <= '\r'); }
 
-// Record i of the file is record Slot(i) of the input (first: where record 0 went), and the other way round.
-size_t Slot(size_t i, size_t first) { return i == 0 ? first : i == first ? 0 : i; }
-
 // The first record written begins with a byte Assimp reads as data whenever one of the `count` records of
 // `stride` bytes in `records` does.
 void CheckLeadingByte(const char* records, size_t count, size_t stride, const char* written) {
@@ -52,7 +49,7 @@ void PointsRoundTrip(const std::string& bytes, const std::vector<std::string>& c
   if (again.size() != points.size()) Fail("point count");
   const size_t first = p2n::LeadingRecord(points.size(), [&](size_t i) { return points[i].position.x(); });
   for (size_t i = 0; i < points.size(); ++i) {
-    const p2n::ColouredPoint& point = points[Slot(i, first)];
+    const p2n::ColouredPoint& point = points[p2n::TradedPlace(i, first)];
     for (int k = 0; k < 3; ++k) {
       if (!SameFloat(again[i].position[k], point.position[k]) || again[i].rgb[k] != point.rgb[k]) Fail("point");
     }
@@ -114,14 +111,15 @@ void MeshRoundTrip(const std::string& bytes, const std::vector<std::string>& com
   CheckLeadingByte(bytes.data(), count, kVertex, body.data());
   const size_t first = p2n::LeadingRecord(count, [&](size_t v) { return mesh.positions[v].x(); });
   for (size_t i = 0; i < count; ++i) {
-    if (std::memcmp(body.data() + i * kVertex, bytes.data() + Slot(i, first) * kVertex, kVertex) != 0) {
+    if (std::memcmp(body.data() + i * kVertex, bytes.data() + p2n::TradedPlace(i, first) * kVertex, kVertex) != 0) {
       Fail("vertex");
     }
     const char* face = body.data() + count * kVertex + i * kFace;
     int32_t indices[3];
     std::memcpy(indices, face + 1, sizeof(indices));
     for (int k = 0; k < 3; ++k) {
-      if (face[0] != 3 || indices[k] != static_cast<int32_t>(Slot(mesh.triangles[i][k], first))) Fail("face");
+      if (face[0] != 3 || indices[k] != static_cast<int32_t>(p2n::TradedPlace(mesh.triangles[i][k], first)))
+        Fail("face");
     }
   }
 }
