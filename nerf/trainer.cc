@@ -129,11 +129,9 @@ Trainer::Trainer(const TrainerOptions& options, const TrainingData& data) : opti
     grid_adam_ = std::make_unique<Adam<float>>(adam, grid->num_params(), grid->entry_size());
   }
   if (options.learn_background) {
-    for (const TrainView& view : data.train) {
-      if (view.channels == 4) {
-        throw std::invalid_argument("training view " + view.name +
-                                    " has alpha: it was composited on a known background, which is not learnt");
-      }
+    if (const TrainView* view = FirstWithAlpha(data.train)) {
+      throw std::invalid_argument("training view " + view->name +
+                                  " has alpha: it was composited on a known background, which is not learnt");
     }
     background_adam_ = std::make_unique<Adam<float>>(adam, 3);
   }

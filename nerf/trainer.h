@@ -44,6 +44,8 @@ struct TrainView {
 
 // The photo as floats (RGB), composited on `background` where it has alpha: what a render is compared with.
 FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& background);
+// The first of `views` with an alpha channel (composited on a background the trainers must keep), or null.
+const TrainView* FirstWithAlpha(const std::vector<TrainView>& views);
 
 struct TrainingData {
   std::vector<TrainView> train, heldout;

@@ -18,6 +18,13 @@ FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& 
   return image;
 }
 
+const TrainView* FirstWithAlpha(const std::vector<TrainView>& views) {
+  for (const TrainView& view : views) {
+    if (view.channels == 4) return &view;
+  }
+  return nullptr;
+}
+
 namespace {
 
 // n colours as an image one pixel high.

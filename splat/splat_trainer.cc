@@ -37,9 +37,8 @@ SplatTrainer::SplatTrainer(Gaussians<float> gaussians, const SplatScene& scene, 
   options_.Check();
   if (scene_.views == nullptr || scene_.views->empty()) throw std::invalid_argument("SplatTrainer: no training views");
   if (scene_.learn_background) {
-    for (const TrainView& view : *scene_.views) {
-      if (view.channels == 4)
-        throw std::invalid_argument("SplatTrainer: a background learnt behind photos with alpha (" + view.name + ")");
+    if (const TrainView* view = FirstWithAlpha(*scene_.views)) {
+      throw std::invalid_argument("SplatTrainer: a background learnt behind photos with alpha (" + view->name + ")");
     }
   }
   gaussians_.ForEachArray([&](const std::vector<float>& values, int per) {

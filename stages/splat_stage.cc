@@ -263,7 +263,7 @@ void SplatStage::Run(StageContext& context) const {
   trainer_options.max_gaussians = 2 * static_cast<size_t>(options.max_gaussians);
   trainer_options.ssim_weight = options.ssim_weight;
   SplatScene scene{&setup.data.train, setup.background, setup.extent, near};
-  scene.learn_background = options.background == "auto" && !AnyWithAlpha(setup.data.train);
+  scene.learn_background = options.background == "auto" && FirstWithAlpha(setup.data.train) == nullptr;
   SplatTrainer trainer(setup.gaussians, scene, trainer_options);
   RunState state;
   const fs::path checkpoint = context.resume_dir / "checkpoint.bin";

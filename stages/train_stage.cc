@@ -367,12 +367,13 @@ void TrainStage::Run(StageContext& context) const {
   setup.data = LoadTrainingData(poses);
   const TrainingData& data = setup.data;
   setup.trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, poses.meta.dataset_kind));
-  const bool alpha = AnyWithAlpha(data.train);
+  const TrainView* with_alpha = FirstWithAlpha(data.train);
+  const bool alpha = with_alpha != nullptr;
   if (options.background == "learnt" && alpha) {
     throw UserError(
-        format("train.background is learnt, but the photos in {} have alpha: they were composited on a "
-               "known colour, which must stay; use auto or fixed",
-               transforms.string()));
+        format("train.background is learnt, but {} (in {}) has alpha: it was composited on a known "
+               "colour, which must stay; use auto or fixed",
+               with_alpha->name, transforms.string()));
   }
   setup.trainer.random_background = options.background == "random" || (options.background == "auto" && alpha);
   setup.trainer.learn_background = options.background == "learnt" || (options.background == "auto" && !alpha);

@@ -43,10 +43,6 @@ TrainView LoadTrainView(const ImportedView& imported) {
   return view;
 }
 
-bool AnyWithAlpha(const std::vector<TrainView>& views) {
-  return std::any_of(views.begin(), views.end(), [](const TrainView& view) { return view.channels == 4; });
-}
-
 std::string HeldoutSplit(const ImportedDataset& dataset) {
   const bool has_test = std::any_of(dataset.views.begin(), dataset.views.end(),
                                     [](const ImportedView& v) { return v.view.split == "test"; });

@@ -21,7 +21,5 @@ std::string HeldoutSplit(const ImportedDataset& dataset);
 // (LoadTransformsJson), decoded to 8 bits, with the background its images were composited on; UserError naming
 // a bad file.
 TrainingData LoadTrainingData(const ImportedDataset& poses);
-// Whether any of `views` has an alpha channel (it was composited on a background the trainers must keep).
-bool AnyWithAlpha(const std::vector<TrainView>& views);
 
 }  // namespace p2n
