@@ -119,10 +119,10 @@ void HashGridEncoding<T>::Corners(const Level& level, const T* p, uint32_t* entr
   T fraction[3];
   for (int d = 0; d < dims_; ++d) {
     // Into [0, 1] (a NaN coordinate to 0: std::max returns its first argument unless the second is greater).
-    const double position = std::min(std::max(0.0, static_cast<double>(p[d])), 1.0) * level.scale;
-    const double floor = std::floor(position);
+    const T position = std::min(std::max(T(0), p[d]), T(1)) * static_cast<T>(level.scale);
+    const T floor = std::floor(position);
     base[d] = static_cast<uint32_t>(floor);
-    fraction[d] = static_cast<T>(position - floor);
+    fraction[d] = position - floor;
   }
   for (int corner = 0; corner < (1 << dims_); ++corner) {
     uint32_t vertex[3];
@@ -153,23 +153,26 @@ void HashGridEncoding<T>::GroupCorners(const Level& level, const Matrix& input, 
     return;
   }
   // The common case, as Corners() and EntryIndex() but in loops over the points without branches, which
-  // vectorise: first each point's cell and where in it the point lies, then the corners.
+  // vectorise: first each point's cell and where in it the point lies, then the corners. In T, as the points:
+  // float keeps a 2048-cell level's fractions to 2^-13 of a cell, and twice the lanes of double (fox's render:
+  // these loops 9.2 -> 7.8% of the time).
   uint32_t base[3][kGroup];
   T fraction[3][kGroup];
-  double coordinate[kGroup];
+  T coordinate[kGroup];
+  const T scale = static_cast<T>(level.scale);
   for (int d = 0; d < 3; ++d) {
     const T* p = input.data() + first * 3 + d;
     // As in Corners(): clamped to [0, 1]. (Clamping in the loop that reads the points, with std::clamp, or to both
     // bounds in one loop keeps GCC 12 from vectorising these loops without AVX-512.)
-    for (int i = 0; i < count; ++i) coordinate[i] = static_cast<double>(p[3 * i]);
-    for (int i = 0; i < count; ++i) coordinate[i] = std::max(0.0, coordinate[i]);
-    for (int i = 0; i < count; ++i) coordinate[i] = std::min(coordinate[i], 1.0);
+    for (int i = 0; i < count; ++i) coordinate[i] = p[3 * i];
+    for (int i = 0; i < count; ++i) coordinate[i] = std::max(T(0), coordinate[i]);
+    for (int i = 0; i < count; ++i) coordinate[i] = std::min(coordinate[i], T(1));
     for (int i = 0; i < count; ++i) {
       // The position is at least 0, so truncation is its floor.
-      const double position = coordinate[i] * level.scale;
+      const T position = coordinate[i] * scale;
       const int32_t cell = static_cast<int32_t>(position);
       base[d][i] = static_cast<uint32_t>(cell);
-      fraction[d][i] = static_cast<T>(position - cell);
+      fraction[d][i] = position - static_cast<T>(cell);
     }
   }
   const uint32_t stride = level.dense ? level.vertices : kPrimes[1];
@@ -318,8 +321,8 @@ void HashGridEncoding<T>::AddInputGradient(const Level& level, const T* p, const
   T fraction[3];
   bool inside[3];  // a clamped coordinate has no gradient
   for (int d = 0; d < dims_; ++d) {
-    const double position = std::clamp(static_cast<double>(p[d]), 0.0, 1.0) * level.scale;
-    fraction[d] = static_cast<T>(position - std::floor(position));
+    const T position = std::clamp(p[d], T(0), T(1)) * static_cast<T>(level.scale);
+    fraction[d] = position - std::floor(position);
     inside[d] = p[d] > T(0) && p[d] < T(1);
   }
   const int features = config_.features_per_level;

@@ -37,14 +37,6 @@ SceneSpace SceneSpaceFromName(const std::string& name) {
   throw std::invalid_argument("unknown scene space '" + name + "' (bounded, unbounded or forward)");
 }
 
-Eigen::Vector3d FieldPoint(const NerfModel& model, const Eigen::Vector3d& world) {
-  if (model.space == SceneSpace::kBounded) return 0.5 * (world + Eigen::Vector3d::Ones());
-  if (model.space == SceneSpace::kForward) return 0.5 * (ForwardNdc(model.forward, world) + Eigen::Vector3d::Ones());
-  const double norm = world.cwiseAbs().maxCoeff();
-  const Eigen::Vector3d contracted = norm <= 1 ? world : ((2 - 1 / norm) / norm) * world;
-  return 0.25 * (contracted + Eigen::Vector3d::Constant(2));
-}
-
 Eigen::Matrix3d FieldPointJacobian(const NerfModel& model, const Eigen::Vector3d& world) {
   if (model.space == SceneSpace::kBounded) return 0.5 * Eigen::Matrix3d::Identity();
   if (model.space == SceneSpace::kForward) return 0.5 * ForwardNdcJacobian(model.forward, world);

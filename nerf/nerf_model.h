@@ -43,8 +43,21 @@ struct NerfModel {
   nlohmann::json info = nlohmann::json::object();  // kept with the model: normalisation, training summary
 };
 
+// Where a world point of an unbounded scene lies in the field's unit cube. Inline, as FieldPoint(): ray marching
+// asks this at every step.
+inline Eigen::Vector3d UnboundedFieldPoint(const Eigen::Vector3d& world) {
+  const double norm = world.cwiseAbs().maxCoeff();
+  if (norm <= 1) return 0.25 * world + Eigen::Vector3d::Constant(0.5);
+  const double inverse = 1 / norm;
+  return (0.25 * (2 - inverse) * inverse) * world + Eigen::Vector3d::Constant(0.5);
+}
+
 // Where a world point lies in the field's unit cube.
-Eigen::Vector3d FieldPoint(const NerfModel& model, const Eigen::Vector3d& world);
+inline Eigen::Vector3d FieldPoint(const NerfModel& model, const Eigen::Vector3d& world) {
+  if (model.space == SceneSpace::kBounded) return 0.5 * (world + Eigen::Vector3d::Ones());
+  if (model.space == SceneSpace::kForward) return 0.5 * (ForwardNdc(model.forward, world) + Eigen::Vector3d::Ones());
+  return UnboundedFieldPoint(world);
+}
 // d(FieldPoint)/d(world) at `world`.
 Eigen::Matrix3d FieldPointJacobian(const NerfModel& model, const Eigen::Vector3d& world);
 

@@ -119,16 +119,6 @@ double OccupancyGrid::MeanDensity() const {
   return known == 0 ? 0.0 : sum / known;
 }
 
-bool OccupancyGrid::Occupied(const Eigen::Vector3d& point) const {
-  int cell[3];
-  for (int axis = 0; axis < 3; ++axis) {
-    if (!(point[axis] >= 0 && point[axis] <= 1)) return false;
-    cell[axis] = std::min(resolution_ - 1, static_cast<int>(point[axis] * resolution_));
-  }
-  const size_t index = CellIndex(cell[0], cell[1], cell[2]);
-  return bits_[index / 8] & (1u << (index % 8));
-}
-
 double OccupancyGrid::OccupiedFraction() const {
   size_t occupied = 0;
   for (const uint8_t byte : bits_) occupied += static_cast<size_t>(__builtin_popcount(byte));

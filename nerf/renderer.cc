@@ -77,15 +77,17 @@ std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, doubl
   }
   if (model.space == SceneSpace::kUnbounded) {
     std::vector<MarchSample> samples;
+    samples.reserve(32);
     double t = limited ? near : 0.0;
     const double end = limited ? far : kUnboundedFar;
     const auto step_at = [&](double distance) { return step * std::max(1.0, 0.5 * distance); };
     t += offset * step_at(t);
+    const OccupancyGrid& occupancy = model.occupancy;
+    const Eigen::Vector3d origin = ray.origin, direction = ray.direction;
     while (t < end && samples.size() < max_samples) {
       const double dt = std::min(step_at(t), end - t);
       const double middle = t + 0.5 * dt;
-      if (model.occupancy.Occupied(FieldPoint(model, ray.origin + middle * ray.direction)))
-        samples.push_back({middle, dt});
+      if (occupancy.Occupied(UnboundedFieldPoint(origin + middle * direction))) samples.push_back({middle, dt});
       t += dt;
     }
     return samples;
