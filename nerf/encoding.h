@@ -125,12 +125,18 @@ class HashGridEncoding : public Encoding<T> {
   // corner c at c * kGroup + i.
   void GroupCorners(const Level& level, const Matrix& input, Eigen::Index first, int count, uint32_t* entries,
                     T* weights) const;
-  // Asks the cache for the `corners` entries of `table` at entries[c * kGroup] (for writing or reading).
-  void PrefetchEntries(const uint32_t* entries, int corners, const T* table, bool write) const;
-  // Forward() and Backward() at level l (kFeatures: features per level, 0 for any).
-  template <int kFeatures>
+  // Asks the cache for the `corners` entries (of `features` values) of `table` at entries[c * kGroup] (for writing
+  // or reading).
+  void PrefetchEntries(const uint32_t* entries, int corners, int features, const T* table, bool write) const;
+  // The layouts whose level loops are compiled for them (their features and corners known, the loops unrolled):
+  // 3 dimensions with 2 or 4 features per level. Fox's render: the forward loop 11% less time than with the
+  // corners counted at run time.
+  enum LevelLayout { kCube2, kCube4, kOther };
+  LevelLayout Layout() const;
+  // Forward() and Backward() at level l (kFeatures: features per level, kCorners: corners per cell; 0 for any).
+  template <int kFeatures, int kCorners>
   void ForwardLevel(int l, const Matrix& input, Eigen::Index begin, Eigen::Index end, Matrix* output) const;
-  template <int kFeatures>
+  template <int kFeatures, int kCorners>
   void BackwardLevel(int l, const Matrix& input, const Matrix& d_output);
   // Adds this level's dL/d(p) for one point given dL/d(this level's features).
   void AddInputGradient(const Level& level, const T* p, const T* d_features, T* d_p) const;

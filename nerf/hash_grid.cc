@@ -191,9 +191,10 @@ void HashGridEncoding<T>::GroupCorners(const Level& level, const Matrix& input, 
 }
 
 template <typename T>
-void HashGridEncoding<T>::PrefetchEntries(const uint32_t* entries, int corners, const T* table, bool write) const {
+void HashGridEncoding<T>::PrefetchEntries(const uint32_t* entries, int corners, int features, const T* table,
+                                          bool write) const {
   for (int c = 0; c < corners; ++c) {
-    const T* address = table + size_t{entries[c * kGroup]} * config_.features_per_level;
+    const T* address = table + size_t{entries[c * kGroup]} * features;
     if (write) {
       __builtin_prefetch(address, 1);
     } else {
@@ -203,23 +204,33 @@ void HashGridEncoding<T>::PrefetchEntries(const uint32_t* entries, int corners, 
 }
 
 template <typename T>
-template <int kFeatures>
+typename HashGridEncoding<T>::LevelLayout HashGridEncoding<T>::Layout() const {
+  if (dims_ != 3) return kOther;
+  return config_.features_per_level == 2 ? kCube2 : config_.features_per_level == 4 ? kCube4 : kOther;
+}
+
+template <typename T>
+template <int kFeatures, int kCorners>
 void HashGridEncoding<T>::ForwardLevel(int l, const Matrix& input, Eigen::Index begin, Eigen::Index end,
                                        Matrix* output) const {
-  const int features = kFeatures > 0 ? kFeatures : config_.features_per_level, corners = 1 << dims_;
+  const int features = kFeatures > 0 ? kFeatures : config_.features_per_level;
+  const int corners = kCorners > 0 ? kCorners : 1 << dims_;
+  const T* table = params_.data();
+  T* out = output->data() + l * features;
+  const Eigen::Index out_stride = output->rows();
   uint32_t entries[kGroup * 8];
   T weights[kGroup * 8];
   for (Eigen::Index group = begin; group < end; group += kGroup) {
     const int count = static_cast<int>(std::min(kGroup, end - group));
     GroupCorners(levels_[l], input, group, count, entries, weights);
     for (int i = 0; i < count; ++i) {
-      if (i + kPrefetchAhead < count) PrefetchEntries(entries + i + kPrefetchAhead, corners, params_.data(), false);
+      if (i + kPrefetchAhead < count) PrefetchEntries(entries + i + kPrefetchAhead, corners, features, table, false);
       T sum[8] = {};
       for (int c = 0; c < corners; ++c) {
-        const T* feature = params_.data() + size_t{entries[c * kGroup + i]} * features;
+        const T* feature = table + size_t{entries[c * kGroup + i]} * features;
         for (int f = 0; f < features; ++f) sum[f] += weights[c * kGroup + i] * feature[f];
       }
-      std::copy(sum, sum + features, output->col(group + i).data() + l * features);
+      std::copy(sum, sum + features, out + (group + i) * out_stride);
     }
   }
 }
@@ -235,15 +246,13 @@ void HashGridEncoding<T>::Forward(const Matrix& input, Matrix* output) const {
     FlushDenormalsOnThisThread();
     const int l = static_cast<int>(task / blocks);
     const Eigen::Index begin = task % blocks * kBlock, end = std::min(n, begin + kBlock);
-    switch (config_.features_per_level) {
-      case 2:
-        ForwardLevel<2>(l, input, begin, end, output);
-        break;
-      case 4:
-        ForwardLevel<4>(l, input, begin, end, output);
-        break;
+    switch (Layout()) {
+      case kCube2:
+        return ForwardLevel<2, 8>(l, input, begin, end, output);
+      case kCube4:
+        return ForwardLevel<4, 8>(l, input, begin, end, output);
       default:
-        ForwardLevel<0>(l, input, begin, end, output);
+        return ForwardLevel<0, 0>(l, input, begin, end, output);
     }
   });
 }
@@ -258,22 +267,26 @@ void HashGridEncoding<T>::ZeroGrad() {
 }
 
 template <typename T>
-template <int kFeatures>
+template <int kFeatures, int kCorners>
 void HashGridEncoding<T>::BackwardLevel(int l, const Matrix& input, const Matrix& d_output) {
-  const int features = kFeatures > 0 ? kFeatures : config_.features_per_level, corners = 1 << dims_;
+  const int features = kFeatures > 0 ? kFeatures : config_.features_per_level;
+  const int corners = kCorners > 0 ? kCorners : 1 << dims_;
+  T* table = grads_.data();
+  const T* d_in = d_output.data() + l * features;
+  const Eigen::Index d_stride = d_output.rows();
   uint32_t entries[kGroup * 8];
   T weights[kGroup * 8];
   for (Eigen::Index group = 0; group < input.cols(); group += kGroup) {
     const int count = static_cast<int>(std::min(kGroup, input.cols() - group));
     GroupCorners(levels_[l], input, group, count, entries, weights);
     for (int i = 0; i < count; ++i) {
-      if (i + kPrefetchAhead < count) PrefetchEntries(entries + i + kPrefetchAhead, corners, grads_.data(), true);
+      if (i + kPrefetchAhead < count) PrefetchEntries(entries + i + kPrefetchAhead, corners, features, table, true);
       T d_out[8];
-      std::copy_n(d_output.col(group + i).data() + l * features, features, d_out);
+      std::copy_n(d_in + (group + i) * d_stride, features, d_out);
       for (int c = 0; c < corners; ++c) {
         const uint32_t entry = entries[c * kGroup + i];
         touched_->Mark(entry);
-        T* grad = grads_.data() + size_t{entry} * features;
+        T* grad = table + size_t{entry} * features;
         for (int f = 0; f < features; ++f) grad[f] += weights[c * kGroup + i] * d_out[f];
       }
     }
@@ -284,15 +297,13 @@ template <typename T>
 void HashGridEncoding<T>::Backward(const Matrix& input, const Matrix& d_output) {
   tbb::parallel_for(0, config_.levels, [&](int l) {
     FlushDenormalsOnThisThread();
-    switch (config_.features_per_level) {
-      case 2:
-        BackwardLevel<2>(l, input, d_output);
-        break;
-      case 4:
-        BackwardLevel<4>(l, input, d_output);
-        break;
+    switch (Layout()) {
+      case kCube2:
+        return BackwardLevel<2, 8>(l, input, d_output);
+      case kCube4:
+        return BackwardLevel<4, 8>(l, input, d_output);
       default:
-        BackwardLevel<0>(l, input, d_output);
+        return BackwardLevel<0, 0>(l, input, d_output);
     }
   });
 }
