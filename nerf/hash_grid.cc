@@ -271,7 +271,7 @@ template <int kFeatures, int kCorners>
 void HashGridEncoding<T>::BackwardLevel(int l, const Matrix& input, const Matrix& d_output) {
   const int features = kFeatures > 0 ? kFeatures : config_.features_per_level;
   const int corners = kCorners > 0 ? kCorners : 1 << dims_;
-  T* table = grads_.data();
+  T* grads = grads_.data();
   const T* d_in = d_output.data() + l * features;
   const Eigen::Index d_stride = d_output.rows();
   uint32_t entries[kGroup * 8];
@@ -280,13 +280,13 @@ void HashGridEncoding<T>::BackwardLevel(int l, const Matrix& input, const Matrix
     const int count = static_cast<int>(std::min(kGroup, input.cols() - group));
     GroupCorners(levels_[l], input, group, count, entries, weights);
     for (int i = 0; i < count; ++i) {
-      if (i + kPrefetchAhead < count) PrefetchEntries(entries + i + kPrefetchAhead, corners, features, table, true);
+      if (i + kPrefetchAhead < count) PrefetchEntries(entries + i + kPrefetchAhead, corners, features, grads, true);
       T d_out[8];
       std::copy_n(d_in + (group + i) * d_stride, features, d_out);
       for (int c = 0; c < corners; ++c) {
         const uint32_t entry = entries[c * kGroup + i];
         touched_->Mark(entry);
-        T* grad = table + size_t{entry} * features;
+        T* grad = grads + size_t{entry} * features;
         for (int f = 0; f < features; ++f) grad[f] += weights[c * kGroup + i] * d_out[f];
       }
     }
