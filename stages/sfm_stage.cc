@@ -26,19 +26,20 @@ namespace {
 
 constexpr double kSuspiciousFocusAngleDeg = 20;  // correct orbit models stay near 8 (DESIGN.md §7)
 constexpr size_t kMaxNamesListed = 20;
-// The mapper's global bundle adjustments stop when the cost changes by less than this fraction (COLMAP's default 0
-// runs each to its iteration limit), as 3D Gaussian Splatting's and nerfstudio's COLMAP scripts do: the final
-// bundle adjustment refines the cameras anyway. Three runs each (`photo2nerf run PHOTOS -w WS --until poses`):
-// fox mapping and adjustment 36.5 -> 31.7 s (medians), fern 10.0 -> 8.5 s, camera rotations as close to the
-// references (fox 0.033-0.043 against 0.033-0.045 deg, fern 0.39-0.50 against 0.40-0.43 deg).
-constexpr const char* kGlobalBaTolerance = "1e-6";
-// Fewer adjustments while the model grows: a global one when the images or points grew by 40% since the last (COLMAP's
-// default 10%; its medium-quality preset 32%), and local ones of at most 10 iterations (25; medium 12). COLMAP's
-// medium preset also halves the global adjustments' iterations, which moved fox's cameras by 0.095 deg (median) and
-// fern's by 0.149; these two alone moved them by 0.023 and 0.027 deg, the synthetic scene's by 0.008 (before the final
-// adjustment), for mapping in 35.1 s instead of 51.1 (fox), 12.0 instead of 13.6 (fern), 2.7 instead of 3.5.
-constexpr const char* kGlobalBaRatio = "1.4";
-constexpr const char* kLocalBaIterations = "10";
+// How the mapper adjusts while the model grows (COLMAP's defaults otherwise):
+// - global adjustments stop when the cost changes by less than 1e-6 of it (COLMAP's default 0 runs each to its
+//   iteration limit), as 3D Gaussian Splatting's and nerfstudio's COLMAP scripts do: the final bundle adjustment
+//   refines the cameras anyway. Three runs each (`photo2nerf run PHOTOS -w WS --until poses`): fox mapping and
+//   adjustment 36.5 -> 31.7 s (medians), fern 10.0 -> 8.5 s, camera rotations as close to the references (fox
+//   0.033-0.043 against 0.033-0.045 deg, fern 0.39-0.50 against 0.40-0.43 deg);
+// - a global one runs when the images or points grew by 40% since the last (COLMAP's default 10%; its
+//   medium-quality preset 32%), and local ones stop after 10 iterations (25; medium 12). COLMAP's medium preset also
+//   halves the global adjustments' iterations, which moved fox's cameras by 0.095 deg (median) and fern's by 0.149;
+//   these two alone moved them by 0.023 and 0.027 deg, the synthetic scene's by 0.008 (before the final
+//   adjustment), for mapping in 35.1 s instead of 51.1 (fox), 12.0 instead of 13.6 (fern), 2.7 instead of 3.5.
+constexpr const char* kMapperTuning[] = {
+    "--Mapper.ba_global_function_tolerance", "1e-6", "--Mapper.ba_global_images_ratio",      "1.4",
+    "--Mapper.ba_global_points_ratio",       "1.4",  "--Mapper.ba_local_max_num_iterations", "10"};
 // The vocabulary tree, built from the photos themselves: a word per 64 features at most, clustered from up to 30
 // photos with a narrower, shallower k-means than COLMAP's defaults (branching 256, 11 iterations, every photo),
 // which took 175 s for fox's 50 photos on 2 cores; these settings took a third of that.
@@ -212,30 +213,11 @@ struct ColmapRun {
   fs::path MapLargestModel(size_t photos, const std::string& step, const std::string& folder,
                            std::vector<SfmReport::Model>* models) const {
     fs::create_directories(out / folder);
-    const fs::path log = steps->Run(step,
-                                    {options.colmap,
-                                     "mapper",
-                                     "--database_path",
-                                     database().string(),
-                                     "--image_path",
-                                     images.string(),
-                                     "--output_path",
-                                     (out / folder).string(),
-                                     "--random_seed",
-                                     seed,
-                                     "--Mapper.num_threads",
-                                     threads,
-                                     "--Mapper.min_model_size",
-                                     "3",
-                                     "--Mapper.ba_global_function_tolerance",
-                                     kGlobalBaTolerance,
-                                     "--Mapper.ba_global_images_ratio",
-                                     kGlobalBaRatio,
-                                     "--Mapper.ba_global_points_ratio",
-                                     kGlobalBaRatio,
-                                     "--Mapper.ba_local_max_num_iterations",
-                                     kLocalBaIterations},
-                                    /*allow_failure=*/true);
+    std::vector<std::string> command({options.colmap, "mapper", "--database_path", database().string(), "--image_path",
+                                      images.string(), "--output_path", (out / folder).string(), "--random_seed", seed,
+                                      "--Mapper.num_threads", threads, "--Mapper.min_model_size", "3"});
+    command.insert(command.end(), std::begin(kMapperTuning), std::end(kMapperTuning));
+    const fs::path log = steps->Run(step, command, /*allow_failure=*/true);
     if (!steps->last_ok()) {
       if (ReadTextFile(log).find("No good initial image pair found") != std::string::npos) {
         throw UserError(
