@@ -29,29 +29,44 @@ using M = lanes::M<T>;
 template <typename T>
 using Lane = std::remove_reference_t<decltype(M<T>{}[0])>;  // a mask lane's integer type
 
+// A splat in a tile's list: it and the box outside which it is blended nowhere (DrawnExtent's, in pixels).
+template <typename T>
+struct TileSplat {
+  Splat2D<T> s;
+  T x0, x1, y0, y1;
+
+  // Whether it can be blended at a pixel of the strip whose pixel centres are x (x + 0.5) .. x_last, row y.
+  bool Reaches(T x, T x_last, T y) const { return y >= y0 && y <= y1 && x_last >= x0 && x <= x1; }
+};
+
 // A tile's splats, front to back, copied together for the row loops.
 template <typename T>
-using TileSplats = std::vector<Splat2D<T>>;
+using TileSplats = std::vector<TileSplat<T>>;
 
 template <typename T>
-void Gather(const std::vector<Splat2D<T>>& splats, const uint32_t* ids, size_t n, TileSplats<T>* tile) {
+void Gather(const std::vector<Splat2D<T>>& splats, const std::vector<std::array<T, 2>>& extents, const uint32_t* ids,
+            size_t n, TileSplats<T>* tile) {
   tile->resize(n);
-  for (size_t e = 0; e < n; ++e) (*tile)[e] = splats[ids[e]];
+  for (size_t e = 0; e < n; ++e) {
+    const Splat2D<T>& s = splats[ids[e]];
+    const std::array<T, 2>& half = extents[ids[e]];
+    (*tile)[e] = {s, s.x - half[0], s.x + half[0], s.y - half[1], s.y + half[1]};
+  }
 }
 
-// The half width and height (pixels) of the box outside which splat `s` is never blended, within `radius` (3
-// standard deviations of its widest axis); false when it is blended nowhere. Footprint blends a pixel only where
-// opacity e^(-m^2 / 2) >= kMinAlpha, m being the pixel's Mahalanobis distance, so within the ellipse
-// m^2 <= 2 ln(opacity / kMinAlpha), whose box has half sides sqrt(m^2 sxx) and sqrt(m^2 syy) (s = the conic's
-// inverse, the 2D covariance). A faint or thin splat skips the tiles its 3-sigma square would have given it and
-// draws nothing different (the bound has 1% to spare against rounding).
+// The half width and height (pixels) of the box outside which splat `s` is never blended; false when it is
+// blended nowhere. Footprint blends a pixel only where opacity e^(-m^2 / 2) >= kMinAlpha, m being the pixel's
+// Mahalanobis distance, so within the ellipse m^2 <= 2 ln(opacity / kMinAlpha), whose box has half sides
+// sqrt(m^2 sxx) and sqrt(m^2 syy) (s = the conic's inverse, the 2D covariance); the bound has 1% to spare against
+// rounding. A faint or thin splat skips the tiles its 3-sigma square would have given it, and the rows and strips
+// of a tile outside the box, and draws nothing different.
 template <typename T>
-bool DrawnExtent(const Splat2D<T>& s, T radius, T* half_x, T* half_y) {
+bool DrawnExtent(const Splat2D<T>& s, T* half_x, T* half_y) {
   const T m2 = T(2.02) * std::log(s.opacity / T(kMinAlpha));
   if (!(m2 > 0)) return false;
   const T det = s.conic_a * s.conic_c - s.conic_b * s.conic_b;  // > 0: the covariance's inverse
-  *half_x = std::min(radius, std::sqrt(m2 * s.conic_c / det));
-  *half_y = std::min(radius, std::sqrt(m2 * s.conic_a / det));
+  *half_x = std::sqrt(m2 * s.conic_c / det);
+  *half_y = std::sqrt(m2 * s.conic_a / det);
   return true;
 }
 
@@ -89,8 +104,10 @@ void BlendRow(const TileSplats<T>& splats, T x0, T py, int lanes, RowForward<T>*
   row->red = row->green = row->blue = row->depth = V<T>{};
   row->active = lanes::Iota<T>() < T(lanes);
   row->count = M<T>{};
+  const T x_last = x0 + T(kLanes - 1);
   for (size_t e = 0; e < splats.size(); ++e) {
-    const Splat2D<T>& s = splats[e];
+    if (!splats[e].Reaches(x0, x_last, py)) continue;
+    const Splat2D<T>& s = splats[e].s;
     const Footprint<T> f(s, px, py);
     const M<T> valid = f.drawn & row->active;
     const V<T> next = row->transmittance * (1 - f.alpha);
@@ -191,14 +208,16 @@ void Rasterizer<T>::Project() {
   splats_.resize(n);
   rects_.assign(n, Rect{});
   blended_.assign(n, Rect{});
+  extents_.resize(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t i = range.begin(); i < range.end(); ++i) {
       T depth = 0, radius = 0;
       if (!ProjectGaussian(*gaussians_, i, camera_, options_.projection, &splats_[i], &depth, &radius)) continue;
       rects_[i] = TileRect(splats_[i], radius, radius);
       T half_x = 0, half_y = 0;
-      if (!rects_[i].Empty() && DrawnExtent(splats_[i], radius, &half_x, &half_y)) {
-        blended_[i] = TileRect(splats_[i], half_x, half_y);
+      if (!rects_[i].Empty() && DrawnExtent(splats_[i], &half_x, &half_y)) {
+        extents_[i] = {half_x, half_y};
+        blended_[i] = TileRect(splats_[i], std::min(radius, half_x), std::min(radius, half_y));
       }
     }
   });
@@ -277,7 +296,7 @@ void Rasterizer<T>::Blend() {
     const int tx = tile % tiles_x_, ty = tile / tiles_x_, x0 = tx * kSplatTileSize;
     const size_t begin = tile_begin_[tile];
     TileSplats<T>& splats = local.local();
-    Gather(splats_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
+    Gather(splats_, extents_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
     RowForward<T> row;
     for (int y = ty * kSplatTileSize; y < std::min(height, (ty + 1) * kSplatTileSize); ++y) {
       for (int xs = x0; xs < std::min(width, x0 + kSplatTileSize); xs += kLanes) {
@@ -309,7 +328,7 @@ void Rasterizer<T>::Backward(const std::vector<T>& d_rgb, Gaussians<T>* grads, s
     const int tx = tile % tiles_x_, ty = tile / tiles_x_, x0 = tx * kSplatTileSize;
     const size_t begin = tile_begin_[tile];
     TileSplats<T>& splats = tile_splats.local();
-    Gather(splats_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
+    Gather(splats_, extents_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
     // Every strip of the tile at once, back to front: each splat's gradient is summed over the tile in lanes, then
     // kept for the tile's entry (summed over the splat's tiles below, in their order). Strip s is row s / kStrips,
     // pixels from x0 + kLanes (s % kStrips).
@@ -341,7 +360,10 @@ void Rasterizer<T>::Backward(const std::vector<T>& d_rgb, Gaussians<T>* grads, s
       for (int r = 0; r < rows; ++r) {
         for (int k = 0; k < strips; ++k) {
           const int i = r * kStrips + k;
-          if (e < strip_most[i]) BackwardSplat(splats[e], e, px[k], T(y0 + r) + T(0.5), &strip[i], &gradient);
+          const T py = T(y0 + r) + T(0.5), x = T(x0 + k * kLanes) + T(0.5);
+          if (e < strip_most[i] && splats[e].Reaches(x, x + T(kLanes - 1), py)) {
+            BackwardSplat(splats[e].s, e, px[k], py, &strip[i], &gradient);
+          }
         }
       }
       entry_grads_[begin + e] = gradient.Sum();
