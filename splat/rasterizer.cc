@@ -35,7 +35,7 @@ struct TileSplat {
   Splat2D<T> s;
   T x0, x1, y0, y1;
 
-  // Whether it can be blended at a pixel of the strip whose pixel centres are x (x + 0.5) .. x_last, row y.
+  // Whether it can be blended at a pixel of the strip whose pixel centres run from (x, y) to (x_last, y).
   bool Reaches(T x, T x_last, T y) const { return y >= y0 && y <= y1 && x_last >= x0 && x <= x1; }
 };
 
