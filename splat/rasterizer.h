@@ -4,8 +4,8 @@
 // 3-sigma square and the box of the ellipse where its alpha reaches 1/255), sort each tile's list by depth, and
 // blend front to back per pixel: alpha = min(0.99, opacity · exp(-½ dᵀ Σ₂⁻¹ d)), skipping alpha < 1/255 and
 // stopping before the transmittance falls below 1e-4; the background fills what remains. Backward: each pixel
-// walks its list again back to front from its last contributor, recovering the transmittance by division. Tiles
-// are TBB tasks.
+// walks its list again back to front from its last contributor, recovering the transmittance by division. Both
+// take a strip of a tile's row at a time, passing over the splats whose box misses it. Tiles are TBB tasks.
 
 #include <array>
 #include <vector>
