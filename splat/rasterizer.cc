@@ -29,14 +29,14 @@ using M = lanes::M<T>;
 template <typename T>
 using Lane = std::remove_reference_t<decltype(M<T>{}[0])>;  // a mask lane's integer type
 
-// A splat in a tile's list: it and the box outside which it is blended nowhere (DrawnExtent's, in pixels).
+// A splat in a tile's list: it and the box outside which it is blended nowhere (Rasterizer::boxes_).
 template <typename T>
 struct TileSplat {
   Splat2D<T> s;
-  T x0, x1, y0, y1;
+  std::array<T, 4> box;  // x0, x1, y0, y1 (pixels)
 
   // Whether it can be blended at a pixel of the strip whose pixel centres run from (x, y) to (x_last, y).
-  bool Reaches(T x, T x_last, T y) const { return y >= y0 && y <= y1 && x_last >= x0 && x <= x1; }
+  bool Reaches(T x, T x_last, T y) const { return y >= box[2] && y <= box[3] && x_last >= box[0] && x <= box[1]; }
 };
 
 // A tile's splats, front to back, copied together for the row loops.
@@ -44,14 +44,10 @@ template <typename T>
 using TileSplats = std::vector<TileSplat<T>>;
 
 template <typename T>
-void Gather(const std::vector<Splat2D<T>>& splats, const std::vector<std::array<T, 2>>& extents, const uint32_t* ids,
+void Gather(const std::vector<Splat2D<T>>& splats, const std::vector<std::array<T, 4>>& boxes, const uint32_t* ids,
             size_t n, TileSplats<T>* tile) {
   tile->resize(n);
-  for (size_t e = 0; e < n; ++e) {
-    const Splat2D<T>& s = splats[ids[e]];
-    const std::array<T, 2>& half = extents[ids[e]];
-    (*tile)[e] = {s, s.x - half[0], s.x + half[0], s.y - half[1], s.y + half[1]};
-  }
+  for (size_t e = 0; e < n; ++e) (*tile)[e] = {splats[ids[e]], boxes[ids[e]]};
 }
 
 // The half width and height (pixels) of the box outside which splat `s` is never blended; false when it is
@@ -208,7 +204,7 @@ void Rasterizer<T>::Project() {
   splats_.resize(n);
   rects_.assign(n, Rect{});
   blended_.assign(n, Rect{});
-  extents_.resize(n);
+  boxes_.resize(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t i = range.begin(); i < range.end(); ++i) {
       T depth = 0, radius = 0;
@@ -216,7 +212,8 @@ void Rasterizer<T>::Project() {
       rects_[i] = TileRect(splats_[i], radius, radius);
       T half_x = 0, half_y = 0;
       if (!rects_[i].Empty() && DrawnExtent(splats_[i], &half_x, &half_y)) {
-        extents_[i] = {half_x, half_y};
+        const Splat2D<T>& s = splats_[i];
+        boxes_[i] = {s.x - half_x, s.x + half_x, s.y - half_y, s.y + half_y};
         blended_[i] = TileRect(splats_[i], std::min(radius, half_x), std::min(radius, half_y));
       }
     }
@@ -296,7 +293,7 @@ void Rasterizer<T>::Blend() {
     const int tx = tile % tiles_x_, ty = tile / tiles_x_, x0 = tx * kSplatTileSize;
     const size_t begin = tile_begin_[tile];
     TileSplats<T>& splats = local.local();
-    Gather(splats_, extents_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
+    Gather(splats_, boxes_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
     RowForward<T> row;
     for (int y = ty * kSplatTileSize; y < std::min(height, (ty + 1) * kSplatTileSize); ++y) {
       for (int xs = x0; xs < std::min(width, x0 + kSplatTileSize); xs += kLanes) {
@@ -328,7 +325,7 @@ void Rasterizer<T>::Backward(const std::vector<T>& d_rgb, Gaussians<T>* grads, s
     const int tx = tile % tiles_x_, ty = tile / tiles_x_, x0 = tx * kSplatTileSize;
     const size_t begin = tile_begin_[tile];
     TileSplats<T>& splats = tile_splats.local();
-    Gather(splats_, extents_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
+    Gather(splats_, boxes_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
     // Every strip of the tile at once, back to front: each splat's gradient is summed over the tile in lanes, then
     // kept for the tile's entry (summed over the splat's tiles below, in their order). Strip s is row s / kStrips,
     // pixels from x0 + kLanes (s % kStrips).
@@ -353,15 +350,19 @@ void Rasterizer<T>::Backward(const std::vector<T>& d_rgb, Gaussians<T>* grads, s
       }
     }
     const uint32_t most = *std::max_element(strip_most.begin(), strip_most.end());
+    std::array<T, kStrips> strip_x;  // the strips' first pixel centres
     std::array<V<T>, kStrips> px;
-    for (int k = 0; k < kStrips; ++k) px[k] = T(x0 + k * kLanes) + T(0.5) + lanes::Iota<T>();
+    for (int k = 0; k < kStrips; ++k) {
+      strip_x[k] = T(x0 + k * kLanes) + T(0.5);
+      px[k] = strip_x[k] + lanes::Iota<T>();
+    }
     for (size_t e = most; e-- > 0;) {
       LaneGradient<T> gradient;
       for (int r = 0; r < rows; ++r) {
         for (int k = 0; k < strips; ++k) {
           const int i = r * kStrips + k;
-          const T py = T(y0 + r) + T(0.5), x = T(x0 + k * kLanes) + T(0.5);
-          if (e < strip_most[i] && splats[e].Reaches(x, x + T(kLanes - 1), py)) {
+          const T py = T(y0 + r) + T(0.5);
+          if (e < strip_most[i] && splats[e].Reaches(strip_x[k], strip_x[k] + T(kLanes - 1), py)) {
             BackwardSplat(splats[e].s, e, px[k], py, &strip[i], &gradient);
           }
         }

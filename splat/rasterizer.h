@@ -65,9 +65,9 @@ class Rasterizer {
   SplatCamera<T> camera_;
   int tiles_x_ = 0, tiles_y_ = 0;
   std::vector<Splat2D<T>> splats_;
-  std::vector<Rect> rects_;                // the tiles under each Gaussian's 3-sigma square (drawn: any)
-  std::vector<Rect> blended_;              // within those, the tiles where it can be blended: those it is listed in
-  std::vector<std::array<T, 2>> extents_;  // half sides of the box (pixels) outside which it is not blended
+  std::vector<Rect> rects_;              // the tiles under each Gaussian's 3-sigma square (drawn: any)
+  std::vector<Rect> blended_;            // within those, the tiles where it can be blended: those it is listed in
+  std::vector<std::array<T, 4>> boxes_;  // x0, x1, y0, y1: the box (pixels) outside which it is not blended
   size_t drawn_ = 0;
   std::vector<size_t> tile_begin_;  // tiles_x · tiles_y + 1 offsets into entries_
   std::vector<uint32_t> entries_;   // Gaussian indices, each tile's sorted front to back
