@@ -50,6 +50,13 @@ SplatTrainer::SplatTrainer(Gaussians<float> gaussians, const SplatScene& scene, 
 
 int SplatTrainer::ShDegree() const { return std::min(gaussians_.sh_degree, step_ / options_.sh_interval); }
 
+double SplatTrainer::Progress() const {
+  if (progress_ >= 0) return std::min(1.0, progress_);
+  return options_.steps > 0 ? std::min(1.0, double(step_) / options_.steps) : 1.0;
+}
+
+// By the step, not by the run's progress: a run cut short keeps the means moving (decaying it over a 370-step run,
+// with the other rates falling to a tenth over its last 40%, cost fox 1.2 dB).
 double SplatTrainer::PositionLearningRate() const {
   const double t = options_.steps > 0 ? std::min(1.0, double(step_) / options_.steps) : 1.0;
   return scene_.extent * std::exp((1 - t) * std::log(options_.position_lr) + t * std::log(options_.final_position_lr));
@@ -129,8 +136,10 @@ double SplatTrainer::Step() {
     ++array;
   });
   ++step_;
-  const int densify_last = static_cast<int>(options_.densify_until * options_.steps);
-  if (step_ >= options_.densify_from && step_ <= densify_last && step_ % options_.densify_interval == 0) Densify();
+  if (step_ >= options_.densify_from && step_ % options_.densify_interval == 0 &&
+      Progress() <= options_.densify_until) {
+    Densify();
+  }
   return loss;
 }
 

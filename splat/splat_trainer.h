@@ -22,6 +22,8 @@
 namespace p2n {
 
 struct SplatTrainerOptions {
+  // The nominal run: the means' learning rate decays over it, and it measures the run's progress (densification's
+  // end) unless the trainer's owner does (SplatTrainer::SetProgress).
   int steps = 2000;
   double position_lr = 1.6e-4;  // × the extent, decaying to final_position_lr × the extent at the last step
   double final_position_lr = 1.6e-6;
@@ -32,7 +34,7 @@ struct SplatTrainerOptions {
   int sh_interval = 200;           // steps between the joining of each higher SH degree
   int densify_interval = 100;      // steps between densifications
   int densify_from = 100;          // the first densification's step
-  double densify_until = 0.5;      // fraction of the steps after which the Gaussians' number stays
+  double densify_until = 0.5;      // share of the run after which the Gaussians' number stays
   double densify_gradient = 2e-4;  // mean screen-space gradient (normalised device units) that densifies
   double dense_fraction = 0.01;    // of the extent: larger Gaussians split, smaller ones clone
   double prune_opacity = 0.005;
@@ -65,6 +67,10 @@ class SplatTrainer {
   // Trains on `views` from the next step on: the same views in the same order, at another size (the coarse
   // first part of an optimisation).
   void SetViews(const std::vector<TrainView>* views);
+  // The share of the run done (0..1) from the next step on; without it, step / options.steps. A run bounded by
+  // time sets it from its clock, so that densification ends halfway through whatever number of steps the time
+  // buys, and the Gaussians it adds are optimised before the end.
+  void SetProgress(double share) { progress_ = share; }
   int step() const { return step_; }
   const Gaussians<float>& gaussians() const { return gaussians_; }
   const std::array<float, 3>& background() const { return background_; }
@@ -76,6 +82,7 @@ class SplatTrainer {
   void Load(BinaryReader* reader);
 
  private:
+  double Progress() const;
   double PositionLearningRate() const;
   void Densify();
   void StepBackground(const std::vector<float>& d_rgb);
@@ -92,6 +99,7 @@ class SplatTrainer {
   Rasterizer<float> rasterizer_;
   SsimLoss ssim_;
   int step_ = 0;
+  double progress_ = -1;  // SetProgress's share; negative: by steps
   std::mt19937_64 random_;
   std::vector<size_t> order_;  // this epoch's views; the next is order_.back()
   std::vector<float> screen_gradient_sum_;

@@ -216,6 +216,8 @@ void OptimiseUntilDone(SplatTrainer& trainer, const SplatSetup& setup, const Spl
   while (!done()) {
     ThrowIfCancelled();
     trainer.SetViews(!coarse.empty() && coarse_phase() ? &coarse : &setup.data.train);
+    trainer.SetProgress(std::max(budget > 0 ? state->seconds / budget : 0.0,
+                                 options.steps > 0 ? double(trainer.step()) / options.steps : 0.0));
     const auto start = Clock::now();
     state->loss_sum += trainer.Step();
     ++state->loss_steps;

@@ -288,6 +288,24 @@ TEST_CASE("Splat optimisation fits photos, and a resumed run continues as an uni
   CHECK(psnr(resumed.gaussians()) == Approx(after).margin(0.05));
 }
 
+TEST_CASE("Densification ends at the share of the run its owner sets, whatever the step", "[splat]") {
+  const Gaussians<float> truth = RandomSplats(30, 0, 5);
+  const std::vector<TrainView> views = ViewsOf(truth, 8);
+  Gaussians<float> start = truth;
+  for (float& v : start.sh_dc) v += 0.5f;  // something to learn: every drawn splat's mean is pulled
+  const SplatScene scene{&views, {1, 1, 1}, 2.5, 0.01};
+  SplatTrainerOptions options;  // a nominal 2,000 steps: by the step, step 10 would be early in the run
+  options.densify_from = options.densify_interval = 10;
+  options.densify_gradient = 1e-12;  // every splat drawn densifies
+  const auto size_after_ten_steps = [&](double progress) {
+    SplatTrainer trainer(start, scene, options);
+    for (int s = 0; s < 10; ++s) trainer.SetProgress(progress), trainer.Step();
+    return trainer.gaussians().size();
+  };
+  CHECK(size_after_ten_steps(0.4) > start.size());
+  CHECK(size_after_ten_steps(0.6) == start.size());  // past densify_until (0.5): neither added nor pruned
+}
+
 TEST_CASE("Splat optimisation learns the colour behind the splats from photos without alpha, and resumes it",
           "[splat]") {
   const Gaussians<float> truth = RandomSplats(30, 0, 5);
