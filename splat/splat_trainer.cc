@@ -50,15 +50,16 @@ SplatTrainer::SplatTrainer(Gaussians<float> gaussians, const SplatScene& scene, 
 
 int SplatTrainer::ShDegree() const { return std::min(gaussians_.sh_degree, step_ / options_.sh_interval); }
 
-double SplatTrainer::Progress() const {
-  if (progress_ >= 0) return std::min(1.0, progress_);
+double SplatTrainer::StepShare() const {
   return options_.steps > 0 ? std::min(1.0, double(step_) / options_.steps) : 1.0;
 }
+
+double SplatTrainer::Progress() const { return progress_ >= 0 ? std::min(1.0, progress_) : StepShare(); }
 
 // By the step, not by the run's progress: a run cut short keeps the means moving (decaying it over a 370-step run,
 // with the other rates falling to a tenth over its last 40%, cost fox 1.2 dB).
 double SplatTrainer::PositionLearningRate() const {
-  const double t = options_.steps > 0 ? std::min(1.0, double(step_) / options_.steps) : 1.0;
+  const double t = StepShare();
   return scene_.extent * std::exp((1 - t) * std::log(options_.position_lr) + t * std::log(options_.final_position_lr));
 }
 

@@ -85,6 +85,7 @@ class SplatTrainer {
   void Load(BinaryReader* reader);
 
  private:
+  double StepShare() const;  // step / options.steps, at most 1
   double Progress() const;
   double PositionLearningRate() const;
   void Densify();
