@@ -202,22 +202,21 @@ bool LoadCheckpoint(const fs::path& path, const std::string& key, RunState* stat
 void OptimiseUntilDone(SplatTrainer& trainer, const SplatSetup& setup, const SplatOptions& options, double budget,
                        double near, const fs::path& checkpoint, const std::string& key, RunState* state) {
   using Clock = std::chrono::steady_clock;
-  const auto done = [&] {
-    return (budget > 0 && state->seconds >= budget) || (options.steps > 0 && trainer.step() >= options.steps);
+  // The share of the run done: of the time budget, or of the steps, whichever is further (done at 1).
+  const auto share = [&] {
+    return std::max(budget > 0 ? state->seconds / budget : 0.0,
+                    options.steps > 0 ? double(trainer.step()) / options.steps : 0.0);
   };
+  const auto done = [&] { return share() >= 1; };
   Progress progress("splat", budget > 0 ? static_cast<int64_t>(budget) : options.steps, budget > 0 ? "s" : "steps");
   progress.Add(budget > 0 ? static_cast<int64_t>(state->seconds) : trainer.step());
   double next_eval = (std::floor(state->seconds / options.eval_interval) + 1) * options.eval_interval;
   auto last_checkpoint = Clock::now();
   const std::vector<TrainView> coarse = options.coarse > 0 ? HalfSizeViews(setup.data.train) : std::vector<TrainView>{};
-  const auto coarse_phase = [&] {
-    return budget > 0 ? state->seconds < options.coarse * budget : trainer.step() < options.coarse * options.steps;
-  };
   while (!done()) {
     ThrowIfCancelled();
-    trainer.SetViews(!coarse.empty() && coarse_phase() ? &coarse : &setup.data.train);
-    trainer.SetProgress(std::max(budget > 0 ? state->seconds / budget : 0.0,
-                                 options.steps > 0 ? double(trainer.step()) / options.steps : 0.0));
+    trainer.SetViews(!coarse.empty() && share() < options.coarse ? &coarse : &setup.data.train);
+    trainer.SetProgress(share());
     const auto start = Clock::now();
     state->loss_sum += trainer.Step();
     ++state->loss_steps;
