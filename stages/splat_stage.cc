@@ -48,7 +48,6 @@ double SplatTimeBudget(const SplatOptions& options, const std::string& train_pre
 
 namespace {
 
-constexpr int kMaxEvalViewsDuringTraining = 4;
 constexpr size_t kPixelsPerSplat = 64;
 
 // The splats' world: the training data with every camera in the output frame (the training views as camera
@@ -134,15 +133,16 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   return setup;
 }
 
-// PSNR and SSIM of the splats on held-out views (the first `max_views`, or all for 0).
+// PSNR and SSIM of the splats on every held-out view (the same during the run as at its end, so that the curve
+// ends at the reported score).
 struct Scores {
   std::vector<double> psnr, ssim;
   double seconds_per_view = 0;
 };
 Scores Evaluate(const Gaussians<float>& gaussians, const std::array<float, 3>& background, const SplatSetup& setup,
-                double near, size_t max_views, bool with_ssim) {
+                double near, bool with_ssim) {
   Scores scores;
-  const size_t views = max_views == 0 ? setup.data.heldout.size() : std::min(max_views, setup.data.heldout.size());
+  const size_t views = setup.data.heldout.size();
   double seconds = 0;
   for (size_t v = 0; v < views; ++v) {
     ThrowIfCancelled();
@@ -198,6 +198,14 @@ bool LoadCheckpoint(const fs::path& path, const std::string& key, RunState* stat
   }
 }
 
+// A metrics.csv row: the run so far, the training loss since the last row and the held-out PSNR.
+void AddMetricsRow(const SplatTrainer& trainer, const Scores& scores, RunState* state) {
+  state->metrics += format("{:.3f},{},{},{:.6g},{:.4f}\n", state->seconds, trainer.step(), trainer.gaussians().size(),
+                           state->loss_sum / std::max(state->loss_steps, 1), Mean(scores.psnr));
+  state->loss_sum = 0;
+  state->loss_steps = 0;
+}
+
 // Optimises until the budget (seconds, else steps) is spent: a metrics row at every evaluation, checkpoints.
 void OptimiseUntilDone(SplatTrainer& trainer, const SplatSetup& setup, const SplatOptions& options, double budget,
                        double near, const fs::path& checkpoint, const std::string& key, RunState* state) {
@@ -223,13 +231,8 @@ void OptimiseUntilDone(SplatTrainer& trainer, const SplatSetup& setup, const Spl
     const int64_t whole_before = static_cast<int64_t>(state->seconds);
     state->seconds += std::chrono::duration<double>(Clock::now() - start).count();
     progress.Add(budget > 0 ? static_cast<int64_t>(state->seconds) - whole_before : 1);
-    if (state->seconds >= next_eval || done()) {
-      const Scores scores =
-          Evaluate(trainer.gaussians(), trainer.background(), setup, near, kMaxEvalViewsDuringTraining, false);
-      state->metrics += format("{:.3f},{},{},{:.6g},{:.4f}\n", state->seconds, trainer.step(),
-                               trainer.gaussians().size(), state->loss_sum / state->loss_steps, Mean(scores.psnr));
-      state->loss_sum = 0;
-      state->loss_steps = 0;
+    if (state->seconds >= next_eval && !done()) {  // the last row is the final evaluation's
+      AddMetricsRow(trainer, Evaluate(trainer.gaussians(), trainer.background(), setup, near, false), state);
       next_eval = (std::floor(state->seconds / options.eval_interval) + 1) * options.eval_interval;
     }
     if (options.checkpoint_interval > 0 &&
@@ -272,7 +275,8 @@ void SplatStage::Run(StageContext& context) const {
   if (resumed_from > 0) LogInfo(format("splat: resumed at step {} from {}", resumed_from, checkpoint.string()));
   OptimiseUntilDone(trainer, setup, options, budget, near, checkpoint, context.key, &state);
 
-  const Scores scores = Evaluate(trainer.gaussians(), trainer.background(), setup, near, 0, true);
+  const Scores scores = Evaluate(trainer.gaussians(), trainer.background(), setup, near, true);
+  AddMetricsRow(trainer, scores, &state);
   WriteOrExplain([&] {
     WriteSplatPly(out / "splats.ply", trainer.gaussians(),
                   {setup.frame.description,

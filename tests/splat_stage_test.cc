@@ -3,6 +3,10 @@
 
 #include <catch2/catch.hpp>
 
+#include <sstream>
+#include <string>
+#include <vector>
+
 #include "formats/output_frame.h"
 #include "pipeline/file_util.h"
 #include "splat/splat_ply.h"
@@ -11,19 +15,32 @@
 namespace p2n::testing {
 namespace fs = std::filesystem;
 
-TEST_CASE("splat stage: splats where the scene is, scored on the held-out views, with their curve", "[splat]") {
+TEST_CASE("splat stage: splats where the scene is, scored on the held-out views, with their curve ending at that score",
+          "[splat]") {
   StageWorkspace setup;
   Config config = SmallStageConfig(150);
+  config.Set("poses.holdout_every", 2, "test");  // more held-out views than a cheap evaluation might take
   setup.runner.Run(setup.workspace, config, Until("splat"));
   const fs::path out = setup.dir / "ws" / "35_splat";
   const nlohmann::json report = ReadJsonFile(out / "splat_report.json");
+  CHECK(report["heldout_views"] == 6);
   const Gaussians<float> splats = ReadSplatPly(out / "splats.ply");
   CHECK(splats.size() == report["splats"].get<size_t>());
   CHECK(splats.sh_degree == 3);
   CHECK(report["steps"] == 30);
   CHECK(report["heldout_psnr"].get<double>() > 15);
   CHECK(report["heldout_psnr_per_view"].size() == report["heldout_views"].get<size_t>());
-  CHECK(ReadTextFile(out / "metrics.csv").find("wall_seconds,step,splats,train_loss,heldout_psnr\n") == 0);
+  const std::string metrics = ReadTextFile(out / "metrics.csv");
+  CHECK(metrics.find("wall_seconds,step,splats,train_loss,heldout_psnr\n") == 0);
+  // The curve ends where the report does: its last row is the final evaluation, on the same views.
+  const std::string last = metrics.substr(metrics.rfind('\n', metrics.size() - 2) + 1);
+  std::vector<double> fields;
+  std::stringstream row(last);
+  for (std::string field; std::getline(row, field, ',');) fields.push_back(std::stod(field));
+  REQUIRE(fields.size() == 5);
+  CHECK(fields[1] == 30);
+  CHECK(fields[2] == report["splats"].get<double>());
+  CHECK(fields[4] == Approx(report["heldout_psnr"].get<double>()).margin(1e-3));
 
   // In the source frame, the splats lie where the normalised scene's unit box maps to.
   const fs::path ws = setup.dir / "ws";
