@@ -16,11 +16,11 @@ struct SplatOptions {
   double time_budget = 0;  // seconds of optimisation; 0: by the training preset (SplatTimeBudget)
   int steps = 0;           // stop after this many steps; 0: no step limit
   int sh_degree = 3;
-  std::string init = "field";   // field | sparse: where the first Gaussians come from
-  int init_width = 128;         // training views rendered this wide to place the first Gaussians
-  int max_gaussians = 100'000;  // of the first; densification may double it. Fewer: more steps for the time
-  double coarse = 0.75;         // share of the optimisation on the photos at half size
-  double ssim_weight = 0.1;     // the loss: (1 - w) L1 + w (1 - SSIM)
+  std::string init = "field";       // field | sparse: where the first Gaussians come from
+  int init_width = 128;             // training views rendered this wide to place the first Gaussians
+  int max_gaussians = 100'000;      // of the first; densification may double it. Fewer: more steps for the time
+  double coarse = 0.75;             // share of the optimisation on the photos at half size
+  double ssim_weight = 0.1;         // the loss: (1 - w) L1 + w (1 - SSIM)
   std::string background = "auto";  // auto: learnt behind photos without alpha, else the field's; fixed: the field's
   std::string frame = "source";
   double eval_interval = 20;  // seconds of optimisation between held-out evaluations
@@ -31,7 +31,7 @@ struct SplatOptions {
   void Visit(V& v) {
     v("enabled", enabled, "bake the trained field into 3D Gaussian splats (splats.ply, for live viewing)");
     v("time_budget", time_budget,
-      "optimisation time of the splats; 0: by train.preset (fast 30, default 120, quality 180)", "s");
+      "optimisation time of the splats; 0: by train.preset (fast 30, default and quality 180)", "s");
     v("steps", steps, "stop after this many steps (one training photo each); 0: no step limit", "steps");
     v("sh_degree", sh_degree, "spherical-harmonics degree of the splats' colours (0: one colour each)");
     v("init", init,

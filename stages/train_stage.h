@@ -16,7 +16,7 @@ struct TrainOptions {
   std::string preset = "default";  // fast | default | quality: sizes, sample spacing and time budget together
   std::string field = "ngp";       // ngp (hash grid) or vanilla (the seed's positional-encoding MLP)
   std::string scene = "auto";      // bounded, unbounded, forward (nerf_model.h), or auto (ResolveSceneSpace)
-  double time_budget = 0;          // seconds of training; 0: the preset's (fast 60, default 300, quality 900)
+  double time_budget = 0;          // seconds of training; 0: the preset's (fast 60, default 240, quality 900)
   int steps = 0;                   // stop after this many steps (0: no step limit)
   int batch_samples = 0;           // samples per step; 0: the preset's
   int march_samples = 0;           // samples across the scene cube's diagonal (ngp); 0: the preset's
@@ -47,7 +47,7 @@ struct TrainOptions {
       "looking one way, as LLFF captures: a mean camera's normalised device coordinates), or auto: bounded for "
       "Blender and .npz datasets, unbounded for photos and LLFF data",
       "", OptionKind::kResult, {"auto", "bounded", "unbounded", "forward"});
-    v("time_budget", time_budget, "training time; 0: the preset's (fast 60, default 300, quality 900)", "s");
+    v("time_budget", time_budget, "training time; 0: the preset's (fast 60, default 240, quality 900)", "s");
     v("steps", steps, "stop after this many steps; 0: no step limit", "steps");
     v("batch_samples", batch_samples, "samples per training step; 0: the preset's", "samples");
     v("march_samples", march_samples, "samples across the scene cube's diagonal (ngp); 0: the preset's", "samples");
