@@ -142,11 +142,9 @@ struct Scores {
 Scores Evaluate(const Gaussians<float>& gaussians, const std::array<float, 3>& background, const SplatSetup& setup,
                 double near, bool with_ssim) {
   Scores scores;
-  const size_t views = setup.data.heldout.size();
   double seconds = 0;
-  for (size_t v = 0; v < views; ++v) {
+  for (const TrainView& view : setup.data.heldout) {
     ThrowIfCancelled();
-    const TrainView& view = setup.data.heldout[v];
     const auto start = std::chrono::steady_clock::now();
     const FloatImage image = RenderSplats(gaussians, view.camera, background, near);
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -154,7 +152,7 @@ Scores Evaluate(const Gaussians<float>& gaussians, const std::array<float, 3>& b
     scores.psnr.push_back(Psnr(image, photo));
     if (with_ssim) scores.ssim.push_back(Ssim(image, photo));
   }
-  scores.seconds_per_view = views > 0 ? seconds / views : 0;
+  scores.seconds_per_view = scores.psnr.empty() ? 0 : seconds / scores.psnr.size();
   return scores;
 }
 

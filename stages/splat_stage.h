@@ -23,7 +23,7 @@ struct SplatOptions {
   double ssim_weight = 0.1;         // the loss: (1 - w) L1 + w (1 - SSIM)
   std::string background = "auto";  // auto: learnt behind photos without alpha, else the field's; fixed: the field's
   std::string frame = "source";
-  double eval_interval = 20;  // seconds of optimisation between held-out evaluations
+  double eval_interval = 30;  // seconds of optimisation between held-out evaluations (each of every held-out view)
   double checkpoint_interval = 60;
   int seed = 0;
 
