@@ -56,8 +56,9 @@ Preset PresetFor(const std::string& name) {
   // the real captures (fox 27.10 against 28.41, fern 22.39 against 22.53, with 128 samples unbounded).
   if (name == "quality") return {900, 512, 1 << 17, 128, {8, 4, 19, 16, 4096}, 0.3};
   // 240 s, and the splats 180 (splat stage): on the Zen 3 that split gave fox's splats 26.41 and 27.24 dB against
-  // 25.99 and 25.72 after 300 + 120 s (the field 25.00 and 25.14 against 25.20), fern's 23.19 against 23.06 (the
-  // field 21.81 against 21.98), in the same wall time: the splats are what the render stage and viewer show.
+  // 25.99 and 25.72 after 300 + 120 s (the field 25.00 and 25.14 against 25.20), fern's 23.19 and 23.13 against
+  // 23.06 (the field 21.81 and 21.72 against 21.98), in the same wall time: the splats are what the render stage
+  // and the viewer show.
   return {240, 256, 1 << 16, 128, {16, 2, 17, 16, 2048}, 0.1};
 }
 
