@@ -44,7 +44,7 @@ void SplatOptions::Check() const {
 double SplatTimeBudget(const SplatOptions& options, const std::string& train_preset) {
   if (options.time_budget > 0 || options.steps > 0) return options.time_budget;
   // default: see the train stage's presets. quality: on a 5-minute field 480 s gave fox's splats 29.88 dB against
-  // 28.40 after 180 s, fern's 23.69 against 23.23 (SSIM 0.758 against 0.733).
+  // 28.40 after 180 s, fern's 23.69 against 23.23 (SSIM 0.758 against 0.733), lego 800's 33.11 against 32.12.
   if (train_preset == "fast") return 30;
   return train_preset == "quality" ? 480 : 180;
 }
