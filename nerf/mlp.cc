@@ -3,8 +3,62 @@
 #include <cmath>
 #include <random>
 #include <stdexcept>
+#include <type_traits>
+
+#include "nerf/mlp_kernels.h"
 
 namespace p2n {
+namespace {
+
+template <typename T>
+using MatrixOf = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic>;
+template <typename T>
+using WeightMap = Eigen::Map<const MatrixOf<T>>;
+
+// out = weight in + bias, then ReLU where `relu`: mlp_kernels' products for float in a build with them, Eigen's
+// otherwise.
+template <typename T>
+void AffineLayer(const WeightMap<T>& weight, const T* bias, const MatrixOf<T>& in, bool relu, MatrixOf<T>* out) {
+  if constexpr (std::is_same_v<T, float>) {
+    if (mlp_kernels::Available()) {
+      out->resize(weight.rows(), in.cols());
+      mlp_kernels::LayerForward(weight.data(), bias, weight.rows(), weight.cols(), in.data(), in.cols(), relu,
+                                out->data());
+      return;
+    }
+  }
+  out->noalias() = weight * in;
+  out->colwise() += Eigen::Map<const Eigen::Matrix<T, Eigen::Dynamic, 1>>(bias, weight.rows());
+  if (relu) *out = out->cwiseMax(T(0));
+}
+
+// Adds the layer's parameter gradients (d_weight += delta in^T, d_bias += delta's column sum) and, given d_in,
+// writes weight^T delta there, zero where the layer's input is not positive when `relu_input` (ReLU's gradient).
+template <typename T>
+void LayerBackward(const WeightMap<T>& weight, const MatrixOf<T>& in, const MatrixOf<T>& delta, bool relu_input,
+                   T* d_weight, T* d_bias, MatrixOf<T>* d_in) {
+  const int outputs = static_cast<int>(weight.rows()), inputs = static_cast<int>(weight.cols());
+  if constexpr (std::is_same_v<T, float>) {
+    if (mlp_kernels::Available()) {
+      mlp_kernels::AddLayerGradient(delta.data(), outputs, in.data(), inputs, delta.cols(), d_weight, d_bias);
+      if (d_in == nullptr) return;
+      d_in->resize(inputs, delta.cols());
+      mlp_kernels::LayerInputGradient(weight.data(), outputs, inputs, delta.data(), delta.cols(),
+                                      relu_input ? in.data() : nullptr, d_in->data());
+      return;
+    }
+  }
+  Eigen::Map<MatrixOf<T>>(d_weight, outputs, inputs).noalias() += delta * in.transpose();
+  // Column by column: a fixed summation order (Eigen's vectorised reductions depend on memory alignment, which
+  // would make training runs differ).
+  Eigen::Map<Eigen::Matrix<T, Eigen::Dynamic, 1>> bias_gradient(d_bias, outputs);
+  for (Eigen::Index j = 0; j < delta.cols(); ++j) bias_gradient += delta.col(j);
+  if (d_in == nullptr) return;
+  *d_in = weight.transpose() * delta;
+  if (relu_input) *d_in = (in.array() > T(0)).select(*d_in, T(0));
+}
+
+}  // namespace
 
 nlohmann::json MlpConfig::ToJson() const {
   return {{"otype", "FullyConnected"},
@@ -55,13 +109,10 @@ void Mlp<T>::Forward(const Matrix& input, Matrix* output, Cache* cache) const {
   for (size_t i = 0; i < layers_.size(); ++i) {
     const Layer& layer = layers_[i];
     const Eigen::Map<const Matrix> weight(params_.data() + layer.weight_offset, layer.outputs, layer.inputs);
-    const Eigen::Map<const Eigen::Matrix<T, Eigen::Dynamic, 1>> bias(params_.data() + layer.bias_offset, layer.outputs);
     Matrix& out = cache->activations[i + 1];
-    out.noalias() = weight * cache->activations[i];
-    out.colwise() += bias;
-    if (i + 1 < layers_.size() || config_.output_activation == OutputActivation::kRelu) {
-      out = out.cwiseMax(T(0));
-    } else if (config_.output_activation == OutputActivation::kSigmoid) {
+    const bool relu = i + 1 < layers_.size() || config_.output_activation == OutputActivation::kRelu;
+    AffineLayer<T>(weight, params_.data() + layer.bias_offset, cache->activations[i], relu, &out);
+    if (!relu && config_.output_activation == OutputActivation::kSigmoid) {
       // 1 / (1 + exp(-x)), with the exponent clamped so that no step overflows.
       out = (T(1) + (-out.array().max(T(-60)).min(T(60))).exp()).inverse().matrix();
     }
@@ -80,20 +131,13 @@ void Mlp<T>::Backward(const Cache& cache, const Matrix& d_output, T* d_params, M
   }
   for (size_t i = layers_.size(); i-- > 0;) {
     const Layer& layer = layers_[i];
-    const Matrix& layer_input = cache.activations[i];
-    Eigen::Map<Matrix> d_weight(d_params + layer.weight_offset, layer.outputs, layer.inputs);
-    Eigen::Map<Eigen::Matrix<T, Eigen::Dynamic, 1>> d_bias(d_params + layer.bias_offset, layer.outputs);
-    d_weight.noalias() += delta * layer_input.transpose();
-    // Column by column: a fixed summation order (Eigen's vectorised reductions depend on memory alignment,
-    // which would make training runs differ).
-    for (Eigen::Index j = 0; j < delta.cols(); ++j) d_bias += delta.col(j);
-    if (i == 0 && d_input == nullptr) break;
     const Eigen::Map<const Matrix> weight(params_.data() + layer.weight_offset, layer.outputs, layer.inputs);
-    Matrix previous = weight.transpose() * delta;
-    if (i > 0) {
-      // ReLU: the gradient passes where the activation was positive.
-      previous = (layer_input.array() > T(0)).select(previous, T(0));
-    }
+    const bool input_wanted = i > 0 || d_input != nullptr;
+    Matrix previous;
+    // ReLU before every layer but the first.
+    LayerBackward<T>(weight, cache.activations[i], delta, i > 0, d_params + layer.weight_offset,
+                     d_params + layer.bias_offset, input_wanted ? &previous : nullptr);
+    if (!input_wanted) break;
     delta = std::move(previous);
   }
   if (d_input != nullptr) *d_input = std::move(delta);
