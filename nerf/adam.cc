@@ -59,20 +59,22 @@ void Update(const AdamOptions& options, T c1, T c2, size_t count, T* params, con
 }
 
 // Update() of `count` values each at its own step (step_size: lr c1; correction: c2, 0 for a value that takes no
-// step and keeps its moments), zeroing the gradient; written without branches, so that it vectorises.
+// step and keeps its moments), zeroing the gradient. Written so that GCC 12 vectorises it (scalar, it was a tenth
+// of a training step): without branches, each value read once, unaliased arrays, and not inlined into the sweep.
 template <typename T>
-void UpdateSome(const AdamOptions& options, const T* step_size, const T* correction, size_t count, T* params, T* grads,
-                T* m, T* v) {
+[[gnu::noinline]] void UpdateSome(const AdamOptions& options, const T* __restrict__ step_size,
+                                  const T* __restrict__ correction, size_t count, T* __restrict__ params,
+                                  T* __restrict__ grads, T* __restrict__ m, T* __restrict__ v) {
   const T beta1 = static_cast<T>(options.beta1), beta2 = static_cast<T>(options.beta2);
   const T epsilon = static_cast<T>(options.epsilon);
   for (size_t k = 0; k < count; ++k) {
-    const T g = grads[k];
+    const T g = grads[k], m_old = m[k], v_old = v[k], p_old = params[k];
     const bool active = correction[k] != T(0);
-    const T m_new = beta1 * m[k] + (1 - beta1) * g, v_new = beta2 * v[k] + (1 - beta2) * g * g;
-    const T p_new = params[k] - step_size[k] * m_new / (std::sqrt(v_new) * correction[k] + epsilon);
-    m[k] = active ? m_new : m[k];
-    v[k] = active ? v_new : v[k];
-    params[k] = active ? p_new : params[k];
+    const T m_new = beta1 * m_old + (1 - beta1) * g, v_new = beta2 * v_old + (1 - beta2) * g * g;
+    const T p_new = p_old - step_size[k] * m_new / (std::sqrt(v_new) * correction[k] + epsilon);
+    m[k] = active ? m_new : m_old;
+    v[k] = active ? v_new : v_old;
+    params[k] = active ? p_new : p_old;
     grads[k] = T(0);
   }
 }
@@ -95,28 +97,35 @@ void Adam<T>::StepSparse(T* params, T* grads, TouchMarks* marks) {
   const T learning_rate = static_cast<T>(options_.learning_rate);
   tbb::parallel_for(
       tbb::blocked_range<size_t>(0, (entries + group - 1) / group, 2048), [&](const tbb::blocked_range<size_t>& range) {
-        // Per value of a group: lr / (1 - beta1^t) and 1 / sqrt(1 - beta2^t) at its entry's step t (0 and 0 for an
-        // entry without a gradient, which takes no step).
-        std::vector<T> step_size(group * n), correction(group * n);
-        for (size_t g = range.begin(); g < range.end(); ++g) {
-          if (marks != nullptr) {
-            if (!marks->marked(g)) continue;
-            marks->Clear(g);
+        // Per value: lr / (1 - beta1^t) and 1 / sqrt(1 - beta2^t) at its entry's step t (0 and 0 for an entry
+        // without a gradient, which takes no step); then one update over each run of marked groups.
+        std::vector<T> step_size, correction;
+        for (size_t g = range.begin(); g < range.end();) {
+          size_t end = g;
+          for (; end < range.end() && (marks == nullptr || marks->marked(end)); ++end) {
+            if (marks != nullptr) marks->Clear(end);
           }
-          const size_t first = g * group, count = std::min(entries, first + group) - first;
-          bool any = false;
-          for (size_t e = 0; e < count; ++e) {
+          if (end == g) {
+            ++g;
+            continue;
+          }
+          const size_t first = g * group, count = std::min(entries, end * group) - first;
+          step_size.resize(count * n);
+          correction.resize(count * n);
+          for (size_t e = 0; e < count; ++e) {  // without branches: whether an entry was touched is a coin toss
             const T* gradient = grads + (first + e) * n;
-            const bool touched = std::any_of(gradient, gradient + n, [](T value) { return value != T(0); });
-            const uint32_t step = touched ? ++entry_steps_[first + e] : 0;
-            any |= touched;
-            std::fill_n(step_size.begin() + e * n, n, learning_rate * correction1_[step]);
-            std::fill_n(correction.begin() + e * n, n, correction2_[step]);
+            bool touched = false;
+            for (size_t f = 0; f < n; ++f) touched |= gradient[f] != T(0);
+            entry_steps_[first + e] += touched;
+            const uint32_t step = touched ? entry_steps_[first + e] : 0;
+            for (size_t f = 0; f < n; ++f) {
+              step_size[e * n + f] = learning_rate * correction1_[step];
+              correction[e * n + f] = correction2_[step];
+            }
           }
-          if (any) {
-            UpdateSome(options_, step_size.data(), correction.data(), count * n, params + first * n, grads + first * n,
-                       first_moment_.data() + first * n, second_moment_.data() + first * n);
-          }
+          UpdateSome(options_, step_size.data(), correction.data(), count * n, params + first * n, grads + first * n,
+                     first_moment_.data() + first * n, second_moment_.data() + first * n);
+          g = end;
         }
       });
 }
