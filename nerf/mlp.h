@@ -3,7 +3,8 @@
 // matrix product. Hidden layers use ReLU; the output is linear, sigmoid or ReLU. Parameters live in one flat vector
 // (per layer: W, out x in, column-major; then b) so that one optimiser updates them all.
 //
-// Templated on the scalar: float for training, double for gradient checks.
+// Templated on the scalar: float for training (its products from mlp_kernels where the build has AVX2 and FMA,
+// Eigen's otherwise), double for gradient checks.
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
