@@ -79,6 +79,25 @@ template <typename T>
   }
 }
 
+// For `count` entries of n values (kN of them, or n when kN is 0): counts this step for each entry with a gradient
+// and writes its values' step size lr c1 and correction c2 at its step (0 and 0 for an entry without one, which takes
+// no step). Without branches: whether an entry was touched is a coin toss.
+template <size_t kN, typename T>
+void EntryRates(size_t n, size_t count, const T* grads, uint32_t* steps, const T* c1, const T* c2, T learning_rate,
+                T* step_size, T* correction) {
+  if constexpr (kN > 0) n = kN;
+  for (size_t e = 0; e < count; ++e) {
+    bool touched = false;
+    for (size_t f = 0; f < n; ++f) touched |= grads[e * n + f] != T(0);
+    steps[e] += touched;
+    const uint32_t step = touched ? steps[e] : 0;
+    for (size_t f = 0; f < n; ++f) {
+      step_size[e * n + f] = learning_rate * c1[step];
+      correction[e * n + f] = c2[step];
+    }
+  }
+}
+
 }  // namespace
 
 template <typename T>
@@ -112,17 +131,9 @@ void Adam<T>::StepSparse(T* params, T* grads, TouchMarks* marks) {
           const size_t first = g * group, count = std::min(entries, end * group) - first;
           step_size.resize(count * n);
           correction.resize(count * n);
-          for (size_t e = 0; e < count; ++e) {  // without branches: whether an entry was touched is a coin toss
-            const T* gradient = grads + (first + e) * n;
-            bool touched = false;
-            for (size_t f = 0; f < n; ++f) touched |= gradient[f] != T(0);
-            entry_steps_[first + e] += touched;
-            const uint32_t step = touched ? entry_steps_[first + e] : 0;
-            for (size_t f = 0; f < n; ++f) {
-              step_size[e * n + f] = learning_rate * correction1_[step];
-              correction[e * n + f] = correction2_[step];
-            }
-          }
+          const auto rates = n == 2 ? EntryRates<2, T> : EntryRates<0, T>;  // the hash grid's entries: 2 values
+          rates(n, count, grads + first * n, entry_steps_.data() + first, correction1_.data(), correction2_.data(),
+                learning_rate, step_size.data(), correction.data());
           UpdateSome(options_, step_size.data(), correction.data(), count * n, params + first * n, grads + first * n,
                      first_moment_.data() + first * n, second_moment_.data() + first * n);
           g = end;

@@ -53,6 +53,20 @@ TEST_CASE("sparse Adam equals dense Adam when every entry is touched, and counts
   late.StepSparse(params.data(), grads.data());
   CHECK(params[2] == Approx(-0.01));
   CHECK(params[3] == Approx(-0.01));
+  // The same with entries of three values (the general path; the hash grid's two values have their own), one value
+  // of the late entry touched: the whole entry takes the step, its untouched values keep zero moments.
+  Adam<double> late3({0.01, 0.9, 0.99, 1e-15}, 6, 3);
+  std::vector<double> params3(6, 0.0);
+  for (int step = 0; step < 10; ++step) {
+    std::vector<double> grads3 = {1, 1, 1, 0, 0, 0};
+    late3.StepSparse(params3.data(), grads3.data());
+  }
+  CHECK(params3 == std::vector<double>{params3[0], params3[0], params3[0], 0, 0, 0});
+  std::vector<double> grads3 = {0, 0, 0, 0, 1, 0};
+  late3.StepSparse(params3.data(), grads3.data());
+  CHECK(params3[3] == 0);
+  CHECK(params3[4] == Approx(-0.01));
+  CHECK(params3[5] == 0);
 }
 
 TEST_CASE("sparse Adam given touch marks reads only the marked groups, updates them as without marks and clears them",
