@@ -31,9 +31,11 @@ class RadianceField {
     Matrix positions, encoded, hidden, colour_in;
     std::vector<typename Mlp<T>::Cache> mlps;
 
-    // Keeps the samples `columns` alone (in that order): Backward() with their dL/d(density) and dL/d(rgb) then
-    // costs nothing for the others (e.g. the samples behind a ray's termination point, which have no gradient).
+    // Keeps the samples `columns` (increasing, distinct) alone: Backward() with their dL/d(density) and dL/d(rgb)
+    // then costs nothing for the others (e.g. the samples behind a ray's termination point, which have no
+    // gradient). Keeping them all copies nothing (on real captures nearly every sample is kept).
     void KeepColumns(const std::vector<Eigen::Index>& columns) {
+      if (static_cast<Eigen::Index>(columns.size()) == positions.cols()) return;
       const auto keep = [&](Matrix& m) { m = m(Eigen::all, columns).eval(); };
       for (Matrix* m : {&positions, &encoded, &hidden, &colour_in}) keep(*m);
       for (typename Mlp<T>::Cache& mlp : mlps) {
