@@ -116,8 +116,7 @@ void Adam<T>::StepSparse(T* params, T* grads, TouchMarks* marks) {
   const T learning_rate = static_cast<T>(options_.learning_rate);
   tbb::parallel_for(
       tbb::blocked_range<size_t>(0, (entries + group - 1) / group, 2048), [&](const tbb::blocked_range<size_t>& range) {
-        // Per value: lr / (1 - beta1^t) and 1 / sqrt(1 - beta2^t) at its entry's step t (0 and 0 for an entry
-        // without a gradient, which takes no step); then one update over each run of marked groups.
+        // Each run of marked groups: its entries' rates, then one update over all its values.
         std::vector<T> step_size, correction;
         for (size_t g = range.begin(); g < range.end();) {
           size_t end = g;

@@ -135,14 +135,15 @@ void Run(const Product& p, size_t columns) {
 
 int Padded(int rows) { return (rows + kLanes - 1) / kLanes * kLanes; }
 
-// (rows x columns) column-major `source` (column stride `stride`) as `columns` panels of Padded(rows), zero-filled.
-std::vector<float> Panels(const float* source, int rows, int columns, size_t row_stride, size_t column_stride) {
+// `columns` panels of Padded(rows) values into `panels`, zero-filled past `rows`: panel c holds source[r row_stride +
+// c column_stride] for r < rows.
+void Panels(const float* source, int rows, int columns, size_t row_stride, size_t column_stride,
+            std::vector<float>* panels) {
   const int padded = Padded(rows);
-  std::vector<float> panels(size_t(padded) * columns, 0.0f);
+  panels->assign(size_t(padded) * columns, 0.0f);
   for (int c = 0; c < columns; ++c) {
-    for (int r = 0; r < rows; ++r) panels[size_t(c) * padded + r] = source[r * row_stride + c * column_stride];
+    for (int r = 0; r < rows; ++r) (*panels)[size_t(c) * padded + r] = source[r * row_stride + c * column_stride];
   }
-  return panels;
 }
 #else
 [[noreturn]] void Unavailable() { throw std::logic_error("mlp_kernels: this build has no AVX2 and FMA"); }
@@ -161,7 +162,8 @@ bool Available() {
 void LayerForward(const float* weight, const float* bias, int m, int k, const float* x, Eigen::Index n, bool relu,
                   float* y) {
 #ifdef P2N_MLP_KERNELS
-  const std::vector<float> w = Panels(weight, m, k, 1, m);  // panel t: W's column t
+  std::vector<float> w;
+  Panels(weight, m, k, 1, m, &w);  // panel t: W's column t
   Run({w.data(), size_t(Padded(m)), m, k, x, size_t(k), 1, bias, 0, relu ? Epilogue::kRelu : Epilogue::kNone, nullptr,
        0, y, size_t(m)},
       n);
@@ -174,7 +176,8 @@ void LayerForward(const float* weight, const float* bias, int m, int k, const fl
 void LayerInputGradient(const float* weight, int m, int k, const float* dy, Eigen::Index n, const float* mask,
                         float* dx) {
 #ifdef P2N_MLP_KERNELS
-  const std::vector<float> w = Panels(weight, k, m, m, 1);  // panel t: W's row t
+  std::vector<float> w;
+  Panels(weight, k, m, m, 1, &w);  // panel t: W's row t
   Run({w.data(), size_t(Padded(k)), k, m, dy, size_t(m), 1, nullptr, 0,
        mask != nullptr ? Epilogue::kMask : Epilogue::kNone, mask, size_t(k), dx, size_t(k)},
       n);
@@ -187,9 +190,10 @@ void LayerInputGradient(const float* weight, int m, int k, const float* dy, Eige
 void AddLayerGradient(const float* dy, int m, const float* x, int k, Eigen::Index n, float* d_weight, float* d_bias) {
 #ifdef P2N_MLP_KERNELS
   // Over blocks of samples: C = d_weight, depth the block's samples, A_t = dy's column t (packed), B(c, t) = x(c, t).
+  std::vector<float> a;  // one allocation for every block
   for (Eigen::Index first = 0; first < n; first += kGradientBlock) {
     const int count = static_cast<int>(std::min(kGradientBlock, n - first));
-    const std::vector<float> a = Panels(dy + first * m, m, count, 1, m);
+    Panels(dy + first * m, m, count, 1, m, &a);
     Run({a.data(), size_t(Padded(m)), m, count, x + first * k, 1, size_t(k), d_weight, size_t(m), Epilogue::kNone,
          nullptr, 0, d_weight, size_t(m)},
         k);
