@@ -135,9 +135,15 @@ class HashGridEncoding : public Encoding<T> {
   LevelLayout Layout() const;
   // Forward() and Backward() at level l (kFeatures: features per level, kCorners: corners per cell; 0 for any).
   template <int kFeatures, int kCorners>
-  void ForwardLevel(int l, const Matrix& input, Eigen::Index begin, Eigen::Index end, Matrix* output) const;
+  // Features (and their gradients) level-major: level l's for point i at (l * n + i) * features_per_level.
+  void ForwardLevel(int l, const Matrix& input, Eigen::Index begin, Eigen::Index end, T* by_level) const;
   template <int kFeatures, int kCorners>
-  void BackwardLevel(int l, const Matrix& input, const Matrix& d_output);
+  void BackwardLevel(int l, const Matrix& input, const T* d_by_level);
+  // From the level-major layout to the points' columns (output_dims() x n), or back.
+  void Transpose(const T* from, Eigen::Index n, T* to, bool to_points) const;
+  // Transpose() of points begin..end.
+  template <int kFeatures>
+  void TransposeBlock(const T* from, Eigen::Index n, Eigen::Index begin, Eigen::Index end, T* to, bool to_points) const;
   // Adds this level's dL/d(p) for one point given dL/d(this level's features).
   void AddInputGradient(const Level& level, const T* p, const T* d_features, T* d_p) const;
 

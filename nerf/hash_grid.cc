@@ -22,6 +22,7 @@ constexpr Eigen::Index kBlock = 16384;  // points per task of Forward()
 // to 4.6 (4 and 16 were slower), and backward from 1.5 to 5.1.
 constexpr Eigen::Index kGroup = 64;
 constexpr int kPrefetchAhead = 8;
+constexpr Eigen::Index kTransposeBlock = 256;  // points per task interleaving the levels' features (32 KB a side)
 
 }  // namespace
 
@@ -211,13 +212,10 @@ typename HashGridEncoding<T>::LevelLayout HashGridEncoding<T>::Layout() const {
 
 template <typename T>
 template <int kFeatures, int kCorners>
-void HashGridEncoding<T>::ForwardLevel(int l, const Matrix& input, Eigen::Index begin, Eigen::Index end,
-                                       Matrix* output) const {
+void HashGridEncoding<T>::ForwardLevel(int l, const Matrix& input, Eigen::Index begin, Eigen::Index end, T* out) const {
   const int features = kFeatures > 0 ? kFeatures : config_.features_per_level;
   const int corners = kCorners > 0 ? kCorners : 1 << dims_;
   const T* table = params_.data();
-  T* out = output->data() + l * features;
-  const Eigen::Index out_stride = output->rows();
   uint32_t entries[kGroup * 8];
   T weights[kGroup * 8];
   for (Eigen::Index group = begin; group < end; group += kGroup) {
@@ -230,7 +228,7 @@ void HashGridEncoding<T>::ForwardLevel(int l, const Matrix& input, Eigen::Index 
         const T* feature = table + size_t{entries[c * kGroup + i]} * features;
         for (int f = 0; f < features; ++f) sum[f] += weights[c * kGroup + i] * feature[f];
       }
-      std::copy(sum, sum + features, out + (group + i) * out_stride);
+      std::copy(sum, sum + features, out + (group + i) * features);
     }
   }
 }
@@ -238,21 +236,63 @@ void HashGridEncoding<T>::ForwardLevel(int l, const Matrix& input, Eigen::Index 
 template <typename T>
 void HashGridEncoding<T>::Forward(const Matrix& input, Matrix* output) const {
   // Level by level, in blocks of points: a task reads one level's table (a few MB at most), which stays in the
-  // cache for its whole block; reading every level for each point would cycle through all the tables.
+  // cache for its whole block; reading every level for each point would cycle through all the tables. Each level
+  // writes its features for consecutive points side by side (level-major), which a second pass interleaves into
+  // the points' columns: written straight into the columns, each level's task touched a cache line of every
+  // point's column for a few bytes. 65,536 random points, default layout, alternated three times: forward 2.5 ->
+  // 3.1 M samples/s, and Backward() (which reads the gradient the same way) 1.5 -> 2.3.
   const Eigen::Index n = input.cols();
-  output->resize(output_dims(), n);  // every value is written
+  const int features = config_.features_per_level;
+  const std::unique_ptr<T[]> by_level(new T[size_t(n) * output_dims()]);
   const Eigen::Index blocks = (n + kBlock - 1) / kBlock;
   tbb::parallel_for(Eigen::Index{0}, config_.levels * blocks, [&](Eigen::Index task) {
     FlushDenormalsOnThisThread();
     const int l = static_cast<int>(task / blocks);
     const Eigen::Index begin = task % blocks * kBlock, end = std::min(n, begin + kBlock);
+    T* out = by_level.get() + size_t(n) * l * features;
     switch (Layout()) {
       case kCube2:
-        return ForwardLevel<2, 8>(l, input, begin, end, output);
+        return ForwardLevel<2, 8>(l, input, begin, end, out);
       case kCube4:
-        return ForwardLevel<4, 8>(l, input, begin, end, output);
+        return ForwardLevel<4, 8>(l, input, begin, end, out);
       default:
-        return ForwardLevel<0, 0>(l, input, begin, end, output);
+        return ForwardLevel<0, 0>(l, input, begin, end, out);
+    }
+  });
+  output->resize(output_dims(), n);  // every value is written
+  Transpose(by_level.get(), n, output->data(), true);
+}
+
+template <typename T>
+template <int kFeatures>
+void HashGridEncoding<T>::TransposeBlock(const T* from, Eigen::Index n, Eigen::Index begin, Eigen::Index end, T* to,
+                                         bool to_points) const {
+  const int features = kFeatures > 0 ? kFeatures : config_.features_per_level, rows = output_dims();
+  for (int l = 0; l < config_.levels; ++l) {
+    for (Eigen::Index i = begin; i < end; ++i) {
+      const size_t level_major = (size_t(n) * l + i) * features, point_major = i * rows + l * features;
+      for (int f = 0; f < features; ++f) {
+        if (to_points) {
+          to[point_major + f] = from[level_major + f];
+        } else {
+          to[level_major + f] = from[point_major + f];
+        }
+      }
+    }
+  }
+}
+
+template <typename T>
+void HashGridEncoding<T>::Transpose(const T* from, Eigen::Index n, T* to, bool to_points) const {
+  tbb::parallel_for(Eigen::Index{0}, (n + kTransposeBlock - 1) / kTransposeBlock, [&](Eigen::Index block) {
+    const Eigen::Index begin = block * kTransposeBlock, end = std::min(n, begin + kTransposeBlock);
+    switch (Layout()) {
+      case kCube2:
+        return TransposeBlock<2>(from, n, begin, end, to, to_points);
+      case kCube4:
+        return TransposeBlock<4>(from, n, begin, end, to, to_points);
+      default:
+        return TransposeBlock<0>(from, n, begin, end, to, to_points);
     }
   });
 }
@@ -268,12 +308,11 @@ void HashGridEncoding<T>::ZeroGrad() {
 
 template <typename T>
 template <int kFeatures, int kCorners>
-void HashGridEncoding<T>::BackwardLevel(int l, const Matrix& input, const Matrix& d_output) {
+void HashGridEncoding<T>::BackwardLevel(int l, const Matrix& input, const T* d_by_level) {
   const int features = kFeatures > 0 ? kFeatures : config_.features_per_level;
   const int corners = kCorners > 0 ? kCorners : 1 << dims_;
   T* grads = grads_.data();
-  const T* d_in = d_output.data() + l * features;
-  const Eigen::Index d_stride = d_output.rows();
+  const T* d_in = d_by_level + size_t(input.cols()) * l * features;
   uint32_t entries[kGroup * 8];
   T weights[kGroup * 8];
   for (Eigen::Index group = 0; group < input.cols(); group += kGroup) {
@@ -282,7 +321,7 @@ void HashGridEncoding<T>::BackwardLevel(int l, const Matrix& input, const Matrix
     for (int i = 0; i < count; ++i) {
       if (i + kPrefetchAhead < count) PrefetchEntries(entries + i + kPrefetchAhead, corners, features, grads, true);
       T d_out[8];
-      std::copy_n(d_in + (group + i) * d_stride, features, d_out);
+      std::copy_n(d_in + (group + i) * features, features, d_out);
       for (int c = 0; c < corners; ++c) {
         const uint32_t entry = entries[c * kGroup + i];
         touched_->Mark(entry);
@@ -295,15 +334,18 @@ void HashGridEncoding<T>::BackwardLevel(int l, const Matrix& input, const Matrix
 
 template <typename T>
 void HashGridEncoding<T>::Backward(const Matrix& input, const Matrix& d_output) {
+  // The gradient level-major first, as Forward() writes it: each level's task then reads its own contiguous part.
+  const std::unique_ptr<T[]> d_by_level(new T[d_output.size()]);
+  Transpose(d_output.data(), input.cols(), d_by_level.get(), false);
   tbb::parallel_for(0, config_.levels, [&](int l) {
     FlushDenormalsOnThisThread();
     switch (Layout()) {
       case kCube2:
-        return BackwardLevel<2, 8>(l, input, d_output);
+        return BackwardLevel<2, 8>(l, input, d_by_level.get());
       case kCube4:
-        return BackwardLevel<4, 8>(l, input, d_output);
+        return BackwardLevel<4, 8>(l, input, d_by_level.get());
       default:
-        return BackwardLevel<0, 0>(l, input, d_output);
+        return BackwardLevel<0, 0>(l, input, d_by_level.get());
     }
   });
 }
