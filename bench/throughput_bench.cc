@@ -89,21 +89,25 @@ int main(int argc, char** argv) {
       field.density_mlp().Backward(density_cache, density_out, d_dense[c].data(), &d_in);
     });
   });
-  // The whole field: grid + MLPs + spherical harmonics, forward and backward (grid backward once, by level;
-  // its gradient accumulates over the repeats, as nothing here consumes it).
+  // The whole field as the trainer runs it: the grid's encoding of the whole batch, then chunk by chunk the
+  // networks and spherical harmonics, forward and backward, then the grid's backward pass over the whole batch (its
+  // gradient accumulates over the repeats, as nothing here consumes it).
+  Eigen::MatrixXf all_positions(3, per_chunk * chunks);
+  for (int c = 0; c < chunks; ++c) all_positions.middleCols(c * per_chunk, per_chunk) = positions[c];
   const double field_seconds = MedianSeconds(repeats, [&] {
-    std::vector<Eigen::MatrixXf> d_encoded(chunks);
+    Eigen::MatrixXf encoded, d_encoded(field.grid().output_dims(), all_positions.cols());
+    field.grid().Forward(all_positions, &encoded);
     tbb::parallel_for(0, chunks, [&](int c) {
-      Eigen::MatrixXf density, rgb;
-      field.Forward(positions[c], directions[c], &density, &rgb, &caches[c]);
-      field.Backward(caches[c], density, rgb, d_dense[c].data(), &d_encoded[c]);
+      Eigen::MatrixXf density, rgb, d_chunk;
+      field.ForwardEncoded(positions[c], encoded.middleCols(c * per_chunk, per_chunk), directions[c], &density, &rgb,
+                           &caches[c]);
+      field.Backward(caches[c], density, rgb, d_dense[c].data(), &d_chunk);
+      d_encoded.middleCols(c * per_chunk, per_chunk) = d_chunk;
     });
-    for (int c = 0; c < chunks; ++c) field.grid().Backward(positions[c], d_encoded[c]);
+    field.grid().Backward(all_positions, d_encoded);
   });
   // The hash grid alone, as the trainer calls it (the whole batch at once), in the default layout and the quality
   // preset's.
-  Eigen::MatrixXf all_positions(3, per_chunk * chunks);
-  for (int c = 0; c < chunks; ++c) all_positions.middleCols(c * per_chunk, per_chunk) = positions[c];
   const auto grid_seconds = [&](const p2n::HashGridConfig& layout) {
     p2n::HashGridEncoding<float> grid(3, layout, 1);
     Eigen::MatrixXf encoded;
