@@ -174,6 +174,59 @@ TEST_CASE("hash-grid gradients with respect to the input match finite difference
   CHECK_THROWS_AS(fixed.InputGradient(Matrix::Zero(3, 1), Matrix::Zero(15, 1), &d_input), std::logic_error);
 }
 
+TEST_CASE("the float hash grid (its own loops and layouts) agrees with the double one", "[gradients]") {
+  // 600 points: several groups and blocks of the level-major scratch (hash_grid.cc); 2 and 4 features take the
+  // loops compiled for them, 3 the general ones.
+  for (const int features : {2, 3, 4}) {
+    CAPTURE(features);
+    HashGridConfig config = SmallGridConfig();
+    config.features_per_level = features;
+    HashGridEncoding<double> exact(3, config, 3);
+    HashGridEncoding<float> grid(3, config, 3);
+    std::mt19937_64 random(8);
+    std::uniform_real_distribution<double> uniform(-1, 1);
+    for (size_t k = 0; k < grid.num_params(); ++k) {
+      grid.params()[k] = static_cast<float>(uniform(random));
+      exact.params()[k] = grid.params()[k];
+    }
+    const Matrix input = Random(3, 600, 4, 0, 1), d_output = Random(exact.output_dims(), 600, 5, -1, 1);
+    Matrix out;
+    Eigen::MatrixXf out_float;
+    exact.Forward(input, &out);
+    grid.Forward(input.cast<float>(), &out_float);
+    // Rows 0..features-1 are the coarsest level (dense, 2 cells a side: 4 vertices with the border), by hand.
+    for (Eigen::Index i = 0; i < input.cols(); ++i) {
+      const Eigen::Vector3d position = input.col(i) * 2.0, fraction = position.array() - position.array().floor();
+      for (int f = 0; f < features; ++f) {
+        double value = 0;
+        for (int corner = 0; corner < 8; ++corner) {
+          double weight = 1;
+          int entry = 0;
+          for (int d = 0, stride = 1; d < 3; ++d, stride *= 4) {
+            const int upper = (corner >> d) & 1;
+            weight *= upper ? fraction[d] : 1 - fraction[d];
+            entry += (static_cast<int>(position[d]) + upper) * stride;
+          }
+          value += weight * exact.params()[entry * features + f];
+        }
+        REQUIRE(out(f, i) == Approx(value).margin(1e-12));
+      }
+    }
+    REQUIRE(out_float.rows() == out.rows());
+    REQUIRE(out_float.cols() == 600);
+    CHECK((out_float.cast<double>() - out).cwiseAbs().maxCoeff() < 1e-5);
+    exact.Backward(input, d_output);
+    grid.Backward(input.cast<float>(), d_output.cast<float>());
+    double worst = 0, largest = 0;
+    for (size_t k = 0; k < grid.num_params(); ++k) {
+      worst = std::max(worst, std::abs(grid.grads()[k] - exact.grads()[k]));
+      largest = std::max(largest, std::abs(exact.grads()[k]));
+    }
+    CHECK(largest > 1);
+    CHECK(worst < 1e-5 * largest);
+  }
+}
+
 TEST_CASE("hash-grid interpolation reproduces vertex values and is continuous", "[gradients]") {
   HashGridConfig config;
   config.levels = 1;
