@@ -133,9 +133,9 @@ class HashGridEncoding : public Encoding<T> {
   // corners counted at run time.
   enum LevelLayout { kCube2, kCube4, kOther };
   LevelLayout Layout() const;
-  // Forward() and Backward() at level l (kFeatures: features per level, kCorners: corners per cell; 0 for any).
+  // Forward() and Backward() at level l (kFeatures: features per level, kCorners: corners per cell; 0 for any),
+  // with the features (and their gradients) level-major: level l's of point i at (l * n + i) * features_per_level.
   template <int kFeatures, int kCorners>
-  // Features (and their gradients) level-major: level l's for point i at (l * n + i) * features_per_level.
   void ForwardLevel(int l, const Matrix& input, Eigen::Index begin, Eigen::Index end, T* by_level) const;
   template <int kFeatures, int kCorners>
   void BackwardLevel(int l, const Matrix& input, const T* d_by_level);
