@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <random>
 #include <stdexcept>
 #include <type_traits>
@@ -28,9 +29,11 @@ constexpr Eigen::Index kGroup = 64;
 constexpr int kPrefetchAhead = 8;
 #ifdef __FMA__
 // A two-float entry in the low half of a register (one 8-byte load or store: GCC 12 leaves the two-feature loops
-// scalar, as SLP vectorisation is off in this project).
-__m128 LoadPair(const float* pair) { return _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(pair))); }
-void StorePair(float* pair, __m128 value) { _mm_store_sd(reinterpret_cast<double*>(pair), _mm_castps_pd(value)); }
+// scalar, as SLP vectorisation is off in this project). The 64-bit integer forms may alias any type.
+__m128 LoadPair(const float* pair) { return _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(pair))); }
+void StorePair(float* pair, __m128 value) {
+  _mm_storel_epi64(reinterpret_cast<__m128i*>(pair), _mm_castps_si128(value));
+}
 #endif
 constexpr Eigen::Index kTransposeBlock = 256;  // points per task interleaving the levels' features (32 KB a side)
 
