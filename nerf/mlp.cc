@@ -1,5 +1,6 @@
 #include "nerf/mlp.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -33,17 +34,20 @@ void AffineLayer(const WeightMap<T>& weight, const T* bias, const MatrixOf<T>& i
 }
 
 // Adds the layer's parameter gradients (d_weight += delta in^T, d_bias += delta's column sum) and, given d_in,
-// writes weight^T delta there, zero where the layer's input is not positive when `relu_input` (ReLU's gradient).
+// writes the first `d_in_rows` rows of weight^T delta there, zero where the layer's input is not positive when
+// `relu_input` (ReLU's gradient; fewer rows than inputs only without it: the kernel reads the mask with the rows'
+// stride).
 template <typename T>
 void LayerBackward(const WeightMap<T>& weight, const MatrixOf<T>& in, const MatrixOf<T>& delta, bool relu_input,
-                   T* d_weight, T* d_bias, MatrixOf<T>* d_in) {
+                   T* d_weight, T* d_bias, MatrixOf<T>* d_in, int d_in_rows) {
   const int outputs = static_cast<int>(weight.rows()), inputs = static_cast<int>(weight.cols());
   if constexpr (std::is_same_v<T, float>) {
     if (mlp_kernels::Available()) {
       mlp_kernels::AddLayerGradient(delta.data(), outputs, in.data(), inputs, delta.cols(), d_weight, d_bias);
       if (d_in == nullptr) return;
-      d_in->resize(inputs, delta.cols());
-      mlp_kernels::LayerInputGradient(weight.data(), outputs, inputs, delta.data(), delta.cols(),
+      d_in->resize(d_in_rows, delta.cols());
+      // The weight's first d_in_rows columns, as the whole weight but fewer rows of the result.
+      mlp_kernels::LayerInputGradient(weight.data(), outputs, d_in_rows, delta.data(), delta.cols(),
                                       relu_input ? in.data() : nullptr, d_in->data());
       return;
     }
@@ -54,8 +58,8 @@ void LayerBackward(const WeightMap<T>& weight, const MatrixOf<T>& in, const Matr
   Eigen::Map<Eigen::Matrix<T, Eigen::Dynamic, 1>> bias_gradient(d_bias, outputs);
   for (Eigen::Index j = 0; j < delta.cols(); ++j) bias_gradient += delta.col(j);
   if (d_in == nullptr) return;
-  *d_in = weight.transpose() * delta;
-  if (relu_input) *d_in = (in.array() > T(0)).select(*d_in, T(0));
+  *d_in = weight.leftCols(d_in_rows).transpose() * delta;
+  if (relu_input) *d_in = (in.topRows(d_in_rows).array() > T(0)).select(*d_in, T(0));
 }
 
 }  // namespace
@@ -121,7 +125,7 @@ void Mlp<T>::Forward(const Matrix& input, Matrix* output, Cache* cache) const {
 }
 
 template <typename T>
-void Mlp<T>::Backward(const Cache& cache, const Matrix& d_output, T* d_params, Matrix* d_input) const {
+void Mlp<T>::Backward(const Cache& cache, const Matrix& d_output, T* d_params, Matrix* d_input, int input_rows) const {
   Matrix delta = d_output;
   if (config_.output_activation == OutputActivation::kSigmoid) {
     const Matrix& s = cache.activations.back();
@@ -135,8 +139,9 @@ void Mlp<T>::Backward(const Cache& cache, const Matrix& d_output, T* d_params, M
     const bool input_wanted = i > 0 || d_input != nullptr;
     Matrix previous;
     // ReLU before every layer but the first.
+    const int rows = i == 0 && input_rows >= 0 ? std::min(input_rows, layer.inputs) : layer.inputs;
     LayerBackward<T>(weight, cache.activations[i], delta, i > 0, d_params + layer.weight_offset,
-                     d_params + layer.bias_offset, input_wanted ? &previous : nullptr);
+                     d_params + layer.bias_offset, input_wanted ? &previous : nullptr, rows);
     if (!input_wanted) break;
     delta = std::move(previous);
   }

@@ -48,8 +48,10 @@ class Mlp {
   // output = f(input); input is (inputs x n).
   void Forward(const Matrix& input, Matrix* output, Cache* cache) const;
   // Given dL/d(output) (outputs x n), adds dL/d(params) into `d_params` (num_params() values) and, when
-  // `d_input` is not null, writes dL/d(input).
-  void Backward(const Cache& cache, const Matrix& d_output, T* d_params, Matrix* d_input) const;
+  // `d_input` is not null, writes dL/d(input): its first `input_rows` rows alone when that is given (the inputs
+  // with a use for their gradient first, as the colour network's geometry features before the fixed direction
+  // encoding), every row when it is negative.
+  void Backward(const Cache& cache, const Matrix& d_output, T* d_params, Matrix* d_input, int input_rows = -1) const;
 
   // Where each layer's weights (outputs x inputs, column-major) and biases are in params().
   struct Layer {

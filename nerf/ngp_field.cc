@@ -128,7 +128,8 @@ template <typename T>
 void NgpField<T>::Backward(const Cache& cache, const Matrix& d_density, const Matrix& d_rgb, T* d_dense,
                            Matrix* d_encoded) const {
   Matrix d_colour_in;
-  colour_mlp_.Backward(cache.mlps[1], d_rgb, d_dense + density_mlp_.num_params(), &d_colour_in);
+  colour_mlp_.Backward(cache.mlps[1], d_rgb, d_dense + density_mlp_.num_params(), &d_colour_in,
+                       config_.geometry_features);
   Matrix d_hidden(cache.hidden.rows(), cache.hidden.cols());
   d_hidden.bottomRows(config_.geometry_features) = d_colour_in.topRows(config_.geometry_features);
   for (Eigen::Index i = 0; i < cache.hidden.cols(); ++i) {
