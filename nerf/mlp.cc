@@ -5,6 +5,7 @@
 #include <random>
 #include <stdexcept>
 #include <type_traits>
+#include <utility>
 
 #include "nerf/mlp_kernels.h"
 
@@ -108,8 +109,13 @@ Mlp<T>::Mlp(const MlpConfig& config, uint64_t seed) : config_(config) {
 
 template <typename T>
 void Mlp<T>::Forward(const Matrix& input, Matrix* output, Cache* cache) const {
+  *output = Forward(Matrix(input), cache);
+}
+
+template <typename T>
+const typename Mlp<T>::Matrix& Mlp<T>::Forward(Matrix input, Cache* cache) const {
   cache->activations.resize(layers_.size() + 1);
-  cache->activations[0] = input;
+  cache->activations[0] = std::move(input);
   for (size_t i = 0; i < layers_.size(); ++i) {
     const Layer& layer = layers_[i];
     const Eigen::Map<const Matrix> weight(params_.data() + layer.weight_offset, layer.outputs, layer.inputs);
@@ -121,7 +127,7 @@ void Mlp<T>::Forward(const Matrix& input, Matrix* output, Cache* cache) const {
       out = (T(1) + (-out.array().max(T(-60)).min(T(60))).exp()).inverse().matrix();
     }
   }
-  *output = cache->activations.back();
+  return cache->activations.back();
 }
 
 template <typename T>

@@ -47,6 +47,9 @@ class Mlp {
 
   // output = f(input); input is (inputs x n).
   void Forward(const Matrix& input, Matrix* output, Cache* cache) const;
+  // The same with the input moved into the cache and the output left there (the cache's last activation, which
+  // this returns): no copy of either.
+  const Matrix& Forward(Matrix input, Cache* cache) const;
   // Given dL/d(output) (outputs x n), adds dL/d(params) into `d_params` (num_params() values) and, when
   // `d_input` is not null, writes dL/d(input): its first `input_rows` rows alone when that is given (the inputs
   // with a use for their gradient first, as the colour network's geometry features before the fixed direction

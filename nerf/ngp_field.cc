@@ -79,12 +79,13 @@ template <typename T>
 void NgpField<T>::ForwardEncoded(const Matrix& positions, Matrix encoded, const Matrix& directions, Matrix* density,
                                  Matrix* rgb, Cache* cache) const {
   cache->positions = positions;
-  cache->encoded = std::move(encoded);
   cache->mlps.resize(2);
-  density_mlp_.Forward(cache->encoded, &cache->hidden, &cache->mlps[0]);
-  ExpDensity<T>(cache->hidden, density);
-  ColourInput(cache->hidden, directions, &cache->colour_in);
-  colour_mlp_.Forward(cache->colour_in, rgb, &cache->mlps[1]);
+  // The encoding, the hidden features and the colour network's input are kept once, in the networks' caches.
+  const Matrix& hidden = density_mlp_.Forward(std::move(encoded), &cache->mlps[0]);
+  ExpDensity<T>(hidden, density);
+  Matrix colour_in;
+  ColourInput(hidden, directions, &colour_in);
+  *rgb = colour_mlp_.Forward(std::move(colour_in), &cache->mlps[1]);
 }
 
 template <typename T>
@@ -117,11 +118,10 @@ void NgpField<T>::Render(const Matrix& positions, const Matrix& directions, Matr
 
 template <typename T>
 void NgpField<T>::Density(const Matrix& positions, Matrix* density) const {
-  Matrix encoded, raw;
+  Matrix encoded;
   typename Mlp<T>::Cache cache;
   grid_.Forward(positions, &encoded);
-  density_mlp_.Forward(encoded, &raw, &cache);
-  ExpDensity<T>(raw, density);
+  ExpDensity<T>(density_mlp_.Forward(std::move(encoded), &cache), density);
 }
 
 template <typename T>
@@ -130,10 +130,11 @@ void NgpField<T>::Backward(const Cache& cache, const Matrix& d_density, const Ma
   Matrix d_colour_in;
   colour_mlp_.Backward(cache.mlps[1], d_rgb, d_dense + density_mlp_.num_params(), &d_colour_in,
                        config_.geometry_features);
-  Matrix d_hidden(cache.hidden.rows(), cache.hidden.cols());
+  const Matrix& hidden = cache.mlps[0].activations.back();
+  Matrix d_hidden(hidden.rows(), hidden.cols());
   d_hidden.bottomRows(config_.geometry_features) = d_colour_in.topRows(config_.geometry_features);
-  for (Eigen::Index i = 0; i < cache.hidden.cols(); ++i) {
-    const T raw = cache.hidden(0, i);
+  for (Eigen::Index i = 0; i < hidden.cols(); ++i) {
+    const T raw = hidden(0, i);
     // d exp(min(x, max)) / dx = exp(x) below the clamp, 0 above it.
     d_hidden(0, i) = raw < kMaxLogDensity ? d_density(0, i) * std::exp(raw) : T(0);
   }

@@ -26,7 +26,8 @@ class RadianceField {
  public:
   using Matrix = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic>;
 
-  // Activations of one Forward(), kept for Backward(); every matrix has a column per sample.
+  // Activations of one Forward(), kept for Backward(); every matrix has a column per sample, or none where a
+  // field does not use it (NgpField keeps its encoding and hidden features in its networks' caches alone).
   struct Cache {
     Matrix positions, encoded, hidden, colour_in;
     std::vector<typename Mlp<T>::Cache> mlps;
@@ -36,7 +37,9 @@ class RadianceField {
     // gradient). Keeping them all copies nothing (on real captures nearly every sample is kept).
     void KeepColumns(const std::vector<Eigen::Index>& columns) {
       if (static_cast<Eigen::Index>(columns.size()) == positions.cols()) return;
-      const auto keep = [&](Matrix& m) { m = m(Eigen::all, columns).eval(); };
+      const auto keep = [&](Matrix& m) {
+        if (m.cols() > 0) m = m(Eigen::all, columns).eval();
+      };
       for (Matrix* m : {&positions, &encoded, &hidden, &colour_in}) keep(*m);
       for (typename Mlp<T>::Cache& mlp : mlps) {
         for (Matrix& m : mlp.activations) keep(m);
@@ -51,7 +54,7 @@ class RadianceField {
   // finite and >= 0) and rgb (3 x n, in (0, 1)).
   virtual void Forward(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb,
                        Cache* cache) const = 0;
-  // Forward() given the trainable encoding's output for `positions` (encoded: its output_dims x n, kept in the
+  // Forward() given the trainable encoding's output for `positions` (encoded: its output_dims x n, moved into the
   // cache), computed beforehand for a whole batch at once (the trainer does, so the hash tables are read level
   // by level); a field without a trainable encoding ignores `encoded`.
   virtual void ForwardEncoded(const Matrix& positions, Matrix encoded, const Matrix& directions, Matrix* density,
