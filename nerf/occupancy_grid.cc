@@ -125,11 +125,12 @@ double OccupancyGrid::OccupiedFraction() const {
   return static_cast<double>(occupied) / densities_.size();
 }
 
-std::vector<MarchSample> OccupancyGrid::March(const Ray& ray, double near, double far, double step,
-                                              size_t max_samples) const {
+std::vector<MarchSample> OccupancyGrid::March(const Ray& ray, double near, double far, double step, size_t max_samples,
+                                              double* stop) const {
   std::vector<MarchSample> samples;
-  if (!(step > 0) || !(far > near)) return samples;
   double t = near;
+  if (stop != nullptr) *stop = t;
+  if (!(step > 0) || !(far > near)) return samples;
   while (t < far && samples.size() < max_samples) {
     const double middle = std::min(t + 0.5 * step, 0.5 * (t + far));
     const Eigen::Vector3d point = ray.origin + middle * ray.direction;
@@ -158,6 +159,7 @@ std::vector<MarchSample> OccupancyGrid::March(const Ray& ray, double near, doubl
     }
     t += std::max(step, std::ceil((exit - t) / step) * step);
   }
+  if (stop != nullptr) *stop = t;
   return samples;
 }
 

@@ -51,8 +51,10 @@ class OccupancyGrid {
   double OccupiedFraction() const;
 
   // Samples every `step` along `ray` within [near, far] (in the grid's [0, 1]^3 frame), leaping over
-  // unoccupied cells (the largest empty block of them around) to their exit; at most `max_samples`.
-  std::vector<MarchSample> March(const Ray& ray, double near, double far, double step, size_t max_samples) const;
+  // unoccupied cells (the largest empty block of them around) to their exit; at most `max_samples`. With `stop`,
+  // writes where the march stopped there: a march resumed from it continues the same samples.
+  std::vector<MarchSample> March(const Ray& ray, double near, double far, double step, size_t max_samples,
+                                 double* stop = nullptr) const;
 
   const std::vector<float>& densities() const { return densities_; }
   // Where the next partial update starts (kept in training checkpoints, so that a resumed run is the same).

@@ -6,99 +6,25 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <limits>
 
 #include "nerf/config_check.h"
 #include "nerf/denormals.h"
+#include "nerf/ray_march.h"
 #include "nerf/volume_rendering.h"
 
 namespace p2n {
 namespace {
 
 constexpr size_t kChunkRays = 256;
-constexpr int kTileSide = 16;          // kTileSide^2 = kChunkRays: a chunk is one tile
-constexpr double kUnboundedFar = 1e3;  // world units: the contracted distance there is within 0.1% of the limit
-
-// Bounded and forward-facing scenes march through the occupancy grid along a straight ray in the field's cube,
-// where their box [-1, 1]^3 is half as long: samples (u, du) there. `to_world` turns them into samples along
-// the world ray.
-template <typename ToWorld>
-std::vector<MarchSample> MarchInCube(const NerfModel& model, const Ray& field_ray, double begin, double end,
-                                     double step, size_t max_samples, double offset, std::mt19937_64* jitter,
-                                     const ToWorld& to_world) {
-  std::vector<MarchSample> samples;
-  const auto box = IntersectBox(field_ray, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones());
-  if (!box) return samples;
-  begin = std::max(begin, box->first);
-  end = std::min(end, box->second);
-  if (!(end > begin)) return samples;
-  if (model.stratified_samples > 0) {
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
-    const double width = (end - begin) / model.stratified_samples;
-    for (int i = 0; i < model.stratified_samples; ++i) {
-      samples.push_back({begin + (i + (jitter != nullptr ? unit(*jitter) : 0.5)) * width, width});
-    }
-  } else {
-    samples = model.occupancy.March(field_ray, begin + offset * 0.5 * step, end, 0.5 * step, max_samples);
-  }
-  for (MarchSample& sample : samples) sample = to_world(sample);
-  return samples;
-}
-
-// The smallest share of a forward ray's NDC segment left before its point at infinity: no sample beyond.
-constexpr double kForwardEnd = 1 - 1e-6;
-
-std::vector<MarchSample> SampleForwardRay(const NerfModel& model, const Ray& ray, double near, double step,
-                                          size_t max_samples, double offset, std::mt19937_64* jitter) {
-  const ForwardRay forward = ToForward(model.forward, ray);
-  if (!forward.valid) return {};
-  const Eigen::Vector3d start = 0.5 * (forward.start + Eigen::Vector3d::Ones());
-  const Eigen::Vector3d along = 0.5 * (forward.end - forward.start);
-  const double length = along.norm();
-  if (!(length > 0)) return {};
-  const Ray field_ray{start, along / length};
-  const double begin = near > forward.t0 ? length * forward.Fraction(near) : 0.0;
-  return MarchInCube(model, field_ray, begin, kForwardEnd * length, step, max_samples, offset, jitter,
-                     [&](const MarchSample& s) {
-                       return MarchSample{forward.Distance(s.t / length), 2 * s.delta};
-                     });
-}
+constexpr int kTileSide = 16;  // kTileSide^2 = kChunkRays: a chunk is one tile
 
 }  // namespace
 
 std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, double near, double far, double step,
                                    size_t max_samples, std::mt19937_64* jitter) {
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const double offset = jitter != nullptr ? unit(*jitter) : 0.5;
-  const bool limited = near >= 0 && far >= 0;
-  if (limited && !(far > near)) return {};  // an empty segment
-  if (model.space == SceneSpace::kForward) {
-    return SampleForwardRay(model, ray, limited ? near : 0.0, step, max_samples, offset, jitter);
-  }
-  if (model.space == SceneSpace::kUnbounded) {
-    std::vector<MarchSample> samples;
-    samples.reserve(32);
-    double t = limited ? near : 0.0;
-    const double end = limited ? far : kUnboundedFar;
-    const auto step_at = [&](double distance) { return step * std::max(1.0, 0.5 * distance); };
-    t += offset * step_at(t);
-    const OccupancyGrid& occupancy = model.occupancy;
-    const Eigen::Vector3d origin = ray.origin, direction = ray.direction;
-    while (t < end && samples.size() < max_samples) {
-      const double dt = std::min(step_at(t), end - t);
-      const double middle = t + 0.5 * dt;
-      if (occupancy.Occupied(UnboundedFieldPoint(origin + middle * direction))) samples.push_back({middle, dt});
-      t += dt;
-    }
-    return samples;
-  }
-  // Bounded: distances in the field's cube are half the world's.
-  const Ray field_ray{FieldPoint(model, ray.origin), ray.direction};
-  return MarchInCube(model, field_ray, limited ? 0.5 * near : 0.0,
-                     limited ? 0.5 * far : std::numeric_limits<double>::infinity(), step, max_samples, offset, jitter,
-                     [](const MarchSample& s) {
-                       return MarchSample{2 * s.t, 2 * s.delta};
-                     });
+  std::vector<MarchSample> samples;
+  RayMarch(model, ray, near, far, step, jitter).Next(max_samples, &samples);
+  return samples;
 }
 
 double DefaultStepScale(const NerfModel& model) { return model.space == SceneSpace::kBounded ? 0.5 : 1.0; }
@@ -137,22 +63,26 @@ void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std:
   tbb::parallel_for(size_t{0}, (rays.size() + kChunkRays - 1) / kChunkRays, [&](size_t chunk) {
     FlushDenormalsOnThisThread();
     const size_t first = chunk * kChunkRays, count = std::min(rays.size(), first + kChunkRays) - first;
+    // Each ray is marched only as far as its rounds need: the steps beyond where it turns opaque are never taken.
+    std::vector<RayMarch> marches;
+    marches.reserve(count);
+    for (size_t r = 0; r < count; ++r) {
+      const Eigen::Vector2d& range = near_far[first + r];
+      marches.emplace_back(model, rays[first + r], range[0], range[1], step, nullptr);
+    }
     std::vector<std::vector<MarchSample>> samples(count);
     std::vector<CompositeAccumulator<float>> accumulators(count);
     std::vector<size_t> next(count, 0);
     size_t chunk_marched = 0, chunk_evaluated = 0;
-    for (size_t r = 0; r < count; ++r) {
-      const Eigen::Vector2d& range = near_far[first + r];
-      samples[r] = SampleRay(model, rays[first + r], range[0], range[1], step, options.max_samples, nullptr);
-      chunk_marched += samples[r].size();
-    }
     Eigen::MatrixXf positions, directions, density, colour;
     std::vector<std::pair<size_t, size_t>> round;  // (ray, sample)
     for (size_t width = 8;; width = std::min<size_t>(width * 2, 128)) {
       round.clear();
       for (size_t r = 0; r < count; ++r) {
         if (accumulators[r].Done(options.min_transmittance)) continue;
-        for (size_t k = next[r]; k < std::min(samples[r].size(), next[r] + width); ++k) round.emplace_back(r, k);
+        const size_t wanted = std::min(next[r] + width, options.max_samples);
+        if (samples[r].size() < wanted) chunk_marched += marches[r].Next(wanted - samples[r].size(), &samples[r]);
+        for (size_t k = next[r]; k < std::min(samples[r].size(), wanted); ++k) round.emplace_back(r, k);
       }
       if (round.empty()) break;
       positions.resize(3, round.size());

@@ -35,7 +35,7 @@ struct RenderOptions {
 
 struct RenderStats {
   size_t rays = 0;
-  size_t samples_marched = 0;    // in occupied space
+  size_t samples_marched = 0;    // in occupied space, as far as each ray was followed
   size_t samples_evaluated = 0;  // before early termination
   double seconds = 0;
 };
@@ -46,7 +46,7 @@ struct RenderStats {
 // contracted space is sampled about evenly; in a forward-facing one the samples are even in NDC (from near, or
 // the near plane, to infinity: `far` does not apply) and their lengths (delta) are in NDC units, as the densities
 // there are. With `jitter`, samples are shifted by a random fraction of a step (training); without, they sit in
-// the middle of their segments.
+// the middle of their segments. At most `max_samples`, the first of the march (ray_march.h takes it in pieces).
 std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, double near, double far, double step,
                                    size_t max_samples, std::mt19937_64* jitter);
 
