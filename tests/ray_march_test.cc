@@ -2,6 +2,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -46,7 +47,9 @@ TEST_CASE("a march taken in pieces gives the samples of one march, in every scen
       model.stratified_samples = stratified;
       size_t total = 0;
       for (int r = 0; r < 40; ++r) {
-        const Eigen::Vector3d origin(1.5 * uniform(random), 1.5 * uniform(random), 2 + uniform(random));
+        // Every fourth ray starts beyond the forward frame's near plane (z = -1): its march starts at its origin.
+        const double z = r % 4 == 3 ? -1.2 - 0.3 * std::abs(uniform(random)) : 2 + uniform(random);
+        const Eigen::Vector3d origin(0.5 * uniform(random), 0.5 * uniform(random), z);
         const Eigen::Vector3d target(0.8 * uniform(random), 0.8 * uniform(random), -1 + 0.5 * uniform(random));
         const Ray ray{origin, (target - origin).normalized()};
         const double near = r % 3 == 0 ? -1.0 : 0.5 + 0.5 * uniform(random);
@@ -61,6 +64,7 @@ TEST_CASE("a march taken in pieces gives the samples of one march, in every scen
           }
           INFO("space " << int(space) << ", stratified " << stratified << ", ray " << r << ", jitter " << jitter);
           REQUIRE(pieces.size() == whole.size());
+          if (!whole.empty()) CHECK(whole.front().t >= (near >= 0 ? near : 0.0));  // not behind the origin or near
           for (size_t k = 0; k < whole.size(); ++k) {
             CHECK(pieces[k].t == whole[k].t);
             CHECK(pieces[k].delta == whole[k].delta);
