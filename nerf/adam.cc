@@ -2,10 +2,14 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#ifdef __AVX2__
+#include <immintrin.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <type_traits>
 
 #include "nerf/config_check.h"
 
@@ -98,6 +102,52 @@ void EntryRates(size_t n, size_t count, const T* grads, uint32_t* steps, const T
   }
 }
 
+#ifdef __AVX2__
+// EntryRates<2> and UpdateSome in one pass, for float entries of two values, four entries (one register) at a
+// time: an entry's step count and its bias corrections stay in registers instead of going through two arrays as
+// wide as the values. Fox, 600 training steps under perf: the sparse step 8.2% of the samples (EntryRates 3.5,
+// UpdateSome 4.7) -> about 3.5%. The same arithmetic as UpdateSome; `count` entries, any number (the last few by
+// the two passes).
+void UpdatePairs(const AdamOptions& options, const float* c1, const float* c2, float learning_rate, size_t count,
+                 uint32_t* steps, float* params, float* grads, float* m, float* v) {
+  const float beta1 = static_cast<float>(options.beta1), beta2 = static_cast<float>(options.beta2);
+  const __m256 b1 = _mm256_set1_ps(beta1), b2 = _mm256_set1_ps(beta2), one_minus_b1 = _mm256_set1_ps(1 - beta1),
+               one_minus_b2 = _mm256_set1_ps(1 - beta2), epsilon = _mm256_set1_ps(static_cast<float>(options.epsilon)),
+               rate = _mm256_set1_ps(learning_rate), zero = _mm256_setzero_ps();
+  const __m256i each_entry = _mm256_setr_epi32(0, 2, 4, 6, 0, 0, 0, 0),
+                pairs = _mm256_setr_epi32(0, 0, 1, 1, 2, 2, 3, 3);
+  size_t e = 0;
+  for (; e + 4 <= count; e += 4) {
+    const size_t k = 2 * e;
+    const __m256 g = _mm256_loadu_ps(grads + k);
+    const __m256 nonzero = _mm256_cmp_ps(g, zero, _CMP_NEQ_UQ);
+    const __m256 touched = _mm256_or_ps(nonzero, _mm256_permute_ps(nonzero, 0xB1));  // either value of the entry
+    const __m128i entry_touched =
+        _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(_mm256_castps_si256(touched), each_entry));
+    __m128i step = _mm_sub_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(steps + e)), entry_touched);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(steps + e), step);
+    step = _mm_and_si128(step, entry_touched);  // 0 where untouched: corrections 0, as EntryRates writes
+    const __m256 correction1 = _mm256_permutevar8x32_ps(_mm256_castps128_ps256(_mm_i32gather_ps(c1, step, 4)), pairs);
+    const __m256 correction2 = _mm256_permutevar8x32_ps(_mm256_castps128_ps256(_mm_i32gather_ps(c2, step, 4)), pairs);
+    const __m256 m_old = _mm256_loadu_ps(m + k), v_old = _mm256_loadu_ps(v + k), p_old = _mm256_loadu_ps(params + k);
+    const __m256 m_new = _mm256_add_ps(_mm256_mul_ps(b1, m_old), _mm256_mul_ps(one_minus_b1, g));
+    const __m256 v_new = _mm256_add_ps(_mm256_mul_ps(b2, v_old), _mm256_mul_ps(_mm256_mul_ps(one_minus_b2, g), g));
+    const __m256 denominator = _mm256_add_ps(_mm256_mul_ps(_mm256_sqrt_ps(v_new), correction2), epsilon);
+    const __m256 p_new =
+        _mm256_sub_ps(p_old, _mm256_div_ps(_mm256_mul_ps(_mm256_mul_ps(rate, correction1), m_new), denominator));
+    _mm256_storeu_ps(m + k, _mm256_blendv_ps(m_old, m_new, touched));
+    _mm256_storeu_ps(v + k, _mm256_blendv_ps(v_old, v_new, touched));
+    _mm256_storeu_ps(params + k, _mm256_blendv_ps(p_old, p_new, touched));
+    _mm256_storeu_ps(grads + k, zero);
+  }
+  if (e == count) return;
+  const size_t rest = count - e, k = 2 * e;
+  std::vector<float> step_size(2 * rest), correction(2 * rest);
+  EntryRates<2, float>(2, rest, grads + k, steps + e, c1, c2, learning_rate, step_size.data(), correction.data());
+  UpdateSome(options, step_size.data(), correction.data(), 2 * rest, params + k, grads + k, m + k, v + k);
+}
+#endif
+
 }  // namespace
 
 template <typename T>
@@ -128,6 +178,17 @@ void Adam<T>::StepSparse(T* params, T* grads, TouchMarks* marks) {
             continue;
           }
           const size_t first = g * group, count = std::min(entries, end * group) - first;
+#ifdef __AVX2__
+          if constexpr (std::is_same_v<T, float>) {
+            if (n == 2) {
+              UpdatePairs(options_, correction1_.data(), correction2_.data(), learning_rate, count,
+                          entry_steps_.data() + first, params + first * n, grads + first * n,
+                          first_moment_.data() + first * n, second_moment_.data() + first * n);
+              g = end;
+              continue;
+            }
+          }
+#endif
           step_size.resize(count * n);
           correction.resize(count * n);
           const auto rates = n == 2 ? EntryRates<2, T> : EntryRates<0, T>;  // the hash grid's entries: 2 values
