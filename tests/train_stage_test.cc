@@ -39,10 +39,10 @@ TEST_CASE("train stage: model.bin, metrics.csv and train_report.json, fresh on a
   CHECK(std::count(metrics.begin(), metrics.end(), '\n') >= 2);  // the header and at least the final row
   const NerfModel model = LoadModel(out / "model.bin");
   CHECK(model.info["steps"] == 40);
-  // Photos without alpha: the colour behind the scene was learnt, and the report says which it is.
+  // Photos without alpha: the colour behind the scene is learnt (trainer_test: towards the sky's), and the report
+  // says which it is. Forty steps do not tell where it goes: a young field paints the sky as haze in front of it.
   CHECK(report["trainer"]["background"] == "learnt");
   for (int c = 0; c < 3; ++c) CHECK(report["trainer"]["background_colour"][c] == model.background[c]);
-  CHECK(model.background != (std::array<float, 3>{1, 1, 1}));
   CHECK(fs::exists(out / "psnr.png"));
   CHECK_FALSE(fs::exists(dir / "ws" / "30_train.resume"));
 
