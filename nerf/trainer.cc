@@ -83,6 +83,9 @@ void TrainerOptions::Check() const {
   CheckField(occupancy_warmup >= 0, kWhat, "occupancy_warmup", "be at least 0", occupancy_warmup);
   CheckField(occupancy_decay > 0 && occupancy_decay <= 1, kWhat, "occupancy_decay", "be in (0, 1]", occupancy_decay);
   CheckField(march_step > 0 && std::isfinite(march_step), kWhat, "march_step", "be positive", march_step);
+  CheckField(fine_march_step >= 0 && std::isfinite(fine_march_step), kWhat, "fine_march_step", "be at least 0",
+             fine_march_step);
+  CheckField(fine_march_from >= 0, kWhat, "fine_march_from", "be at least 0", fine_march_from);
   CheckField(max_samples_per_ray >= 1, kWhat, "max_samples_per_ray", "be at least 1", max_samples_per_ray);
   CheckField(stratified_samples >= 0, kWhat, "stratified_samples", "be at least 0", stratified_samples);
   CheckField(batch_samples >= 1, kWhat, "batch_samples", "be at least 1", batch_samples);
@@ -211,13 +214,14 @@ RayBatch Trainer::SampleBatch(int rays) {
 }
 
 StepResult Trainer::Step(double progress) {
+  if (options_.fine_march_step > 0 && step_ == options_.fine_march_from) model_.march_step = options_.fine_march_step;
   if (options_.stratified_samples == 0 && step_ >= options_.occupancy_warmup &&
       (step_ - options_.occupancy_warmup) % options_.occupancy_interval == 0) {
     UpdateOccupancy();
   }
   const double per_ray = samples_per_ray_ > 0              ? samples_per_ray_
                          : options_.stratified_samples > 0 ? options_.stratified_samples
-                                                           : 2.0 / options_.march_step;
+                                                           : 2.0 / model_.march_step;
   const int rays = static_cast<int>(std::clamp(static_cast<double>(options_.batch_samples) / std::max(per_ray, 1.0),
                                                double(options_.min_batch_rays), double(options_.max_batch_rays)));
   return StepOnBatch(SampleBatch(rays), progress);
@@ -232,7 +236,7 @@ void Trainer::UpdateOccupancy() {
   };
   // A cell is occupied when one step through it would be at least 1% opaque (or above the mean, early on).
   const size_t cells = model_.occupancy.densities().size();
-  model_.occupancy.Update(density, static_cast<float>(0.01 / options_.march_step),
+  model_.occupancy.Update(density, static_cast<float>(0.01 / model_.march_step),
                           static_cast<float>(options_.occupancy_decay), MixSeed(options_.seed, step_, 1),
                           step_ == options_.occupancy_warmup ? cells : std::max<size_t>(cells / 16, 1));
 }
@@ -261,7 +265,7 @@ void Trainer::MarchChunk(const RayBatch& batch, const std::vector<Ray>& rays, si
   chunk->offsets.assign(chunk->count + 1, 0);
   for (size_t r = 0; r < chunk->count; ++r) {
     const Eigen::Vector2d& range = batch.near_far[chunk->first + r];
-    samples[r] = SampleRay(model_, rays[chunk->first + r], range[0], range[1], options_.march_step,
+    samples[r] = SampleRay(model_, rays[chunk->first + r], range[0], range[1], model_.march_step,
                            options_.max_samples_per_ray, &random);
     chunk->offsets[r + 1] = chunk->offsets[r] + samples[r].size();
   }

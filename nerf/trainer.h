@@ -58,7 +58,9 @@ struct TrainerOptions {
   int occupancy_interval = 16;     // steps between occupancy updates
   int occupancy_warmup = 16;       // steps before the first update (the field knows nothing before)
   double occupancy_decay = 0.95;
-  double march_step = 3.4641016 / 256;      // world units: 256 samples across the scene box's diagonal
+  double march_step = 3.4641016 / 256;  // world units: 256 samples across the scene box's diagonal
+  double fine_march_step = 0;           // > 0: the spacing from step fine_march_from on
+  int fine_march_from = 1000;
   SceneSpace space = SceneSpace::kBounded;  // nerf_model.h; forward: the frame is fitted to the training views
   size_t max_samples_per_ray = 1024;
   int stratified_samples = 0;              // > 0: that many stratified samples per ray, no occupancy grid (vanilla)

@@ -14,6 +14,8 @@ nlohmann::json CheckpointIdentity(const TrainerOptions& options) {
   return {{"field", options.field},
           {"occupancy_resolution", options.occupancy_resolution},
           {"march_step", options.march_step},
+          {"fine_march_step", options.fine_march_step},
+          {"fine_march_from", options.fine_march_from},
           {"space", SceneSpaceName(options.space)},
           {"stratified_samples", options.stratified_samples},
           {"appearance", options.appearance},

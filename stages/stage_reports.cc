@@ -240,6 +240,7 @@ nlohmann::json TrainReport::ToJson() const {
           {"field", field},
           {"trainer",
            {{"march_step", trainer.march_step},
+            {"rendered_march_step", trainer.rendered_march_step},
             {"batch_samples", trainer.batch_samples},
             {"scene", trainer.scene},
             {"learning_rate", trainer.learning_rate},
@@ -283,6 +284,7 @@ TrainReport TrainReport::Read(const fs::path& file) {
   fields.Get("field", &report.field);
   const Fields trainer = fields.Object("trainer");
   trainer.Get("march_step", &report.trainer.march_step);
+  trainer.Get("rendered_march_step", &report.trainer.rendered_march_step);
   trainer.Get("batch_samples", &report.trainer.batch_samples);
   trainer.Get("scene", &report.trainer.scene);
   trainer.Get("learning_rate", &report.trainer.learning_rate);

@@ -93,7 +93,9 @@ struct TrainReport {
   double samples_per_ray_rendered = 0, render_seconds_per_view = 0, occupied_fraction = 0;
   nlohmann::json field = nlohmann::json::object();  // the field's config, as MakeField reads it
   struct Trainer {
-    double march_step = 0, learning_rate = 0, distortion_weight = 0;
+    double march_step = 0;           // sample spacing along a ray (unbounded: near the centre), at the start
+    double rendered_march_step = 0;  // the model's at the end, which renders use (finer after a refinement)
+    double learning_rate = 0, distortion_weight = 0;
     size_t batch_samples = 0;
     std::string scene;  // bounded | unbounded | forward
     bool appearance = false, refine_cameras = false, error_sampling = false;

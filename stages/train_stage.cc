@@ -33,7 +33,8 @@ constexpr double kAutoDistortion = 0.002;
 
 struct Preset {
   double time_budget;
-  int march_samples;  // across the box's diagonal, bounded scenes (unbounded and forward: kUnboundedMarchSamples)
+  int march_samples;       // across the box's diagonal, bounded scenes (unbounded and forward: kUnboundedMarchSamples)
+  int fine_march_samples;  // bounded scenes from the trainer's fine_march_from (1,000th) step on; 0: march_samples
   int batch_samples, occupancy_resolution;
   HashGridConfig grid;  // levels, features per level, log2 table size, base and finest resolution
 };
@@ -52,21 +53,27 @@ constexpr double kNgpFinalLearningRate = 0.3;
 // 64 samples 26.61 / 22.26 dB, 128 28.41 / 22.53, 256 27.70 / 22.72, 512 - / 22.33; fox renders 6.5, 10.0 and
 // 20.1 samples per ray. (At 2 minutes of a 2.5x slower engine, session 8, 64 had been best: fewer samples per
 // ray bought more rays while the young field was haze.) The demo's scene with the fast preset (60 s): 128
-// 22.27 dB, 64 21.69, 32 20.97.
+// 22.27 dB, 64 21.69, 32 20.97. 256 from the 1,000th step on (one thread each, 600 s, side by side): fox 28.93
+// against 28.14 dB, but 16.7 samples a ray rendered against 9.3, so no finer march for these scenes.
 constexpr int kUnboundedMarchSamples = 128;
 
 Preset PresetFor(const std::string& name) {
-  if (name == "fast") return {60, 128, 1 << 15, 64, {16, 2, 15, 16, 1024}};
+  if (name == "fast") return {60, 128, 0, 1 << 15, 64, {16, 2, 15, 16, 1024}};
   // Measured at lego 800 (5-minute runs): 8 levels of 4 features (half the table reads of 16 levels of 2, the
   // same encoding width) train 19% more steps and reach +0.25 dB. At 5 minutes it beats the default on lego (29.60
   // against 28.22 dB), not on the real captures (fox 27.10 against 28.41, fern 22.39 against 22.53, with 128 samples
   // unbounded).
-  if (name == "quality") return {900, 512, 1 << 17, 128, {8, 4, 19, 16, 4096}};
+  if (name == "quality") return {900, 512, 0, 1 << 17, 128, {8, 4, 19, 16, 4096}};
   // 240 s, and the splats 180 (splat stage): on the Zen 3 that split gave fox's splats 26.41 and 27.24 dB against
   // 25.99 and 25.72 after 300 + 120 s (the field 25.00 and 25.14 against 25.20), fern's 23.19 and 23.13 against
   // 23.06 (the field 21.81 and 21.72 against 21.98), in the same wall time: the splats are what the render stage
   // and the viewer show.
-  return {240, 256, 1 << 16, 128, {16, 2, 17, 16, 2048}};
+  // Bounded scenes march 256 samples, 512 from the 1,000th step on: a young field's haze costs rays at the finer
+  // spacing, a grown one gains detail (one thread each, side by side; lego 800: 600 s 29.34 against 28.34 dB, 4.7
+  // samples a ray rendered against 3.0; 512 throughout: 300 s 28.35 and 28.30 against 27.77, 60 s 22.28 against
+  // 22.94; lego_200, 40 s: 512 throughout 0.4-1.3 dB lower, 128 0.9-1.2 lower; 300 s 512 30.87 against 30.79).
+  // Lego 800, 5 minutes alone on two threads: 29.11 dB (4,713 steps) against 28.31 with 256 throughout.
+  return {240, 256, 512, 1 << 16, 128, {16, 2, 17, 16, 2048}};
 }
 
 }  // namespace
@@ -168,6 +175,7 @@ TrainReport MakeTrainReport(Trainer& trainer, const TrainerOptions& trainer_opti
   report.occupied_fraction = model.occupancy.OccupiedFraction();
   report.field = model.field->Config();
   report.trainer = {trainer_options.march_step,
+                    model.march_step,
                     trainer_options.learning_rate,
                     trainer_options.distortion_weight,
                     trainer_options.batch_samples,
@@ -256,6 +264,8 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
                     : space != SceneSpace::kBounded ? kUnboundedMarchSamples
                                                     : preset.march_samples;
   trainer.march_step = 2 * std::sqrt(3.0) / march;  // the scene box [-1, 1]^3's diagonal
+  if (options.march_samples == 0 && space == SceneSpace::kBounded && preset.fine_march_samples > 0)
+    trainer.fine_march_step = 2 * std::sqrt(3.0) / preset.fine_march_samples;
   trainer.occupancy_resolution = preset.occupancy_resolution;
   trainer.batch_samples = options.batch_samples > 0 ? options.batch_samples : preset.batch_samples;
   trainer.learning_rate = options.learning_rate > 0 ? options.learning_rate : vanilla ? 5e-4 : 1e-2;

@@ -105,7 +105,7 @@ class TrainStage : public Stage {
   std::string name() const override { return "train"; }
   std::string folder() const override { return "30_train"; }
   // 3: photos without alpha learn the background; 4: the default preset's learning rate ends at 0.3 of its start
-  int format_version() const override { return 5; }
+  int format_version() const override { return 6; }
   std::vector<std::string> upstream() const override { return {"poses"}; }
   void Run(StageContext& context) const override;
 };

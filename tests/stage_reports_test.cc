@@ -58,7 +58,7 @@ TrainReport SomeTrainReport() {
   report.render_seconds_per_view = 0.25;
   report.occupied_fraction = 0.125;
   report.field = {{"otype", "ngp"}};
-  report.trainer = {0.0135, 0.01, 0.002, 65536, "unbounded", true, true, false, "learnt", {0.25, 0.5, 0.75}};
+  report.trainer = {0.0135, 0.00675, 0.01, 0.002, 65536, "unbounded", true, true, false, "learnt", {0.25, 0.5, 0.75}};
   report.appearance = {true, 0.875, 1.125, {{"a.png", 0.875, std::vector<float>(12, 0.5f)}}};
   report.camera_refinement = {{"enabled", true},
                               {"rotation_degrees_median", 0.125},

@@ -353,6 +353,34 @@ TEST_CASE("per-image appearance learns each photo's exposure and keeps it out of
   CHECK(psnr[1] > psnr[0] + 2);
 }
 
+TEST_CASE("the march refines from step fine_march_from on: twice the samples a ray, and the field learns on",
+          "[trainer]") {
+  // The sphere at 128 samples across the cube's diagonal, 256 from the 150th step: each ray's occupied stretch
+  // gets about twice the samples, the model renders at the finer spacing, and training goes on undisturbed.
+  const TrainingData data = SphereScene();
+  TrainerOptions options = SmallOptions();
+  options.fine_march_step = options.march_step / 2;
+  options.fine_march_from = 150;
+  Trainer trainer(options, data);
+  double samples[2] = {0, 0}, rays[2] = {0, 0};
+  for (int step = 0; step < 300; ++step) {
+    const StepResult result = trainer.Step(step / 300.0);
+    REQUIRE_FALSE(result.skipped);
+    REQUIRE(trainer.model().march_step == (step < 150 ? options.march_step : options.fine_march_step));
+    if (step >= 120 && step < 180) {
+      samples[step >= 150] += double(result.samples);
+      rays[step >= 150] += double(result.rays);
+    }
+  }
+  const double ratio = (samples[1] / rays[1]) / (samples[0] / rays[0]);
+  WARN("samples a ray " << samples[0] / rays[0] << " then " << samples[1] / rays[1]);
+  CHECK(ratio > 1.5);
+  CHECK(ratio < 2.5);
+  const double psnr = Mean(trainer.HeldoutPsnr(0));
+  INFO("held-out PSNR " << psnr << " dB");
+  CHECK(psnr > 20.0);
+}
+
 TEST_CASE("the background learnt behind photos without alpha: the sky's colour, and a better field", "[trainer]") {
   // The sphere before a sky of (0.3, 0.5, 0.7); the data's background is white, as for any photo without alpha.
   const Eigen::Vector3d sky(0.3, 0.5, 0.7);
