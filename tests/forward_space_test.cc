@@ -9,6 +9,7 @@
 #include "nerf/nerf_model.h"
 #include "nerf/ngp_field.h"
 #include "nerf/renderer.h"
+#include "test_camera.h"
 
 namespace p2n::testing {
 namespace {
@@ -26,12 +27,7 @@ ForwardFrame SimpleFrame() {
 std::vector<PinholeCamera> SideBySide() {
   std::vector<PinholeCamera> cameras;
   for (int i = 0; i < 5; ++i) {
-    PinholeCamera camera;
-    camera.width = 64;
-    camera.height = 48;
-    camera.fx = camera.fy = 50;
-    camera.cx = 32;
-    camera.cy = 24;
+    PinholeCamera camera = CentredCamera(64, 48, 50);
     const Eigen::AngleAxisd turn(i == 4 ? 4 * M_PI / 180 : 0, Eigen::Vector3d::UnitY());
     camera.world_from_cam.topLeftCorner<3, 3>() = turn.toRotationMatrix();
     camera.world_from_cam.topRightCorner<3, 1>() = Eigen::Vector3d(0.1 * i - 0.2, 0.05 * (i % 2), 2);

@@ -34,6 +34,7 @@
 #include "stages/training_data.h"
 #include "stages/view_renderer.h"
 #include "stages/view_renders.h"
+#include "test_camera.h"
 
 namespace p2n::testing {
 namespace fs = std::filesystem;
@@ -158,12 +159,7 @@ TEST_CASE("the splats' depth: the distance along each pixel's ray in normalised 
   // A wide, flat, opaque Gaussian across the view axis, 2 normalised units ahead of the camera: each pixel's
   // depth is 2 over the cosine of its ray's angle to the axis, whichever frame the splats were written in.
   TempDir dir;
-  PinholeCamera camera;
-  camera.width = 40;
-  camera.height = 30;
-  camera.fx = camera.fy = 30;
-  camera.cx = 20;
-  camera.cy = 15;
+  PinholeCamera camera = CentredCamera(40, 30, 30);
   for (const double scale : {1.0, 0.25}) {
     ImportedDataset poses;  // normalized = scale * rotation * source + shift
     Eigen::Matrix4d& normalized_from_source = poses.meta.normalization.normalized_from_world;
@@ -203,12 +199,7 @@ TEST_CASE("the splats' depth: the distance along each pixel's ray in normalised 
 
 TEST_CASE("render stage: a camera path file is read back as written, bad ones are refused by name", "[render]") {
   TempDir dir;
-  PinholeCamera camera;
-  camera.width = 40;
-  camera.height = 30;
-  camera.fx = camera.fy = 35;
-  camera.cx = 20;
-  camera.cy = 15;
+  PinholeCamera camera = CentredCamera(40, 30, 35);
   camera.world_from_cam.block<3, 1>(0, 3) = Eigen::Vector3d(1, 2, 3);
   WriteCameraPath(dir / "path.json", {camera, camera});
   const std::vector<PinholeCamera> read = ReadCameraPath(dir / "path.json", PinholeCamera{});

@@ -10,18 +10,14 @@
 #include <random>
 
 #include "splat/rasterizer.h"
+#include "test_camera.h"
 
 namespace p2n::testing {
 namespace {
 
 // A camera at `position` looking at the origin, `width` x `height` pixels, focal length `focal` pixels.
 PinholeCamera LookingAtOrigin(int width, int height, double focal, const Eigen::Vector3d& position) {
-  PinholeCamera camera;
-  camera.width = width;
-  camera.height = height;
-  camera.fx = camera.fy = focal;
-  camera.cx = width / 2.0;
-  camera.cy = height / 2.0;
+  PinholeCamera camera = CentredCamera(width, height, focal);
   camera.world_from_cam = LookAtPose(position, Eigen::Vector3d::Zero());
   return camera;
 }

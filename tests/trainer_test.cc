@@ -373,7 +373,7 @@ TEST_CASE("the march refines from step fine_march_from on: twice the samples a r
     }
   }
   const double ratio = (samples[1] / rays[1]) / (samples[0] / rays[0]);
-  WARN("samples a ray " << samples[0] / rays[0] << " then " << samples[1] / rays[1]);
+  INFO("samples a ray " << samples[0] / rays[0] << " then " << samples[1] / rays[1]);
   CHECK(ratio > 1.5);
   CHECK(ratio < 2.5);
   const double psnr = Mean(trainer.HeldoutPsnr(0));
