@@ -264,7 +264,7 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
                     : space != SceneSpace::kBounded ? kUnboundedMarchSamples
                                                     : preset.march_samples;
   trainer.march_step = 2 * std::sqrt(3.0) / march;  // the scene box [-1, 1]^3's diagonal
-  if (options.march_samples == 0 && space == SceneSpace::kBounded && preset.fine_march_samples > 0)
+  if (!vanilla && options.march_samples == 0 && space == SceneSpace::kBounded && preset.fine_march_samples > 0)
     trainer.fine_march_step = 2 * std::sqrt(3.0) / preset.fine_march_samples;
   trainer.occupancy_resolution = preset.occupancy_resolution;
   trainer.batch_samples = options.batch_samples > 0 ? options.batch_samples : preset.batch_samples;
