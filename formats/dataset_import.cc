@@ -167,6 +167,12 @@ void LoadNpz(const fs::path& file, ImportedDataset* out) {
 
 }  // namespace
 
+std::vector<PinholeCamera> ImportedDataset::Cameras() const {
+  std::vector<PinholeCamera> cameras;
+  for (const ImportedView& view : views) cameras.push_back(view.view.camera);
+  return cameras;
+}
+
 std::string DatasetKind(const fs::path& input) {
   if (fs::is_regular_file(input) && LowerExtension(input) == "npz") return "npz";
   if (!fs::is_directory(input)) return "";

@@ -31,6 +31,8 @@ struct ImportedDataset {
   std::vector<std::filesystem::path> files;  // every file the result depends on (for the cache key)
   std::vector<std::string> warnings;
   TransformsMeta meta;  // transforms.json's own fields (LoadTransformsJson); the defaults for other datasets
+
+  std::vector<PinholeCamera> Cameras() const;  // every view's, in order
 };
 
 // The kind of dataset at `input` ("" for a plain photo folder).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
@@ -100,6 +101,16 @@ ForwardFrame FitForwardFrame(const std::vector<PinholeCamera>& cameras, const st
   frame.tan_x = tan_x;
   frame.tan_y = tan_y;
   return frame;
+}
+
+bool FacesForward(const std::vector<PinholeCamera>& cameras, double max_angle_deg) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const PinholeCamera& camera : cameras) mean += Axis(camera).normalized();
+  if (cameras.empty() || !(mean.norm() > 1e-9)) return false;
+  mean.normalize();
+  const double min_cosine = std::cos(max_angle_deg * std::numbers::pi / 180);
+  return std::all_of(cameras.begin(), cameras.end(),
+                     [&](const PinholeCamera& camera) { return Axis(camera).normalized().dot(mean) >= min_cosine; });
 }
 
 nlohmann::json ForwardFrameJson(const ForwardFrame& frame) {

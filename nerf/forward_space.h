@@ -44,6 +44,11 @@ struct ForwardRay {
 };
 ForwardRay ToForward(const ForwardFrame& frame, const Ray& ray);
 
+// Whether `cameras` were taken from one side looking one way, as LLFF captures are: every viewing direction within
+// `max_angle_deg` of their mean. The default, 15, takes photos looking inwards from an arc of up to about 30
+// degrees (fern's are within 9.5 of their mean, fox's within 52).
+bool FacesForward(const std::vector<PinholeCamera>& cameras, double max_angle_deg = 15);
+
 // The frame for a set of training cameras: centred at their mean centre, looking along their mean viewing
 // direction, upright by their mean up vector; the near plane at 0.8 x the nearest scene depth seen (`nears`, per
 // camera, <= 0: unknown; none known: a tenth of the cameras' distance from the origin); tan_x and tan_y just wide

@@ -35,23 +35,14 @@ constexpr double kSplatPsnrMargin = 0.5;  // dB: render.source auto takes splats
 // The orbit: all the way round when the photos leave no gap wider than this between neighbours (a view from the
 // middle of such a gap is within half of it of a photo); else over the arc they cover, there and back.
 constexpr double kOrbitMaxGapDeg = 60;
-// render.path auto: photos within an arc narrower than this were taken from one side (forward-facing, as
-// LLFF's): a spiral in front of them. An orbit sweeps at least this much.
+// An orbit asked of photos taken from one side sweeps at least this much.
 constexpr double kForwardArcDeg = 30;
 
-std::vector<PinholeCamera> DatasetCameras(const ImportedDataset& dataset) {
-  std::vector<PinholeCamera> cameras;
-  for (const ImportedView& view : dataset.views) cameras.push_back(view.view.camera);
-  return cameras;
-}
-
-// render.path resolved: auto is a spiral for LLFF data and photos taken from one side, else an orbit.
+// render.path resolved: auto is a spiral for a forward-facing capture (which trains in normalised device
+// coordinates, where an orbit would leave what the field holds), else an orbit.
 std::string PathKind(const RenderStageOptions& options, const ImportedDataset& dataset) {
   if (options.path != "auto") return options.path;
-  if (dataset.meta.dataset_kind == "llff") return "spiral";
-  double start = 0, sweep = 0;
-  CapturedArc(DatasetCameras(dataset), kOrbitMaxGapDeg, &start, &sweep);
-  return sweep < kForwardArcDeg ? "spiral" : "orbit";
+  return ForwardFacingCapture(dataset) ? "spiral" : "orbit";
 }
 
 // Image writes fail for the user's reasons (a full disk, permissions): UserError naming the file.
@@ -165,7 +156,7 @@ EvalReport RenderHeldout(const ViewRenderer& renderer, const ImportedDataset& da
 std::vector<PinholeCamera> PathCameras(const RenderStageOptions& options, const std::string& kind,
                                        const ImportedDataset& dataset, const PinholeCamera& reference) {
   if (kind == "file") return ReadCameraPath(options.path_file, reference);
-  const std::vector<PinholeCamera> cameras = DatasetCameras(dataset);
+  const std::vector<PinholeCamera> cameras = dataset.Cameras();
   CameraPathOptions path;
   path.frames = options.frames;
   if (kind == "spiral") {

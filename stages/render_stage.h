@@ -77,7 +77,7 @@ class RenderStage : public Stage {
   std::string name() const override { return "render"; }
   std::string folder() const override { return "40_render"; }
   // 2: renders from the splats when they are as good; 3: eval.json and render_report.json as stage_reports.h types them
-  int format_version() const override { return 5; }  // 5: an arc's way back drawn once (rendered_frames)
+  int format_version() const override { return 6; }  // 6: render.path auto by ForwardFacingCapture
   std::vector<std::string> upstream() const override { return {"poses", "train", "splat"}; }
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
   void Run(StageContext& context) const override;

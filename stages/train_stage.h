@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 
+#include "formats/dataset_import.h"
 #include "nerf/trainer.h"
 #include "pipeline/stage.h"
 
@@ -45,7 +46,8 @@ struct TrainOptions {
     v("scene", scene,
       "bounded (an object inside the unit box), unbounded (space beyond it contracted), forward (every camera "
       "looking one way, as LLFF captures: a mean camera's normalised device coordinates), or auto: bounded for "
-      "Blender and .npz datasets, unbounded for photos and LLFF data",
+      "Blender and .npz datasets, forward for LLFF data and photos whose cameras all look within 15 degrees of "
+      "their mean direction, else unbounded",
       "", OptionKind::kResult, {"auto", "bounded", "unbounded", "forward"});
     v("time_budget", time_budget, "training time; 0: the preset's (fast 60, default 240, quality 900)", "s");
     v("steps", steps, "stop after this many steps; 0: no step limit", "steps");
@@ -90,10 +92,9 @@ struct TrainOptions {
   void Check() const;
 };
 
-// The scene space train.scene asks for; auto: bounded for Blender and .npz data, else unbounded (also for LLFF
-// captures: on fern, 15 minutes of default, forward and unbounded are level within a run's noise: at 1, 2, 5, 10
-// and 15 minutes 19.77 / 20.88 / 21.83 / 22.34 / 22.52 dB against 19.77 / 20.73 / 21.74 / 22.24 / 22.44).
-SceneSpace ResolveSceneSpace(const TrainOptions& options, const std::string& dataset_kind);
+// The scene space train.scene asks for; auto: bounded for Blender and .npz data, forward for a forward-facing
+// capture (ForwardFacingCapture), else unbounded.
+SceneSpace ResolveSceneSpace(const TrainOptions& options, const ImportedDataset& poses);
 
 // The trainer's options for these stage options (presets resolved) in a scene of this space.
 TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space);
@@ -105,7 +106,7 @@ class TrainStage : public Stage {
   std::string name() const override { return "train"; }
   std::string folder() const override { return "30_train"; }
   // 3: photos without alpha learn the background; 4: the default preset's learning rate ends at 0.3 of its start
-  int format_version() const override { return 6; }
+  int format_version() const override { return 7; }  // 7: train.scene auto picks forward for forward-facing captures
   std::vector<std::string> upstream() const override { return {"poses"}; }
   void Run(StageContext& context) const override;
 };

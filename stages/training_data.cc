@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "nerf/forward_space.h"
 #include "nerf/image_io.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
@@ -47,6 +48,10 @@ std::string HeldoutSplit(const ImportedDataset& dataset) {
   const bool has_test = std::any_of(dataset.views.begin(), dataset.views.end(),
                                     [](const ImportedView& v) { return v.view.split == "test"; });
   return has_test ? "test" : "val";
+}
+
+bool ForwardFacingCapture(const ImportedDataset& dataset) {
+  return dataset.meta.dataset_kind == "llff" || FacesForward(dataset.Cameras());
 }
 
 TrainingData LoadTrainingData(const ImportedDataset& poses) {

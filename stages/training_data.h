@@ -17,6 +17,10 @@ TrainView LoadTrainView(const ImportedView& imported);
 // The split held out for evaluation: "test" when any view has it, else "val".
 std::string HeldoutSplit(const ImportedDataset& dataset);
 
+// Whether the photos were taken from one side looking one way: LLFF data, or cameras that face forward
+// (FacesForward). Such a scene trains in normalised device coordinates and its video is a spiral.
+bool ForwardFacingCapture(const ImportedDataset& dataset);
+
 // The training views ("train" split) and held-out views (HeldoutSplit's) of the poses stage's transforms.json
 // (LoadTransformsJson), decoded to 8 bits, with the background its images were composited on; UserError naming
 // a bad file.

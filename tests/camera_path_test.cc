@@ -7,6 +7,7 @@
 
 #include "nerf/camera_path.h"
 #include "nerf/synthetic_scene.h"
+#include "test_camera.h"
 
 namespace p2n::testing {
 
@@ -35,22 +36,15 @@ TEST_CASE("camera paths: an orbit circles the centre at its radius and elevation
 }
 
 TEST_CASE("camera paths: the arc the photos cover, and an orbit there and back over it", "[path]") {
-  const auto ring = [](std::vector<double> azimuths_deg) {
-    std::vector<PinholeCamera> cameras;
-    for (const double a : azimuths_deg) {
-      const double r = a * M_PI / 180;
-      cameras.push_back(LookAtCamera({2 * std::cos(r), 2 * std::sin(r), 0.5}, {0, 0, 0}, 40, 30, 50));
-    }
-    return cameras;
-  };
   double start = -1, sweep = -1;
-  CapturedArc(ring({40, 10, 100, 70}), 60, &start, &sweep);  // a quarter of the circle, in any order
+  CapturedArc(RingOfCameras({40, 10, 100, 70}), 60, &start, &sweep);  // a quarter of the circle, in any order
   CHECK(start == Approx(10));
   CHECK(sweep == Approx(90));
-  CapturedArc(ring({350, 20, 5}), 60, &start, &sweep);  // across azimuth 0
+  CapturedArc(RingOfCameras({350, 20, 5}), 60, &start, &sweep);  // across azimuth 0
   CHECK(start == Approx(350));
   CHECK(sweep == Approx(30));
-  CapturedArc(ring({0, 50, 100, 150, 200, 250, 300}), 60, &start, &sweep);  // all round: gaps of 50 and 60 degrees
+  CapturedArc(RingOfCameras({0, 50, 100, 150, 200, 250, 300}), 60, &start,
+              &sweep);  // all round: gaps of 50 and 60 degrees
   CHECK(start == 0);
   CHECK(sweep == 360);
 

@@ -98,6 +98,15 @@ TEST_CASE("NDC: the frame fitted to cameras looks their way and holds every ray 
   CHECK_THROWS_AS(FitForwardFrame({}, {}), std::invalid_argument);
 }
 
+TEST_CASE("NDC: cameras face forward when every one looks within 15 degrees of their mean direction", "[forward]") {
+  CHECK(FacesForward(SideBySide()));                       // parallel but one, turned 4 degrees
+  CHECK(FacesForward(RingOfCameras({-14, 0, 14})));        // looking inwards (and down) from an arc of 28 degrees
+  CHECK_FALSE(FacesForward(RingOfCameras({-16, 0, 16})));  // 15.5 degrees from the mean (they look down 14)
+  CHECK(FacesForward(RingOfCameras({-16, 0, 16}), 17));
+  CHECK_FALSE(FacesForward(RingOfCameras({0, 90, 180, 270})));  // all round: no mean direction
+  CHECK_FALSE(FacesForward({}));
+}
+
 TEST_CASE("NDC: samples are even in NDC from the near plane to infinity, lengths in NDC", "[forward]") {
   NerfModel model;
   model.space = SceneSpace::kForward;

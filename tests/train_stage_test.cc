@@ -10,9 +10,34 @@
 #include "pipeline/file_util.h"
 #include "stage_fixtures.h"
 #include "stages/stages.h"
+#include "stages/train_stage.h"
+#include "test_camera.h"
 
 namespace p2n::testing {
 namespace fs = std::filesystem;
+
+TEST_CASE("train stage: train.scene auto is bounded for Blender and .npz data, forward for one-sided captures",
+          "[train]") {
+  const auto dataset = [](const std::string& kind, const std::vector<double>& azimuths_deg) {
+    ImportedDataset poses;
+    poses.meta.dataset_kind = kind;
+    for (const PinholeCamera& camera : RingOfCameras(azimuths_deg)) {
+      ImportedView view;
+      view.view.camera = camera;
+      poses.views.push_back(std::move(view));
+    }
+    return poses;
+  };
+  const std::vector<double> one_side = {-10, 0, 10}, around = {0, 60, 120, 180, 240, 300};
+  TrainOptions options;
+  CHECK(ResolveSceneSpace(options, dataset("blender", one_side)) == SceneSpace::kBounded);
+  CHECK(ResolveSceneSpace(options, dataset("npz", around)) == SceneSpace::kBounded);
+  CHECK(ResolveSceneSpace(options, dataset("llff", around)) == SceneSpace::kForward);  // LLFF's by definition
+  CHECK(ResolveSceneSpace(options, dataset("", one_side)) == SceneSpace::kForward);
+  CHECK(ResolveSceneSpace(options, dataset("colmap", around)) == SceneSpace::kUnbounded);
+  options.scene = "unbounded";
+  CHECK(ResolveSceneSpace(options, dataset("", one_side)) == SceneSpace::kUnbounded);
+}
 
 TEST_CASE("train stage: model.bin, metrics.csv and train_report.json, fresh on a rerun, stale on a new seed",
           "[train]") {
