@@ -214,7 +214,10 @@ RayBatch Trainer::SampleBatch(int rays) {
 }
 
 StepResult Trainer::Step(double progress) {
-  if (options_.fine_march_step > 0 && step_ == options_.fine_march_from) model_.march_step = options_.fine_march_step;
+  if (options_.fine_march_step > 0 && step_ == options_.fine_march_from) {
+    samples_per_ray_ *= model_.march_step / options_.fine_march_step;  // the batch's rays sized for the new spacing
+    model_.march_step = options_.fine_march_step;
+  }
   if (options_.stratified_samples == 0 && step_ >= options_.occupancy_warmup &&
       (step_ - options_.occupancy_warmup) % options_.occupancy_interval == 0) {
     UpdateOccupancy();
