@@ -105,12 +105,12 @@ ForwardFrame FitForwardFrame(const std::vector<PinholeCamera>& cameras, const st
 
 bool FacesForward(const std::vector<PinholeCamera>& cameras, double max_angle_deg) {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (const PinholeCamera& camera : cameras) mean += Axis(camera).normalized();
+  for (const PinholeCamera& camera : cameras) mean += Axis(camera);
   if (cameras.empty() || !(mean.norm() > 1e-9)) return false;
   mean.normalize();
   const double min_cosine = std::cos(max_angle_deg * std::numbers::pi / 180);
   return std::all_of(cameras.begin(), cameras.end(),
-                     [&](const PinholeCamera& camera) { return Axis(camera).normalized().dot(mean) >= min_cosine; });
+                     [&](const PinholeCamera& camera) { return Axis(camera).dot(mean) >= min_cosine; });
 }
 
 nlohmann::json ForwardFrameJson(const ForwardFrame& frame) {
