@@ -1,8 +1,8 @@
 // Throughput of the ngp field's MLPs against this machine's dense matrix-multiply speed, measured in one run:
 // an Eigen single-precision GEMM of comparable shape (64 x 64 times 64 x N) and a large square one, then the
-// density and colour MLPs' forward + backward on N samples (FLOPs counted from their layer sizes), and the
-// whole field (hash grid included), and the hash grid alone. Uses the TBB threads given (default: all cores) by
-// splitting N.
+// density and colour MLPs' forward + backward on N samples (FLOPs counted from their layer sizes), then the
+// whole field (hash grid included) and the hash grid alone, for the grid of NgpFieldConfig and those of the default
+// and quality presets. Uses the TBB threads given (default: all cores) by splitting N.
 // Usage: throughput_bench [SAMPLES [REPEATS]]
 
 #include <tbb/parallel_for.h>
@@ -94,20 +94,22 @@ int main(int argc, char** argv) {
   // gradient accumulates over the repeats, as nothing here consumes it).
   Eigen::MatrixXf all_positions(3, per_chunk * chunks);
   for (int c = 0; c < chunks; ++c) all_positions.middleCols(c * per_chunk, per_chunk) = positions[c];
-  const double field_seconds = MedianSeconds(repeats, [&] {
-    Eigen::MatrixXf encoded, d_encoded(field.grid().output_dims(), all_positions.cols());
-    field.grid().Forward(all_positions, &encoded);
-    tbb::parallel_for(0, chunks, [&](int c) {
-      Eigen::MatrixXf density, rgb, d_chunk;
-      field.ForwardEncoded(positions[c], encoded.middleCols(c * per_chunk, per_chunk), directions[c], &density, &rgb,
-                           &caches[c]);
-      field.Backward(caches[c], density, rgb, d_dense[c].data(), &d_chunk);
-      d_encoded.middleCols(c * per_chunk, per_chunk) = d_chunk;
+  const auto field_seconds = [&](p2n::NgpField<float>& measured) {
+    std::vector<std::vector<float>> d_params(chunks, std::vector<float>(measured.num_dense_params()));
+    return MedianSeconds(repeats, [&] {
+      Eigen::MatrixXf encoded, d_encoded(measured.grid().output_dims(), all_positions.cols());
+      measured.grid().Forward(all_positions, &encoded);
+      tbb::parallel_for(0, chunks, [&](int c) {
+        Eigen::MatrixXf density, rgb, d_chunk;
+        measured.ForwardEncoded(positions[c], encoded.middleCols(c * per_chunk, per_chunk), directions[c], &density,
+                                &rgb, &caches[c]);
+        measured.Backward(caches[c], density, rgb, d_params[c].data(), &d_chunk);
+        d_encoded.middleCols(c * per_chunk, per_chunk) = d_chunk;
+      });
+      measured.grid().Backward(all_positions, d_encoded);
     });
-    field.grid().Backward(all_positions, d_encoded);
-  });
-  // The hash grid alone, as the trainer calls it (the whole batch at once), in the default layout and the quality
-  // preset's.
+  };
+  // The hash grid alone, as the trainer calls it (the whole batch at once).
   const auto grid_seconds = [&](const p2n::HashGridConfig& layout) {
     p2n::HashGridEncoding<float> grid(3, layout, 1);
     Eigen::MatrixXf encoded;
@@ -115,9 +117,6 @@ int main(int argc, char** argv) {
     return std::pair(MedianSeconds(repeats, [&] { grid.Forward(all_positions, &encoded); }),
                      MedianSeconds(repeats, [&] { grid.Backward(all_positions, d_grid); }));
   };
-  const p2n::HashGridConfig default_layout = config.grid, quality_layout{8, 4, 19, 16, 4096};
-  const auto [default_forward, default_backward] = grid_seconds(default_layout);
-  const auto [quality_forward, quality_backward] = grid_seconds(quality_layout);
   const double samples = double(per_chunk) * chunks;
   std::printf("samples per batch                 %.0f\n", samples);
   std::printf("GEMM 64x64 * 64xN (chunked)       %.1f GFLOP/s\n", gemm_gflops);
@@ -126,13 +125,22 @@ int main(int argc, char** argv) {
               mlp_flops * samples / mlp_seconds / 1e9, 100 * mlp_flops * samples / mlp_seconds / 1e9 / gemm_gflops,
               samples / mlp_seconds / 1e6);
   std::printf("MLP FLOPs per sample (fwd+bwd)    %.0f\n", mlp_flops);
-  std::printf("whole field fwd+bwd               %.2f M samples/s (MLPs %.0f%% of its time)\n",
-              samples / field_seconds / 1e6, 100 * mlp_seconds / field_seconds);
-  const auto print_grid = [&](const p2n::HashGridConfig& layout, double forward, double backward) {
-    std::printf("hash grid %2dx%d, 2^%d: forward   %.2f M samples/s, backward %.2f M samples/s\n", layout.levels,
-                layout.features_per_level, layout.log2_table_size, samples / forward / 1e6, samples / backward / 1e6);
-  };
-  print_grid(default_layout, default_forward, default_backward);
-  print_grid(quality_layout, quality_forward, quality_backward);
+  // The field's grid as NgpFieldConfig has it, as the default preset trains it (a table of 2^17 entries a level)
+  // and as the quality preset does (8 levels of 4 features).
+  const p2n::HashGridConfig default_preset{16, 2, 17, 16, 2048}, quality_preset{8, 4, 19, 16, 4096};
+  for (const auto& [name, layout] :
+       {std::pair("NgpFieldConfig", config.grid), std::pair("default preset", default_preset),
+        std::pair("quality preset", quality_preset)}) {
+    p2n::NgpFieldConfig measured_config = config;
+    measured_config.grid = layout;
+    p2n::NgpField<float> measured(measured_config, 1);
+    const double whole = field_seconds(measured);
+    const auto [forward, backward] = grid_seconds(layout);
+    std::printf(
+        "%-15s grid %2dx%d, 2^%d: whole field fwd+bwd %.2f M samples/s (MLPs %.0f%% of its time); grid "
+        "forward %.2f, backward %.2f M samples/s\n",
+        name, layout.levels, layout.features_per_level, layout.log2_table_size, samples / whole / 1e6,
+        100 * mlp_seconds / whole, samples / forward / 1e6, samples / backward / 1e6);
+  }
   return 0;
 }
