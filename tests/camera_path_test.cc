@@ -43,8 +43,8 @@ TEST_CASE("camera paths: the arc the photos cover, and an orbit there and back o
   CapturedArc(RingOfCameras({350, 20, 5}), 60, &start, &sweep);  // across azimuth 0
   CHECK(start == Approx(350));
   CHECK(sweep == Approx(30));
-  CapturedArc(RingOfCameras({0, 50, 100, 150, 200, 250, 300}), 60, &start,
-              &sweep);  // all round: gaps of 50 and 60 degrees
+  // All round: gaps of 50 and 60 degrees.
+  CapturedArc(RingOfCameras({0, 50, 100, 150, 200, 250, 300}), 60, &start, &sweep);
   CHECK(start == 0);
   CHECK(sweep == 360);
 
