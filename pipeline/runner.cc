@@ -76,10 +76,10 @@ const Stage* Runner::Find(std::string_view name) const {
   return nullptr;
 }
 
-bool Runner::DependsOn(size_t i, size_t j) const {
-  for (const std::string& up : stages_[i]->upstream()) {
+bool Runner::DependsOn(size_t i, size_t j, const Config& config) const {
+  for (const std::string& up : stages_[i]->UpstreamFor(config)) {
     const size_t k = IndexOf(up);
-    if (k == j || DependsOn(k, j)) return true;
+    if (k == j || DependsOn(k, j, config)) return true;
   }
   return false;
 }
@@ -93,7 +93,11 @@ std::vector<StageStatus> Runner::Status(const Workspace& workspace, const Config
     expected.stage = stage->name();
     expected.format_version = stage->format_version();
     for (const std::string& section : stage->option_sections()) expected.options.update(config.ResultOptions(section));
-    for (const std::string& up : stage->upstream()) expected.upstream_keys[up] = statuses[IndexOf(up)].expected_key;
+    for (const std::string& up : stage->UpstreamFor(config)) {
+      const size_t k = IndexOf(up);
+      P2N_CHECK(k < statuses.size(), "stage " + stage->name() + " reads " + up + ", which does not come before it");
+      expected.upstream_keys[up] = statuses[k].expected_key;
+    }
     try {
       expected.inputs = stage->ExternalInputs(workspace, config);
     } catch (const UserError& e) {
@@ -147,14 +151,14 @@ std::vector<StageRun> Runner::Run(const Workspace& workspace, const Config& conf
   std::vector<bool> forced(stages_.size(), false);
   for (const std::string& name : request.force) {
     const size_t f = IndexOf(name);
-    for (size_t i = 0; i < stages_.size(); ++i) forced[i] = forced[i] || i == f || DependsOn(i, f);
+    for (size_t i = 0; i < stages_.size(); ++i) forced[i] = forced[i] || i == f || DependsOn(i, f, config);
   }
 
   std::vector<StageStatus> statuses = Status(workspace, config);
   for (size_t j = 0; j < first; ++j) {
     const bool needed = [&] {
       for (size_t i = first; i <= last; ++i) {
-        if (DependsOn(i, j)) return true;
+        if (DependsOn(i, j, config)) return true;
       }
       return false;
     }();
@@ -218,7 +222,9 @@ void Runner::RunOne(const Workspace& workspace, const Config& config, const Stag
                        workspace.ResumeDir(stage.folder()),
                        this,
                        memo};
-  for (const std::string& up : stage.upstream()) context.upstream_dirs[up] = workspace.StageDir(Get(up).folder());
+  for (const std::string& up : stage.UpstreamFor(config)) {
+    context.upstream_dirs[up] = workspace.StageDir(Get(up).folder());
+  }
   const auto start = std::chrono::steady_clock::now();
   stage.Run(context);
   ThrowIfCancelled();

@@ -1,8 +1,8 @@
 #pragma once
-// The stage contract (DESIGN.md §2): a stage declares its name, folder, format version, upstream stages, the
-// option sections whose result options change its output, and any inputs from outside the workspace. Its
-// cache key is a stable hash of those plus its upstream stages' keys. Run() writes into the staging folder;
-// the pipeline writes the manifest and moves the folder into place.
+// The stage contract (DESIGN.md §2): a stage declares its name, folder, format version, upstream stages (those its
+// options make it read), the option sections whose result options change its output, and any inputs from outside
+// the workspace. Its cache key is a stable hash of those plus the keys of the upstream stages it reads. Run() writes
+// into the staging folder; the pipeline writes the manifest and moves the folder into place.
 
 #include <nlohmann/json.hpp>
 
@@ -42,7 +42,14 @@ class Stage {
   virtual std::string folder() const { return name(); }
   // Bump when the stage's output changes for the same inputs; results of another version are stale.
   virtual int format_version() const = 0;
+  // The stages whose results it may read, under any options: they come before it in a runner's table.
   virtual std::vector<std::string> upstream() const { return {}; }
+  // Those of them it reads under `config`: their keys are part of its key, they must be fresh for it to run, and
+  // they are its StageContext::upstream_dirs. All of upstream() unless an option leaves one out.
+  virtual std::vector<std::string> UpstreamFor(const Config& config) const {
+    (void)config;
+    return upstream();
+  }
   // Sections whose kResult options are part of the key; defaults to the stage's own name.
   virtual std::vector<std::string> option_sections() const { return {name()}; }
   // Inputs from outside the workspace, as label -> fingerprint ("image 0001.jpg" -> SHA-1,

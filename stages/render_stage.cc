@@ -301,9 +301,8 @@ std::string DbText(const std::optional<double>& psnr) { return psnr ? format("{:
 // field's (they render tens of times faster), else the field.
 ViewRenderer ChooseRenderer(const StageContext& context, const RenderStageOptions& options, const NerfModel& model,
                             const RenderOptions& render, const ImportedDataset& poses) {
-  const SplatReport splats = SplatReport::Read(context.upstream_dirs.at("splat") / "splat_report.json");
-  const bool bounded = model.space == SceneSpace::kBounded;
   if (options.source == "field") return FieldRenderer(model, render);
+  const SplatReport splats = SplatReport::Read(context.upstream_dirs.at("splat") / "splat_report.json");
   if (!splats.enabled) {
     if (options.source == "splats") {
       throw UserError(
@@ -318,7 +317,7 @@ ViewRenderer ChooseRenderer(const StageContext& context, const RenderStageOption
                    DbText(splat_psnr), DbText(field_psnr)));
     return FieldRenderer(model, render);
   }
-  return SplatRenderer(context.upstream_dirs.at("splat"), poses, bounded);
+  return SplatRenderer(context.upstream_dirs.at("splat"), poses, model.space == SceneSpace::kBounded);
 }
 
 }  // namespace
@@ -382,6 +381,11 @@ void WriteCameraPath(const fs::path& file, const std::vector<PinholeCamera>& cam
   WriteJsonAtomic(file, {{"frames", frames}});
 }
 
+std::vector<std::string> RenderStage::UpstreamFor(const Config& config) const {
+  if (config.Get<std::string>("render.source") == "field") return {"poses", "train"};
+  return upstream();
+}
+
 std::map<std::string, std::string> RenderStage::ExternalInputs(const Workspace&, const Config& config) const {
   const RenderStageOptions options = ReadOptions<RenderStageOptions>(config, "render");
   if (options.path != "file") return {};
@@ -405,9 +409,11 @@ void RenderStage::Run(StageContext& context) const {
     EvalReport eval = RenderHeldout(renderer, dataset, context.output_dir);
     if (renderer.source == "field") eval.step_scale = StepScale(model, render);
     eval.field_psnr = renderer.source == "field" ? eval.psnr : FieldPsnr(context);
-    eval.splats_psnr = renderer.source == "splats"
-                           ? eval.psnr
-                           : SplatReport::Read(context.upstream_dirs.at("splat") / "splat_report.json").heldout_psnr;
+    if (renderer.source == "splats") {
+      eval.splats_psnr = eval.psnr;
+    } else if (const auto splat = context.upstream_dirs.find("splat"); splat != context.upstream_dirs.end()) {
+      eval.splats_psnr = SplatReport::Read(splat->second / "splat_report.json").heldout_psnr;
+    }
     WriteJsonAtomic(context.output_dir / "eval.json", eval.ToJson());
     if (eval.psnr) {
       summary["heldout_psnr"] = *eval.psnr;

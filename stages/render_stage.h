@@ -79,6 +79,8 @@ class RenderStage : public Stage {
   // 2: renders from the splats when they are as good; 3: eval.json and render_report.json as stage_reports.h types them
   int format_version() const override { return 6; }  // 6: render.path auto by ForwardFacingCapture
   std::vector<std::string> upstream() const override { return {"poses", "train", "splat"}; }
+  // Rendering the field (render.source field) reads no splats.
+  std::vector<std::string> UpstreamFor(const Config& config) const override;
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
   void Run(StageContext& context) const override;
 };

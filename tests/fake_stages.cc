@@ -27,6 +27,9 @@ class FakeStage : public Stage {
   std::string name() const override { return name_; }
   int format_version() const override { return format_version_; }
   std::vector<std::string> upstream() const override { return upstream_; }
+  std::vector<std::string> UpstreamFor(const Config& config) const override {
+    return ReadOptions<FakeOptions>(config, name_).read_upstream ? upstream_ : std::vector<std::string>{};
+  }
   std::map<std::string, std::string> ExternalInputs(const Workspace&, const Config&) const override {
     const fs::path input = counter_dir_ / "input.txt";
     if (name_ != "a" || !fs::exists(input)) return {};

@@ -13,10 +13,11 @@
 namespace p2n::testing {
 
 struct FakeOptions {
-  int value = 1;       // written into out.txt: changes the result
-  bool fail = false;   // throw a UserError in the middle of Run()
-  bool block = false;  // write started.flag into the counter folder, then sleep for a minute
-  int min_value = 0;   // a threshold: a result whose value is below it fails (Run and CheckResult)
+  int value = 1;              // written into out.txt: changes the result
+  bool fail = false;          // throw a UserError in the middle of Run()
+  bool block = false;         // write started.flag into the counter folder, then sleep for a minute
+  int min_value = 0;          // a threshold: a result whose value is below it fails (Run and CheckResult)
+  bool read_upstream = true;  // false: the stage reads no upstream stage (Stage::UpstreamFor)
 
   template <class V>
   void Visit(V& v) {
@@ -24,6 +25,7 @@ struct FakeOptions {
     v("fail", fail, "fail in the middle of the run", "", OptionKind::kRuntime);
     v("block", block, "block in the middle of the run", "", OptionKind::kRuntime);
     v("min_value", min_value, "the least value a result may have", "", OptionKind::kCheck);
+    v("read_upstream", read_upstream, "read the upstream stage's result");
   }
   void Check() const {}
 };

@@ -127,6 +127,15 @@ TEST_CASE("render stage: held-out PSNR and SSIM, path frames, depth, video, a wr
     CHECK(Sha1OfFile(out / folder / "0002.png") == Sha1OfFile(out / folder / "0000.png"));
     CHECK(Sha1OfFile(out / folder / "0003.png") == Sha1OfFile(out / folder / "0001.png"));
   }
+
+  // The field's renders read no splats: without the splat stage's result the render stays fresh and runs alone.
+  fs::remove_all(setup.dir / "ws" / "35_splat");
+  CHECK(setup.Status(config, "render").state == StageState::kFresh);
+  RunRequest alone;
+  alone.from = alone.until = "render";
+  alone.force = {"render"};
+  setup.runner.Run(setup.workspace, config, alone);
+  CHECK(ReadJsonFile(out / "eval.json")["splats_psnr"].is_null());
 }
 
 TEST_CASE("render stage: from the splats, with both PSNRs in eval.json, refused when there are none", "[render]") {

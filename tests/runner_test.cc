@@ -128,6 +128,24 @@ TEST_CASE("an option change reruns its stage and everything downstream, nothing 
   CHECK(f.Counts() == std::vector{1, 3, 3});
 }
 
+TEST_CASE("a stage that its options keep from reading an upstream stage is keyed and run without it", "[runner]") {
+  Fixture f;
+  f.config.Set("c.read_upstream", false, "test");
+  f.Run();
+  CHECK(ReadText(f.workspace.StageDir("c") / "out.txt") == "c=1");
+  f.config.Set("b.value", 2, "test");
+  CHECK(States(f.Status()) == std::vector{kFresh, kStale, kFresh});
+  f.Run(From("c"));  // b is stale, but c does not need it
+  f.Run(Force("b"));
+  CHECK(f.Counts() == std::vector{1, 2, 1});
+  MakeFakeRunner(f.counters).Clean(f.workspace, "b");
+  CHECK(f.Status()[2].state == kFresh);
+  f.config.Set("c.read_upstream", true, "test");
+  f.Run();
+  CHECK(f.Counts() == std::vector{1, 3, 2});
+  CHECK(ReadText(f.workspace.StageDir("c") / "out.txt") == "c=1;b=2;a=1");
+}
+
 TEST_CASE("a runtime-only option reruns nothing", "[runner]") {
   Fixture f;
   f.Run();
