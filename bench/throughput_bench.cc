@@ -17,6 +17,7 @@
 
 #include "nerf/encoding.h"
 #include "nerf/ngp_field.h"
+#include "stages/train_presets.h"
 
 namespace {
 
@@ -126,11 +127,10 @@ int main(int argc, char** argv) {
               samples / mlp_seconds / 1e6);
   std::printf("MLP FLOPs per sample (fwd+bwd)    %.0f\n", mlp_flops);
   // The field's grid as NgpFieldConfig has it, as the default preset trains it (a table of 2^17 entries a level)
-  // and as the quality preset does (8 levels of 4 features): the grids of PresetFor in stages/train_stage.cc.
-  const p2n::HashGridConfig default_preset{16, 2, 17, 16, 2048}, quality_preset{8, 4, 19, 16, 4096};
+  // and as the quality preset does (8 levels of 4 features).
   for (const auto& [name, layout] :
-       {std::pair("NgpFieldConfig", config.grid), std::pair("default preset", default_preset),
-        std::pair("quality preset", quality_preset)}) {
+       {std::pair("NgpFieldConfig", config.grid), std::pair("default preset", p2n::PresetFor("default").grid),
+        std::pair("quality preset", p2n::PresetFor("quality").grid)}) {
     p2n::NgpFieldConfig measured_config = config;
     measured_config.grid = layout;
     p2n::NgpField<float> measured(measured_config, 1);

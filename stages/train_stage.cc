@@ -20,6 +20,7 @@
 #include "stages/camera_corrections.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"
+#include "stages/train_presets.h"
 #include "stages/training_data.h"
 
 namespace p2n {
@@ -27,58 +28,6 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr int kMaxConsecutiveSkips = 50;
-// train.distortion auto in an unbounded scene. Fox and fern, 2 minutes of the default preset: weight 0.002
-// +0.7 and +0.5 dB and fewer samples per ray than 0 (fern 210 -> 137); 0.01 -4.1 and -0.9 dB.
-constexpr double kAutoDistortion = 0.002;
-
-struct Preset {
-  double time_budget;
-  int march_samples;       // across the box's diagonal, bounded scenes (unbounded and forward: kUnboundedMarchSamples)
-  int fine_march_samples;  // bounded scenes from the trainer's fine_march_from (1,000th) step on; 0: march_samples
-  int batch_samples, occupancy_resolution;
-  HashGridConfig grid;  // levels, features per level, log2 table size, base and finest resolution
-};
-
-// ngp's learning rate ends at 0.3 of its start rather than a tenth, in every preset: each underfits at its end.
-// One thread per run, two runs side by side: the default (300 s, about 2,000 steps) fox 27.09 against 26.27 dB,
-// lego 27.68 against 27.45, fern 21.96 and 22.02 against 21.79; 600 s (4,300 to 4,700 steps, as 5 minutes on two
-// threads) fox 28.37 against 28.08 (9.2 samples a ray against 10.1), lego 28.35 against 28.19. A constant rate:
-// fox +0.4, lego and fern -0.05 against 0.3. The fast preset (60 s): lego_200 26.43 and 26.38 against 25.78 and
-// 25.62, fox 24.59 against 23.30 (22.6 samples a ray against 27.8). The quality preset: +0.25 dB at lego 800.
-constexpr double kNgpFinalLearningRate = 0.3;
-
-// Unbounded and forward scenes march with 128 samples across the box's diagonal in every preset (near the
-// centre; the step grows with the distance beyond it). Fox and fern, 5 minutes of the default preset (session 12,
-// `bench/train_bench.sh DATASET 300 OUT default -- --train.eval_interval 60 --train.march_samples N`):
-// 64 samples 26.61 / 22.26 dB, 128 28.41 / 22.53, 256 27.70 / 22.72, 512 - / 22.33; fox renders 6.5, 10.0 and
-// 20.1 samples per ray. (At 2 minutes of a 2.5x slower engine, session 8, 64 had been best: fewer samples per
-// ray bought more rays while the young field was haze.) The demo's scene with the fast preset (60 s): 128
-// 22.27 dB, 64 21.69, 32 20.97. 256 from the 1,000th step on (one thread each, 600 s, side by side): fox 28.93
-// against 28.14 dB, but 16.7 samples a ray rendered against 9.3, so no finer march for these scenes.
-constexpr int kUnboundedMarchSamples = 128;
-
-Preset PresetFor(const std::string& name) {
-  if (name == "fast") return {60, 128, 0, 1 << 15, 64, {16, 2, 15, 16, 1024}};
-  // Measured at lego 800 (5-minute runs): 8 levels of 4 features (half the table reads of 16 levels of 2, the
-  // same encoding width) train 19% more steps and reach +0.25 dB. At 5 minutes it beats the default on lego (29.60
-  // against 28.22 dB), not on the real captures (fox 27.10 against 28.41, fern 22.39 against 22.53, with 128 samples
-  // unbounded).
-  if (name == "quality") return {900, 512, 0, 1 << 17, 128, {8, 4, 19, 16, 4096}};
-  // 240 s, and the splats 180 (splat stage): on the Zen 3 that split gave fox's splats 26.41 and 27.24 dB against
-  // 25.99 and 25.72 after 300 + 120 s (the field 25.00 and 25.14 against 25.20), fern's 23.19 and 23.13 against
-  // 23.06 (the field 21.81 and 21.72 against 21.98), in the same wall time: the splats are what the render stage
-  // and the viewer show.
-  // Bounded scenes march 256 samples, 512 from the 1,000th step on: a young field's haze costs rays at the finer
-  // spacing, a grown one gains detail (one thread each, side by side; lego 800: 600 s 29.34 against 28.34 dB, 4.7
-  // samples a ray rendered against 3.0; 512 throughout: 300 s 28.35 and 28.30 against 27.77, 60 s 22.28 against
-  // 22.94; lego_200, 40 s: 512 throughout 0.4-1.3 dB lower, 128 0.9-1.2 lower; 300 s 512 30.87 against 30.79).
-  // Lego 800, 5 minutes alone on two threads: 29.11 dB (4,713 steps) against 28.31 with 256 throughout.
-  return {240, 256, 512, 1 << 16, 128, {16, 2, 17, 16, 2048}};
-}
-
-}  // namespace
-
-namespace {
 
 // What a training is made from: the stage's options, the trainer's they resolve to, and the data.
 struct TrainingSetup {
@@ -253,7 +202,7 @@ double DistortionWeight(const TrainOptions& options, SceneSpace space) {
 }
 
 TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space) {
-  const Preset preset = PresetFor(options.preset);
+  const TrainPreset preset = PresetFor(options.preset);
   TrainerOptions trainer;
   const bool vanilla = options.field == "vanilla";
   if (vanilla) {
