@@ -38,6 +38,18 @@ PinholeCamera ScaledCamera(const PinholeCamera& camera, int width) {
   return scaled;
 }
 
+PinholeCamera ResizedCamera(const PinholeCamera& camera, int width, int height) {
+  const double sx = double(width) / camera.width, sy = double(height) / camera.height;
+  PinholeCamera resized = camera;
+  resized.width = width;
+  resized.height = height;
+  resized.fx *= sx;
+  resized.cx *= sx;
+  resized.fy *= sy;
+  resized.cy *= sy;
+  return resized;
+}
+
 Eigen::Matrix4d LookAtPose(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
   const Eigen::Vector3d forward = (target - position).normalized();
   Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ());

@@ -19,6 +19,9 @@ struct PinholeCamera {
 
 // The same camera with images `width` pixels wide (the height by the aspect ratio, at least 1), intrinsics scaled.
 PinholeCamera ScaledCamera(const PinholeCamera& camera, int width);
+// The same camera with its images resized to `width` x `height`: the intrinsics scaled along each axis (the image's
+// edges stay where they were, as an area or linear resize keeps them).
+PinholeCamera ResizedCamera(const PinholeCamera& camera, int width, int height);
 
 // Maps points in OpenCV camera axes to OpenGL camera axes (flips y and z); its inverse is the paired
 // OpenCvFromOpenGlCamera() (the same matrix: the flip is its own inverse).

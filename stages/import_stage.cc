@@ -63,12 +63,14 @@ OIIO::ImageBuf Composite(const OIIO::ImageBuf& image, float background) {
 }
 
 struct ImageCounts {
-  std::atomic<int> undistorted{0}, composited{0};
+  std::atomic<int> undistorted{0}, composited{0}, downsized{0};
 };
 
 // Writes the dataset's images into `images` as the poses stage's are: undistorted, composited on the background
-// unless it is "keep", copied when nothing changed them; the views then name them and hold no distortion.
-void WriteImages(ImportedDataset& dataset, const ImportOptions& options, const fs::path& images, ImageCounts* counts) {
+// unless it is "keep", downsized to `max_side` (0: any size), copied when nothing changed them; the views then name
+// them and hold no distortion.
+void WriteImages(ImportedDataset& dataset, const ImportOptions& options, int max_side, const fs::path& images,
+                 ImageCounts* counts) {
   fs::create_directories(images);
   Progress progress("import: images", static_cast<int64_t>(dataset.views.size()), "images");
   tbb::parallel_for(size_t{0}, dataset.views.size(), [&](size_t i) {
@@ -97,6 +99,12 @@ void WriteImages(ImportedDataset& dataset, const ImportOptions& options, const f
       image = Composite(image, options.background == "white" ? 1.0f : 0.0f);
       changed = true;
       ++counts->composited;
+    }
+    if (max_side > 0 && std::max(camera.width, camera.height) > max_side) {
+      image = DownsizeToFit(image, max_side);
+      view.view.camera = ResizedCamera(camera, image.spec().width, image.spec().height);
+      changed = true;
+      ++counts->downsized;
     }
     const std::string extension = LowerExtension(view.source);
     if (!changed && (extension == "png" || extension == "jpg" || extension == "jpeg")) {
@@ -170,11 +178,12 @@ void ImportStage::Run(StageContext& context) const {
   for (const std::string& warning : dataset.warnings) LogWarning("import: " + warning);
   LogInfo(format("import: {} dataset, {} views", dataset.kind, dataset.views.size()));
   ImageCounts counts;
-  WriteImages(dataset, options, context.output_dir / "images", &counts);
+  WriteImages(dataset, options, poses.max_image_size, context.output_dir / "images", &counts);
   const Normalization normalization = WriteCameras(dataset, input, poses, options, context.output_dir);
   context.summary = {{"views", dataset.views.size()}, {"dataset", dataset.kind}};
-  LogInfo(format("import: {} views ({} undistorted, {} composited on {}), scene scale {:.4g}", dataset.views.size(),
-                 counts.undistorted.load(), counts.composited.load(), options.background, normalization.scale));
+  LogInfo(format("import: {} views ({} undistorted, {} composited on {}, {} downsized to {} px), scene scale {:.4g}",
+                 dataset.views.size(), counts.undistorted.load(), counts.composited.load(), options.background,
+                 counts.downsized.load(), poses.max_image_size, normalization.scale));
 }
 
 }  // namespace p2n

@@ -1,7 +1,8 @@
 #pragma once
 // The poses stage of a dataset that already has cameras: validates and copies its images (decoding each,
-// undistorting distorted ones, compositing transparent ones on the chosen background), normalises the
-// cameras like the COLMAP path does and writes the same transforms.json. Replaces ingest -> sfm -> poses.
+// undistorting distorted ones, compositing transparent ones on the chosen background, downsizing those larger than
+// poses.max_image_size), normalises the cameras like the COLMAP path does and writes the same transforms.json.
+// Replaces ingest -> sfm -> poses.
 
 #include <string>
 
@@ -24,7 +25,7 @@ class ImportStage : public Stage {
  public:
   std::string name() const override { return "poses"; }
   std::string folder() const override { return "20_poses"; }
-  int format_version() const override { return 1; }
+  int format_version() const override { return 2; }  // 2: images downsized to poses.max_image_size
   std::vector<std::string> option_sections() const override { return {"poses", "import"}; }
   // Every file of the dataset that the result depends on, by SHA-1.
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;

@@ -1,5 +1,7 @@
 #include "stages/poses_stage.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -9,10 +11,12 @@
 #include "formats/transforms_json.h"
 #include "nerf/camera.h"
 #include "nerf/float_image.h"
+#include "nerf/image_io.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/log.h"
+#include "pipeline/progress.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -32,10 +36,40 @@ PinholeCamera Intrinsics(const ColmapCamera& camera) {
   return pinhole;
 }
 
+// The views whose images are larger than `max_side` (0: none) name downsized copies in `out`/images instead (PNG,
+// the name kept), with their intrinsics scaled to them. Views name their images from this stage's folder, whose
+// staging copy `out` sits beside it.
+void DownsizeLargeImages(const fs::path& out, int max_side, std::vector<CameraView>* views) {
+  std::vector<CameraView*> large;
+  for (CameraView& view : *views) {
+    if (max_side > 0 && std::max(view.camera.width, view.camera.height) > max_side) large.push_back(&view);
+  }
+  if (large.empty()) return;
+  fs::create_directories(out / "images");
+  Progress progress("poses: downsizing images", static_cast<int64_t>(large.size()), "images");
+  tbb::parallel_for(size_t{0}, large.size(), [&](size_t i) {
+    CameraView& view = *large[i];
+    const fs::path source = out / view.file_path;
+    ReadImageResult read = ReadImage(source);
+    if (!read.ok()) throw UserError(format("cannot use '{}': {}", source.string(), read.error));
+    const OIIO::ImageBuf image = DownsizeToFit(read.image, max_side);
+    const std::string name = fs::path(view.file_path).filename().string();
+    view.file_path = "images/" + (LowerExtension(name) == "png" ? name : name + ".png");
+    const std::string error = WriteImage(image, out / view.file_path);
+    if (!error.empty()) throw UserError(error);
+    view.camera = ResizedCamera(view.camera, image.spec().width, image.spec().height);
+    progress.Add();
+  });
+  LogInfo(format("poses: {} of {} images downsized to {} pixels on their longest side (poses.max_image_size)",
+                 large.size(), views->size(), max_side));
+}
+
 }  // namespace
 
 void PosesOptions::Check() const {
   CheckOption(holdout_every >= 0, "poses.holdout_every", "must be 0 (none) or positive");
+  CheckOption(max_image_size == 0 || max_image_size >= 16, "poses.max_image_size",
+              format("must be 0 (as they are) or at least 16 pixels, not {}", max_image_size));
 }
 
 void PosesStage::Run(StageContext& context) const {
@@ -78,6 +112,7 @@ void PosesStage::Run(StageContext& context) const {
     views.push_back(view);
   }
   if (without_bounds > 0) LogWarning(format("poses: {} views see too few points for depth bounds", without_bounds));
+  DownsizeLargeImages(context.output_dir, options.max_image_size, &views);
   AssignHoldout(&views, options.holdout_every);
 
   Normalization normalization;

@@ -21,11 +21,13 @@ namespace {
 
 const fs::path kData = fs::path(P2N_SOURCE_DIR) / ".." / "shared" / "data";
 
-// Runs the import stage on `input`; returns the written transforms.json.
-nlohmann::json Import(const fs::path& input, const fs::path& workspace_path) {
+// Runs the import stage on `input` (images at most `max_image_size` on their longest side); returns the written
+// transforms.json.
+nlohmann::json Import(const fs::path& input, const fs::path& workspace_path, int max_image_size = 0) {
   const OptionRegistry registry = AllOptions();
   Config config(registry);
   config.Set("run.progress", "none", "test");
+  if (max_image_size > 0) config.Set("poses.max_image_size", max_image_size, "test");
   Workspace workspace = Workspace::Open(workspace_path, true);
   workspace.SetInput(input);
   RunRequest request;
@@ -88,6 +90,35 @@ TEST_CASE("import: a transforms.json dataset keeps its cameras up to a similarit
   CHECK(WorstRotationAfterAlignment(ours, theirs) < 1e-6);
   CHECK(transforms["frames"][0]["split"] == "val");  // every 8th, from the first
   CHECK(transforms["fl_x"].get<double>() == Approx(truth["fl_x"].get<double>()));
+}
+
+TEST_CASE("import: images larger than poses.max_image_size are downsized, their intrinsics with them", "[import]") {
+  TempDir dir;
+  WriteSyntheticScene(SmallScene(3), dir / "data");
+  fs::rename(dir / "data" / "ground_truth_cameras.json", dir / "data" / "transforms.json");
+  const nlohmann::json truth = ReadJsonFile(dir / "data" / "transforms.json");
+  const nlohmann::json transforms = Import(dir / "data", dir / "ws", 32);  // 64 x 48 -> 32 x 24
+  CHECK(transforms["w"] == 32);
+  CHECK(transforms["h"] == 24);
+  for (const char* key : {"fl_x", "fl_y", "cx", "cy"})
+    CHECK(transforms[key].get<double>() == Approx(truth[key].get<double>() / 2));
+  for (size_t i = 0; i < 3; ++i) {
+    const std::string file = transforms["frames"][i]["file_path"];
+    const OIIO::ImageBuf small((dir / "ws" / "20_poses" / file).string());
+    const OIIO::ImageBuf full((dir / "data" / truth["frames"][i]["file_path"].get<std::string>()).string());
+    REQUIRE(small.spec().width == 32);
+    REQUIRE(small.spec().height == 24);
+    // Each pixel the mean of the 2 x 2 it covers (an area filter), within 8-bit rounding.
+    for (const auto& [x, y] : {std::pair{0, 0}, std::pair{13, 7}, std::pair{31, 23}}) {
+      for (int c = 0; c < 3; ++c) {
+        float mean = 0;
+        for (int d = 0; d < 4; ++d) mean += full.getchannel(2 * x + d % 2, 2 * y + d / 2, 0, c) / 4;
+        CHECK(small.getchannel(x, y, 0, c) == Approx(mean).margin(1.0 / 255));
+      }
+    }
+  }
+  // The default keeps images of up to 1920 pixels as they are.
+  CHECK(Import(dir / "data", dir / "ws_default")["w"] == 64);
 }
 
 TEST_CASE("import: a COLMAP project folder (images/ + sparse/0) keeps its cameras and points", "[import]") {

@@ -26,6 +26,23 @@ TEST_CASE("a camera ray projects back to its pixel, the principal point looks do
   CHECK((centre.direction + camera.world_from_cam.block<3, 1>(0, 2)).norm() < 1e-12);
 }
 
+TEST_CASE("a resized camera sees each point at the same place in the image, each axis scaled", "[rays]") {
+  const PinholeCamera camera = LookAtCamera({3, -2, 1.5}, {0, 0, 0.4}, 320, 240, 60);
+  const PinholeCamera resized = ResizedCamera(camera, 101, 77);  // not the aspect ratio: each axis its own scale
+  CHECK(resized.width == 101);
+  CHECK(resized.height == 77);
+  for (const Eigen::Vector3d& point : {Eigen::Vector3d(0, 0, 0.4), Eigen::Vector3d(0.3, -0.2, 0.1)}) {
+    const Eigen::Vector2d before = Project(camera, point), after = Project(resized, point);
+    CHECK(after.x() == Approx(before.x() * 101 / 320));
+    CHECK(after.y() == Approx(before.y() * 77 / 240));
+  }
+  // The image's far corner stays the far corner.
+  const Ray corner = CameraRay(camera, 320, 240);
+  const Eigen::Vector2d far_corner = Project(resized, corner.origin + 2 * corner.direction);
+  CHECK(far_corner.x() == Approx(101));
+  CHECK(far_corner.y() == Approx(77));
+}
+
 TEST_CASE("ray-box intersection: hits, misses, axis-parallel, behind, grazing and far-away rays", "[rays]") {
   const Eigen::Vector3d low(-1, -1, -1), high(1, 1, 1);
   const auto hit = [&](Eigen::Vector3d origin, Eigen::Vector3d direction) {

@@ -120,6 +120,21 @@ TEST_CASE("sfm + poses recover the synthetic scene's cameras", "[colmap][e2e]") 
   for (const auto& frame : truth["frames"]) true_poses[frame["file_path"]] = ReadMatrix(frame["transform_matrix"]);
   CheckPoses(transforms, true_poses, 0.5, 0.01);
   CHECK(fs::exists(dir / "ws" / "20_poses" / "sparse_points.ply"));
+
+  // Images above poses.max_image_size: the same cameras, downsized copies and intrinsics scaled to them.
+  config.Set("poses.max_image_size", 160, "test");
+  RunUntilPoses(dir / "photos", dir / "ws", config);
+  const nlohmann::json small = ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json");
+  const double scale = 160.0 / std::max(transforms["w"].get<int>(), transforms["h"].get<int>());
+  CHECK(small["w"] == 160);
+  CHECK(small["fl_x"].get<double>() == Approx(transforms["fl_x"].get<double>() * scale).epsilon(0.01));
+  CHECK(small["cy"].get<double>() == Approx(transforms["cy"].get<double>() * scale).epsilon(0.01));
+  for (size_t i = 0; i < small["frames"].size(); ++i) {
+    CHECK(small["frames"][i]["transform_matrix"] == transforms["frames"][i]["transform_matrix"]);
+    const fs::path image = dir / "ws" / "20_poses" / small["frames"][i]["file_path"].get<std::string>();
+    CHECK(image.parent_path().filename() == "images");
+    CHECK(OIIO::ImageBuf(image.string()).spec().width == 160);
+  }
 }
 
 // A messy photo folder (issue 7): the synthetic scene's views stored every way a folder of real photos may hold
