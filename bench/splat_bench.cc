@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
   const p2n::SplatReport report = p2n::SplatReport::Read(ws / "35_splat" / "splat_report.json");
   const p2n::OutputFrame frame = p2n::MakeOutputFrame(report.frame, poses);
   const p2n::Gaussians<float> gaussians = p2n::ReadSplatPly(ws / "35_splat" / "splats.ply");
-  const std::array<float, 3> background = poses.meta.Background();
+  const std::array<float, 3> background = report.background;  // the learnt one behind photos without alpha
   const double near = report.near;
 
   std::vector<double> seconds;

@@ -300,4 +300,14 @@ std::vector<TrainView> HalfSizeViews(const std::vector<TrainView>& views) {
   return half;
 }
 
+std::vector<TrainView> HalvedToFit(std::vector<TrainView> views, int max_side) {
+  const auto longest = [&] {
+    int side = 0;
+    for (const TrainView& view : views) side = std::max({side, view.camera.width, view.camera.height});
+    return side;
+  };
+  while (max_side > 0 && longest() > max_side) views = HalfSizeViews(views);
+  return views;
+}
+
 }  // namespace p2n

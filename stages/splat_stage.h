@@ -20,6 +20,7 @@ struct SplatOptions {
   int init_width = 128;             // training views rendered this wide to place the first Gaussians
   int max_gaussians = 100'000;      // of the first; densification may double it. Fewer: more steps for the time
   double coarse = 0.75;             // share of the optimisation on the photos at half size
+  int max_image_size = 1080;        // the photos are halved until their longest side is at most this; 0: any size
   double ssim_weight = 0.1;         // the loss: (1 - w) L1 + w (1 - SSIM)
   std::string background = "auto";  // auto: learnt behind photos without alpha, else the field's; fixed: the field's
   std::string frame = "source";
@@ -44,6 +45,10 @@ struct SplatOptions {
     v("max_gaussians", max_gaussians, "splats placed from the field (densification may add as many again)");
     v("coarse", coarse,
       "share of the optimisation time spent on the photos at half size (four times the steps; coarse to fine)");
+    v("max_image_size", max_image_size,
+      "longest side of the photos the splats are optimised on: halved until the largest fits (the coarse share at "
+      "half that again); held-out views are scored at their own size; 0: as they are",
+      "px");
     v("ssim_weight", ssim_weight,
       "weight of the structural dissimilarity (1 - SSIM) in the loss, the rest L1 (3D Gaussian Splatting uses 0.2)");
     v("background", background,
@@ -68,8 +73,9 @@ class SplatStage : public Stage {
  public:
   std::string name() const override { return "splat"; }
   std::string folder() const override { return "35_splat"; }
-  // 2: the SSIM term; 3: placed from at most 2 M pixels (the export's renders); 4: the background learnt (auto)
-  int format_version() const override { return 4; }
+  // 2: the SSIM term; 3: placed from at most 2 M pixels (the export's renders); 4: the background learnt (auto);
+  // 5: optimised on photos of at most splat.max_image_size
+  int format_version() const override { return 5; }
   std::vector<std::string> upstream() const override { return {"poses", "train"}; }
   void Run(StageContext& context) const override;
 };

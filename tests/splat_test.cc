@@ -214,6 +214,20 @@ TEST_CASE("Views at half size: each pixel the mean of four, every point where th
   }
 }
 
+TEST_CASE("Views halved to fit a size: as many halvings as the largest needs, none when it fits", "[splat]") {
+  TrainView large, small;
+  large.camera = CameraAt({0.3, -2, 0.5}, 40);
+  small.camera = CameraAt({0.3, -2, 0.5}, 20);
+  for (TrainView* view : {&large, &small}) view->pixels.assign(size_t(view->camera.width) * view->camera.height * 3, 7);
+  const std::vector<TrainView> halved = HalvedToFit({large, small}, 16);  // 40 -> 20 -> 10: the largest fits
+  REQUIRE(halved.size() == 2);
+  CHECK(halved[0].camera.width == 10);
+  CHECK(halved[1].camera.width == 5);
+  CHECK(halved[0].camera.fx == Approx(large.camera.fx / 4));
+  CHECK(HalvedToFit({large}, 40)[0].camera.width == 40);
+  CHECK(HalvedToFit({large}, 0)[0].camera.width == 40);
+}
+
 TEST_CASE("SSIM of the splats' loss: 1 for the photo itself, its gradient against central differences", "[splat]") {
   constexpr int kWidth = 14, kHeight = 11, kChannels = 3;
   std::mt19937_64 random(7);
