@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "nerf/heap.h"
 #include "nerf/plot.h"
 #include "nerf/renderer.h"
 #include "stages/training_data.h"
@@ -44,6 +45,7 @@ class FloatRendering : public p2n::RadianceField<float> {
 }  // namespace
 
 int main(int argc, char** argv) {
+  p2n::KeepFreedBlocksInHeap();  // as photo2nerf does
   if (argc < 3) {
     std::fprintf(stderr,
                  "usage: render_bench WORKSPACE OUT|--speed|--speed-float [VIEWS] [STEP_SCALE] [MIN_TRANSMITTANCE]\n");

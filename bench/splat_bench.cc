@@ -10,6 +10,7 @@
 #include <cstdlib>
 
 #include "formats/output_frame.h"
+#include "nerf/heap.h"
 #include "pipeline/file_util.h"
 #include "splat/rasterizer.h"
 #include "splat/splat_ply.h"
@@ -17,6 +18,7 @@
 #include "stages/training_data.h"
 
 int main(int argc, char** argv) {
+  p2n::KeepFreedBlocksInHeap();  // as photo2nerf does
   if (argc < 2) {
     std::fprintf(stderr, "usage: splat_bench WORKSPACE [VIEWS] [REPEATS] [SAVE_DIR] [SPLIT]\n");
     return 1;

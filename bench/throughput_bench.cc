@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "nerf/encoding.h"
+#include "nerf/heap.h"
 #include "nerf/ngp_field.h"
 #include "stages/train_presets.h"
 
@@ -51,6 +52,7 @@ double MlpFlops(const p2n::MlpConfig& c) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  p2n::KeepFreedBlocksInHeap();  // as photo2nerf does
   const int n = argc > 1 ? std::atoi(argv[1]) : 65536;
   const int repeats = argc > 2 ? std::atoi(argv[2]) : 7;
   const int chunks = 64;

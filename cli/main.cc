@@ -1,7 +1,5 @@
 // photo2nerf: a dispatch table of subcommands; the only place where errors become exit codes.
 
-#include <malloc.h>
-
 #include <csignal>
 #include <cstring>
 #include <exception>
@@ -11,6 +9,7 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "nerf/heap.h"
 #include "photo2nerf/version.h"
 #include "pipeline/cancel.h"
 #include "pipeline/errors.h"
@@ -50,11 +49,7 @@ void PrintUsage(const std::vector<Command>& commands) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // Training and rendering allocate and free matrices of a few MB in every step. By default glibc maps each from
-  // the kernel and returns it when freed, so every step faults its pages in again (a tenth of a training step on
-  // fox): keep such blocks in the heap (up to the largest threshold glibc allows) and keep freed memory.
-  mallopt(M_MMAP_THRESHOLD, 32 << 20);
-  mallopt(M_TRIM_THRESHOLD, 512 << 20);
+  p2n::KeepFreedBlocksInHeap();
   const std::vector<Command> commands = Commands();
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
     PrintUsage(commands);
