@@ -4,6 +4,9 @@
 #include <cmath>
 #include <sstream>
 
+#include <opencv2/imgproc.hpp>
+
+#include "nerf/camera.h"
 #include "nerf/config_check.h"
 
 namespace p2n {
@@ -300,14 +303,24 @@ std::vector<TrainView> HalfSizeViews(const std::vector<TrainView>& views) {
   return half;
 }
 
-std::vector<TrainView> HalvedToFit(std::vector<TrainView> views, int max_side) {
-  const auto longest = [&] {
-    int side = 0;
-    for (const TrainView& view : views) side = std::max({side, view.camera.width, view.camera.height});
-    return side;
-  };
-  while (max_side > 0 && longest() > max_side) views = HalfSizeViews(views);
-  return views;
+std::vector<TrainView> FittedViews(const std::vector<TrainView>& views, int max_side) {
+  int longest = 0;
+  for (const TrainView& view : views) longest = std::max({longest, view.camera.width, view.camera.height});
+  if (max_side <= 0 || longest <= max_side) return views;
+  const double scale = static_cast<double>(max_side) / longest;
+  std::vector<TrainView> fitted;
+  for (const TrainView& view : views) {
+    const int width = std::max(1, static_cast<int>(std::lround(view.camera.width * scale)));
+    const int height = std::max(1, static_cast<int>(std::lround(view.camera.height * scale)));
+    TrainView small{ResizedCamera(view.camera, width, height), view.near, view.far, view.channels, {}, view.name};
+    small.pixels.resize(size_t(width) * height * view.channels);
+    const cv::Mat source(view.camera.height, view.camera.width, CV_8UC(view.channels),
+                         const_cast<uint8_t*>(view.pixels.data()));
+    cv::Mat target(height, width, CV_8UC(view.channels), small.pixels.data());
+    cv::resize(source, target, target.size(), 0, 0, cv::INTER_AREA);
+    fitted.push_back(std::move(small));
+  }
+  return fitted;
 }
 
 }  // namespace p2n

@@ -114,8 +114,9 @@ class SplatTrainer {
 // intrinsics halved exactly. For the coarse first part of an optimisation: many more steps for the time.
 std::vector<TrainView> HalfSizeViews(const std::vector<TrainView>& views);
 
-// `views` halved (HalfSizeViews) until the longest side of the largest is at most `max_side` (0: as they are).
-std::vector<TrainView> HalvedToFit(std::vector<TrainView> views, int max_side);
+// `views` downsized with an area filter, their intrinsics scaled per axis (ResizedCamera), so that the longest side of
+// the largest is `max_side` (0, or all of them smaller: as they are).
+std::vector<TrainView> FittedViews(const std::vector<TrainView>& views, int max_side);
 
 // The Gaussians' image of `camera` over `background`: an RGB FloatImage.
 FloatImage RenderSplats(const Gaussians<float>& gaussians, const PinholeCamera& camera,

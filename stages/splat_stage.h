@@ -74,8 +74,8 @@ class SplatStage : public Stage {
   std::string name() const override { return "splat"; }
   std::string folder() const override { return "35_splat"; }
   // 2: the SSIM term; 3: placed from at most 2 M pixels (the export's renders); 4: the background learnt (auto);
-  // 5: optimised on photos of at most splat.max_image_size
-  int format_version() const override { return 5; }
+  // 5: optimised on photos of at most splat.max_image_size (halved); 6: downsized to it with an area filter
+  int format_version() const override { return 6; }
   std::vector<std::string> upstream() const override { return {"poses", "train"}; }
   void Run(StageContext& context) const override;
 };

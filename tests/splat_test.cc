@@ -214,18 +214,38 @@ TEST_CASE("Views at half size: each pixel the mean of four, every point where th
   }
 }
 
-TEST_CASE("Views halved to fit a size: as many halvings as the largest needs, none when it fits", "[splat]") {
+TEST_CASE("Views fitted to a size: the largest's longest side at the size, each pixel the mean of those it covers",
+          "[splat]") {
   TrainView large, small;
   large.camera = CameraAt({0.3, -2, 0.5}, 40);
+  large.camera.height = 30;  // not square: both axes scale by the largest's factor
   small.camera = CameraAt({0.3, -2, 0.5}, 20);
-  for (TrainView* view : {&large, &small}) view->pixels.assign(size_t(view->camera.width) * view->camera.height * 3, 7);
-  const std::vector<TrainView> halved = HalvedToFit({large, small}, 16);  // 40 -> 20 -> 10: the largest fits
-  REQUIRE(halved.size() == 2);
-  CHECK(halved[0].camera.width == 10);
-  CHECK(halved[1].camera.width == 5);
-  CHECK(halved[0].camera.fx == Approx(large.camera.fx / 4));
-  CHECK(HalvedToFit({large}, 40)[0].camera.width == 40);
-  CHECK(HalvedToFit({large}, 0)[0].camera.width == 40);
+  for (TrainView* view : {&large, &small}) {
+    for (int y = 0; y < view->camera.height; ++y) {
+      for (int x = 0; x < view->camera.width; ++x) {
+        for (int c = 0; c < 3; ++c) view->pixels.push_back(static_cast<uint8_t>(3 * x + 2 * y + 20 * c));
+      }
+    }
+  }
+  const std::vector<TrainView> fitted = FittedViews({large, small}, 20);  // by half exactly
+  REQUIRE(fitted.size() == 2);
+  CHECK(fitted[0].camera.width == 20);
+  CHECK(fitted[0].camera.height == 15);
+  CHECK(fitted[1].camera.width == 10);
+  CHECK(fitted[0].camera.fx == Approx(large.camera.fx / 2));
+  CHECK(fitted[0].camera.cy == Approx(large.camera.cy / 2));
+  for (int y = 0; y < 15; ++y) {
+    for (int x = 0; x < 20; ++x) {
+      const double mean = 6 * x + 4 * y + 22.5;  // of the four pixels' green values
+      CHECK(std::abs(fitted[0].pixels[(size_t(y) * 20 + x) * 3 + 1] - mean) <= 0.5);
+    }
+  }
+  const std::vector<TrainView> odd = FittedViews({large}, 16);  // by 0.4: 16 x 12
+  CHECK(odd[0].camera.width == 16);
+  CHECK(odd[0].camera.height == 12);
+  CHECK(odd[0].camera.fy == Approx(large.camera.fy * 0.4));
+  CHECK(FittedViews({large}, 40)[0].camera.width == 40);
+  CHECK(FittedViews({large}, 0)[0].camera.width == 40);
 }
 
 TEST_CASE("SSIM of the splats' loss: 1 for the photo itself, its gradient against central differences", "[splat]") {
