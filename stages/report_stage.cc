@@ -61,6 +61,11 @@ std::string TrainingSection(const fs::path& train_dir, const std::optional<Train
       report.steps, report.wall_seconds, Number(report.heldout_psnr), report.heldout_views,
       HtmlEscape(report.heldout_split), pixels(report.heldout_pixels_per_view), report.samples_per_ray_rendered,
       100 * report.occupied_fraction);
+  if (report.throughput && report.throughput->seconds > 0 && report.throughput->rays > 0) {
+    const TrainReport::Throughput& t = *report.throughput;
+    html += format("<p>Training evaluated the field at {:.3g} million samples a second, {:.3g} samples per ray.</p>\n",
+                   t.samples / t.seconds / 1e6, double(t.samples) / t.rays);
+  }
   const TrainReport::Evaluations& evals = report.evaluations_during_training;
   html += format(
       "<p>Distortion loss weight {:.4g}; {} held-out evaluations during training ({} pixels per view) took "

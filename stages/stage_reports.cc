@@ -83,6 +83,19 @@ nlohmann::json OrNull(const std::optional<double>& value) {
   return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }
 
+// The rates are written beside the counts for whoever reads the file; Read() takes the counts.
+nlohmann::json ThroughputJson(const std::optional<TrainReport::Throughput>& throughput) {
+  if (!throughput) return nullptr;
+  const TrainReport::Throughput& t = *throughput;
+  const auto per = [](double count, double by) { return by > 0 ? count / by : 0.0; };
+  return {{"steps", t.steps},
+          {"seconds", t.seconds},
+          {"rays", t.rays},
+          {"samples", t.samples},
+          {"samples_per_second", per(double(t.samples), t.seconds)},
+          {"samples_per_ray", per(double(t.samples), double(t.rays))}};
+}
+
 // A pixels-per-view count as written: the number, or "all" for 0.
 nlohmann::json PixelsPerView(int pixels) { return pixels == 0 ? nlohmann::json("all") : nlohmann::json(pixels); }
 
@@ -237,6 +250,7 @@ nlohmann::json TrainReport::ToJson() const {
           {"samples_per_ray_rendered", samples_per_ray_rendered},
           {"render_seconds_per_view", render_seconds_per_view},
           {"occupied_fraction", occupied_fraction},
+          {"throughput", ThroughputJson(throughput)},
           {"field", field},
           {"trainer",
            {{"march_step", trainer.march_step},
@@ -281,6 +295,14 @@ TrainReport TrainReport::Read(const fs::path& file) {
   fields.Get("samples_per_ray_rendered", &report.samples_per_ray_rendered);
   fields.Get("render_seconds_per_view", &report.render_seconds_per_view);
   fields.Get("occupied_fraction", &report.occupied_fraction);
+  if (json.contains("throughput") && !json.at("throughput").is_null()) {
+    const Fields throughput = fields.Object("throughput");
+    TrainReport::Throughput& read = report.throughput.emplace();
+    throughput.Get("steps", &read.steps);
+    throughput.Get("seconds", &read.seconds);
+    throughput.Get("rays", &read.rays);
+    throughput.Get("samples", &read.samples);
+  }
   fields.Get("field", &report.field);
   const Fields trainer = fields.Object("trainer");
   trainer.Get("march_step", &report.trainer.march_step);

@@ -91,6 +91,14 @@ struct TrainReport {
     int pixels_per_view = 0;  // 0: every pixel
   } evaluations_during_training;
   double samples_per_ray_rendered = 0, render_seconds_per_view = 0, occupied_fraction = 0;
+  // The steps of this session of the run (a resumed run counts from its resumption): their time, the rays they
+  // trained on and the samples they marched and evaluated. None in reports written before it was recorded.
+  struct Throughput {
+    int steps = 0;
+    double seconds = 0;
+    size_t rays = 0, samples = 0;
+  };
+  std::optional<Throughput> throughput;
   nlohmann::json field = nlohmann::json::object();  // the field's config, as MakeField reads it
   struct Trainer {
     double march_step = 0;           // sample spacing along a ray (unbounded: near the centre), at the start

@@ -80,10 +80,12 @@ bool LoadCheckpoint(const fs::path& path, const std::string& key, RunState* stat
   }
 }
 
-// The held-out evaluations during training (in this session of the run: a resumed run counts from its resumption).
-struct EvalLog {
-  int count = 0;
-  double seconds = 0;
+// This session of the run (a resumed run counts from its resumption): its held-out evaluations during training and
+// its steps.
+struct SessionLog {
+  int evaluations = 0;
+  double evaluation_seconds = 0;
+  TrainReport::Throughput steps;
 };
 
 // The per-photo colour transforms (train_report.json's "appearance").
@@ -106,7 +108,7 @@ TrainReport::Appearance AppearanceReport(const Trainer& trainer, const TrainingD
 
 TrainReport MakeTrainReport(Trainer& trainer, const TrainerOptions& trainer_options, const TrainOptions& options,
                             const TrainingData& data, const std::vector<double>& psnrs, const RenderStats& eval_stats,
-                            int resumed_from, const EvalLog& eval_log) {
+                            int resumed_from, const SessionLog& session) {
   TrainReport report;
   report.steps = trainer.step();
   report.skipped_steps = trainer.skipped_steps();
@@ -117,7 +119,8 @@ TrainReport MakeTrainReport(Trainer& trainer, const TrainerOptions& trainer_opti
   if (!psnrs.empty()) report.heldout_psnr = Mean(psnrs);
   report.heldout_step_scale = DefaultStepScale(trainer.model());  // Trainer::HeldoutPsnr's
   for (size_t v = 0; v < psnrs.size(); ++v) report.heldout_per_view.push_back({data.heldout[v].name, psnrs[v]});
-  report.evaluations_during_training = {eval_log.count, eval_log.seconds, options.eval_pixels};
+  report.evaluations_during_training = {session.evaluations, session.evaluation_seconds, options.eval_pixels};
+  report.throughput = session.steps;
   report.samples_per_ray_rendered = eval_stats.rays > 0 ? double(eval_stats.samples_evaluated) / eval_stats.rays : 0;
   report.render_seconds_per_view = psnrs.empty() ? 0.0 : eval_stats.seconds / psnrs.size();
   const NerfModel& model = trainer.model();
@@ -242,7 +245,7 @@ void CheckCancel(size_t) { ThrowIfCancelled(); }  // Ctrl-C stops an evaluation 
 // evaluation (evaluations take at most train.eval_share of the wall time), checkpoints every
 // train.checkpoint_interval seconds into `checkpoint`, tagged with the result's `key`.
 void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptions& options, double budget,
-                    const fs::path& checkpoint, const std::string& key, RunState* state, EvalLog* eval_log) {
+                    const fs::path& checkpoint, const std::string& key, RunState* state, SessionLog* session) {
   using Clock = std::chrono::steady_clock;
   const auto done = [&] {
     return (budget > 0 && state->train_seconds >= budget) || (options.steps > 0 && trainer.step() >= options.steps);
@@ -261,8 +264,8 @@ void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptio
     state->loss_sum = 0;
     state->loss_steps = 0;
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    eval_log->seconds += seconds;
-    ++eval_log->count;
+    session->evaluation_seconds += seconds;
+    ++session->evaluations;
     return seconds;
   };
 
@@ -278,6 +281,11 @@ void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptio
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
     const int64_t whole_before = static_cast<int64_t>(state->train_seconds);
     state->train_seconds += seconds;
+    TrainReport::Throughput& counted = session->steps;
+    ++counted.steps;
+    counted.seconds += seconds;
+    counted.rays += step.rays;
+    counted.samples += step.samples;
     progress.Add(budget > 0 ? static_cast<int64_t>(state->train_seconds) - whole_before : 1);
     if (step.skipped) {
       LogWarning(format("train: step {} skipped: {}", trainer.step(), step.problem));
@@ -308,9 +316,9 @@ void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptio
 TrainReport WriteTrainReport(const fs::path& out, Trainer& trainer, const TrainingSetup& setup,
                              const std::vector<double>& psnrs, const std::vector<double>& fitted,
                              const RenderStats& eval_stats, const RunState& state, int resumed_from,
-                             const EvalLog& eval_log) {
+                             const SessionLog& session) {
   TrainReport report =
-      MakeTrainReport(trainer, setup.trainer, setup.options, setup.data, psnrs, eval_stats, resumed_from, eval_log);
+      MakeTrainReport(trainer, setup.trainer, setup.options, setup.data, psnrs, eval_stats, resumed_from, session);
   report.wall_seconds = state.train_seconds;
   report.heldout_split = setup.heldout_split;
   if (!fitted.empty()) report.heldout_psnr_fitted = Mean(fitted);
@@ -367,8 +375,8 @@ void TrainStage::Run(StageContext& context) const {
     LogInfo(format("train: resumed at step {} ({:.1f} s of training) from {}", trainer.step(), state.train_seconds,
                    checkpoint.string()));
   }
-  EvalLog eval_log;
-  TrainUntilDone(trainer, data, options, budget, checkpoint, context.key, &state, &eval_log);
+  SessionLog session;
+  TrainUntilDone(trainer, data, options, budget, checkpoint, context.key, &state, &session);
 
   if (!ModelIsFinite(trainer.model())) throw InternalError("training ended with non-finite parameters");
   RenderStats eval_stats;
@@ -383,12 +391,17 @@ void TrainStage::Run(StageContext& context) const {
                 {"refine_cameras", setup.trainer.refine_cameras}};
   WriteOrExplain([&] { SaveModel(model, context.output_dir / "model.bin"); });
   const TrainReport report =
-      WriteTrainReport(context.output_dir, trainer, setup, psnrs, fitted, eval_stats, state, resumed_from, eval_log);
+      WriteTrainReport(context.output_dir, trainer, setup, psnrs, fitted, eval_stats, state, resumed_from, session);
   context.summary = {{"steps", trainer.step()},
                      {"train_seconds", state.train_seconds},
                      {"heldout_psnr", report.heldout_psnr ? nlohmann::json(*report.heldout_psnr) : nullptr}};
-  LogInfo(format("train: {} steps in {:.1f} s; held-out PSNR {:.2f} dB over {} views ({:.1f} samples per ray)",
-                 trainer.step(), state.train_seconds, Mean(psnrs), psnrs.size(), report.samples_per_ray_rendered));
+  const TrainReport::Throughput& counted = session.steps;
+  LogInfo(format(
+      "train: {} steps in {:.1f} s ({:.2f} M samples/s, {:.1f} a ray); held-out PSNR {:.2f} dB over {} views ({:.1f} "
+      "samples per ray rendered)",
+      trainer.step(), state.train_seconds, counted.seconds > 0 ? counted.samples / counted.seconds / 1e6 : 0.0,
+      counted.rays > 0 ? double(counted.samples) / counted.rays : 0.0, Mean(psnrs), psnrs.size(),
+      report.samples_per_ray_rendered));
 }
 
 }  // namespace p2n

@@ -65,6 +65,8 @@ TEST_CASE("report stage: a self-contained page with every section, drawn by head
                        Catch::Contains(format("({:.2f}, {:.2f}, {:.2f})", background[0].get<double>(),
                                               background[1].get<double>(), background[2].get<double>())));
   CHECK_THAT(html, Catch::Contains("mesh.ply"));
+  const nlohmann::json throughput = ReadJsonFile(setup.dir / "ws" / "30_train" / "train_report.json")["throughput"];
+  CHECK_THAT(html, Catch::Contains(format("{:.3g} samples per ray.", throughput["samples_per_ray"].get<double>())));
   // Self-contained: nothing is loaded from elsewhere.
   CHECK_FALSE(std::regex_search(html, std::regex(R"((src|href)\s*=\s*"(https?:)?//)")));
   CHECK(setup.Status(config, "report").state == StageState::kFresh);

@@ -57,6 +57,7 @@ TrainReport SomeTrainReport() {
   report.samples_per_ray_rendered = 9.5;
   report.render_seconds_per_view = 0.25;
   report.occupied_fraction = 0.125;
+  report.throughput = TrainReport::Throughput{480, 60.25, 4096 * 480, 4096 * 480 * 12};
   report.field = {{"otype", "ngp"}};
   report.trainer = {0.0135, 0.00675, 0.01, 0.002, 65536, "unbounded", true, true, false, "learnt", {0.25, 0.5, 0.75}};
   report.appearance = {true, 0.875, 1.125, {{"a.png", 0.875, std::vector<float>(12, 0.5f)}}};
@@ -181,13 +182,20 @@ TEST_CASE("Reports between stages read back exactly what was written", "[reports
   CHECK(train_read.refinement.enabled);
   CHECK(train_read.refinement.rotation_degrees_max == 0.25);
   CHECK(train_read.appearance.per_view.at(0).transform.size() == 12);
+  CHECK(train_read.throughput.value().samples == 4096 * 480 * 12);
+  CHECK(train.ToJson()["throughput"]["samples_per_ray"] == 12.0);
   TrainReport plain = train;
   plain.appearance = {};
   plain.camera_refinement = {{"enabled", false}};
   plain.heldout_psnr.reset();
   plain.heldout_step_scale.reset();  // as in reports written before it was recorded
+  plain.throughput.reset();
   WriteJsonAtomic(dir.path() / "train_report.json", plain.ToJson());
   CHECK(TrainReport::Read(dir.path() / "train_report.json").ToJson() == plain.ToJson());
+  nlohmann::json older = plain.ToJson();
+  older.erase("throughput");  // written before it was recorded
+  WriteJsonAtomic(dir.path() / "train_report.json", older);
+  CHECK_FALSE(TrainReport::Read(dir.path() / "train_report.json").throughput.has_value());
 
   const SplatReport splat = SomeSplatReport();
   WriteJsonAtomic(dir.path() / "splat_report.json", splat.ToJson());

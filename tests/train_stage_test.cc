@@ -143,6 +143,10 @@ TEST_CASE("train stage: a cancelled run resumes from its checkpoint and finishes
   CHECK(report["steps"] == 60);
   CHECK(report["resumed_from_step"].get<int>() > 0);
   CHECK(report["resumed_from_step"].get<int>() < 60);
+  const nlohmann::json& throughput = report["throughput"];  // of this session of the run
+  CHECK(throughput["steps"] == 60 - report["resumed_from_step"].get<int>());
+  CHECK(throughput["rays"].get<size_t>() > 0);
+  CHECK(throughput["samples"].get<size_t>() > 0);
   CHECK_FALSE(fs::exists(checkpoint));  // removed once the stage is complete
 
   // A checkpoint of other options is not resumed from: it would be another result.
