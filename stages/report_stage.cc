@@ -61,10 +61,9 @@ std::string TrainingSection(const fs::path& train_dir, const std::optional<Train
       report.steps, report.wall_seconds, Number(report.heldout_psnr), report.heldout_views,
       HtmlEscape(report.heldout_split), pixels(report.heldout_pixels_per_view), report.samples_per_ray_rendered,
       100 * report.occupied_fraction);
-  if (report.throughput && report.throughput->seconds > 0 && report.throughput->rays > 0) {
-    const TrainReport::Throughput& t = *report.throughput;
+  if (report.throughput && report.throughput->steps > 0) {
     html += format("<p>Training evaluated the field at {:.3g} million samples a second, {:.3g} samples per ray.</p>\n",
-                   t.samples / t.seconds / 1e6, double(t.samples) / t.rays);
+                   report.throughput->SamplesPerSecond() / 1e6, report.throughput->SamplesPerRay());
   }
   const TrainReport::Evaluations& evals = report.evaluations_during_training;
   html += format(

@@ -87,13 +87,12 @@ nlohmann::json OrNull(const std::optional<double>& value) {
 nlohmann::json ThroughputJson(const std::optional<TrainReport::Throughput>& throughput) {
   if (!throughput) return nullptr;
   const TrainReport::Throughput& t = *throughput;
-  const auto per = [](double count, double by) { return by > 0 ? count / by : 0.0; };
   return {{"steps", t.steps},
           {"seconds", t.seconds},
           {"rays", t.rays},
           {"samples", t.samples},
-          {"samples_per_second", per(double(t.samples), t.seconds)},
-          {"samples_per_ray", per(double(t.samples), double(t.rays))}};
+          {"samples_per_second", t.SamplesPerSecond()},
+          {"samples_per_ray", t.SamplesPerRay()}};
 }
 
 // A pixels-per-view count as written: the number, or "all" for 0.

@@ -97,6 +97,8 @@ struct TrainReport {
     int steps = 0;
     double seconds = 0;
     size_t rays = 0, samples = 0;
+    double SamplesPerSecond() const { return seconds > 0 ? samples / seconds : 0.0; }
+    double SamplesPerRay() const { return rays > 0 ? double(samples) / rays : 0.0; }
   };
   std::optional<Throughput> throughput;
   nlohmann::json field = nlohmann::json::object();  // the field's config, as MakeField reads it

@@ -395,13 +395,11 @@ void TrainStage::Run(StageContext& context) const {
   context.summary = {{"steps", trainer.step()},
                      {"train_seconds", state.train_seconds},
                      {"heldout_psnr", report.heldout_psnr ? nlohmann::json(*report.heldout_psnr) : nullptr}};
-  const TrainReport::Throughput& counted = session.steps;
   LogInfo(format(
       "train: {} steps in {:.1f} s ({:.2f} M samples/s, {:.1f} a ray); held-out PSNR {:.2f} dB over {} views ({:.1f} "
       "samples per ray rendered)",
-      trainer.step(), state.train_seconds, counted.seconds > 0 ? counted.samples / counted.seconds / 1e6 : 0.0,
-      counted.rays > 0 ? double(counted.samples) / counted.rays : 0.0, Mean(psnrs), psnrs.size(),
-      report.samples_per_ray_rendered));
+      trainer.step(), state.train_seconds, session.steps.SamplesPerSecond() / 1e6, session.steps.SamplesPerRay(),
+      Mean(psnrs), psnrs.size(), report.samples_per_ray_rendered));
 }
 
 }  // namespace p2n
