@@ -296,11 +296,12 @@ TrainReport TrainReport::Read(const fs::path& file) {
   fields.Get("occupied_fraction", &report.occupied_fraction);
   if (json.contains("throughput") && !json.at("throughput").is_null()) {
     const Fields throughput = fields.Object("throughput");
-    TrainReport::Throughput& read = report.throughput.emplace();
+    TrainReport::Throughput read;
     throughput.Get("steps", &read.steps);
     throughput.Get("seconds", &read.seconds);
     throughput.Get("rays", &read.rays);
     throughput.Get("samples", &read.samples);
+    report.throughput = read;
   }
   fields.Get("field", &report.field);
   const Fields trainer = fields.Object("trainer");
