@@ -20,7 +20,7 @@ struct SplatOptions {
   int init_width = 128;             // training views rendered this wide to place the first Gaussians
   int max_gaussians = 100'000;      // of the first; densification may double it. Fewer: more steps for the time
   double coarse = 0.75;             // share of the optimisation on the photos at half size
-  int max_image_size = 1080;        // the photos are halved until their longest side is at most this; 0: any size
+  int max_image_size = 1080;        // the photos are downsized to at most this on their longest side; 0: any size
   double ssim_weight = 0.1;         // the loss: (1 - w) L1 + w (1 - SSIM)
   std::string background = "auto";  // auto: learnt behind photos without alpha, else the field's; fixed: the field's
   std::string frame = "source";
@@ -46,8 +46,8 @@ struct SplatOptions {
     v("coarse", coarse,
       "share of the optimisation time spent on the photos at half size (four times the steps; coarse to fine)");
     v("max_image_size", max_image_size,
-      "longest side of the photos the splats are optimised on: halved until the largest fits (the coarse share at "
-      "half that again); held-out views are scored at their own size; 0: as they are",
+      "longest side of the photos the splats are optimised on: larger ones are downsized to it with an area filter "
+      "(the coarse share at half that); held-out views are scored at their own size; 0: as they are",
       "px");
     v("ssim_weight", ssim_weight,
       "weight of the structural dissimilarity (1 - SSIM) in the loss, the rest L1 (3D Gaussian Splatting uses 0.2)");
