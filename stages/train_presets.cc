@@ -18,7 +18,12 @@ TrainPreset PresetFor(const std::string& name) {
   // samples a ray rendered against 3.0; 512 throughout: 300 s 28.35 and 28.30 against 27.77, 60 s 22.28 against
   // 22.94; lego_200, 40 s: 512 throughout 0.4-1.3 dB lower, 128 0.9-1.2 lower; 300 s 512 30.87 against 30.79).
   // Lego 800, 5 minutes alone on two threads: 29.11 dB (4,713 steps) against 28.31 with 256 throughout.
-  return {240, 256, 512, 1 << 16, 128, {16, 2, 17, 16, 2048}};
+  // Bounded scenes' hash table has 2^19 entries a level, real captures' 2^17: lego 800, 5 minutes alone on two
+  // threads, 30.03 dB (5,986 steps) against 29.92 with 2^18 (6,584) and 29.68 with 2^17 (7,629); 600 s on one
+  // thread each, side by side, 29.98 against 29.80 (6,097 and 7,938 steps). Fox loses by it, the same pair 28.18
+  // against 28.90 (5,419 and 6,728 steps): a step costs a fifth more, and a real capture is short of steps, not of
+  // entries (fern at equal steps: 2^19 +0.2 dB, at equal time level).
+  return {240, 256, 512, 1 << 16, 128, {16, 2, 17, 16, 2048}, 19};
 }
 
 }  // namespace p2n

@@ -17,7 +17,8 @@ struct TrainPreset {
   int march_samples;       // across the box's diagonal, bounded scenes (unbounded and forward: kUnboundedMarchSamples)
   int fine_march_samples;  // bounded scenes from the trainer's fine_march_from (1,000th) step on; 0: march_samples
   int batch_samples, occupancy_resolution;
-  HashGridConfig grid;  // levels, features per level, log2 table size, base and finest resolution
+  HashGridConfig grid;         // levels, features per level, log2 table size, base and finest resolution
+  int bounded_table_log2 = 0;  // bounded scenes' log2 table size; 0: the grid's
 };
 
 // The preset of that name (train.preset; its options have been checked): default for any other.

@@ -214,6 +214,8 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
   } else {
     NgpFieldConfig field;
     field.grid = preset.grid;
+    if (space == SceneSpace::kBounded && preset.bounded_table_log2 > 0)
+      field.grid.log2_table_size = preset.bounded_table_log2;
     if (options.hash_table_log2 > 0) field.grid.log2_table_size = options.hash_table_log2;
     trainer.field = field.ToJson();
   }

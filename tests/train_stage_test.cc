@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "nerf/nerf_model.h"
+#include "nerf/ngp_field.h"
 #include "pipeline/cancel.h"
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
@@ -37,6 +38,22 @@ TEST_CASE("train stage: train.scene auto is bounded for Blender and .npz data, f
   CHECK(ResolveSceneSpace(options, dataset("colmap", around)) == SceneSpace::kUnbounded);
   options.scene = "unbounded";
   CHECK(ResolveSceneSpace(options, dataset("", one_side)) == SceneSpace::kUnbounded);
+}
+
+TEST_CASE("train stage: the default preset's hash table is larger for bounded scenes; train.hash_table_log2 wins",
+          "[train]") {
+  const auto table_log2 = [](const TrainOptions& options, SceneSpace space) {
+    return NgpFieldConfig::FromJson(MakeTrainerOptions(options, space).field).grid.log2_table_size;
+  };
+  TrainOptions options;
+  CHECK(table_log2(options, SceneSpace::kBounded) == 19);
+  CHECK(table_log2(options, SceneSpace::kUnbounded) == 17);
+  CHECK(table_log2(options, SceneSpace::kForward) == 17);
+  options.preset = "fast";
+  CHECK(table_log2(options, SceneSpace::kBounded) == 15);
+  options.hash_table_log2 = 16;
+  CHECK(table_log2(options, SceneSpace::kBounded) == 16);
+  CHECK(table_log2(options, SceneSpace::kUnbounded) == 16);
 }
 
 TEST_CASE("train stage: model.bin, metrics.csv and train_report.json, fresh on a rerun, stale on a new seed",
