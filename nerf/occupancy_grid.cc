@@ -10,6 +10,21 @@
 #include "nerf/denormals.h"
 
 namespace p2n {
+namespace {
+
+// The sweeps over every cell run in parallel, in fixed blocks of cells: a multiple of 8, so that no two blocks share
+// a byte of the bits, and fixed, so that sums over them do not depend on the threads (a 256^3 grid's sweeps were a
+// few percent of a training step on one thread).
+constexpr size_t kSweepBlock = size_t{1} << 16;
+
+// Calls body(begin, end) on each block of [0, n), in parallel.
+template <typename Body>
+void ForEachBlock(size_t n, const Body& body) {
+  tbb::parallel_for(size_t{0}, (n + kSweepBlock - 1) / kSweepBlock,
+                    [&](size_t b) { body(b * kSweepBlock, std::min(n, (b + 1) * kSweepBlock)); });
+}
+
+}  // namespace
 
 OccupancyGrid::OccupancyGrid(int resolution)
     : resolution_(resolution),
@@ -42,15 +57,17 @@ void OccupancyGrid::BuildBlocks() {
   for (int k = 1; k <= kMaxBlockLevel && previous > 1; ++k) {
     const int size = (previous + 1) / 2;
     std::vector<uint8_t> flags(static_cast<size_t>(size) * size * size, 0);
-    for (int z = 0; z < previous; ++z) {
-      for (int y = 0; y < previous; ++y) {
-        for (int x = 0; x < previous; ++x) {
-          const size_t fine = (static_cast<size_t>(z) * previous + y) * previous + x;
-          const bool occupied = k == 1 ? (bits_[fine / 8] >> (fine % 8)) & 1 : blocks_.back()[fine];
-          if (occupied) flags[(static_cast<size_t>(z / 2) * size + y / 2) * size + x / 2] = 1;
+    tbb::parallel_for(0, size, [&](int block_z) {  // each task writes its own slice of blocks
+      for (int z = 2 * block_z; z < std::min(previous, 2 * block_z + 2); ++z) {
+        for (int y = 0; y < previous; ++y) {
+          for (int x = 0; x < previous; ++x) {
+            const size_t fine = (static_cast<size_t>(z) * previous + y) * previous + x;
+            const bool occupied = k == 1 ? (bits_[fine / 8] >> (fine % 8)) & 1 : blocks_.back()[fine];
+            if (occupied) flags[(static_cast<size_t>(block_z) * size + y / 2) * size + x / 2] = 1;
+          }
         }
       }
-    }
+    });
     blocks_.push_back(std::move(flags));
     previous = size;
   }
@@ -71,9 +88,11 @@ int OccupancyGrid::EmptyBlockSide(const int* cell) const {
 void OccupancyGrid::Update(const DensityFunction& density, float threshold, float decay, uint64_t seed, size_t cells) {
   const size_t total = densities_.size();
   if (cells == 0 || cells > total) cells = total;
-  for (float& value : densities_) {
-    if (value > 0) value *= decay;
-  }
+  ForEachBlock(total, [&](size_t begin, size_t end) {
+    for (size_t cell = begin; cell < end; ++cell) {
+      if (densities_[cell] > 0) densities_[cell] *= decay;
+    }
+  });
   // Cell k of this round is (cursor + k) * stride mod total: an odd stride visits every cell of a power-of-two
   // grid once per `total` cells, scattered over the volume.
   const size_t stride = (total % 2 == 0) ? 2654435761u % total | 1 : 1;
@@ -100,21 +119,35 @@ void OccupancyGrid::Update(const DensityFunction& density, float threshold, floa
   });
   cursor_ = (cursor_ + cells) % total;
   threshold = std::min(threshold, static_cast<float>(MeanDensity()));
-  std::fill(bits_.begin(), bits_.end(), 0);
-  for (size_t cell = 0; cell < total; ++cell) {
-    if (densities_[cell] > threshold || densities_[cell] < 0) bits_[cell / 8] |= static_cast<uint8_t>(1u << (cell % 8));
-  }
+  ForEachBlock(total, [&](size_t begin, size_t end) {
+    for (size_t byte = begin / 8; byte < (end + 7) / 8; ++byte) {
+      uint8_t bits = 0;
+      for (size_t cell = byte * 8; cell < std::min(end, byte * 8 + 8); ++cell) {
+        if (densities_[cell] > threshold || densities_[cell] < 0) bits |= static_cast<uint8_t>(1u << (cell % 8));
+      }
+      bits_[byte] = bits;
+    }
+  });
   BuildBlocks();
 }
 
 double OccupancyGrid::MeanDensity() const {
+  const size_t blocks = (densities_.size() + kSweepBlock - 1) / kSweepBlock;
+  std::vector<double> sums(blocks, 0.0);
+  std::vector<size_t> counts(blocks, 0);
+  ForEachBlock(densities_.size(), [&](size_t begin, size_t end) {
+    for (size_t cell = begin; cell < end; ++cell) {
+      if (densities_[cell] >= 0) {
+        sums[begin / kSweepBlock] += densities_[cell];
+        ++counts[begin / kSweepBlock];
+      }
+    }
+  });
   double sum = 0;
   size_t known = 0;
-  for (const float value : densities_) {
-    if (value >= 0) {
-      sum += value;
-      ++known;
-    }
+  for (size_t b = 0; b < blocks; ++b) {
+    sum += sums[b];
+    known += counts[b];
   }
   return known == 0 ? 0.0 : sum / known;
 }
