@@ -17,8 +17,9 @@ struct TrainPreset {
   int march_samples;       // across the box's diagonal, bounded scenes (unbounded and forward: kUnboundedMarchSamples)
   int fine_march_samples;  // bounded scenes from the trainer's fine_march_from (1,000th) step on; 0: march_samples
   int batch_samples, occupancy_resolution;
-  HashGridConfig grid;         // levels, features per level, log2 table size, base and finest resolution
-  int bounded_table_log2 = 0;  // bounded scenes' log2 table size; 0: the grid's
+  HashGridConfig grid;  // levels, features per level, log2 table size, base and finest resolution
+  // Bounded scenes' log2 table size and occupancy grid resolution; 0: the grid's and occupancy_resolution.
+  int bounded_table_log2 = 0, bounded_occupancy_resolution = 0;
 };
 
 // The preset of that name (train.preset; its options have been checked): default for any other.

@@ -226,6 +226,8 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
   if (!vanilla && options.march_samples == 0 && space == SceneSpace::kBounded && preset.fine_march_samples > 0)
     trainer.fine_march_step = 2 * std::sqrt(3.0) / preset.fine_march_samples;
   trainer.occupancy_resolution = preset.occupancy_resolution;
+  if (space == SceneSpace::kBounded && preset.bounded_occupancy_resolution > 0)
+    trainer.occupancy_resolution = preset.bounded_occupancy_resolution;
   trainer.batch_samples = options.batch_samples > 0 ? options.batch_samples : preset.batch_samples;
   trainer.learning_rate = options.learning_rate > 0 ? options.learning_rate : vanilla ? 5e-4 : 1e-2;
   trainer.final_learning_rate = trainer.learning_rate * (vanilla ? 0.1 : kNgpFinalLearningRate);

@@ -40,8 +40,7 @@ TEST_CASE("train stage: train.scene auto is bounded for Blender and .npz data, f
   CHECK(ResolveSceneSpace(options, dataset("", one_side)) == SceneSpace::kUnbounded);
 }
 
-TEST_CASE("train stage: the default preset's hash table is larger for bounded scenes; train.hash_table_log2 wins",
-          "[train]") {
+TEST_CASE("train stage: bounded scenes get the default preset's larger hash table and occupancy grid", "[train]") {
   const auto table_log2 = [](const TrainOptions& options, SceneSpace space) {
     return NgpFieldConfig::FromJson(MakeTrainerOptions(options, space).field).grid.log2_table_size;
   };
@@ -49,8 +48,12 @@ TEST_CASE("train stage: the default preset's hash table is larger for bounded sc
   CHECK(table_log2(options, SceneSpace::kBounded) == 19);
   CHECK(table_log2(options, SceneSpace::kUnbounded) == 17);
   CHECK(table_log2(options, SceneSpace::kForward) == 17);
+  CHECK(MakeTrainerOptions(options, SceneSpace::kBounded).occupancy_resolution == 256);
+  CHECK(MakeTrainerOptions(options, SceneSpace::kUnbounded).occupancy_resolution == 128);
+  CHECK(MakeTrainerOptions(options, SceneSpace::kForward).occupancy_resolution == 128);
   options.preset = "fast";
   CHECK(table_log2(options, SceneSpace::kBounded) == 15);
+  CHECK(MakeTrainerOptions(options, SceneSpace::kBounded).occupancy_resolution == 64);
   options.hash_table_log2 = 16;
   CHECK(table_log2(options, SceneSpace::kBounded) == 16);
   CHECK(table_log2(options, SceneSpace::kUnbounded) == 16);
