@@ -28,7 +28,8 @@ renderer.setPixelRatio(nativeSize ? 1 : Math.min(window.devicePixelRatio, 2));
 // for linear ones and brighten them on the way out.
 renderer.setClearColor(new THREE.Color().setRGB(...scene.background, THREE.SRGBColorSpace), 1);
 const world = new THREE.Scene();
-world.add(new SparkRenderer({ renderer }));
+const spark = new SparkRenderer({ renderer });
+world.add(spark);
 const splats = new SplatMesh({
   fileBytes: base64Bytes(document.getElementById("p2n-splats").textContent),
   fileName: "splats.compressed.ply",
@@ -123,5 +124,8 @@ splats.initialized.then(() => {
 window.p2n = {
   loaded: splats.initialized,
   frames: () => frames,
+  // Whether the splats drawn are in the order of a finished sort and no other is due: before the first sort
+  // Spark draws none of them.
+  sorted: () => spark.activeSplats > 0 && !spark.sorting && !spark.sortDirty,
   showCamera: (name) => showCamera(scene.cameras.find((v) => v.name === name)),
 };

@@ -21,15 +21,17 @@ try {
   const url = `${pathToFileURL(page_path)}#camera=${encodeURIComponent(camera_name)}&size=native`;
   await page.goto(url, { waitUntil: "load" });
   await page.evaluate(() => window.p2n.loaded);
-  // Spark sorts the splats in a worker: let a few frames go by, then wait until two frames agree.
+  // Spark sorts the splats in a worker and draws none before its first sort: wait for two frames that agree, the
+  // first taken after a sort had finished. (Two blank frames agree too: a slow worker once let CI compare one.)
   const snapshot = () => page.evaluate(() => document.getElementById("p2n-canvas").toDataURL("image/png"));
   const settled = async () => {
-    let previous = "";
+    let previous = "", sorted_before_previous = false;
     for (let i = 0; i < 40; ++i) {
       await page.evaluate(() => new Promise((done) => setTimeout(done, 250)));
+      const sorted = await page.evaluate(() => window.p2n.sorted());
       const now = await snapshot();
-      if (now === previous) return now;
-      previous = now;
+      if (now === previous && sorted_before_previous) return now;
+      [previous, sorted_before_previous] = [now, sorted];
     }
     return previous;
   };
