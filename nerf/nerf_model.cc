@@ -50,11 +50,12 @@ Eigen::Matrix3d FieldPointJacobian(const NerfModel& model, const Eigen::Vector3d
   return 0.25 * jacobian;
 }
 
-void WriteModel(const NerfModel& model, BinaryWriter* writer) {
+void WriteModel(const NerfModel& model, BinaryWriter* writer, bool occupancy_densities) {
   writer->PutBytes(kModelMagic, 8);
   writer->Put<uint32_t>(kModelFormatVersion);
   nlohmann::json header = {{"field", model.field->Config()},
                            {"occupancy_resolution", model.occupancy.resolution()},
+                           {"occupancy_densities", occupancy_densities},
                            {"background", model.background},
                            {"space", SceneSpaceName(model.space)},
                            {"march_step", model.march_step},
@@ -65,7 +66,7 @@ void WriteModel(const NerfModel& model, BinaryWriter* writer) {
   for (const ParamBlock<float>& block : model.field->DenseParams()) writer->PutArray(block.data, block.size);
   Encoding<float>* encoding = model.field->TrainableEncoding();
   if (encoding != nullptr) writer->PutArray(encoding->params(), encoding->num_params());
-  writer->PutVector(model.occupancy.densities());
+  if (occupancy_densities) writer->PutVector(model.occupancy.densities());
   writer->PutVector(model.occupancy.bits());
 }
 
@@ -103,9 +104,13 @@ NerfModel ReadModel(BinaryReader* reader) {
       std::copy(values.begin(), values.end(), encoding->params());
     }
     if (resolution < 1 || resolution > 1024) reader->Fail("occupancy_resolution must be 1..1024");
-    std::vector<float> densities = reader->GetVector<float>(size_t(resolution) * resolution * resolution);
+    const size_t cells = size_t(resolution) * resolution * resolution;
+    // Version 1 kept the densities always.
+    std::vector<float> densities;
+    if (version < 2 || header.at("occupancy_densities").get<bool>()) densities = reader->GetVector<float>(cells);
     std::vector<uint8_t> bits = reader->GetVector<uint8_t>();
-    model.occupancy = OccupancyGrid(resolution, std::move(densities), std::move(bits));
+    model.occupancy = densities.empty() ? OccupancyGrid(resolution, std::move(bits))
+                                        : OccupancyGrid(resolution, std::move(densities), std::move(bits));
   } catch (const nlohmann::json::exception& error) {
     reader->Fail(std::string("its header: ") + error.what());
   } catch (const std::invalid_argument& error) {
@@ -116,7 +121,7 @@ NerfModel ReadModel(BinaryReader* reader) {
 
 void SaveModel(const NerfModel& model, const std::filesystem::path& path) {
   BinaryWriter writer;
-  WriteModel(model, &writer);
+  WriteModel(model, &writer, false);
   WriteBinaryFileAtomic(path, writer.buffer());
 }
 

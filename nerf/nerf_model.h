@@ -24,7 +24,8 @@
 
 namespace p2n {
 
-inline constexpr uint32_t kModelFormatVersion = 1;
+// 2: the occupancy grid's densities only where the header says so (checkpoints; model.bin keeps the bits alone).
+inline constexpr uint32_t kModelFormatVersion = 2;
 
 // How the scene's space maps onto the field's unit cube (above).
 enum class SceneSpace { kBounded, kUnbounded, kForward };
@@ -61,12 +62,14 @@ inline Eigen::Vector3d FieldPoint(const NerfModel& model, const Eigen::Vector3d&
 // d(FieldPoint)/d(world) at `world`.
 Eigen::Matrix3d FieldPointJacobian(const NerfModel& model, const Eigen::Vector3d& world);
 
-void WriteModel(const NerfModel& model, BinaryWriter* writer);
+// With `occupancy_densities`, the occupancy grid's densities too: what a resumed training needs, and most of a
+// model's bytes at 256^3 (67 MB); a render, an export or the splats need the grid's bits alone.
+void WriteModel(const NerfModel& model, BinaryWriter* writer, bool occupancy_densities);
 // Reads what WriteModel wrote; std::runtime_error naming the source when it is damaged, of a newer format, or
 // its config is invalid.
 NerfModel ReadModel(BinaryReader* reader);
 
-// model.bin: written to a temporary file, flushed to disk and renamed into place.
+// model.bin (without the occupancy densities): written to a temporary file, flushed to disk and renamed into place.
 void SaveModel(const NerfModel& model, const std::filesystem::path& path);
 NerfModel LoadModel(const std::filesystem::path& path);
 

@@ -44,6 +44,16 @@ OccupancyGrid::OccupancyGrid(int resolution, std::vector<float> densities, std::
   BuildBlocks();
 }
 
+OccupancyGrid::OccupancyGrid(int resolution, std::vector<uint8_t> bits) : OccupancyGrid(resolution) {
+  if (bits.size() != bits_.size())
+    throw std::invalid_argument("occupancy grid: the saved bits do not match the resolution");
+  bits_ = std::move(bits);
+  for (size_t cell = 0; cell < densities_.size(); ++cell) {
+    if (!((bits_[cell / 8] >> (cell % 8)) & 1)) densities_[cell] = 0;
+  }
+  BuildBlocks();
+}
+
 void OccupancyGrid::MarkAllOccupied() {
   std::fill(bits_.begin(), bits_.end(), 0xff);
   BuildBlocks();

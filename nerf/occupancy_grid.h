@@ -24,6 +24,8 @@ class OccupancyGrid {
   explicit OccupancyGrid(int resolution = 128);
   // A grid saved with densities() and bits(); std::invalid_argument when the sizes do not match.
   OccupancyGrid(int resolution, std::vector<float> densities, std::vector<uint8_t> bits);
+  // A grid saved with its bits alone: its occupied cells unknown (as never evaluated), the others empty.
+  OccupancyGrid(int resolution, std::vector<uint8_t> bits);
 
   int resolution() const { return resolution_; }
   // Densities at points (3 x n, in [0, 1]^3) -> n values.

@@ -30,7 +30,7 @@ nlohmann::json CheckpointIdentity(const TrainerOptions& options) {
 void Trainer::SaveCheckpoint(BinaryWriter* writer) const {
   writer->PutBytes(kCheckpointMagic, 8);
   writer->PutString(CheckpointIdentity(options_).dump());
-  WriteModel(model_, writer);
+  WriteModel(model_, writer, true);
   writer->Put<int32_t>(step_);
   writer->Put<int32_t>(skipped_);
   writer->Put<double>(samples_per_ray_);

@@ -141,7 +141,7 @@ TEST_CASE("NDC: model.bin keeps the scene space and the frame, and a damaged fra
   model.space = SceneSpace::kForward;
   model.forward = FitForwardFrame(SideBySide(), {1, 1, 1, 1, 1});
   BinaryWriter writer;
-  WriteModel(model, &writer);
+  WriteModel(model, &writer, false);
   BinaryReader reader(writer.buffer(), "model.bin");
   const NerfModel read = ReadModel(&reader);
   CHECK(read.space == SceneSpace::kForward);

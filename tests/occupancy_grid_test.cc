@@ -81,6 +81,16 @@ TEST_CASE("occupancy grid: partial updates visit every cell once per round and k
   const OccupancyGrid copy(16, grid.densities(), grid.bits());
   CHECK(copy.OccupiedFraction() == 0.0);
   CHECK_THROWS_AS(OccupancyGrid(8, grid.densities(), grid.bits()), std::invalid_argument);
+  // A grid saved with its bits alone marches as the original does; its occupied cells are unknown, the rest empty.
+  grid.MarkAllOccupied();
+  grid.Update(Ball, 0.5f, 0.9f, 9);
+  const OccupancyGrid bits_alone(16, grid.bits());
+  const Ray ray{{0.0, 0.45, 0.55}, Eigen::Vector3d(1, 0.05, 0).normalized()};
+  CHECK(bits_alone.March(ray, 0, 1.2, 0.003, 1000).size() == grid.March(ray, 0, 1.2, 0.003, 1000).size());
+  CHECK(bits_alone.OccupiedFraction() == grid.OccupiedFraction());
+  CHECK(bits_alone.densities()[0] == 0.0f);                  // a corner: empty
+  CHECK(bits_alone.densities()[(8 * 16 + 8) * 16 + 8] < 0);  // the centre: occupied, its density unknown
+  CHECK_THROWS_AS(OccupancyGrid(8, grid.bits()), std::invalid_argument);
 }
 
 TEST_CASE("occupancy grid: leaping over empty blocks keeps every sample the lattice gives in occupied cells",

@@ -210,18 +210,25 @@ TEST_CASE("model.bin renders the same after loading, newer and damaged files are
   CHECK((original.rgb.pixels == copy.rgb.pixels));
   CHECK((original.depth.pixels == copy.depth.pixels));
 
+  // model.bin keeps the occupancy grid's bits without its densities (a checkpoint keeps both).
+  CHECK((loaded.occupancy.bits() == trainer.model().occupancy.bits()));
+  BinaryWriter with_densities;
+  WriteModel(trainer.model(), &with_densities, true);
+  CHECK(with_densities.buffer().size() >=
+        std::filesystem::file_size(dir / "model.bin") + 4 * trainer.model().occupancy.densities().size());
+
   std::vector<char> bytes = ReadBinaryFile(dir / "model.bin");
-  bytes[8] = 2;  // format version 2
+  bytes[8] = 3;  // format version 3
   WriteBinaryFileAtomic(dir / "newer.bin", bytes);
-  CHECK_THROWS_WITH(LoadModel(dir / "newer.bin"), Catch::Contains("format version 2") && Catch::Contains("newer.bin"));
-  bytes[8] = 1;
+  CHECK_THROWS_WITH(LoadModel(dir / "newer.bin"), Catch::Contains("format version 3") && Catch::Contains("newer.bin"));
+  bytes[8] = 2;
   bytes.resize(bytes.size() / 2);
   WriteBinaryFileAtomic(dir / "short.bin", bytes);
   CHECK_THROWS_WITH(LoadModel(dir / "short.bin"), Catch::Contains("damaged"));
   WriteBinaryFileAtomic(dir / "other.bin", {'h', 'e', 'l', 'l', 'o'});
   CHECK_THROWS_WITH(LoadModel(dir / "other.bin"), Catch::Contains("not a photo2nerf model"));
-  // The fuzzer's seeds are valid models (of both fields).
-  for (const char* seed : {"tiny_ngp.bin", "tiny_vanilla.bin"}) {
+  // The fuzzer's seeds are valid models (of both fields; format version 1 with the densities, 2 without).
+  for (const char* seed : {"tiny_ngp.bin", "tiny_vanilla.bin", "tiny_ngp_v2.bin", "tiny_vanilla_v2.bin"}) {
     const NerfModel tiny =
         LoadModel(std::filesystem::path(P2N_SOURCE_DIR) / "tests" / "fuzz" / "corpus" / "model" / seed);
     CHECK(tiny.occupancy.resolution() == 2);
