@@ -225,7 +225,9 @@ StepResult Trainer::Step(double progress) {
   const double per_ray = samples_per_ray_ > 0              ? samples_per_ray_
                          : options_.stratified_samples > 0 ? options_.stratified_samples
                                                            : 2.0 / model_.march_step;
-  const int rays = static_cast<int>(std::clamp(static_cast<double>(options_.batch_samples) / std::max(per_ray, 1.0),
+  const size_t batch_samples =
+      options_.late_batch_samples > 0 && progress >= 0.5 ? options_.late_batch_samples : options_.batch_samples;
+  const int rays = static_cast<int>(std::clamp(static_cast<double>(batch_samples) / std::max(per_ray, 1.0),
                                                double(options_.min_batch_rays), double(options_.max_batch_rays)));
   return StepOnBatch(SampleBatch(rays), progress);
 }

@@ -65,6 +65,7 @@ struct TrainerOptions {
   size_t max_samples_per_ray = 1024;
   int stratified_samples = 0;              // > 0: that many stratified samples per ray, no occupancy grid (vanilla)
   size_t batch_samples = size_t{1} << 16;  // samples per step (the rays per step follow)
+  size_t late_batch_samples = 0;           // > 0: samples per step in the run's second half
   int min_batch_rays = 256, max_batch_rays = 16384;
   double learning_rate = 1e-2;
   double final_learning_rate = 1e-3;  // reached at the end (exponential decay)

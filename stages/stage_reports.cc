@@ -255,6 +255,7 @@ nlohmann::json TrainReport::ToJson() const {
            {{"march_step", trainer.march_step},
             {"rendered_march_step", trainer.rendered_march_step},
             {"batch_samples", trainer.batch_samples},
+            {"late_batch_samples", trainer.late_batch_samples},
             {"scene", trainer.scene},
             {"learning_rate", trainer.learning_rate},
             {"distortion_weight", trainer.distortion_weight},
@@ -308,6 +309,7 @@ TrainReport TrainReport::Read(const fs::path& file) {
   trainer.Get("march_step", &report.trainer.march_step);
   trainer.Get("rendered_march_step", &report.trainer.rendered_march_step);
   trainer.Get("batch_samples", &report.trainer.batch_samples);
+  trainer.Get("late_batch_samples", &report.trainer.late_batch_samples);
   trainer.Get("scene", &report.trainer.scene);
   trainer.Get("learning_rate", &report.trainer.learning_rate);
   trainer.Get("distortion_weight", &report.trainer.distortion_weight);

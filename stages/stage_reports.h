@@ -107,7 +107,8 @@ struct TrainReport {
     double rendered_march_step = 0;  // the model's at the end, which renders use (finer after a refinement)
     double learning_rate = 0, distortion_weight = 0;
     size_t batch_samples = 0;
-    std::string scene;  // bounded | unbounded | forward
+    size_t late_batch_samples = 0;  // in the run's second half; 0: batch_samples throughout
+    std::string scene;              // bounded | unbounded | forward
     bool appearance = false, refine_cameras = false, error_sampling = false;
     std::string background;                     // random (behind images with alpha) | learnt | fixed
     std::array<double, 3> background_colour{};  // behind the scene after training (the learnt one, or the fixed)

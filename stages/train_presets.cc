@@ -27,7 +27,10 @@ TrainPreset PresetFor(const std::string& name) {
   // pair 30.48 against 30.09 dB (4,690 steps against 6,565: each 16th step refreshes a sixteenth of eight times the
   // cells), 4.3 samples a ray rendered against 5.2; fox's pair 28.69 against 28.93 (5,239 steps against 6,654).
   // Lego 800 alone on two threads with both: 30.52 dB after 5 minutes (4,417 steps), 31.88 after 15 (13,456).
-  return {240, 256, 512, 1 << 16, 128, {16, 2, 17, 16, 2048}, 19, 256};
+  // Bounded scenes' steps take 2^17 samples in the run's second half: lego 800, 1,800 s on one thread each side by
+  // side (15 minutes' worth), 32.02 against 31.83 dB (9,501 steps against 13,089), 3.9 samples a ray rendered
+  // against 4.2; 2^17 throughout lost its 600 s pair, 30.53 against 30.65 (3,229 steps against 4,951).
+  return {240, 256, 512, 1 << 16, 128, {16, 2, 17, 16, 2048}, 19, 256, 1 << 17};
 }
 
 }  // namespace p2n

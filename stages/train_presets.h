@@ -20,6 +20,8 @@ struct TrainPreset {
   HashGridConfig grid;  // levels, features per level, log2 table size, base and finest resolution
   // Bounded scenes' log2 table size and occupancy grid resolution; 0: the grid's and occupancy_resolution.
   int bounded_table_log2 = 0, bounded_occupancy_resolution = 0;
+  // Bounded scenes' samples per step in the run's second half; 0: batch_samples throughout.
+  int bounded_late_batch_samples = 0;
 };
 
 // The preset of that name (train.preset; its options have been checked): default for any other.

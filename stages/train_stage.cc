@@ -131,6 +131,7 @@ TrainReport MakeTrainReport(Trainer& trainer, const TrainerOptions& trainer_opti
                     trainer_options.learning_rate,
                     trainer_options.distortion_weight,
                     trainer_options.batch_samples,
+                    trainer_options.late_batch_samples,
                     SceneSpaceName(trainer_options.space),
                     trainer_options.appearance,
                     trainer_options.refine_cameras,
@@ -229,6 +230,8 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
   if (space == SceneSpace::kBounded && preset.bounded_occupancy_resolution > 0)
     trainer.occupancy_resolution = preset.bounded_occupancy_resolution;
   trainer.batch_samples = options.batch_samples > 0 ? options.batch_samples : preset.batch_samples;
+  if (options.batch_samples == 0 && space == SceneSpace::kBounded)
+    trainer.late_batch_samples = preset.bounded_late_batch_samples;
   trainer.learning_rate = options.learning_rate > 0 ? options.learning_rate : vanilla ? 5e-4 : 1e-2;
   trainer.final_learning_rate = trainer.learning_rate * (vanilla ? 0.1 : kNgpFinalLearningRate);
   trainer.loss = options.loss;

@@ -107,8 +107,8 @@ class TrainStage : public Stage {
   std::string folder() const override { return "30_train"; }
   // 3: photos without alpha learn the background; 4: the default preset's learning rate ends at 0.3 of its start
   // 7: train.scene auto picks forward for forward-facing captures
-  // 8: bounded scenes' default hash table is 2^19 and their occupancy grid 256^3
-  int format_version() const override { return 8; }
+  // 9: bounded scenes' steps take 2^17 samples in the run's second half; 8: their hash table 2^19, occupancy 256^3
+  int format_version() const override { return 9; }
   std::vector<std::string> upstream() const override { return {"poses"}; }
   void Run(StageContext& context) const override;
 };

@@ -40,7 +40,8 @@ TEST_CASE("train stage: train.scene auto is bounded for Blender and .npz data, f
   CHECK(ResolveSceneSpace(options, dataset("", one_side)) == SceneSpace::kUnbounded);
 }
 
-TEST_CASE("train stage: bounded scenes get the default preset's larger hash table and occupancy grid", "[train]") {
+TEST_CASE("train stage: bounded scenes get the default preset's larger hash table, occupancy grid and late batch",
+          "[train]") {
   const auto table_log2 = [](const TrainOptions& options, SceneSpace space) {
     return NgpFieldConfig::FromJson(MakeTrainerOptions(options, space).field).grid.log2_table_size;
   };
@@ -51,9 +52,18 @@ TEST_CASE("train stage: bounded scenes get the default preset's larger hash tabl
   CHECK(MakeTrainerOptions(options, SceneSpace::kBounded).occupancy_resolution == 256);
   CHECK(MakeTrainerOptions(options, SceneSpace::kUnbounded).occupancy_resolution == 128);
   CHECK(MakeTrainerOptions(options, SceneSpace::kForward).occupancy_resolution == 128);
+  // And steps of twice the samples in the run's second half, unless train.batch_samples says otherwise.
+  CHECK(MakeTrainerOptions(options, SceneSpace::kBounded).batch_samples == 65536);
+  CHECK(MakeTrainerOptions(options, SceneSpace::kBounded).late_batch_samples == 131072);
+  CHECK(MakeTrainerOptions(options, SceneSpace::kUnbounded).late_batch_samples == 0);
+  CHECK(MakeTrainerOptions(options, SceneSpace::kForward).late_batch_samples == 0);
+  options.batch_samples = 32768;
+  CHECK(MakeTrainerOptions(options, SceneSpace::kBounded).late_batch_samples == 0);
+  options.batch_samples = 0;
   options.preset = "fast";
   CHECK(table_log2(options, SceneSpace::kBounded) == 15);
   CHECK(MakeTrainerOptions(options, SceneSpace::kBounded).occupancy_resolution == 64);
+  CHECK(MakeTrainerOptions(options, SceneSpace::kBounded).late_batch_samples == 0);
   options.hash_table_log2 = 16;
   CHECK(table_log2(options, SceneSpace::kBounded) == 16);
   CHECK(table_log2(options, SceneSpace::kUnbounded) == 16);
