@@ -108,7 +108,7 @@ NerfModel ReadModel(BinaryReader* reader) {
     // Version 1 kept the densities always.
     std::vector<float> densities;
     if (version < 2 || header.at("occupancy_densities").get<bool>()) densities = reader->GetVector<float>(cells);
-    std::vector<uint8_t> bits = reader->GetVector<uint8_t>();
+    std::vector<uint8_t> bits = reader->GetVector<uint8_t>((cells + 7) / 8);
     model.occupancy = densities.empty() ? OccupancyGrid(resolution, std::move(bits))
                                         : OccupancyGrid(resolution, std::move(densities), std::move(bits));
   } catch (const nlohmann::json::exception& error) {
