@@ -24,18 +24,21 @@ void ForEachBlock(size_t n, const Body& body) {
                     [&](size_t b) { body(b * kSweepBlock, std::min(n, (b + 1) * kSweepBlock)); });
 }
 
-}  // namespace
-
-OccupancyGrid::OccupancyGrid(int resolution)
-    : resolution_(resolution),
-      densities_(static_cast<size_t>(resolution) * resolution * resolution, -1.0f),
-      bits_((densities_.size() + 7) / 8, 0xff) {
+// The cells of a grid of that resolution, checked before anything is allocated.
+size_t CellCount(int resolution) {
   if (resolution < 1 || resolution > 1024) throw std::invalid_argument("occupancy grid resolution must be 1..1024");
-  BuildBlocks();
+  return static_cast<size_t>(resolution) * resolution * resolution;
 }
 
+}  // namespace
+
+OccupancyGrid::OccupancyGrid(int resolution, Unbuilt)
+    : resolution_(resolution), densities_(CellCount(resolution), -1.0f), bits_((densities_.size() + 7) / 8, 0xff) {}
+
+OccupancyGrid::OccupancyGrid(int resolution) : OccupancyGrid(resolution, Unbuilt{}) { BuildBlocks(); }
+
 OccupancyGrid::OccupancyGrid(int resolution, std::vector<float> densities, std::vector<uint8_t> bits)
-    : OccupancyGrid(resolution) {
+    : OccupancyGrid(resolution, Unbuilt{}) {
   if (densities.size() != densities_.size() || bits.size() != bits_.size()) {
     throw std::invalid_argument("occupancy grid: the saved values do not match the resolution");
   }
@@ -44,7 +47,7 @@ OccupancyGrid::OccupancyGrid(int resolution, std::vector<float> densities, std::
   BuildBlocks();
 }
 
-OccupancyGrid::OccupancyGrid(int resolution, std::vector<uint8_t> bits) : OccupancyGrid(resolution) {
+OccupancyGrid::OccupancyGrid(int resolution, std::vector<uint8_t> bits) : OccupancyGrid(resolution, Unbuilt{}) {
   if (bits.size() != bits_.size())
     throw std::invalid_argument("occupancy grid: the saved bits do not match the resolution");
   bits_ = std::move(bits);

@@ -65,6 +65,9 @@ class OccupancyGrid {
   const std::vector<uint8_t>& bits() const { return bits_; }
 
  private:
+  struct Unbuilt {};
+  // Sized, every cell unknown (occupied), the blocks not built yet: what the constructors start from.
+  OccupancyGrid(int resolution, Unbuilt);
   size_t CellIndex(int x, int y, int z) const { return (static_cast<size_t>(z) * resolution_ + y) * resolution_ + x; }
   // The blocks from the bits (after every change of them).
   void BuildBlocks();
