@@ -91,7 +91,8 @@ nlohmann::json Manifest::ToJson() const {
           {"finished_utc", finished_utc},
           {"wall_seconds", wall_seconds},
           {"summary", summary},
-          {"outputs", files}};
+          {"outputs", files},
+          {"upstream_results", upstream_results}};
 }
 
 Manifest Manifest::FromJson(const nlohmann::json& json, const std::string& source) {
@@ -107,6 +108,8 @@ Manifest Manifest::FromJson(const nlohmann::json& json, const std::string& sourc
     manifest.finished_utc = json.value("finished_utc", "");
     manifest.wall_seconds = json.value("wall_seconds", 0.0);
     manifest.summary = json.value("summary", nlohmann::json::object());
+    if (json.contains("upstream_results"))
+      manifest.upstream_results = json.at("upstream_results").get<std::map<std::string, std::string>>();
     for (const nlohmann::json& file : json.at("outputs")) {
       manifest.outputs.push_back(
           {file.at("path").get<std::string>(), file.at("size").get<uint64_t>(), file.at("sha1").get<std::string>()});
@@ -135,6 +138,15 @@ std::vector<OutputFile> ListOutputs(const fs::path& folder) {
   const std::vector<std::string> digests = Sha1OfFiles(paths);
   for (size_t i = 0; i < outputs.size(); ++i) outputs[i].sha1 = digests[i];
   return outputs;
+}
+
+std::string OutputsDigest(const std::vector<OutputFile>& outputs) {
+  Hasher hasher;
+  hasher.Field("photo2nerf outputs v1");
+  for (const OutputFile& file : outputs) {
+    if (file.path != kConfigName) hasher.Field(file.path).Field(static_cast<int64_t>(file.size)).Field(file.sha1);
+  }
+  return hasher.HexDigest();
 }
 
 std::vector<std::string> ChangedOutputs(const fs::path& folder, const std::vector<OutputFile>& outputs) {

@@ -41,6 +41,10 @@ struct Manifest {
   double wall_seconds = 0;
   nlohmann::json summary = nlohmann::json::object();
   std::vector<OutputFile> outputs;
+  // Upstream stage -> OutputsDigest of the result it read. A stage rerun alone (`train --force`) keeps its key
+  // but may make another result (a time budget); what read the old one is stale then. Empty in manifests
+  // written before this was recorded: their upstream results are not checked.
+  std::map<std::string, std::string> upstream_results;
 
   nlohmann::json ToJson() const;
   // UserError naming `source` when a field is missing or of the wrong type.
@@ -48,6 +52,11 @@ struct Manifest {
 };
 
 inline constexpr const char* kManifestName = "manifest.json";
+inline constexpr const char* kConfigName = "config.json";  // the whole configuration a stage ran with
+
+// A SHA-1 over the listed files' paths, sizes and SHA-1s but the configuration's: equal for equal results, whatever
+// runtime options (threads, logging) they were made with.
+std::string OutputsDigest(const std::vector<OutputFile>& outputs);
 
 // Every file below `folder` (but the manifest), sorted, with sizes and SHA-1s (hashed in parallel).
 std::vector<OutputFile> ListOutputs(const std::filesystem::path& folder);

@@ -26,6 +26,19 @@ struct ProgressPrefixScope {
   ~ProgressPrefixScope() { SetProgressPrefix(""); }
 };
 
+// Why `status`'s complete result no longer follows from its upstream stages' results: those remade since with
+// other content (a stage rerun alone keeps its key). `statuses` holds at least the stages before it.
+std::vector<std::string> RemadeUpstream(const StageStatus& status, const std::vector<StageStatus>& statuses) {
+  std::vector<std::string> reasons;
+  for (const auto& [up, digest] : status.manifest->upstream_results) {
+    for (const StageStatus& other : statuses) {
+      if (other.stage->name() == up && other.manifest && OutputsDigest(other.manifest->outputs) != digest)
+        reasons.push_back(format("upstream {} was rerun since and made another result", up));
+    }
+  }
+  return reasons;
+}
+
 }  // namespace
 
 const char* StageStateName(StageState state) {
@@ -136,6 +149,7 @@ std::vector<StageStatus> Runner::Status(const Workspace& workspace, const Config
         for (const std::string& file : ChangedOutputs(dir, status.manifest->outputs)) {
           status.reasons.push_back(format("output {} is missing or was modified", file));
         }
+        if (status.reasons.empty()) status.reasons = RemadeUpstream(status, statuses);
         status.state = status.reasons.empty() ? StageState::kFresh : StageState::kStale;
       }
     }
@@ -194,7 +208,14 @@ std::vector<StageRun> Runner::Run(const Workspace& workspace, const Config& conf
     const auto start = std::chrono::steady_clock::now();
     {
       const ProgressPrefixScope prefix(position);
-      RunOne(workspace, config, status, &memo);
+      statuses[i].manifest = RunOne(workspace, config, status, &memo);
+    }
+    statuses[i].state = StageState::kFresh;
+    for (size_t j = i + 1; j < stages_.size(); ++j) {  // those that read its old result, if this one differs
+      StageStatus& later = statuses[j];
+      if (later.state != StageState::kFresh) continue;
+      later.reasons = RemadeUpstream(later, statuses);
+      if (!later.reasons.empty()) later.state = StageState::kStale;
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     LogInfo(format("{}: done in {:.2f} s", name, seconds));
@@ -203,7 +224,8 @@ std::vector<StageRun> Runner::Run(const Workspace& workspace, const Config& conf
   return runs;
 }
 
-void Runner::RunOne(const Workspace& workspace, const Config& config, const StageStatus& status, RunMemo* memo) const {
+Manifest Runner::RunOne(const Workspace& workspace, const Config& config, const StageStatus& status,
+                        RunMemo* memo) const {
   const Stage& stage = *status.stage;
   const fs::path staging = workspace.StagingDir(stage.folder());
   const fs::path final_dir = workspace.StageDir(stage.folder());
@@ -228,7 +250,7 @@ void Runner::RunOne(const Workspace& workspace, const Config& config, const Stag
   const auto start = std::chrono::steady_clock::now();
   stage.Run(context);
   ThrowIfCancelled();
-  WriteJsonAtomic(staging / "config.json", config.ToJson());
+  WriteJsonAtomic(staging / kConfigName, config.ToJson());
 
   Manifest manifest;
   manifest.inputs = status.expected;
@@ -236,6 +258,10 @@ void Runner::RunOne(const Workspace& workspace, const Config& config, const Stag
   manifest.photo2nerf_version = kVersion;
   manifest.summary = context.summary;
   manifest.outputs = ListOutputs(staging);
+  for (const auto& [up, dir] : context.upstream_dirs) {
+    const fs::path path = dir / kManifestName;
+    manifest.upstream_results[up] = OutputsDigest(Manifest::FromJson(ReadJsonFile(path), path.string()).outputs);
+  }
   manifest.finished_utc = UtcTimestamp();
   manifest.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   WriteJsonAtomic(staging / kManifestName, manifest.ToJson());
@@ -249,6 +275,7 @@ void Runner::RunOne(const Workspace& workspace, const Config& config, const Stag
   SyncDirectory(workspace.root());
   RemoveAll(trash);
   RemoveAll(context.resume_dir);
+  return manifest;
 }
 
 void Runner::Clean(const Workspace& workspace, std::string_view name) const {

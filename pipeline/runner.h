@@ -59,7 +59,8 @@ class Runner {
   size_t IndexOf(std::string_view name) const;
   // Whether stage `i` reads stage `j`'s result under `config`, directly or not.
   bool DependsOn(size_t i, size_t j, const Config& config) const;
-  void RunOne(const Workspace& workspace, const Config& config, const StageStatus& status, RunMemo* memo) const;
+  // Makes the stage's result; returns its manifest.
+  Manifest RunOne(const Workspace& workspace, const Config& config, const StageStatus& status, RunMemo* memo) const;
 
   std::vector<std::unique_ptr<Stage>> stages_;
 };

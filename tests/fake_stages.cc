@@ -52,6 +52,7 @@ class FakeStage : public Stage {
     std::string text = name_ + "=" + std::to_string(options.value);
     for (const auto& [up, dir] : context.upstream_dirs) text += format(";{}", ReadText(dir / "out.txt"));
     std::ofstream(context.output_dir / "out.txt") << text;
+    if (options.noise != 0) std::ofstream(context.output_dir / "noise.txt") << options.noise;
     if (options.fail) throw UserError(format("stage {} failed on purpose", name_));
     CheckResult(context.output_dir, context.config);
     if (options.block) {

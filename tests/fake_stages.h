@@ -18,6 +18,7 @@ struct FakeOptions {
   bool block = false;         // write started.flag into the counter folder, then sleep for a minute
   int min_value = 0;          // a threshold: a result whose value is below it fails (Run and CheckResult)
   bool read_upstream = true;  // false: the stage reads no upstream stage (Stage::UpstreamFor)
+  int noise = 0;              // written into noise.txt when not 0: a result that the key does not determine
 
   template <class V>
   void Visit(V& v) {
@@ -26,6 +27,7 @@ struct FakeOptions {
     v("block", block, "block in the middle of the run", "", OptionKind::kRuntime);
     v("min_value", min_value, "the least value a result may have", "", OptionKind::kCheck);
     v("read_upstream", read_upstream, "read the upstream stage's result");
+    v("noise", noise, "written into noise.txt (as a time budget's result differs)", "", OptionKind::kRuntime);
   }
   void Check() const {}
 };

@@ -303,6 +303,38 @@ TEST_CASE("run requests: from, until and force", "[runner]") {
   }
 }
 
+TEST_CASE("a stage rerun alone with another result makes what read the old one stale", "[runner]") {
+  Fixture f;
+  f.Run();
+  RunRequest b_alone = Force("b");
+  b_alone.from = b_alone.until = "b";
+  f.Run(b_alone);  // the same result: nothing downstream to redo
+  CHECK(States(f.Status()) == std::vector{kFresh, kFresh, kFresh});
+  f.config.Set("b.noise", 7, "test");  // runtime, so not in the key: as a time budget's training differs
+  SECTION("the next status and run") {
+    f.Run(b_alone);
+    const auto statuses = f.Status();
+    CHECK(States(statuses) == std::vector{kFresh, kFresh, kStale});
+    CHECK(statuses[2].reasons == std::vector<std::string>{"upstream b was rerun since and made another result"});
+    f.Run();
+    CHECK(f.Counts() == std::vector{1, 3, 2});
+  }
+  SECTION("within one run") {
+    fs::remove(f.workspace.StageDir("b") / kManifestName);  // b incomplete: redone, and with another result
+    f.Run();
+    CHECK(f.Counts() == std::vector{1, 3, 2});
+    CHECK(States(f.Status()) == std::vector{kFresh, kFresh, kFresh});
+  }
+  SECTION("a manifest from before upstream results were recorded is not checked") {
+    const fs::path manifest = f.workspace.StageDir("c") / kManifestName;
+    nlohmann::json json = ReadJsonFile(manifest);
+    json.erase("upstream_results");
+    WriteJsonAtomic(manifest, json);
+    f.Run(b_alone);
+    CHECK(States(f.Status()) == std::vector{kFresh, kFresh, kFresh});
+  }
+}
+
 TEST_CASE("a manifest that is damaged is reported, not trusted", "[runner]") {
   Fixture f;
   f.Run();
