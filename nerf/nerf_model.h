@@ -35,7 +35,7 @@ SceneSpace SceneSpaceFromName(const std::string& name);
 
 struct NerfModel {
   std::unique_ptr<RadianceField<float>> field;
-  OccupancyGrid occupancy{128};
+  OccupancyGrid occupancy{1};                // one occupied cell until the trainer or a model file sets the real one
   std::array<float, 3> background{1, 1, 1};  // behind the scene when rendering (the training background)
   SceneSpace space = SceneSpace::kBounded;
   ForwardFrame forward;                            // kForward's reference camera
