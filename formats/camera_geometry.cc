@@ -35,4 +35,40 @@ std::optional<FocusPoint> FindFocusPoint(const std::vector<Eigen::Vector3d>& cen
   return focus;
 }
 
+PrincipalFrame PrincipalAxes(const std::vector<Eigen::Vector3d>& points) {
+  PrincipalFrame frame;
+  if (points.empty()) return frame;
+  for (const Eigen::Vector3d& p : points) frame.mean += p;
+  frame.mean /= static_cast<double>(points.size());
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& p : points) scatter += (p - frame.mean) * (p - frame.mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(scatter);
+  frame.axes = solver.eigenvectors();
+  frame.variances = solver.eigenvalues();
+  return frame;
+}
+
+bool OutsideSpan(const std::vector<Eigen::Vector3d>& centres, const Eigen::Vector3d& point) {
+  if (centres.size() < 2) return false;
+  const PrincipalFrame frame = PrincipalAxes(centres);
+  const Eigen::Vector3d& mean = frame.mean;
+  Eigen::Vector3d low = Eigen::Vector3d::Constant(INFINITY), high = -low;
+  for (const Eigen::Vector3d& c : centres) {
+    const Eigen::Vector3d along = frame.axes.transpose() * (c - mean);
+    low = low.cwiseMin(along);
+    high = high.cwiseMax(along);
+  }
+  const Eigen::Vector3d extent = high - low;
+  const double largest = extent.maxCoeff();
+  if (!(largest > 0)) return (point - mean).norm() > 0;
+  const Eigen::Vector3d along = frame.axes.transpose() * (point - mean);
+  Eigen::Index principal = 0;
+  extent.maxCoeff(&principal);
+  for (int axis = 0; axis < 3; ++axis) {
+    const double margin = axis == principal ? 0.02 * largest : 0.1 * largest;
+    if (along[axis] < low[axis] - margin || along[axis] > high[axis] + margin) return true;
+  }
+  return false;
+}
+
 }  // namespace p2n

@@ -59,15 +59,10 @@ Normalization NormalizeScene(const std::vector<Eigen::Vector3d>& centres, const 
     result.up_from = "camera up vectors";
   } else if (centres.size() >= 3) {
     // Cameras around an object lie near a plane whose normal is up; choose the side the cameras' ups lean to.
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (const Eigen::Vector3d& c : centres) mean += c;
-    mean /= static_cast<double>(centres.size());
-    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-    for (const Eigen::Vector3d& c : centres) covariance += (c - mean) * (c - mean).transpose();
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
-    const Eigen::Vector3d values = eigen.eigenvalues();
+    const PrincipalFrame frame = PrincipalAxes(centres);
+    const Eigen::Vector3d& values = frame.variances;
     if (values(1) > 1e-6 * std::max(values(2), kTiny) && values(2) > kTiny) {
-      up = eigen.eigenvectors().col(0);
+      up = frame.axes.col(0);
       if (up.dot(mean_up) < 0) up = -up;
       result.up_from = "camera plane";
     }

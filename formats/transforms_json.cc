@@ -1,5 +1,7 @@
 #include "formats/transforms_json.h"
 
+#include "formats/camera_geometry.h"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -83,6 +85,7 @@ nlohmann::json MetaJson(const TransformsMeta& meta) {
                          {"normalization", {{"centre_from", n.centre_from}, {"up_from", n.up_from}}}};
   if (!meta.dataset_kind.empty()) json["dataset"] = {{"kind", meta.dataset_kind}, {"path", meta.dataset_path}};
   if (meta.background) json["background"] = *meta.background;
+  if (!meta.heldout_rule.empty()) json["heldout_rule"] = meta.heldout_rule;
   if (!meta.frame.empty()) json.update({{"frame", meta.frame}, {"cameras_refined", meta.cameras_refined}});
   return json;
 }
@@ -158,6 +161,10 @@ TransformsMeta ReadMeta(const nlohmann::json& json, const fs::path& file) {
     const nlohmann::json& rgb = json["background"];
     if (!rgb.is_array() || rgb.size() != 3) Bad(file, "background", "must be three numbers (red, green, blue)");
     meta.background = rgb.get<std::array<float, 3>>();
+  }
+  if (json.contains("heldout_rule")) {
+    if (!json["heldout_rule"].is_string()) Bad(file, "heldout_rule", "must be a string");
+    meta.heldout_rule = json["heldout_rule"].get<std::string>();
   }
   meta.frame = json.value("frame", "");
   meta.cameras_refined = json.value("cameras_refined", false);
@@ -239,12 +246,47 @@ std::vector<CameraView> NormalizedViews(const std::vector<CameraView>& views, co
   return out;
 }
 
-void AssignHoldout(std::vector<CameraView>* views, int every) {
-  for (size_t i = 0; i < views->size(); ++i) {
-    CameraView& view = (*views)[i];
-    if (view.split == "val" || view.split == "test") continue;
-    view.split = every > 0 && i % every == 0 ? "val" : "train";
+std::string AssignHoldout(std::vector<CameraView>* views, int every, bool inside_span) {
+  std::vector<CameraView*> open;  // the views without a split of their own
+  for (CameraView& view : *views) {
+    if (view.split != "val" && view.split != "test") open.push_back(&view);
   }
+  for (CameraView* view : open) view->split = "train";
+  if (every <= 0 || open.empty()) return "";
+  if (!inside_span || open.size() >= kFewViews) {
+    for (size_t i = 0; i < open.size(); i += every) open[i]->split = "val";
+    return format("every {}th view from the first", every);
+  }
+  // As many as every Nth would hold out, each the view nearest an even spread over the sequence (away from its
+  // ends) whose camera lies inside the span of the views left to train on.
+  const size_t n = open.size(), count = (n + every - 1) / every;
+  const auto centre = [&](size_t i) -> Eigen::Vector3d {
+    return open[i]->camera.world_from_cam.topRightCorner<3, 1>();
+  };
+  const auto inside = [&](size_t candidate) {
+    std::vector<Eigen::Vector3d> training;
+    for (size_t i = 0; i < n; ++i) {
+      if (i != candidate && open[i]->split == "train") training.push_back(centre(i));
+    }
+    return !OutsideSpan(training, centre(candidate));
+  };
+  for (size_t k = 0; k < count; ++k) {
+    const long ideal = static_cast<long>((2 * k + 1) * n / (2 * count));
+    long chosen = -1;
+    for (long offset = 0; offset < static_cast<long>(n) && chosen < 0; ++offset) {
+      for (const long i : {ideal - offset, ideal + offset}) {
+        if (i < 0 || i >= static_cast<long>(n) || open[i]->split != "train" || !inside(i)) continue;
+        chosen = i;
+        break;
+      }
+    }
+    if (chosen < 0) chosen = open[ideal]->split == "train" ? ideal : -1;  // none inside: the even spread
+    if (chosen >= 0) open[chosen]->split = "val";
+  }
+  return format(
+      "{} of {} views, spread over the capture inside the span of the others (fewer than {} photos: "
+      "the first and last would test extrapolation)",
+      count, n, kFewViews);
 }
 
 void CameraFrames(const std::vector<CameraView>& views, std::vector<Eigen::Vector3d>* centres,

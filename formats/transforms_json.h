@@ -3,7 +3,7 @@
 // (fl_x, fl_y, cx, cy, w, h) at the top level when every view shares them, else per frame; frames with
 // file_path and transform_matrix (camera-to-world, OpenGL axes). Our extras: split, near, far per frame;
 // applied_transform (3x4, normalised from the source world) with applied_scale and how the normalisation was
-// chosen; the dataset imported and the background its images were composited on; the export's frame.
+// chosen; the dataset imported and the background its images show, when known; the export's frame.
 // TransformsFile is the one place that writes and reads it: the poses, import and export stages write one, every
 // later stage reads the poses stage's, and the dataset importer reads instant-ngp's, nerfstudio's and Blender's.
 
@@ -34,8 +34,10 @@ struct TransformsMeta {
   // the frame of the views; centre_from and up_from: how it was chosen ("" when it was not).
   Normalization normalization;
   std::string dataset_kind, dataset_path;  // the dataset imported ("blender", "llff", ...); empty for photos
-  // The colour transparent images were composited on when imported; none: not composited (white stands in).
+  // The colour behind the scene when the import knows it (the colour transparent images were composited on, or the
+  // plain one every image's border shows); none: unknown, learnt from photos (white stands in).
   std::optional<std::array<float, 3>> background;
+  std::string heldout_rule;      // how the held-out views were chosen (AssignHoldout); empty: by the dataset
   std::string frame;             // the export's: which frame its cameras are in; empty otherwise
   bool cameras_refined = false;  // the export's: the training cameras as camera refinement left them
 
@@ -63,9 +65,15 @@ struct TransformsFile {
 // sees it.
 std::vector<CameraView> NormalizedViews(const std::vector<CameraView>& views, const Normalization& normalization);
 
-// Marks every Nth view (0: none) as "val", the others "train"; views whose split is already "val" or "test"
-// keep it.
-void AssignHoldout(std::vector<CameraView>* views, int every);
+// Captures of fewer views than this hold out views inside the span of the others (AssignHoldout).
+inline constexpr size_t kFewViews = 20;
+
+// Marks views "val" (held out for evaluation) or "train"; views whose split is already "val" or "test" keep it.
+// Every Nth from the first (0: none; the NeRF paper's protocol), or, with `inside_span` and fewer than kFewViews
+// views, as many views spread over the sequence, each inside the span of the training cameras (OutsideSpan): with
+// so few photos the ends of an arc would measure extrapolation, not new views. Returns the rule, said in words
+// ("" when none is held out).
+std::string AssignHoldout(std::vector<CameraView>* views, int every, bool inside_span);
 
 // Centres, ups and viewing directions of the views, for NormalizeScene.
 void CameraFrames(const std::vector<CameraView>& views, std::vector<Eigen::Vector3d>* centres,

@@ -32,6 +32,9 @@ constexpr double kPoseRateShare = 0.1;
 // grid's gradient with respect to its input costs about as much as its backward pass, and a pose has 6 values
 // where a batch has thousands of rays.
 constexpr size_t kPoseChunkShare = 8;
+// A learnt background moves at the full rate once this share of a batch's light comes from behind the scene, in
+// proportion below it.
+constexpr double kBackgroundSeen = 0.01;
 
 // The loss of one colour channel and its derivative.
 float ChannelLoss(bool huber, float difference, float* derivative) {
@@ -255,7 +258,8 @@ struct Trainer::Chunk {
   Eigen::Index first_sample = 0;  // in the whole batch
   std::vector<float> d_dense, d_appearance, d_poses;
   std::array<float, 3> d_background{};
-  std::vector<Eigen::Index> used;             // the samples before early termination (the ones with gradients)
+  double background_weight = 0;    // the rays' final transmittance summed: how much of them the background shows
+  std::vector<Eigen::Index> used;  // the samples before early termination (the ones with gradients)
   Eigen::MatrixXf used_positions, d_encoded;  // of those
   double d_encoded_magnitude = 0;             // the sum of |d_encoded|
   double loss = 0;                            // weighted, summed over the rays
@@ -342,6 +346,7 @@ void Trainer::BackpropagateChunk(const RayBatch& batch, const std::vector<Ray>& 
       AppearanceBackward(&appearance_[params], result.rgb, d_out, &chunk->d_appearance[params], d_rgb);
     }
     for (int ch = 0; ch < 3; ++ch) chunk->d_background[ch] += d_rgb[ch] * result.transmittance;
+    chunk->background_weight += result.transmittance;
     for (size_t k = 0; k < result.used; ++k) chunk->used.push_back(static_cast<Eigen::Index>(o + k));
     if (segments.count == 0) continue;
     CompositeBackward(segments, background, result, d_rgb, 0.0f, 0.0f, d_density.data() + o, d_colour.data() + 3 * o);
@@ -460,6 +465,9 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     for (int ch = 0; ch < 3; ++ch) background_grads_[ch] += chunks[c].d_background[ch];
   }
   result.loss /= static_cast<double>(std::max<size_t>(rays.size(), 1));
+  double background_weight = 0;
+  for (const Chunk& chunk : chunks) background_weight += chunk.background_weight;
+  background_seen_ = background_weight / static_cast<double>(std::max<size_t>(rays.size(), 1));
   ++step_;
   if (!std::isfinite(result.loss)) {
     result.problem = "the loss is not finite";
@@ -516,8 +524,11 @@ void Trainer::UpdateParameters(double learning_rate, const float* d_dense, bool 
     CentreAppearance(&appearance_);
   }
   // The background keeps the first rate throughout: three values with a clean gradient, and a field that would
-  // otherwise learn the sky as haze in front of it while the background catches up.
+  // otherwise learn the sky as haze in front of it while the background catches up. But it moves only as far as
+  // the rays show it: Adam's steps are as long for a gradient of noise as for a clean one, and a background that
+  // no ray reaches (a field gone to fog) would drift while the field paints the true colour in front of it.
   if (background_adam_) {
+    background_adam_->set_learning_rate(options_.learning_rate * std::min(1.0, background_seen_ / kBackgroundSeen));
     background_adam_->Step(model_.background.data(), background_grads_.data());
     for (float& value : model_.background) value = std::clamp(value, 0.0f, 1.0f);
   }

@@ -10,6 +10,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -49,7 +50,8 @@ const TrainView* FirstWithAlpha(const std::vector<TrainView>& views);
 
 struct TrainingData {
   std::vector<TrainView> train, heldout;
-  std::array<float, 3> background{1, 1, 1};  // the known background (images without alpha were composited on it)
+  std::array<float, 3> background{1, 1, 1};  // behind the scene: the known colour, or where a learnt one starts
+  bool background_known = false;             // the images were rendered or composited on `background`
 };
 
 struct TrainerOptions {
@@ -106,6 +108,15 @@ struct StepResult {
   std::string problem;      // why it was skipped
 };
 
+// The photos' colour where the rendered rays end on nothing (opacity under a half): what a background must show.
+struct BehindScene {
+  size_t pixels = 0, evaluated = 0;  // such pixels, of all evaluated
+  std::array<double, 3> colour_sum{};
+
+  // Their mean colour; none when fewer than a hundredth of the pixels end on nothing (the background hardly shows).
+  std::optional<std::array<double, 3>> MeanColour() const;
+};
+
 class Trainer {
  public:
   // `data` must outlive the trainer.
@@ -124,9 +135,14 @@ class Trainer {
   // With `fitted`, also each view's PSNR as NeRF-W scores an image it never trained on: the colour transform
   // that best maps the render of the pixels in its left half onto the photo (least squares) applied to those in
   // its right half, scored there.
+  // With `behind`, also what the held-out photos show where the rendered rays end on nothing.
   std::vector<double> HeldoutPsnr(size_t pixels_per_view, RenderStats* stats = nullptr,
                                   const std::function<void(size_t)>& on_rays_done = {},
-                                  std::vector<double>* fitted = nullptr) const;
+                                  std::vector<double>* fitted = nullptr, BehindScene* behind = nullptr) const;
+  // The same scores of at most `max_views` training views spread over them: how well the field fits its photos,
+  // to compare with the held-out views'.
+  std::vector<double> TrainingPsnr(size_t pixels_per_view, size_t max_views,
+                                   const std::function<void(size_t)>& on_rays_done = {}) const;
   // Each training view's colour transform (kAppearanceParams values a view); empty without options.appearance.
   const std::vector<float>& appearance() const { return appearance_; }
   // Each training view's pose correction (kPoseParams values a view); empty without options.refine_cameras.
@@ -144,6 +160,9 @@ class Trainer {
 
  private:
   struct Chunk;  // one chunk of a step's rays (trainer.cc)
+  std::vector<double> ViewPsnrs(const std::vector<const TrainView*>& views, size_t pixels_per_view, RenderStats* stats,
+                                const std::function<void(size_t)>& on_rays_done, std::vector<double>* fitted,
+                                BehindScene* behind) const;
   void UpdateOccupancy();
   // A training pixel: by the error map, or uniformly over all of them (weight 1).
   ErrorMap::Draw DrawPixel(std::mt19937_64* random) const;
@@ -169,6 +188,7 @@ class Trainer {
   std::vector<float> appearance_, appearance_grads_;
   std::unique_ptr<Adam<float>> appearance_adam_;
   std::array<float, 3> background_grads_{};
+  double background_seen_ = 0;  // the last step's mean final transmittance: how much of its rays ends on nothing
   std::unique_ptr<Adam<float>> background_adam_;  // with options.learn_background
   std::vector<float> poses_, pose_grads_;
   std::unique_ptr<Adam<float>> pose_adam_;

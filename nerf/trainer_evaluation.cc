@@ -1,4 +1,4 @@
-// The trainer's held-out evaluation (trainer.h: HeldoutPsnr) and the photos it compares with.
+// The trainer's evaluations (trainer.h: HeldoutPsnr, TrainingPsnr) and the photos they compare with.
 
 #include <random>
 
@@ -51,16 +51,37 @@ double FittedPsnr(const TrainView& view, const std::vector<size_t>& pixels, cons
 
 }  // namespace
 
+std::optional<std::array<double, 3>> BehindScene::MeanColour() const {
+  if (pixels == 0 || pixels * 100 < evaluated) return std::nullopt;
+  return std::array<double, 3>{colour_sum[0] / pixels, colour_sum[1] / pixels, colour_sum[2] / pixels};
+}
+
 std::vector<double> Trainer::HeldoutPsnr(size_t pixels_per_view, RenderStats* stats,
-                                         const std::function<void(size_t)>& on_rays_done,
-                                         std::vector<double>* fitted) const {
+                                         const std::function<void(size_t)>& on_rays_done, std::vector<double>* fitted,
+                                         BehindScene* behind) const {
+  std::vector<const TrainView*> views;
+  for (const TrainView& view : data_.heldout) views.push_back(&view);
+  return ViewPsnrs(views, pixels_per_view, stats, on_rays_done, fitted, behind);
+}
+
+std::vector<double> Trainer::TrainingPsnr(size_t pixels_per_view, size_t max_views,
+                                          const std::function<void(size_t)>& on_rays_done) const {
+  std::vector<const TrainView*> views;
+  const size_t count = std::min(max_views, data_.train.size());
+  for (size_t i = 0; i < count; ++i) views.push_back(&data_.train[i * data_.train.size() / count]);
+  return ViewPsnrs(views, pixels_per_view, nullptr, on_rays_done, nullptr, nullptr);
+}
+
+std::vector<double> Trainer::ViewPsnrs(const std::vector<const TrainView*>& views, size_t pixels_per_view,
+                                       RenderStats* stats, const std::function<void(size_t)>& on_rays_done,
+                                       std::vector<double>* fitted, BehindScene* behind) const {
   std::vector<double> psnrs;
   if (fitted != nullptr) fitted->clear();
   RenderOptions render;
   render.on_rays_done = on_rays_done;
   render.min_transmittance = options_.min_transmittance;
-  for (size_t v = 0; v < data_.heldout.size(); ++v) {
-    const TrainView& view = data_.heldout[v];
+  for (size_t v = 0; v < views.size(); ++v) {
+    const TrainView& view = *views[v];
     const size_t total = size_t(view.camera.width) * view.camera.height;
     std::vector<size_t> pixels;
     if (pixels_per_view == 0 || pixels_per_view >= total) {
@@ -80,6 +101,11 @@ std::vector<double> Trainer::HeldoutPsnr(size_t pixels_per_view, RenderStats* st
     RenderRays(model_, rays, near_far, render, rgb.data(), depth.data(), opacity.data(), stats);
     for (size_t i = 0; i < pixels.size(); ++i) {
       for (int c = 0; c < 3; ++c) target[3 * i + c] = view.OnBackground(pixels[i], c, model_.background[c]);
+      if (behind == nullptr) continue;
+      ++behind->evaluated;
+      if (opacity[i] >= 0.5f) continue;
+      ++behind->pixels;
+      for (int c = 0; c < 3; ++c) behind->colour_sum[c] += target[3 * i + c];
     }
     if (fitted != nullptr) fitted->push_back(FittedPsnr(view, pixels, rgb, target));
     psnrs.push_back(Psnr(Row(std::move(rgb)), Row(std::move(target))));

@@ -14,6 +14,7 @@
 #include "pipeline/hash.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
+#include "stages/plain_background.h"
 #include "stages/poses_stage.h"
 
 namespace p2n {
@@ -66,12 +67,16 @@ struct ImageCounts {
   std::atomic<int> undistorted{0}, composited{0}, downsized{0};
 };
 
+// What each image shows along its border once composited (BorderPixels), by view.
+using Borders = std::vector<std::vector<Rgb>>;
+
 // Writes the dataset's images into `images` as the poses stage's are: undistorted, composited on the background
 // unless it is "keep", downsized to `max_side` (0: any size), copied when nothing changed them; the views then name
 // them and hold no distortion.
 void WriteImages(ImportedDataset& dataset, const ImportOptions& options, int max_side, const fs::path& images,
-                 ImageCounts* counts) {
+                 ImageCounts* counts, Borders* borders) {
   fs::create_directories(images);
+  borders->assign(dataset.views.size(), {});
   Progress progress("import: images", static_cast<int64_t>(dataset.views.size()), "images");
   tbb::parallel_for(size_t{0}, dataset.views.size(), [&](size_t i) {
     ImportedView& view = dataset.views[i];
@@ -100,6 +105,7 @@ void WriteImages(ImportedDataset& dataset, const ImportOptions& options, int max
       changed = true;
       ++counts->composited;
     }
+    if (image.spec().nchannels != 4 && image.spec().nchannels != 2) (*borders)[i] = BorderPixels(image);
     if (max_side > 0 && std::max(camera.width, camera.height) > max_side) {
       image = DownsizeToFit(image, max_side);
       view.view.camera = ResizedCamera(camera, image.spec().width, image.spec().height);
@@ -119,16 +125,29 @@ void WriteImages(ImportedDataset& dataset, const ImportOptions& options, int max
   });
 }
 
+// The colour the images were composited on, or else the one the borders of all of them show (a dataset rendered on
+// a plain background, as the NeRF course's .npz); none for photos and for images that keep their alpha.
+std::optional<Rgb> KnownBackground(const ImportOptions& options, const ImageCounts& counts, const Borders& borders) {
+  if (counts.composited > 0) return options.background == "white" ? Rgb{1, 1, 1} : Rgb{0, 0, 0};
+  std::vector<Rgb> pixels;
+  for (const std::vector<Rgb>& border : borders) {
+    if (border.empty()) return std::nullopt;  // an image with alpha
+    pixels.insert(pixels.end(), border.begin(), border.end());
+  }
+  return SharedColour(std::move(pixels));
+}
+
 // transforms.json of the dataset's cameras (normalised, with a held-out split unless the dataset has one) and
 // sparse_points.ply when it has points, as the poses stage writes them.
 Normalization WriteCameras(const ImportedDataset& dataset, const fs::path& input, const PosesOptions& poses,
-                           const ImportOptions& options, const fs::path& out) {
+                           const std::optional<Rgb>& background, const fs::path& out) {
   TransformsFile transforms;
   for (const ImportedView& view : dataset.views) transforms.views.push_back(view.view);
   std::vector<CameraView>& views = transforms.views;
   const bool has_split =
       std::any_of(views.begin(), views.end(), [](const CameraView& v) { return v.split != "train"; });
-  if (!has_split) AssignHoldout(&views, poses.holdout_every);
+  // LLFF data keeps the NeRF paper's protocol (every 8th from the first), whatever its size.
+  if (!has_split) transforms.meta.heldout_rule = AssignHoldout(&views, poses.holdout_every, dataset.kind != "llff");
   Normalization& normalization = transforms.meta.normalization;
   if (poses.normalize) {
     std::vector<Eigen::Vector3d> centres, ups, axes;
@@ -139,8 +158,7 @@ Normalization WriteCameras(const ImportedDataset& dataset, const fs::path& input
   views = NormalizedViews(views, normalization);
   transforms.meta.dataset_kind = dataset.kind;
   transforms.meta.dataset_path = input.string();
-  if (options.background == "white") transforms.meta.background = {1, 1, 1};
-  if (options.background == "black") transforms.meta.background = {0, 0, 0};
+  transforms.meta.background = background;
   transforms.Write(out / "transforms.json");
   if (!dataset.points.empty()) {
     std::vector<ColouredPoint> cloud;
@@ -178,12 +196,18 @@ void ImportStage::Run(StageContext& context) const {
   for (const std::string& warning : dataset.warnings) LogWarning("import: " + warning);
   LogInfo(format("import: {} dataset, {} views", dataset.kind, dataset.views.size()));
   ImageCounts counts;
-  WriteImages(dataset, options, poses.max_image_size, context.output_dir / "images", &counts);
-  const Normalization normalization = WriteCameras(dataset, input, poses, options, context.output_dir);
+  Borders borders;
+  WriteImages(dataset, options, poses.max_image_size, context.output_dir / "images", &counts, &borders);
+  const std::optional<Rgb> background = KnownBackground(options, counts, borders);
+  const Normalization normalization = WriteCameras(dataset, input, poses, background, context.output_dir);
   context.summary = {{"views", dataset.views.size()}, {"dataset", dataset.kind}};
   LogInfo(format("import: {} views ({} undistorted, {} composited on {}, {} downsized to {} px), scene scale {:.4g}",
                  dataset.views.size(), counts.undistorted.load(), counts.composited.load(), options.background,
                  counts.downsized.load(), poses.max_image_size, normalization.scale));
+  if (background) {
+    LogInfo(format("import: the images show a plain background ({:.3f}, {:.3f}, {:.3f}), kept fixed in training",
+                   (*background)[0], (*background)[1], (*background)[2]));
+  }
 }
 
 }  // namespace p2n

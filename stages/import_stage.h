@@ -25,7 +25,9 @@ class ImportStage : public Stage {
  public:
   std::string name() const override { return "poses"; }
   std::string folder() const override { return "20_poses"; }
-  int format_version() const override { return 2; }  // 2: images downsized to poses.max_image_size
+  // 2: images downsized to poses.max_image_size; 3: the background recorded only where the images show it, and
+  // fewer than 20 views (but LLFF data) hold out views inside the span of the others
+  int format_version() const override { return 3; }
   std::vector<std::string> option_sections() const override { return {"poses", "import"}; }
   // Every file of the dataset that the result depends on, by SHA-1.
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;

@@ -113,7 +113,7 @@ void PosesStage::Run(StageContext& context) const {
   }
   if (without_bounds > 0) LogWarning(format("poses: {} views see too few points for depth bounds", without_bounds));
   DownsizeLargeImages(context.output_dir, options.max_image_size, &views);
-  AssignHoldout(&views, options.holdout_every);
+  const std::string heldout_rule = AssignHoldout(&views, options.holdout_every, true);
 
   Normalization normalization;
   if (options.normalize) {
@@ -125,6 +125,7 @@ void PosesStage::Run(StageContext& context) const {
   TransformsFile transforms;
   transforms.views = NormalizedViews(views, normalization);
   transforms.meta.normalization = normalization;
+  transforms.meta.heldout_rule = heldout_rule;
   transforms.Write(context.output_dir / "transforms.json");
 
   std::vector<ColouredPoint> cloud;
@@ -136,8 +137,9 @@ void PosesStage::Run(StageContext& context) const {
   const size_t held_out =
       std::count_if(views.begin(), views.end(), [](const CameraView& v) { return v.split != "train"; });
   context.summary = {{"views", views.size()}, {"held_out", held_out}, {"points", cloud.size()}};
-  LogInfo(format("poses: {} views ({} held out), scene scale {:.4g} (centre from {}, up from {})", views.size(),
-                 held_out, normalization.scale, normalization.centre_from, normalization.up_from));
+  LogInfo(format("poses: {} views ({} held out: {}), scene scale {:.4g} (centre from {}, up from {})", views.size(),
+                 held_out, heldout_rule.empty() ? "none" : heldout_rule, normalization.scale, normalization.centre_from,
+                 normalization.up_from));
 }
 
 }  // namespace p2n

@@ -14,13 +14,15 @@ namespace p2n {
 inline constexpr int kDefaultMaxTrainingImageSize = 1920;
 
 struct PosesOptions {
-  int holdout_every = 8;  // every Nth view (in name order) is held out for evaluation; 0 holds out none
+  int holdout_every = 8;  // every Nth view (in name order) is held out for evaluation (AssignHoldout); 0: none
   bool normalize = true;  // centre, rotate (up = +z) and scale the scene into the unit cube
   int max_image_size = kDefaultMaxTrainingImageSize;  // longest side of the images later stages read; 0: as they are
 
   template <class V>
   void Visit(V& v) {
-    v("holdout_every", holdout_every, "every Nth view is held out for evaluation; 0: none", "views");
+    v("holdout_every", holdout_every,
+      "every Nth view is held out for evaluation (with fewer than 20, as many inside the span of the others); 0: none",
+      "views");
     v("normalize", normalize, "centre, turn upright and scale the scene into the unit cube");
     v("max_image_size", max_image_size,
       "longest side of the images that training, splats, renders and evaluations use (larger ones are downsized "
@@ -35,7 +37,8 @@ class PosesStage : public Stage {
  public:
   std::string name() const override { return "poses"; }
   std::string folder() const override { return "20_poses"; }
-  int format_version() const override { return 2; }  // 2: images downsized to poses.max_image_size
+  // 2: images downsized to poses.max_image_size; 3: fewer than 20 photos hold out views inside the span of the others
+  int format_version() const override { return 3; }
   std::vector<std::string> upstream() const override { return {"sfm"}; }
   void Run(StageContext& context) const override;
 };

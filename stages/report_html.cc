@@ -17,6 +17,8 @@ h1 { margin-bottom: 0.2em; } h2 { border-bottom: 1px solid #ccc; padding-bottom:
 .muted { color: #777; } .cards { display: flex; flex-wrap: wrap; gap: 1em; }
 .card { border: 1px solid #ddd; border-radius: 6px; padding: 0.6em 1em; min-width: 9em; }
 .card .value { font-size: 1.6em; font-weight: bold; } .card .label { color: #666; font-size: 0.9em; }
+.warnings { border: 2px solid #c62828; background: #fdecea; border-radius: 6px; padding: 0.2em 1em; margin: 1em 0; }
+.warnings h2 { color: #c62828; margin-top: 0.6em; }
 table { border-collapse: collapse; } td, th { border: 1px solid #ddd; padding: 0.3em 0.6em; text-align: left;
   vertical-align: top; font-size: 0.92em; } th { background: #f4f4f4; }
 .triple { display: flex; gap: 0.5em; align-items: flex-start; margin-bottom: 1em; }

@@ -125,6 +125,26 @@ std::string SplatSection(const fs::path& splat_dir, const std::optional<TrainRep
   return html;
 }
 
+// The signs of a failed fit the train and splat stages found (fit_checks.h), first on the page.
+std::string WarningsSection(const std::optional<TrainReport>& train, const fs::path& splat_report) {
+  std::vector<std::pair<std::string, FitWarning>> warnings;
+  if (train) {
+    for (const FitWarning& w : train->warnings) warnings.emplace_back("training", w);
+  }
+  if (const std::optional<SplatReport> splat = ReadReportIfExists<SplatReport>(splat_report)) {
+    for (const FitWarning& w : splat->warnings) warnings.emplace_back("splats", w);
+  }
+  if (warnings.empty()) return "";
+  std::string html =
+      format("<div class=\"warnings\" id=\"warnings\"><h2>{} warning{}: this result may have failed</h2>\n<ul>\n",
+             warnings.size(), warnings.size() == 1 ? "" : "s");
+  for (const auto& [stage, w] : warnings) {
+    html += format("<li><b>{}</b> ({}, <code>{}</code>): {}</li>\n", HtmlEscape(stage), HtmlEscape(w.code),
+                   format("{:.3g}", w.figure), HtmlEscape(w.message));
+  }
+  return html + "</ul>\n<p>The README's section on warnings says what each means and what to do.</p></div>\n";
+}
+
 std::string StagesSection(const StageContext& context) {
   std::string html =
       "<h2>Stages</h2>\n<table>\n<tr><th>stage</th><th>state</th><th>wall time</th><th>finished (UTC)"
@@ -197,10 +217,12 @@ std::string HeldoutSection(const fs::path& render_dir, const std::optional<EvalR
   if (!eval || eval->views.empty())
     return "<h2>Held-out views</h2>\n<p>None rendered: no view was held out, or render.heldout is false.</p>\n";
   std::string html = format(
-      "<h2>Held-out views</h2>\n<p>{} views of the {} split, never trained on: PSNR {} dB, SSIM {} "
+      "<h2>Held-out views</h2>\n<p>{} views of the {} split ({}), never trained on: PSNR {} dB, SSIM {} "
       "on average.{} Error maps: mean absolute RGB error, black 0 to yellow {} and above.</p>\n",
-      eval->views.size(), HtmlEscape(eval->split), Number(eval->psnr, 4), Number(eval->ssim, 3),
-      StepScaleNote(*eval, train), format("{:.2g}", eval->heat_map_max_error));
+      eval->views.size(), HtmlEscape(eval->split),
+      HtmlEscape(train && !train->heldout_rule.empty() ? train->heldout_rule : "as the dataset splits them"),
+      Number(eval->psnr, 4), Number(eval->ssim, 3), StepScaleNote(*eval, train),
+      format("{:.2g}", eval->heat_map_max_error));
   for (const HeldoutScore& view : eval->views) {
     const auto figure = [&](const std::string& uri, const std::string& caption) {
       return format("<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>", uri, HtmlEscape(caption),
@@ -253,6 +275,7 @@ void ReportStage::Run(StageContext& context) const {
       "<p class=\"muted\">Workspace <code>{}</code>; input <code>{}</code>; photo2nerf {}; made {} UTC.</p>\n",
       HtmlEscape(context.workspace.root().string()),
       HtmlEscape(context.workspace.input() ? context.workspace.input()->string() : "-"), kVersion, UtcTimestamp());
+  body += WarningsSection(train, context.upstream_dirs.at("splat") / "splat_report.json");
   body += "<div class=\"cards\">\n";
   body += Card(eval && eval->psnr ? format("{:.2f} dB", *eval->psnr) : "-", "held-out PSNR");
   body += Card(eval && eval->ssim ? format("{:.3f}", *eval->ssim) : "-", "held-out SSIM");

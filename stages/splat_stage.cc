@@ -18,6 +18,7 @@
 #include "splat/splat_ply.h"
 #include "splat/splat_trainer.h"
 #include "stages/camera_corrections.h"
+#include "stages/fit_checks.h"
 #include "stages/splat_viewer.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"
@@ -63,6 +64,7 @@ struct SplatSetup {
   Gaussians<float> gaussians;
   std::array<float, 3> background{1, 1, 1};
   double extent = 1;
+  std::optional<double> field_psnr;  // the field's held-out PSNR, as the train stage measured it
 };
 
 // 1.1 times the largest distance of a training camera from their mean (3D Gaussian Splatting's scene radius).
@@ -103,6 +105,8 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   const ImportedDataset poses = LoadTransformsJson(transforms, context.workspace.root());
   setup.data = LoadTrainingData(poses);
   setup.background = model.background;
+  if (model.info.contains("heldout_psnr") && model.info["heldout_psnr"].is_number())
+    setup.field_psnr = model.info["heldout_psnr"].get<double>();
   const std::map<std::string, CameraCorrection> corrections = ReadCameraCorrections(train_dir / "train_report.json");
   for (TrainView& view : setup.data.train) {
     const auto found = corrections.find(view.name);
@@ -261,6 +265,33 @@ void OptimiseUntilDone(SplatTrainer& trainer, const SplatSetup& setup, const Spl
 
 }  // namespace
 
+// splat_report.json's content (but the sizes of the files written), with the signs of a failed fit.
+SplatReport MakeSplatReport(const SplatTrainer& trainer, const SplatSetup& setup, const SplatOptions& options,
+                            const Scores& scores, double seconds, int resumed_from, double near) {
+  SplatReport report;
+  report.enabled = true;
+  report.splats = trainer.gaussians().size();
+  report.initial_splats = setup.gaussians.size();
+  report.init = options.init;
+  report.sh_degree = trainer.gaussians().sh_degree;
+  report.steps = trainer.step();
+  report.seconds = seconds;
+  report.resumed_from_step = resumed_from;
+  report.heldout_views = setup.data.heldout.size();
+  if (!setup.data.heldout.empty()) {
+    report.heldout_psnr = Mean(scores.psnr);
+    report.heldout_ssim = Mean(scores.ssim);
+  }
+  report.heldout_psnr_per_view = scores.psnr;
+  report.seconds_per_view = scores.seconds_per_view;
+  report.frame = setup.frame.name;
+  report.frame_description = setup.frame.description;
+  report.near = near;
+  report.background = trainer.background();
+  report.warnings = CheckSplatFit(HeldoutViewFits(setup.data, scores.psnr), report.heldout_psnr, setup.field_psnr);
+  return report;
+}
+
 void SplatStage::Run(StageContext& context) const {
   const SplatOptions options = ReadOptions<SplatOptions>(context.config, "splat");
   const fs::path out = context.output_dir;
@@ -283,7 +314,8 @@ void SplatStage::Run(StageContext& context) const {
   trainer_options.max_gaussians = 2 * static_cast<size_t>(options.max_gaussians);
   trainer_options.ssim_weight = options.ssim_weight;
   SplatScene scene{&setup.data.train, setup.background, setup.extent, near};
-  scene.learn_background = options.background == "auto" && FirstWithAlpha(setup.data.train) == nullptr;
+  scene.learn_background =
+      options.background == "auto" && FirstWithAlpha(setup.data.train) == nullptr && !setup.data.background_known;
   SplatTrainer trainer(setup.gaussians, scene, trainer_options);
   RunState state;
   const fs::path checkpoint = context.resume_dir / "checkpoint.bin";
@@ -315,26 +347,7 @@ void SplatStage::Run(StageContext& context) const {
                     {curve});
     });
   }
-  SplatReport report;
-  report.enabled = true;
-  report.splats = trainer.gaussians().size();
-  report.initial_splats = setup.gaussians.size();
-  report.init = options.init;
-  report.sh_degree = trainer.gaussians().sh_degree;
-  report.steps = trainer.step();
-  report.seconds = state.seconds;
-  report.resumed_from_step = resumed_from;
-  report.heldout_views = setup.data.heldout.size();
-  if (!setup.data.heldout.empty()) {
-    report.heldout_psnr = Mean(scores.psnr);
-    report.heldout_ssim = Mean(scores.ssim);
-  }
-  report.heldout_psnr_per_view = scores.psnr;
-  report.seconds_per_view = scores.seconds_per_view;
-  report.frame = setup.frame.name;
-  report.frame_description = setup.frame.description;
-  report.near = near;
-  report.background = trainer.background();
+  SplatReport report = MakeSplatReport(trainer, setup, options, scores, state.seconds, resumed_from, near);
   report.file_bytes = fs::file_size(out / "splats.ply");
   report.viewer_bytes = viewer_bytes;
   WriteJsonAtomic(out / "splat_report.json", report.ToJson());
@@ -342,6 +355,7 @@ void SplatStage::Run(StageContext& context) const {
   if (!setup.data.heldout.empty()) context.summary["splat_psnr"] = Mean(scores.psnr);
   LogInfo(format("splat: {} splats, held-out PSNR {:.2f} dB, {:.3f} s per held-out view", trainer.gaussians().size(),
                  Mean(scores.psnr), scores.seconds_per_view));
+  LogFitWarnings("splat", report.warnings);
 }
 
 }  // namespace p2n

@@ -22,7 +22,7 @@ struct SplatOptions {
   double coarse = 0.75;             // share of the optimisation on the photos at half size
   int max_image_size = 1080;        // the photos are downsized to at most this on their longest side; 0: any size
   double ssim_weight = 0.1;         // the loss: (1 - w) L1 + w (1 - SSIM)
-  std::string background = "auto";  // auto: learnt behind photos without alpha, else the field's; fixed: the field's
+  std::string background = "auto";  // auto: learnt behind photos, the field's where known; fixed: the field's
   std::string frame = "source";
   double eval_interval = 30;  // seconds of optimisation between held-out evaluations (each of every held-out view)
   double checkpoint_interval = 60;
@@ -53,7 +53,8 @@ struct SplatOptions {
       "weight of the structural dissimilarity (1 - SSIM) in the loss, the rest L1 (3D Gaussian Splatting uses 0.2)");
     v("background", background,
       "the colour behind the splats: auto (learnt with them where the photos have no alpha: what lies beyond the "
-      "splats, a sky or a far wall; the field's where the photos were composited on it) or fixed (the field's)",
+      "splats, a sky or a far wall; the field's where the images have alpha or the import knows the colour they were "
+      "composited or rendered on) or fixed (the field's)",
       "", OptionKind::kResult, {"auto", "fixed"});
     v("frame", frame,
       "coordinates of splats.ply: source (COLMAP's world, or the dataset's) or normalized (the training frame)", "",
@@ -75,7 +76,8 @@ class SplatStage : public Stage {
   std::string folder() const override { return "35_splat"; }
   // 2: the SSIM term; 3: placed from at most 2 M pixels (the export's renders); 4: the background learnt (auto);
   // 5: optimised on photos of at most splat.max_image_size (halved); 6: downsized to it with an area filter
-  int format_version() const override { return 6; }
+  // 7: a background the import knows stays fixed (auto)
+  int format_version() const override { return 7; }
   std::vector<std::string> upstream() const override { return {"poses", "train"}; }
   void Run(StageContext& context) const override;
 };

@@ -118,6 +118,25 @@ void ReadAppearance(const Fields& fields, TrainReport::Appearance* appearance) {
   });
 }
 
+nlohmann::json WarningsJson(const std::vector<FitWarning>& warnings) {
+  nlohmann::json json = nlohmann::json::array();
+  for (const FitWarning& w : warnings) json.push_back({{"code", w.code}, {"figure", w.figure}, {"message", w.message}});
+  return json;
+}
+
+// "warnings", where the report has them (reports written before they were checked have none).
+std::vector<FitWarning> ReadWarnings(const Fields& fields) {
+  std::vector<FitWarning> warnings;
+  if (!fields.Has("warnings")) return warnings;
+  fields.ForEach("warnings", [&](const Fields& warning) {
+    FitWarning& read = warnings.emplace_back();
+    warning.Get("code", &read.code);
+    warning.Get("figure", &read.figure);
+    warning.Get("message", &read.message);
+  });
+  return warnings;
+}
+
 }  // namespace
 
 nlohmann::json IngestReport::ToJson() const {
@@ -235,6 +254,9 @@ nlohmann::json TrainReport::ToJson() const {
           {"heldout_split", heldout_split},
           {"heldout_pixels_per_view", PixelsPerView(heldout_pixels_per_view)},
           {"heldout_per_view", per_view},
+          {"heldout_rule", heldout_rule},
+          {"training_psnr", OrNull(training_psnr)},
+          {"warnings", WarningsJson(warnings)},
           {"heldout_psnr_fitted", OrNull(heldout_psnr_fitted)},
           {"heldout_psnr_fitted_is",
            "each held-out photo's colour transform fitted (least squares) on its left half, PSNR on its right half "
@@ -285,6 +307,9 @@ TrainReport TrainReport::Read(const fs::path& file) {
     view.Get("psnr", &score.psnr);
   });
   fields.Get("heldout_psnr_fitted", &report.heldout_psnr_fitted);
+  if (fields.Has("heldout_rule")) fields.Get("heldout_rule", &report.heldout_rule);
+  fields.Get("training_psnr", &report.training_psnr);
+  report.warnings = ReadWarnings(fields);
   const Fields evaluations = fields.Object("evaluations_during_training");
   evaluations.Get("count", &report.evaluations_during_training.count);
   evaluations.Get("seconds", &report.evaluations_during_training.seconds);
@@ -353,7 +378,8 @@ nlohmann::json SplatReport::ToJson() const {
           {"file", "splats.ply"},
           {"file_bytes", file_bytes},
           {"viewer", "viewer.html"},
-          {"viewer_bytes", viewer_bytes}};
+          {"viewer_bytes", viewer_bytes},
+          {"warnings", WarningsJson(warnings)}};
 }
 
 SplatReport SplatReport::Read(const fs::path& file) {
@@ -380,6 +406,7 @@ SplatReport SplatReport::Read(const fs::path& file) {
   fields.Get("background", &report.background);
   fields.Get("file_bytes", &report.file_bytes);
   fields.Get("viewer_bytes", &report.viewer_bytes);
+  report.warnings = ReadWarnings(fields);
   if (report.frame != "normalized" && report.frame != "source") fields.Fail("frame", "must be normalized or source");
   if (!(report.near > 0)) fields.Fail("near", "must be positive");
   return report;

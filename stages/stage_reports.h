@@ -68,6 +68,14 @@ struct SfmReport {
   static SfmReport Read(const std::filesystem::path& file);
 };
 
+// A sign of a failed fit that a stage found in its own result (fit_checks.h): a code, the figure that tripped it,
+// and a sentence saying what it means and what to try.
+struct FitWarning {
+  std::string code;
+  double figure = 0;
+  std::string message;
+};
+
 struct TrainReport {
   int steps = 0, skipped_steps = 0, resumed_from_step = 0;
   double wall_seconds = 0;  // of training
@@ -85,6 +93,9 @@ struct TrainReport {
     double psnr = 0;
   };
   std::vector<ViewPsnr> heldout_per_view;
+  std::string heldout_rule;             // how the held-out views were chosen (transforms.json); empty: the dataset's
+  std::optional<double> training_psnr;  // some training views scored as the held-out ones (none in older reports)
+  std::vector<FitWarning> warnings;     // signs of a failed fit (none in older reports)
   struct Evaluations {
     int count = 0;
     double seconds = 0;
@@ -149,6 +160,7 @@ struct SplatReport {
   double near = 0.01;
   std::array<float, 3> background{1, 1, 1};
   size_t file_bytes = 0, viewer_bytes = 0;  // splats.ply, viewer.html
+  std::vector<FitWarning> warnings;         // signs of a failed fit (none in older reports)
 
   nlohmann::json ToJson() const;
   static SplatReport Read(const std::filesystem::path& file);

@@ -33,4 +33,11 @@ TrainPreset PresetFor(const std::string& name) {
   return {240, 256, 512, 1 << 16, 128, {16, 2, 17, 16, 2048}, 19, 256, 1 << 17};
 }
 
+TrainPreset PresetForBudget(const std::string& name, double budget) {
+  if (budget <= 0 || budget >= kShortBudget) return PresetFor(name);
+  TrainPreset preset = PresetFor("fast");
+  preset.time_budget = budget;
+  return preset;
+}
+
 }  // namespace p2n

@@ -27,6 +27,13 @@ struct TrainPreset {
 // The preset of that name (train.preset; its options have been checked): default for any other.
 TrainPreset PresetFor(const std::string& name);
 
+// Runs shorter than this many seconds train with the fast preset's sizes, whichever preset is named: the larger
+// table, grid and batches of the others pay after minutes, and cost a short run the steps it needs to get out of
+// its first haze (docs/benchmarks.md, short budgets).
+inline constexpr double kShortBudget = 45;
+// The settings of preset `name` for a run of `budget` seconds (0: a run by steps, the preset's own).
+TrainPreset PresetForBudget(const std::string& name, double budget);
+
 // ngp's learning rate ends at 0.3 of its start rather than a tenth, in every preset: each underfits at its end.
 // One thread per run, two runs side by side: the default (300 s, about 2,000 steps) fox 27.09 against 26.27 dB,
 // lego 27.68 against 27.45, fern 21.96 and 22.02 against 21.79; 600 s (4,300 to 4,700 steps, as 5 minutes on two

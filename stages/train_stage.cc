@@ -18,6 +18,7 @@
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
 #include "stages/camera_corrections.h"
+#include "stages/fit_checks.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"
 #include "stages/train_presets.h"
@@ -34,7 +35,18 @@ struct TrainingSetup {
   TrainOptions options;
   TrainerOptions trainer;
   TrainingData data;
-  std::string heldout_split;
+  std::string heldout_split, heldout_rule;
+};
+
+// Training views scored at the end beside the held-out ones (spread over them).
+constexpr size_t kTrainingViewsScored = 8;
+
+// The finished field's scores: each held-out view's PSNR (and NeRF-W's fitted one), some training views', the cost
+// of rendering the held-out pixels, and what the held-out photos show where rays end on nothing.
+struct FinalEvaluation {
+  std::vector<double> heldout, fitted, training;
+  RenderStats stats;
+  BehindScene behind;
 };
 
 // The run's state besides the trainer's, kept in checkpoints.
@@ -107,8 +119,10 @@ TrainReport::Appearance AppearanceReport(const Trainer& trainer, const TrainingD
 }
 
 TrainReport MakeTrainReport(Trainer& trainer, const TrainerOptions& trainer_options, const TrainOptions& options,
-                            const TrainingData& data, const std::vector<double>& psnrs, const RenderStats& eval_stats,
-                            int resumed_from, const SessionLog& session) {
+                            const TrainingData& data, const FinalEvaluation& evaluation, int resumed_from,
+                            const SessionLog& session) {
+  const std::vector<double>& psnrs = evaluation.heldout;
+  const RenderStats& eval_stats = evaluation.stats;
   TrainReport report;
   report.steps = trainer.step();
   report.skipped_steps = trainer.skipped_steps();
@@ -117,6 +131,8 @@ TrainReport MakeTrainReport(Trainer& trainer, const TrainerOptions& trainer_opti
   report.heldout_views = data.heldout.size();
   report.heldout_pixels_per_view = options.final_eval_pixels;
   if (!psnrs.empty()) report.heldout_psnr = Mean(psnrs);
+  if (!evaluation.training.empty()) report.training_psnr = Mean(evaluation.training);
+  if (!evaluation.fitted.empty()) report.heldout_psnr_fitted = Mean(evaluation.fitted);
   report.heldout_step_scale = DefaultStepScale(trainer.model());  // Trainer::HeldoutPsnr's
   for (size_t v = 0; v < psnrs.size(); ++v) report.heldout_per_view.push_back({data.heldout[v].name, psnrs[v]});
   report.evaluations_during_training = {session.evaluations, session.evaluation_seconds, options.eval_pixels};
@@ -141,6 +157,16 @@ TrainReport MakeTrainReport(Trainer& trainer, const TrainerOptions& trainer_opti
                                                        : "fixed",
                     {model.background[0], model.background[1], model.background[2]}};
   report.appearance = AppearanceReport(trainer, data);
+  FieldFit fit{report.heldout_psnr,
+               report.training_psnr,
+               HeldoutViewFits(data, psnrs),
+               trainer_options.learn_background,
+               report.trainer.background_colour,
+               evaluation.behind.MeanColour(),
+               trainer_options.space == SceneSpace::kBounded,
+               report.occupied_fraction,
+               report.samples_per_ray_rendered};
+  report.warnings = CheckFieldFit(fit);
   return report;
 }
 
@@ -206,7 +232,7 @@ double DistortionWeight(const TrainOptions& options, SceneSpace space) {
 }
 
 TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space) {
-  const TrainPreset preset = PresetFor(options.preset);
+  const TrainPreset preset = PresetForBudget(options.preset, ResolvedTimeBudget(options));
   TrainerOptions trainer;
   const bool vanilla = options.field == "vanilla";
   if (vanilla) {
@@ -321,14 +347,13 @@ void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptio
 // What a finished training writes besides the model: train_report.json, metrics.csv and psnr.png; returns the
 // report.
 TrainReport WriteTrainReport(const fs::path& out, Trainer& trainer, const TrainingSetup& setup,
-                             const std::vector<double>& psnrs, const std::vector<double>& fitted,
-                             const RenderStats& eval_stats, const RunState& state, int resumed_from,
+                             const FinalEvaluation& evaluation, const RunState& state, int resumed_from,
                              const SessionLog& session) {
   TrainReport report =
-      MakeTrainReport(trainer, setup.trainer, setup.options, setup.data, psnrs, eval_stats, resumed_from, session);
+      MakeTrainReport(trainer, setup.trainer, setup.options, setup.data, evaluation, resumed_from, session);
   report.wall_seconds = state.train_seconds;
   report.heldout_split = setup.heldout_split;
-  if (!fitted.empty()) report.heldout_psnr_fitted = Mean(fitted);
+  report.heldout_rule = setup.heldout_rule;
   std::vector<std::string> names;
   for (const TrainView& view : setup.data.train) names.push_back(view.name);
   report.camera_refinement = CameraRefinementJson(names, trainer.camera_corrections());
@@ -354,6 +379,7 @@ void TrainStage::Run(StageContext& context) const {
   const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
   const ImportedDataset poses = LoadTransformsJson(transforms, context.workspace.root());
   setup.heldout_split = HeldoutSplit(poses);
+  setup.heldout_rule = poses.meta.heldout_rule;
   setup.data = LoadTrainingData(poses);
   const TrainingData& data = setup.data;
   setup.trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, poses));
@@ -365,8 +391,9 @@ void TrainStage::Run(StageContext& context) const {
                "colour, which must stay; use auto or fixed",
                with_alpha->name, transforms.string()));
   }
+  const bool learn_when_auto = !alpha && !data.background_known;
   setup.trainer.random_background = options.background == "random" || (options.background == "auto" && alpha);
-  setup.trainer.learn_background = options.background == "learnt" || (options.background == "auto" && !alpha);
+  setup.trainer.learn_background = options.background == "learnt" || (options.background == "auto" && learn_when_auto);
   Trainer trainer(setup.trainer, data);
   const double budget = ResolvedTimeBudget(options);
   LogInfo(format("train: {} field, {} scene, preset {}, {} training and {} held-out ({}) views, {}", options.field,
@@ -386,9 +413,11 @@ void TrainStage::Run(StageContext& context) const {
   TrainUntilDone(trainer, data, options, budget, checkpoint, context.key, &state, &session);
 
   if (!ModelIsFinite(trainer.model())) throw InternalError("training ended with non-finite parameters");
-  RenderStats eval_stats;
-  std::vector<double> fitted;
-  const std::vector<double> psnrs = trainer.HeldoutPsnr(options.final_eval_pixels, &eval_stats, CheckCancel, &fitted);
+  FinalEvaluation evaluation;
+  evaluation.heldout = trainer.HeldoutPsnr(options.final_eval_pixels, &evaluation.stats, CheckCancel,
+                                           &evaluation.fitted, &evaluation.behind);
+  evaluation.training = trainer.TrainingPsnr(options.final_eval_pixels, kTrainingViewsScored, CheckCancel);
+  const std::vector<double>& psnrs = evaluation.heldout;
   NerfModel& model = trainer.model();
   model.info = {{"transforms", transforms.string()},
                 {"steps", trainer.step()},
@@ -398,7 +427,7 @@ void TrainStage::Run(StageContext& context) const {
                 {"refine_cameras", setup.trainer.refine_cameras}};
   WriteOrExplain([&] { SaveModel(model, context.output_dir / "model.bin"); });
   const TrainReport report =
-      WriteTrainReport(context.output_dir, trainer, setup, psnrs, fitted, eval_stats, state, resumed_from, session);
+      WriteTrainReport(context.output_dir, trainer, setup, evaluation, state, resumed_from, session);
   context.summary = {{"steps", trainer.step()},
                      {"train_seconds", state.train_seconds},
                      {"heldout_psnr", report.heldout_psnr ? nlohmann::json(*report.heldout_psnr) : nullptr}};
@@ -407,6 +436,7 @@ void TrainStage::Run(StageContext& context) const {
       "samples per ray rendered)",
       trainer.step(), state.train_seconds, session.steps.SamplesPerSecond() / 1e6, session.steps.SamplesPerRay(),
       Mean(psnrs), psnrs.size(), report.samples_per_ray_rendered));
+  LogFitWarnings("train", report.warnings);
 }
 
 }  // namespace p2n

@@ -25,7 +25,7 @@ struct TrainOptions {
   int hash_table_log2 = 0;         // log2 of the hash-grid entries per level (ngp); 0: the preset's
   double learning_rate = 0;        // 0: the field's (ngp 1e-2, vanilla 5e-4)
   std::string loss = "mse";
-  std::string background = "auto";     // auto: random for images with alpha, else learnt
+  std::string background = "auto";     // auto: random for images with alpha, fixed where known, else learnt
   std::string distortion = "auto";     // weight of the distortion loss; auto: by the scene (train_stage.cc)
   std::string appearance = "off";      // a colour transform per training photo (on, off)
   std::string refine_cameras = "off";  // a pose correction per training photo (on, off; ngp only)
@@ -58,8 +58,9 @@ struct TrainOptions {
     v("learning_rate", learning_rate, "Adam learning rate; 0: the field's (ngp 1e-2, vanilla 5e-4)");
     v("loss", loss, "photometric loss", "", OptionKind::kResult, {"mse", "huber"});
     v("background", background,
-      "the colour behind the scene; auto: random behind photos with alpha (they learn transparency), learnt for "
-      "photos without (a sky, a far wall); fixed: the dataset's background colour",
+      "the colour behind the scene; auto: random behind images with alpha (they learn transparency), fixed where "
+      "the import knows it (images composited or rendered on a plain colour), learnt for photos (a sky, a far "
+      "wall); fixed: the dataset's background colour (white when unknown)",
       "", OptionKind::kResult, {"auto", "random", "learnt", "fixed"});
     v("distortion", distortion,
       "weight of the distortion loss, which gathers each ray's weight into one place (against haze and floaters); "
@@ -108,7 +109,8 @@ class TrainStage : public Stage {
   // 3: photos without alpha learn the background; 4: the default preset's learning rate ends at 0.3 of its start
   // 7: train.scene auto picks forward for forward-facing captures
   // 9: bounded scenes' steps take 2^17 samples in the run's second half; 8: their hash table 2^19, occupancy 256^3
-  int format_version() const override { return 9; }
+  // 10: a background the import knows stays fixed (auto); runs shorter than kShortBudget take the fast sizes
+  int format_version() const override { return 10; }
   std::vector<std::string> upstream() const override { return {"poses"}; }
   void Run(StageContext& context) const override;
 };

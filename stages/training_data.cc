@@ -57,6 +57,7 @@ bool ForwardFacingCapture(const ImportedDataset& dataset) {
 TrainingData LoadTrainingData(const ImportedDataset& poses) {
   TrainingData data;
   data.background = poses.meta.Background();
+  data.background_known = poses.meta.background.has_value();
   const std::string heldout_split = HeldoutSplit(poses);
   std::vector<const ImportedView*> train, heldout;
   for (const ImportedView& view : poses.views) {

@@ -88,7 +88,9 @@ TEST_CASE("import: a transforms.json dataset keeps its cameras up to a similarit
     CHECK(fs::exists(dir / "ws" / "20_poses" / transforms["frames"][i]["file_path"].get<std::string>()));
   }
   CHECK(WorstRotationAfterAlignment(ours, theirs) < 1e-6);
-  CHECK(transforms["frames"][0]["split"] == "val");  // every 8th, from the first
+  // One of six held out (as every 8th would), inside the span of the others: the middle of the sequence.
+  for (size_t i = 0; i < 6; ++i) CHECK(transforms["frames"][i]["split"] == (i == 3 ? "val" : "train"));
+  CHECK_THAT(transforms["heldout_rule"].get<std::string>(), Catch::Contains("1 of 6 views"));
   CHECK(transforms["fl_x"].get<double>() == Approx(truth["fl_x"].get<double>()));
 }
 
@@ -305,6 +307,8 @@ TEST_CASE("import: the shared datasets (fox, lego, lego_200, fern)", "[import][d
     CHECK(npz.views[0].view.camera.fx == Approx(277.7778).epsilon(1e-4));
     const nlohmann::json transforms = Import(kData / "lego_200" / "lego_200x200.npz", dir / "ws");
     CHECK(transforms["frames"].size() == 110);
+    // Rendered on white: every image's border says so, and training keeps it fixed.
+    CHECK(transforms["background"] == nlohmann::json::array({1.0, 1.0, 1.0}));
     CHECK(fs::exists(dir / "ws" / "20_poses" / "images" / "val_009.png"));
   }
   SECTION("LLFF fern: poses_bounds rows with their near and far") {
@@ -314,6 +318,12 @@ TEST_CASE("import: the shared datasets (fox, lego, lego_200, fern)", "[import][d
     CHECK(fern.views[0].view.near > 10);
     CHECK(fern.views[0].view.camera.width == 1008);
     CHECK(fern.views[0].view.camera.fx == Approx(3260.526 / 4).epsilon(1e-4));
+    // Photos: no plain background to keep; the NeRF paper's held-out views (every 8th from the first) though
+    // fewer than 20.
+    const nlohmann::json transforms = Import(kData / "fern", dir / "ws");
+    CHECK_FALSE(transforms.contains("background"));
+    CHECK(transforms["heldout_rule"] == "every 8th view from the first");
+    for (size_t i = 0; i < 20; ++i) CHECK(transforms["frames"][i]["split"] == (i % 8 == 0 ? "val" : "train"));
   }
 }
 

@@ -233,7 +233,8 @@ TEST_CASE("export stage: mesh and point cloud open in Assimp, finite, in the sou
   Config config = SmallStageConfig(150);
   config.Set("export.obj", true, "test");
   config.Set("export.frame", "normalized", "test");
-  config.Set("export.threshold", 2.0, "test");  // a young field's densities are low
+  config.Set("export.threshold", 2.0, "test");       // a young field's densities are low
+  config.Set("export.points_opacity", 0.5, "test");  // and so are its opacities
   setup.runner.Run(setup.workspace, config, Until("export"));
   const fs::path out = setup.dir / "ws" / "50_export";
   const nlohmann::json report = ReadJsonFile(out / "export_report.json");

@@ -2,6 +2,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <OpenImageIO/imagebufalgo.h>
+
 #include <thread>
 
 #include "nerf/nerf_model.h"
@@ -10,7 +12,9 @@
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
 #include "stage_fixtures.h"
+#include "stages/stage_reports.h"
 #include "stages/stages.h"
+#include "stages/train_presets.h"
 #include "stages/train_stage.h"
 #include "test_camera.h"
 
@@ -69,6 +73,29 @@ TEST_CASE("train stage: bounded scenes get the default preset's larger hash tabl
   CHECK(table_log2(options, SceneSpace::kUnbounded) == 16);
 }
 
+TEST_CASE("train stage: a short time budget trains with the fast preset's sizes, whatever the preset", "[train]") {
+  const auto table_log2 = [](const TrainOptions& options, SceneSpace space) {
+    return NgpFieldConfig::FromJson(MakeTrainerOptions(options, space).field).grid.log2_table_size;
+  };
+  TrainOptions options;
+  for (const char* preset : {"default", "quality"}) {
+    options.preset = preset;
+    options.time_budget = kShortBudget - 1;
+    CHECK(table_log2(options, SceneSpace::kBounded) == 15);
+    CHECK(MakeTrainerOptions(options, SceneSpace::kBounded).occupancy_resolution == 64);
+    CHECK(MakeTrainerOptions(options, SceneSpace::kBounded).batch_samples == 32768);
+    CHECK(MakeTrainerOptions(options, SceneSpace::kBounded).late_batch_samples == 0);
+    CHECK(ResolvedTimeBudget(options) == kShortBudget - 1);
+    options.time_budget = kShortBudget;
+    CHECK(table_log2(options, SceneSpace::kBounded) == 19);
+  }
+  // A run by steps keeps the preset's sizes.
+  options.preset = "default";
+  options.time_budget = 0;
+  options.steps = 100;
+  CHECK(table_log2(options, SceneSpace::kBounded) == 19);
+}
+
 TEST_CASE("train stage: model.bin, metrics.csv and train_report.json, fresh on a rerun, stale on a new seed",
           "[train]") {
   StageWorkspace setup;
@@ -82,7 +109,10 @@ TEST_CASE("train stage: model.bin, metrics.csv and train_report.json, fresh on a
   const nlohmann::json report = ReadJsonFile(out / "train_report.json");
   CHECK(report["steps"] == 40);
   CHECK(report["wall_seconds"].get<double>() > 0);
-  CHECK(report["heldout_views"].get<int>() == 2);  // every 8th of 12
+  CHECK(report["heldout_views"].get<int>() == 2);  // as many as every 8th of 12, inside the cameras' span
+  CHECK_THAT(report["heldout_rule"].get<std::string>(), Catch::Contains("2 of 12 views"));
+  CHECK(std::isfinite(report["training_psnr"].get<double>()));
+  CHECK(report["warnings"].is_array());
   CHECK(std::isfinite(report["heldout_psnr"].get<double>()));
   CHECK(report["heldout_per_view"].size() == 2);
   // Photos: an unbounded scene; the held-out score with each photo's colour transform fitted on its left half.
@@ -185,6 +215,36 @@ TEST_CASE("train stage: a cancelled run resumes from its checkpoint and finishes
   config.Set("train.seed", 9, "test");
   runner.Run(workspace, config, Until("train"));
   CHECK(ReadJsonFile(dir / "ws" / "30_train" / "train_report.json")["resumed_from_step"] == 0);
+}
+
+}  // namespace p2n::testing
+
+namespace p2n::testing {
+
+TEST_CASE("train stage: a held-out photo that does not match its camera is named in a warning", "[train][fit]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(300);
+  setup.runner.Run(setup.workspace, config, Until("poses"));
+  const nlohmann::json poses = ReadJsonFile(setup.dir / "ws" / "20_poses" / "transforms.json");
+  std::vector<std::string> heldout;
+  for (const nlohmann::json& frame : poses["frames"]) {
+    if (frame["split"] == "val") heldout.push_back(fs::path(frame["file_path"].get<std::string>()).filename());
+  }
+  REQUIRE(heldout.size() == 2);
+  // The first held-out photo becomes its own negative: what its camera sees is no longer in it (as when structure
+  // from motion gives a photo a wrong camera, with far more certainty on a scene this small and a field this young).
+  const fs::path photo = setup.data / heldout[0];
+  OIIO::ImageBuf image(photo.string());
+  OIIO::ImageBuf negative = OIIO::ImageBufAlgo::sub(1.0f, image);
+  REQUIRE(negative.write(photo.string()));
+  setup.runner.Run(setup.workspace, config, Until("train"));
+  const TrainReport report = TrainReport::Read(setup.dir / "ws" / "30_train" / "train_report.json");
+  INFO(report.ToJson().dump(1));
+  const auto low = std::find_if(report.warnings.begin(), report.warnings.end(),
+                                [](const FitWarning& w) { return w.code == "heldout_view_low"; });
+  REQUIRE(low != report.warnings.end());
+  CHECK(low->figure > 5);
+  CHECK_THAT(low->message, Catch::Contains(heldout[0]) && Catch::Contains("among the training cameras"));
 }
 
 }  // namespace p2n::testing
