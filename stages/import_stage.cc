@@ -45,36 +45,19 @@ OIIO::ImageBuf Undistort(const OIIO::ImageBuf& image, const PinholeCamera& camer
   return out;
 }
 
-// Composites a straight-alpha image over a constant background; returns the colour channels only.
-OIIO::ImageBuf Composite(const OIIO::ImageBuf& image, float background) {
-  const OIIO::ImageSpec& spec = image.spec();
-  const int colours = spec.nchannels - 1;
-  const size_t pixels = static_cast<size_t>(spec.width) * spec.height;
-  std::vector<float> in(pixels * spec.nchannels), result(pixels * colours);
-  image.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::FLOAT, in.data());
-  for (size_t p = 0; p < pixels; ++p) {
-    const float alpha = in[p * spec.nchannels + colours];
-    for (int c = 0; c < colours; ++c) {
-      result[p * colours + c] = alpha * in[p * spec.nchannels + c] + (1 - alpha) * background;
-    }
-  }
-  OIIO::ImageBuf out(OIIO::ImageSpec(spec.width, spec.height, colours, spec.format));
-  out.set_pixels(OIIO::ROI::All(), OIIO::TypeDesc::FLOAT, result.data());
-  return out;
-}
-
 struct ImageCounts {
-  std::atomic<int> undistorted{0}, composited{0}, downsized{0};
+  std::atomic<int> undistorted{0}, transparent{0}, downsized{0};
 };
 
-// What each image shows along its border once composited (BorderPixels), by view.
+// What each opaque image shows along its border (BorderPixels), by view; none for an image with alpha.
 using Borders = std::vector<std::vector<Rgb>>;
 
-// Writes the dataset's images into `images` as the poses stage's are: undistorted, composited on the background
-// unless it is "keep", downsized to `max_side` (0: any size), copied when nothing changed them; the views then name
-// them and hold no distortion.
-void WriteImages(ImportedDataset& dataset, const ImportOptions& options, int max_side, const fs::path& images,
-                 ImageCounts* counts, Borders* borders) {
+// Writes the dataset's images into `images` as the poses stage's are: undistorted, downsized to `max_side` (0: any
+// size), copied when nothing changed them; the views then name them and hold no distortion. Transparent images keep
+// their alpha, so that training can put random colours behind them (a fixed colour lets the field paint fog of that
+// colour over it at no cost).
+void WriteImages(ImportedDataset& dataset, int max_side, const fs::path& images, ImageCounts* counts,
+                 Borders* borders) {
   fs::create_directories(images);
   borders->assign(dataset.views.size(), {});
   Progress progress("import: images", static_cast<int64_t>(dataset.views.size()), "images");
@@ -100,12 +83,11 @@ void WriteImages(ImportedDataset& dataset, const ImportOptions& options, int max
       changed = true;
       ++counts->undistorted;
     }
-    if (options.background != "keep" && (image.spec().nchannels == 4 || image.spec().nchannels == 2)) {
-      image = Composite(image, options.background == "white" ? 1.0f : 0.0f);
-      changed = true;
-      ++counts->composited;
+    if (image.spec().nchannels == 4 || image.spec().nchannels == 2) {
+      ++counts->transparent;
+    } else {
+      (*borders)[i] = BorderPixels(image);
     }
-    if (image.spec().nchannels != 4 && image.spec().nchannels != 2) (*borders)[i] = BorderPixels(image);
     if (max_side > 0 && std::max(camera.width, camera.height) > max_side) {
       image = DownsizeToFit(image, max_side);
       view.view.camera = ResizedCamera(camera, image.spec().width, image.spec().height);
@@ -125,10 +107,13 @@ void WriteImages(ImportedDataset& dataset, const ImportOptions& options, int max
   });
 }
 
-// The colour the images were composited on, or else the one the borders of all of them show (a dataset rendered on
-// a plain background, as the NeRF course's .npz); none for photos and for images that keep their alpha.
+// The colour transparent images are shown on (import.background; none for "keep"), or else the one the borders of
+// all the images show (a dataset rendered on a plain background, as the NeRF course's .npz); none for photos.
 std::optional<Rgb> KnownBackground(const ImportOptions& options, const ImageCounts& counts, const Borders& borders) {
-  if (counts.composited > 0) return options.background == "white" ? Rgb{1, 1, 1} : Rgb{0, 0, 0};
+  if (counts.transparent > 0) {
+    if (options.background == "keep") return std::nullopt;
+    return options.background == "white" ? Rgb{1, 1, 1} : Rgb{0, 0, 0};
+  }
   std::vector<Rgb> pixels;
   for (const std::vector<Rgb>& border : borders) {
     if (border.empty()) return std::nullopt;  // an image with alpha
@@ -197,16 +182,16 @@ void ImportStage::Run(StageContext& context) const {
   LogInfo(format("import: {} dataset, {} views", dataset.kind, dataset.views.size()));
   ImageCounts counts;
   Borders borders;
-  WriteImages(dataset, options, poses.max_image_size, context.output_dir / "images", &counts, &borders);
+  WriteImages(dataset, poses.max_image_size, context.output_dir / "images", &counts, &borders);
   const std::optional<Rgb> background = KnownBackground(options, counts, borders);
   const Normalization normalization = WriteCameras(dataset, input, poses, background, context.output_dir);
   context.summary = {{"views", dataset.views.size()}, {"dataset", dataset.kind}};
-  LogInfo(format("import: {} views ({} undistorted, {} composited on {}, {} downsized to {} px), scene scale {:.4g}",
-                 dataset.views.size(), counts.undistorted.load(), counts.composited.load(), options.background,
-                 counts.downsized.load(), poses.max_image_size, normalization.scale));
+  LogInfo(format("import: {} views ({} undistorted, {} with alpha, {} downsized to {} px), scene scale {:.4g}",
+                 dataset.views.size(), counts.undistorted.load(), counts.transparent.load(), counts.downsized.load(),
+                 poses.max_image_size, normalization.scale));
   if (background) {
-    LogInfo(format("import: the images show a plain background ({:.3f}, {:.3f}, {:.3f}), kept fixed in training",
-                   (*background)[0], (*background)[1], (*background)[2]));
+    LogInfo(format("import: the images are shown on a plain background ({:.3f}, {:.3f}, {:.3f})", (*background)[0],
+                   (*background)[1], (*background)[2]));
   }
 }
 

@@ -1,6 +1,6 @@
 #pragma once
 // The poses stage of a dataset that already has cameras: validates and copies its images (decoding each,
-// undistorting distorted ones, compositing transparent ones on the chosen background, downsizing those larger than
+// undistorting distorted ones (transparent ones keep their alpha), downsizing those larger than
 // poses.max_image_size), normalises the cameras like the COLMAP path does and writes the same transforms.json.
 // Replaces ingest -> sfm -> poses.
 
@@ -11,12 +11,14 @@
 namespace p2n {
 
 struct ImportOptions {
-  std::string background = "white";  // transparent images are composited on it; "keep" keeps the alpha
+  std::string background = "white";  // transparent images are shown and scored on it; "keep": none recorded
 
   template <class V>
   void Visit(V& v) {
-    v("background", background, "background that transparent (RGBA) images are composited on", "", OptionKind::kResult,
-      {"white", "black", "keep"});
+    v("background", background,
+      "the colour transparent (RGBA) images are shown and scored on (their alpha is kept: training puts random "
+      "colours behind them); keep: no colour recorded (shown on white)",
+      "", OptionKind::kResult, {"white", "black", "keep"});
   }
   void Check() const {}
 };
@@ -26,8 +28,9 @@ class ImportStage : public Stage {
   std::string name() const override { return "poses"; }
   std::string folder() const override { return "20_poses"; }
   // 2: images downsized to poses.max_image_size; 3: the background recorded only where the images show it, and
-  // fewer than 20 views (but LLFF data) hold out views inside the span of the others
-  int format_version() const override { return 3; }
+  // fewer than 20 views (but LLFF data) hold out views inside the span of the others; 4: transparent images keep
+  // their alpha
+  int format_version() const override { return 4; }
   std::vector<std::string> option_sections() const override { return {"poses", "import"}; }
   // Every file of the dataset that the result depends on, by SHA-1.
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;

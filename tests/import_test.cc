@@ -21,13 +21,15 @@ namespace {
 
 const fs::path kData = fs::path(P2N_SOURCE_DIR) / ".." / "shared" / "data";
 
-// Runs the import stage on `input` (images at most `max_image_size` on their longest side); returns the written
-// transforms.json.
-nlohmann::json Import(const fs::path& input, const fs::path& workspace_path, int max_image_size = 0) {
+// Runs the import stage on `input` (images at most `max_image_size` on their longest side, transparent ones shown on
+// `background`); returns the written transforms.json.
+nlohmann::json Import(const fs::path& input, const fs::path& workspace_path, int max_image_size = 0,
+                      const std::string& background = "white") {
   const OptionRegistry registry = AllOptions();
   Config config(registry);
   config.Set("run.progress", "none", "test");
   if (max_image_size > 0) config.Set("poses.max_image_size", max_image_size, "test");
+  config.Set("import.background", background, "test");
   Workspace workspace = Workspace::Open(workspace_path, true);
   workspace.SetInput(input);
   RunRequest request;
@@ -121,6 +123,33 @@ TEST_CASE("import: images larger than poses.max_image_size are downsized, their 
   }
   // The default keeps images of up to 1920 pixels as they are.
   CHECK(Import(dir / "data", dir / "ws_default")["w"] == 64);
+}
+
+TEST_CASE("import: transparent images keep their alpha, and import.background is the colour they are shown on",
+          "[import]") {
+  TempDir dir;
+  WriteSyntheticScene(SmallScene(3), dir / "data");
+  fs::rename(dir / "data" / "ground_truth_cameras.json", dir / "data" / "transforms.json");
+  const nlohmann::json truth = ReadJsonFile(dir / "data" / "transforms.json");
+  for (const nlohmann::json& frame : truth["frames"]) {  // the left half transparent
+    const fs::path file = dir / "data" / frame["file_path"].get<std::string>();
+    const OIIO::ImageBuf rgb(file.string());
+    OIIO::ImageBuf rgba(OIIO::ImageSpec(64, 48, 4, OIIO::TypeDesc::UINT8));
+    for (OIIO::ImageBuf::Iterator<unsigned char, float> p(rgba); !p.done(); ++p) {
+      for (int c = 0; c < 3; ++c) p[c] = rgb.getchannel(p.x(), p.y(), 0, c);
+      p[3] = p.x() < 32 ? 0.0f : 1.0f;
+    }
+    REQUIRE(rgba.write(file.string()));
+  }
+  const nlohmann::json white = Import(dir / "data", dir / "white");
+  CHECK(white["background"] == nlohmann::json::array({1.0, 1.0, 1.0}));
+  const OIIO::ImageBuf imported(
+      (dir / "white" / "20_poses" / white["frames"][0]["file_path"].get<std::string>()).string());
+  REQUIRE(imported.spec().nchannels == 4);
+  CHECK(imported.getchannel(3, 3, 0, 3) == 0.0f);
+  CHECK(imported.getchannel(40, 3, 0, 3) == 1.0f);
+  CHECK(Import(dir / "data", dir / "black", 0, "black")["background"] == nlohmann::json::array({0.0, 0.0, 0.0}));
+  CHECK_FALSE(Import(dir / "data", dir / "keep", 0, "keep").contains("background"));
 }
 
 TEST_CASE("import: a COLMAP project folder (images/ + sparse/0) keeps its cameras and points", "[import]") {
