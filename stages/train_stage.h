@@ -46,8 +46,8 @@ struct TrainOptions {
     v("scene", scene,
       "bounded (an object inside the unit box), unbounded (space beyond it contracted), forward (every camera "
       "looking one way, as LLFF captures: a mean camera's normalised device coordinates), or auto: bounded for "
-      "Blender and .npz datasets, forward for LLFF data and photos whose cameras all look within 15 degrees of "
-      "their mean direction, else unbounded",
+      "Blender and .npz datasets, forward for captures whose cameras all look within 15 degrees of their "
+      "mean direction (LLFF data or photos), else unbounded",
       "", OptionKind::kResult, {"auto", "bounded", "unbounded", "forward"});
     v("time_budget", time_budget, "training time; 0: the preset's (fast 60, default 240, quality 900)", "s");
     v("steps", steps, "stop after this many steps; 0: no step limit", "steps");
@@ -110,7 +110,8 @@ class TrainStage : public Stage {
   // 7: train.scene auto picks forward for forward-facing captures
   // 9: bounded scenes' steps take 2^17 samples in the run's second half; 8: their hash table 2^19, occupancy 256^3
   // 10: a background the import knows stays fixed (auto); runs shorter than kShortBudget take the fast sizes
-  int format_version() const override { return 10; }
+  // 11: LLFF data is forward only when its cameras face forward
+  int format_version() const override { return 11; }
   std::vector<std::string> upstream() const override { return {"poses"}; }
   void Run(StageContext& context) const override;
 };

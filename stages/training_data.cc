@@ -50,9 +50,7 @@ std::string HeldoutSplit(const ImportedDataset& dataset) {
   return has_test ? "test" : "val";
 }
 
-bool ForwardFacingCapture(const ImportedDataset& dataset) {
-  return dataset.meta.dataset_kind == "llff" || FacesForward(dataset.Cameras());
-}
+bool ForwardFacingCapture(const ImportedDataset& dataset) { return FacesForward(dataset.Cameras()); }
 
 TrainingData LoadTrainingData(const ImportedDataset& poses) {
   TrainingData data;

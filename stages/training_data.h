@@ -17,8 +17,9 @@ TrainView LoadTrainView(const ImportedView& imported);
 // The split held out for evaluation: "test" when any view has it, else "val".
 std::string HeldoutSplit(const ImportedDataset& dataset);
 
-// Whether the photos were taken from one side looking one way: LLFF data, or cameras that face forward
-// (FacesForward). Such a scene trains in normalised device coordinates and its video is a spiral.
+// Whether the photos were taken from one side looking one way: cameras that face forward (FacesForward), whatever
+// the dataset's format (LLFF's poses_bounds.npy holds captures taken around an object too). Such a scene trains in
+// normalised device coordinates and its video is a spiral.
 bool ForwardFacingCapture(const ImportedDataset& dataset);
 
 // The training views ("train" split) and held-out views (HeldoutSplit's) of the poses stage's transforms.json

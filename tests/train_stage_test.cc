@@ -21,8 +21,9 @@
 namespace p2n::testing {
 namespace fs = std::filesystem;
 
-TEST_CASE("train stage: train.scene auto is bounded for Blender and .npz data, forward for one-sided captures",
-          "[train]") {
+TEST_CASE(
+    "train stage: train.scene auto is bounded for Blender and .npz data, forward for one-sided captures of any format",
+    "[train]") {
   const auto dataset = [](const std::string& kind, const std::vector<double>& azimuths_deg) {
     ImportedDataset poses;
     poses.meta.dataset_kind = kind;
@@ -37,7 +38,9 @@ TEST_CASE("train stage: train.scene auto is bounded for Blender and .npz data, f
   TrainOptions options;
   CHECK(ResolveSceneSpace(options, dataset("blender", one_side)) == SceneSpace::kBounded);
   CHECK(ResolveSceneSpace(options, dataset("npz", around)) == SceneSpace::kBounded);
-  CHECK(ResolveSceneSpace(options, dataset("llff", around)) == SceneSpace::kForward);  // LLFF's by definition
+  CHECK(ResolveSceneSpace(options, dataset("llff", one_side)) == SceneSpace::kForward);
+  // poses_bounds.npy holds captures taken around an object too (maryrose): unbounded like any such photos
+  CHECK(ResolveSceneSpace(options, dataset("llff", around)) == SceneSpace::kUnbounded);
   CHECK(ResolveSceneSpace(options, dataset("", one_side)) == SceneSpace::kForward);
   CHECK(ResolveSceneSpace(options, dataset("colmap", around)) == SceneSpace::kUnbounded);
   options.scene = "unbounded";
