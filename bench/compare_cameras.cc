@@ -1,6 +1,11 @@
-// Compares the cameras of two transforms.json files (camera-to-world, OpenGL axes), matched by image file name,
-// after a similarity alignment of the camera centres (Umeyama): rotation error (degrees) and centre error
-// (relative to the reference cameras' spread, the RMS distance from their centroid).
+// Compares the cameras of two transforms.json files (camera-to-world, OpenGL axes), matched by image file name:
+// - centre error after a similarity alignment of the camera centres (Umeyama), relative to the reference cameras'
+//   spread (the RMS distance from their centroid);
+// - rotation error (degrees) under that alignment's rotation; where the centres lie near a line or a flat arc (a
+//   facade walked past) they fix the rotation about it poorly, so that error can be the alignment's, not the cameras';
+// - rotation error under the rotation that best aligns the orientations themselves (the chordal mean of each
+//   reference rotation times the estimated one's inverse);
+// - relative rotation error over every pair of cameras, which no alignment enters.
 // Usage: compare_cameras ESTIMATED.json REFERENCE.json
 
 #include <Eigen/Dense>
@@ -36,6 +41,21 @@ double Median(std::vector<double> values) {
   return values[values.size() / 2];
 }
 
+double AngleDeg(const Eigen::Matrix3d& rotation) { return Eigen::AngleAxisd(rotation).angle() * 180 / M_PI; }
+
+// The rotation nearest (in the Frobenius norm) to a 3 x 3 matrix.
+Eigen::Matrix3d NearestRotation(const Eigen::Matrix3d& m) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
+  return svd.matrixU() * d * svd.matrixV().transpose();
+}
+
+void PrintErrors(const char* what, const std::vector<double>& degrees) {
+  std::printf("%s: median %.3f deg, max %.3f deg\n", what, Median(degrees),
+              *std::max_element(degrees.begin(), degrees.end()));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -62,17 +82,28 @@ int main(int argc, char** argv) {
     const Eigen::Matrix3d rotation = alignment.topLeftCorner<3, 3>() / scale;
     const Eigen::Vector3d centroid = target.rowwise().mean();
     const double spread = std::sqrt((target.colwise() - centroid).colwise().squaredNorm().mean());
-    std::vector<double> angles, centres;
+    std::vector<Eigen::Matrix3d> est(n), ref(n);
+    Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
     for (Eigen::Index i = 0; i < n; ++i) {
-      const Eigen::Matrix3d difference = reference.at(names[i]).topLeftCorner<3, 3>().transpose() * rotation *
-                                         estimated.at(names[i]).topLeftCorner<3, 3>();
-      angles.push_back(Eigen::AngleAxisd(difference).angle() * 180 / M_PI);
+      est[i] = estimated.at(names[i]).topLeftCorner<3, 3>();
+      ref[i] = reference.at(names[i]).topLeftCorner<3, 3>();
+      sum += ref[i] * est[i].transpose();
+    }
+    const Eigen::Matrix3d best_rotation = NearestRotation(sum);
+    std::vector<double> by_centres, by_rotations, relative, centres;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      by_centres.push_back(AngleDeg(ref[i].transpose() * rotation * est[i]));
+      by_rotations.push_back(AngleDeg(ref[i].transpose() * best_rotation * est[i]));
+      for (Eigen::Index j = i + 1; j < n; ++j) {
+        relative.push_back(AngleDeg((ref[i].transpose() * ref[j]).transpose() * (est[i].transpose() * est[j])));
+      }
       centres.push_back(((alignment * source.col(i).homogeneous()).head<3>() - target.col(i)).norm() / spread);
     }
     std::printf("cameras compared: %zu (estimated %zu, reference %zu)\n", names.size(), estimated.size(),
                 reference.size());
-    std::printf("rotation error: median %.3f deg, max %.3f deg\n", Median(angles),
-                *std::max_element(angles.begin(), angles.end()));
+    PrintErrors("rotation error (centres aligned)", by_centres);
+    PrintErrors("rotation error (rotations aligned)", by_rotations);
+    PrintErrors("relative rotation error (every pair)", relative);
     std::printf("centre error: median %.3f%%, max %.3f%% of the camera spread\n", 100 * Median(centres),
                 100 * *std::max_element(centres.begin(), centres.end()));
   } catch (const std::exception& e) {

@@ -10,7 +10,7 @@
 namespace p2n {
 
 struct SfmOptions {
-  std::string camera_model = "OPENCV";  // COLMAP camera model of the photos
+  std::string camera_model = "RADIAL";  // COLMAP camera model of the photos
   bool single_camera = true;            // one camera shared by every photo
   std::string matcher = "auto";         // auto: AutoMatcher (matcher_choice.h)
   int exhaustive_max_images = 100;      // photos above which auto matching is sequential or by retrieval
