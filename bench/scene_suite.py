@@ -10,7 +10,7 @@ suite's own time. Run it alone on the machine (nothing else running): it measure
 
     python3 bench/scene_suite.py OUT [--scenes fox,fern,...] [--budgets fast,default,lego_200@20] [-- OPTIONS...]
 
-OPTIONS go to every training run (e.g. `-- --train.distortion 0`, to measure a change against the defaults).
+OPTIONS go to every run, the import and sfm's too (e.g. `-- --train.distortion 0`, to measure a change against the defaults).
 OUT/suite.md is the table; OUT/<scene>/<budget>/ the workspaces.
 """
 
@@ -76,14 +76,14 @@ def fmt(value, digits=2):
     return "-" if value is None else f"{value:.{digits}f}"
 
 
-def prepare(scene, out):
+def prepare(scene, out, extra):
     """The scene's workspace up to its cameras (shared by every budget)."""
     source, _, _ = SCENES[scene]
     base = os.path.join(out, scene, "poses")
     os.makedirs(os.path.join(out, scene), exist_ok=True)
     if not os.path.exists(os.path.join(base, "20_poses", "manifest.json")):
         shutil.rmtree(base, ignore_errors=True)
-        run([BIN, "run", os.path.join(DATA, source), "-w", base, "--until", "poses", "--run.progress", "none"],
+        run([BIN, "run", os.path.join(DATA, source), "-w", base, "--until", "poses", "--run.progress", "none"] + extra,
             os.path.join(out, scene, "log.txt"))
     return base
 
@@ -161,7 +161,7 @@ def main():
     for scene in args.scenes.split(","):
         if scene not in SCENES:
             sys.exit(f"unknown scene {scene}; the suite's scenes: {', '.join(SCENES)}")
-        base = prepare(scene, args.out)
+        base = prepare(scene, args.out, extra)
         error = camera_error(scene, base)
         if error:
             cameras.append(error)
