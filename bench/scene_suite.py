@@ -10,7 +10,8 @@ suite's own time. Run it alone on the machine (nothing else running): it measure
 
     python3 bench/scene_suite.py OUT [--scenes fox,fern,...] [--budgets fast,default,lego_200@20] [-- OPTIONS...]
 
-OPTIONS go to every run, the import and sfm's too (e.g. `-- --train.distortion 0`, to measure a change against the defaults).
+OPTIONS go to every run, the import and sfm's too (e.g. `-- --train.distortion 0`, to measure a change against
+the defaults).
 OUT/suite.md is the table; OUT/<scene>/<budget>/ the workspaces.
 """
 

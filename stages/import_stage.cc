@@ -49,7 +49,8 @@ struct ImageCounts {
   std::atomic<int> undistorted{0}, transparent{0}, downsized{0};
 };
 
-// What each opaque image shows along its border (BorderPixels), by view; none for an image with alpha.
+// What each opaque image shows along its border (BorderPixels), by view; KnownBackground reads them only when no
+// image has alpha.
 using Borders = std::vector<std::vector<Rgb>>;
 
 // Writes the dataset's images into `images` as the poses stage's are: undistorted, downsized to `max_side` (0: any
@@ -115,10 +116,7 @@ std::optional<Rgb> KnownBackground(const ImportOptions& options, const ImageCoun
     return options.background == "white" ? Rgb{1, 1, 1} : Rgb{0, 0, 0};
   }
   std::vector<Rgb> pixels;
-  for (const std::vector<Rgb>& border : borders) {
-    if (border.empty()) return std::nullopt;  // an image with alpha
-    pixels.insert(pixels.end(), border.begin(), border.end());
-  }
+  for (const std::vector<Rgb>& border : borders) pixels.insert(pixels.end(), border.begin(), border.end());
   return SharedColour(std::move(pixels));
 }
 
