@@ -18,8 +18,8 @@ namespace p2n {
 struct RenderOptions {
   // Sample spacing = the model's march step x this; 0: DefaultStepScale(model).
   double step_scale = 0;
-  // Rays stop below it (0: never). 1e-3 leaves out at most a quarter of an 8-bit level of colour: against 1e-4,
-  // render_bench saves 5-6% of the time on lego and fox at the same PSNR (to 0.01 dB) on lego, fox and fern.
+  // Rays stop below it (0: never). 1e-3 leaves out at most a quarter of an 8-bit level of colour, for 5-6% less
+  // time than 1e-4 at the same PSNR (docs/benchmarks.md, rendering).
   // Training and its evaluations keep the trainer's (TrainerOptions::min_transmittance).
   float min_transmittance = 1e-3f;
   size_t max_samples = 4096;  // per ray
@@ -52,10 +52,8 @@ std::vector<MarchSample> SampleRay(const NerfModel& model, const Ray& ray, doubl
 
 // The render step (as a multiple of the model's march step) when none is given. Training samples at the march
 // step with random offsets. In a bounded scene (sharp surfaces) a render with fixed offsets at half of it is
-// closer to the photos for about twice the samples (lego 200, render_bench: +0.8 dB; lego 800 after 15 minutes
-// of quality: +0.85 dB; a quarter adds about 0.2 dB more; lego 800 after 5 minutes of default, which ends marching
-// 512 samples across the box: +0.76 dB, 4.4 samples a ray against 2.2). In an unbounded one (real captures) it gains
-// nothing (fox and fern after 2 minutes: +0.00 and +0.03 dB), so the render samples at the training step there.
+// closer to the photos for about twice the samples; in an unbounded one (real captures) it gains nothing, so the
+// render samples at the training step there (docs/benchmarks.md, rendering).
 double DefaultStepScale(const NerfModel& model);
 // The step RenderRays takes with `options`, as a multiple of the model's march step: options.step_scale, or
 // DefaultStepScale where it is 0.

@@ -59,8 +59,7 @@ double SplatTrainer::StepShare() const {
 
 double SplatTrainer::Progress() const { return progress_ >= 0 ? std::min(1.0, progress_) : StepShare(); }
 
-// By the step, not by the run's progress: a run cut short keeps the means moving (decaying it over a 370-step run,
-// with the other rates falling to a tenth over its last 40%, cost fox 1.2 dB).
+// By the step, not by the run's progress: a run cut short keeps the means moving (docs/benchmarks.md, splats).
 double SplatTrainer::PositionLearningRate() const {
   const double t = StepShare();
   return scene_.extent * std::exp((1 - t) * std::log(options_.position_lr) + t * std::log(options_.final_position_lr));

@@ -32,8 +32,7 @@ struct SplatTrainerOptions {
   double scale_lr = 5e-3;
   double rotation_lr = 1e-3;
   // Steps between the joining of each higher SH degree: all three by step 300 (3D Gaussian Splatting's 1,000 of
-  // 30,000 steps, scaled towards the few hundred steps a CPU run makes). Against 200 (degree 1 alone by the end of
-  // a 370-step run): fox +0.6 dB (370 steps), fern -0.06 and the demo's scene -0.1 (their 120 and 30 s).
+  // 30,000 steps, scaled towards the few hundred steps a CPU run makes; docs/benchmarks.md, splats).
   int sh_interval = 100;
   int densify_interval = 100;      // steps between densifications
   int densify_from = 100;          // the first densification's step
