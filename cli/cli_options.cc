@@ -80,7 +80,7 @@ std::optional<int> Parse(CLI::App& app, const OptionRegistry& registry, int argc
 Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace, const CommonFlags& flags,
                      bool remember) {
   Config config(registry);
-  const fs::path remembered = workspace.root() / "options.json";
+  const fs::path remembered = workspace.RememberedOptionsPath();
   if (fs::exists(remembered)) config.Merge(ReadJsonFile(remembered), remembered.string());
   if (!flags.config_file.empty()) config.MergeFile(flags.config_file);
   for (const auto& [key, text] : flags.option_text) config.SetFromText(key, text, "--" + key);
@@ -92,7 +92,7 @@ Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace,
 }
 
 std::string RememberedOptionsText(const Workspace& workspace) {
-  const fs::path remembered = workspace.root() / "options.json";
+  const fs::path remembered = workspace.RememberedOptionsPath();
   if (!fs::exists(remembered)) return "";
   const nlohmann::json options = ReadJsonFile(remembered);
   std::string text;
@@ -106,7 +106,7 @@ std::string RememberedOptionsText(const Workspace& workspace) {
 }
 
 std::unique_ptr<tbb::global_control> ApplyRunOptions(const Config& config, const fs::path& log_file) {
-  const RunOptions options = ReadOptions<RunOptions>(config, "run");
+  const RunOptions options = ReadOptions<RunOptions>(config);
   SetLogLevel(ParseLogLevel(options.log_level));
   SetProgressStyle(ParseProgressStyle(options.progress));
   SetLogFile(log_file);

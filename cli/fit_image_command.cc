@@ -147,7 +147,7 @@ void Sweep(const fs::path& image, const FloatImage& target, ImageFitOptions opti
 
 int RunFitImage(int argc, char** argv) {
   OptionRegistry registry;
-  RegisterOptions<RunOptions>(registry, "run");
+  RegisterOptions<RunOptions>(registry, RunOptions::kSection);
   RegisterOptions<ImageFitOptions>(registry, "fit");
   CLI::App app(
       "Fit a neural field to one image: writes the reconstruction, PSNR against time (CSV and plot) and "

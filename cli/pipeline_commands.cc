@@ -15,6 +15,7 @@
 #include "pipeline/log.h"
 #include "pipeline/runner.h"
 #include "stages/stage_reports.h"
+#include "stages/stage_results.h"
 #include "stages/stages.h"
 
 namespace p2n {
@@ -30,7 +31,7 @@ std::string CommandLine(int argc, char** argv) {
 }
 
 // What ran and how long each stage took, then where the results are and how good they are.
-void PrintRunSummary(const Workspace& workspace, const Runner& stages, const std::vector<StageRun>& runs) {
+void PrintRunSummary(const Workspace& workspace, const std::vector<StageRun>& runs) {
   size_t ran = 0;
   double seconds = 0;
   for (const StageRun& run : runs) {
@@ -44,10 +45,7 @@ void PrintRunSummary(const Workspace& workspace, const Runner& stages, const std
   }
   const std::string remembered = RememberedOptionsText(workspace);
   if (!remembered.empty()) LogInfo(format("  options the workspace remembers: {}", remembered));
-  const auto file_of = [&](const char* stage, const char* file) {
-    return workspace.StageDir(stages.Get(stage).folder()) / file;
-  };
-  const fs::path eval = file_of("render", "eval.json");
+  const fs::path eval = InWorkspace<RenderResult>(workspace).eval();
   if (fs::exists(eval)) {
     const EvalReport report = EvalReport::Read(eval);
     if (report.psnr && report.ssim) {
@@ -55,14 +53,14 @@ void PrintRunSummary(const Workspace& workspace, const Runner& stages, const std
                      report.views.size()));
     }
   }
-  const std::array<std::array<const char*, 3>, 6> results = {{{"report", "report.html", "report"},
-                                                              {"render", "video.mp4", "video"},
-                                                              {"splat", "splats.ply", "splats"},
-                                                              {"export", "mesh.ply", "mesh"},
-                                                              {"export", "points.ply", "point cloud"},
-                                                              {"train", "model.bin", "model"}}};
-  for (const auto& [stage, file, what] : results) {
-    const fs::path path = file_of(stage, file);
+  const std::array<std::pair<const char*, fs::path>, 6> results = {
+      {{"report", InWorkspace<ReportResult>(workspace).page()},
+       {"video", InWorkspace<RenderResult>(workspace).video()},
+       {"splats", InWorkspace<SplatResult>(workspace).splats()},
+       {"mesh", InWorkspace<ExportResult>(workspace).mesh()},
+       {"point cloud", InWorkspace<ExportResult>(workspace).points()},
+       {"model", InWorkspace<TrainResult>(workspace).model()}}};
+  for (const auto& [what, path] : results) {
     if (fs::exists(path)) LogInfo(format("  {:<12} {}", what, path.string()));
   }
 }
@@ -78,7 +76,7 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
   std::string photos;
   RunRequest request;
   bool force = false;
-  if (is_run || stage == "ingest") {
+  if (is_run || stage == IngestResult::kId.name) {
     app.add_option("photos", photos,
                    "folder of photos, or a dataset with cameras (transforms.json, Blender, LLFF, COLMAP project, "
                    ".npz); remembered by the workspace");
@@ -123,7 +121,7 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
   LogInfo(format("{} (workspace {})", CommandLine(argc, argv), workspace.root().string()));
 
   const std::vector<StageRun> runs = stages.Run(workspace, config, request);
-  PrintRunSummary(workspace, stages, runs);
+  PrintRunSummary(workspace, runs);
   return kExitOk;
 }
 

@@ -1,11 +1,10 @@
 #include "nerf/nerf_model.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+
+#include "pipeline/file_util.h"
 
 namespace p2n {
 namespace {
@@ -136,30 +135,6 @@ std::vector<char> ReadBinaryFile(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw FileError(path, "open");
   return std::vector<char>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-void WriteBinaryFileAtomic(const std::filesystem::path& path, const std::vector<char>& bytes) {
-  const std::filesystem::path temporary = path.string() + ".tmp";
-  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw FileError(temporary, "create");
-  size_t written = 0;
-  while (written < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const int saved = errno;
-      ::close(fd);
-      ::unlink(temporary.c_str());
-      errno = saved;
-      throw FileError(temporary, "write");
-    }
-    written += static_cast<size_t>(n);
-  }
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
-    ::unlink(temporary.c_str());
-    throw FileError(temporary, "flush");
-  }
-  if (std::rename(temporary.c_str(), path.c_str()) != 0) throw FileError(path, "rename into");
 }
 
 }  // namespace p2n

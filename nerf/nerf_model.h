@@ -73,8 +73,7 @@ NerfModel ReadModel(BinaryReader* reader);
 void SaveModel(const NerfModel& model, const std::filesystem::path& path);
 NerfModel LoadModel(const std::filesystem::path& path);
 
-// Helpers for files in this format: the whole file, and an atomic durable write.
+// The whole file (std::runtime_error naming it when it cannot be opened).
 std::vector<char> ReadBinaryFile(const std::filesystem::path& path);
-void WriteBinaryFileAtomic(const std::filesystem::path& path, const std::vector<char>& bytes);
 
 }  // namespace p2n

@@ -421,6 +421,42 @@ void Trainer::AddPoseGradients(const RayBatch& batch, const std::vector<Ray>& ra
   }
 }
 
+StepResult Trainer::SumChunks(std::vector<Chunk>* chunks, double* d_encoded_magnitude) {
+  StepResult result;
+  std::vector<float>& d_dense = chunks->front().d_dense;
+  // A hash-table entry's gradient sums weight (<= 1) x dL/d(encoding) over samples, so this sum bounds them all:
+  // the table's gradient is finite when the sum is, with room to spare for rounding.
+  double background_weight = 0;
+  for (size_t c = 0; c < chunks->size(); ++c) {
+    const Chunk& chunk = (*chunks)[c];
+    *d_encoded_magnitude += chunk.d_encoded_magnitude;
+    result.rays += chunk.count;
+    result.loss += chunk.loss;
+    result.samples += chunk.offsets.back();
+    result.samples_used += chunk.used.size();
+    if (c > 0) {
+      for (size_t k = 0; k < dense_count_; ++k) d_dense[k] += chunk.d_dense[k];
+    }
+    for (size_t k = 0; k < chunk.d_appearance.size(); ++k) appearance_grads_[k] += chunk.d_appearance[k];
+    for (int ch = 0; ch < 3; ++ch) background_grads_[ch] += chunk.d_background[ch];
+    background_weight += chunk.background_weight;
+  }
+  const double rays = static_cast<double>(std::max<size_t>(result.rays, 1));
+  result.loss /= rays;
+  background_seen_ = background_weight / rays;
+  return result;
+}
+
+std::string Trainer::GradientProblem(const StepResult& result, const std::vector<float>& d_dense,
+                                     double d_encoded_magnitude) const {
+  if (!std::isfinite(result.loss)) return "the loss is not finite";
+  if (!AllFinite(d_dense)) return "a network gradient is not finite";
+  if (!AllFinite(appearance_grads_)) return "an appearance gradient is not finite";
+  if (!AllFinite(background_grads_)) return "the background's gradient is not finite";
+  if (!(d_encoded_magnitude < 0.5 * std::numeric_limits<float>::max())) return "a hash-grid gradient is not finite";
+  return "";
+}
+
 StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
   RadianceField<float>& field = *model_.field;
   // The grid's gradient is zero here: Adam zeroes the entries it used, and a skipped step writes none.
@@ -447,39 +483,11 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     BackpropagateChunk(batch, rays, encoded, &chunks[c]);
   });
 
-  StepResult result;
-  result.rays = rays.size();
-  std::vector<float>& d_dense = chunks.front().d_dense;
-  // A hash-table entry's gradient sums weight (<= 1) x dL/d(encoding) over samples, so this sum bounds them all:
-  // the table's gradient is finite when the sum is, with room to spare for rounding.
   double d_encoded_magnitude = 0;
-  for (size_t c = 0; c < chunks.size(); ++c) {
-    d_encoded_magnitude += chunks[c].d_encoded_magnitude;
-    result.loss += chunks[c].loss;
-    result.samples += chunks[c].offsets.back();
-    result.samples_used += chunks[c].used.size();
-    if (c > 0) {
-      for (size_t k = 0; k < dense_count_; ++k) d_dense[k] += chunks[c].d_dense[k];
-    }
-    for (size_t k = 0; k < chunks[c].d_appearance.size(); ++k) appearance_grads_[k] += chunks[c].d_appearance[k];
-    for (int ch = 0; ch < 3; ++ch) background_grads_[ch] += chunks[c].d_background[ch];
-  }
-  result.loss /= static_cast<double>(std::max<size_t>(rays.size(), 1));
-  double background_weight = 0;
-  for (const Chunk& chunk : chunks) background_weight += chunk.background_weight;
-  background_seen_ = background_weight / static_cast<double>(std::max<size_t>(rays.size(), 1));
+  StepResult result = SumChunks(&chunks, &d_encoded_magnitude);
+  std::vector<float>& d_dense = chunks.front().d_dense;
   ++step_;
-  if (!std::isfinite(result.loss)) {
-    result.problem = "the loss is not finite";
-  } else if (!AllFinite(d_dense)) {
-    result.problem = "a network gradient is not finite";
-  } else if (!AllFinite(appearance_grads_)) {
-    result.problem = "an appearance gradient is not finite";
-  } else if (!AllFinite(background_grads_)) {
-    result.problem = "the background's gradient is not finite";
-  } else if (!(d_encoded_magnitude < 0.5 * std::numeric_limits<float>::max())) {
-    result.problem = "a hash-grid gradient is not finite";
-  }
+  result.problem = GradientProblem(result, d_dense, d_encoded_magnitude);
   if (!result.problem.empty()) {
     std::fill(appearance_grads_.begin(), appearance_grads_.end(), 0.0f);
     background_grads_.fill(0.0f);

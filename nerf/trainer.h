@@ -173,6 +173,12 @@ class Trainer {
   Eigen::MatrixXf EncodeBatch(std::vector<Chunk>* chunks) const;
   void BackpropagateChunk(const RayBatch& batch, const std::vector<Ray>& rays, const Eigen::MatrixXf& encoded,
                           Chunk* chunk) const;
+  // The chunks' losses, sample counts and gradients summed: the networks' into the first chunk's d_dense, the
+  // appearance's and background's into theirs; *d_encoded_magnitude bounds the hash grid's (see trainer.cc).
+  StepResult SumChunks(std::vector<Chunk>* chunks, double* d_encoded_magnitude);
+  // What is not finite in a summed step ("" when all is).
+  std::string GradientProblem(const StepResult& result, const std::vector<float>& d_dense,
+                              double d_encoded_magnitude) const;
   // The used samples' field points and dL/d(encoding), chunk after chunk.
   void GatherUsed(const std::vector<Chunk>& chunks, Eigen::MatrixXf* positions, Eigen::MatrixXf* d_encoded) const;
   // From the first 1 / kPoseChunkShare of the chunks, given what GatherUsed() gathered.

@@ -15,34 +15,42 @@
 namespace p2n {
 namespace fs = std::filesystem;
 
-void WriteFileAtomic(const fs::path& path, std::string_view contents) {
+namespace {
+
+// The one atomic write: a temporary file beside `path`, written, flushed to disk and renamed into place.
+void WriteBytesAtomic(const fs::path& path, const char* data, size_t size) {
   const fs::path temporary = path.string() + ".tmp";
   const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  const auto fail = [&](const char* what) {
+  const auto fail = [&](const char* what, bool opened) {
     const std::string reason = std::strerror(errno);
-    if (fd >= 0) ::close(fd);
+    if (opened) ::close(fd);
     ::unlink(temporary.c_str());
-    throw UserError(format("cannot {} '{}': {}", what, path.string(), reason));
+    throw UserError(
+        format("cannot {} '{}': {}; check the free space, the file-size limit (ulimit -f) and the "
+               "folder's permissions",
+               what, path.string(), reason));
   };
-  if (fd < 0) fail("create");
+  if (fd < 0) fail("create", false);
   size_t written = 0;
-  while (written < contents.size()) {
-    const ssize_t n = ::write(fd, contents.data() + written, contents.size() - written);
+  while (written < size) {
+    const ssize_t n = ::write(fd, data + written, size - written);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) fail("write");
+    if (n <= 0) fail("write", true);
     written += static_cast<size_t>(n);
   }
-  if (::fsync(fd) != 0) fail("write");
-  if (::close(fd) != 0) {
-    const std::string reason = std::strerror(errno);
-    ::unlink(temporary.c_str());
-    throw UserError(format("cannot write '{}': {}", path.string(), reason));
-  }
-  if (::rename(temporary.c_str(), path.c_str()) != 0) {
-    const std::string reason = std::strerror(errno);
-    ::unlink(temporary.c_str());
-    throw UserError(format("cannot write '{}': {}", path.string(), reason));
-  }
+  if (::fsync(fd) != 0) fail("write", true);
+  if (::close(fd) != 0) fail("write", false);
+  if (::rename(temporary.c_str(), path.c_str()) != 0) fail("write", false);
+}
+
+}  // namespace
+
+void WriteFileAtomic(const fs::path& path, std::string_view contents) {
+  WriteBytesAtomic(path, contents.data(), contents.size());
+}
+
+void WriteBinaryFileAtomic(const fs::path& path, const std::vector<char>& bytes) {
+  WriteBytesAtomic(path, bytes.data(), bytes.size());
 }
 
 void WriteJsonAtomic(const fs::path& path, const nlohmann::json& value) { WriteFileAtomic(path, value.dump(2) + "\n"); }

@@ -6,11 +6,14 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace p2n {
 
-// Writes `contents` to `path` atomically; UserError naming the file when it cannot (disk full, no permission).
+// Writes `contents` to `path` atomically (a temporary file beside it, flushed to disk, renamed into place); UserError
+// naming the file, the reason and what to check when it cannot (a full disk, a file-size limit, no permission).
 void WriteFileAtomic(const std::filesystem::path& path, std::string_view contents);
+void WriteBinaryFileAtomic(const std::filesystem::path& path, const std::vector<char>& bytes);
 // Pretty JSON, classic locale, doubles that round-trip; atomic.
 void WriteJsonAtomic(const std::filesystem::path& path, const nlohmann::json& value);
 // The whole file as text; an empty string when it cannot be read (for logs and small files).

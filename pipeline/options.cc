@@ -188,6 +188,20 @@ nlohmann::json Config::ExplicitResultOptions() const {
   return nested;
 }
 
+bool ParseAutoOrNumber(const std::string& text, std::optional<double>* value) {
+  value->reset();
+  if (text == "auto") return true;
+  try {
+    size_t end = 0;
+    const double number = std::stod(text, &end);
+    if (end != text.size() || !std::isfinite(number)) return false;
+    *value = number;
+    return true;
+  } catch (const std::exception&) {  // not a number, or out of range
+    return false;
+  }
+}
+
 void CheckOption(bool condition, std::string_view key, std::string_view rule) {
   if (!condition) throw UserError(format("option {} {}", key, rule));
 }

@@ -12,11 +12,13 @@
 //   };
 //
 // RegisterOptions<IngestOptions>(registry, "ingest") declares the keys with the struct's defaults;
-// ReadOptions<IngestOptions>(config, "ingest") fills a struct from a resolved Config and checks it.
+// ReadOptions<IngestOptions>(config, "ingest") fills a struct from a resolved Config and checks it. A struct that
+// names its section (static constexpr const char* kSection = "ingest") is read with ReadOptions<IngestOptions>(config).
 
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <optional>
 #include <set>
 #include <string>
 #include <string_view>
@@ -127,6 +129,15 @@ Options ReadOptions(const Config& config, std::string_view section) {
   options.Check();
   return options;
 }
+
+template <class Options>
+Options ReadOptions(const Config& config) {
+  return ReadOptions<Options>(config, Options::kSection);
+}
+
+// An "auto or a number" option's text (train.distortion, render.elevation): *value is nothing for "auto", else the
+// number the whole text is. False when it is neither.
+bool ParseAutoOrNumber(const std::string& text, std::optional<double>* value);
 
 // Throws UserError "option KEY RULE" when `condition` is false; for XxxOptions::Check().
 void CheckOption(bool condition, std::string_view key, std::string_view rule);

@@ -30,6 +30,8 @@ class Workspace {
   std::filesystem::path ResumeDir(std::string_view folder) const;
   std::filesystem::path LogDir() const { return root_ / "logs"; }
   std::filesystem::path ConfigPath() const { return root_ / "config.json"; }
+  // The options set for this workspace, applied to every later command in it.
+  std::filesystem::path RememberedOptionsPath() const { return root_ / "options.json"; }
 
   // The photo folder (or dataset) this workspace was made from, as an absolute path.
   std::optional<std::filesystem::path> input() const { return input_; }

@@ -7,7 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "nerf/nerf_model.h"
+#include "pipeline/file_util.h"
 
 namespace p2n {
 namespace {
@@ -44,6 +44,57 @@ void ForEachProperty(G& g, size_t i, int degree, Visit&& values) {
   throw std::runtime_error("'" + name + "': " + problem + " (expected a binary little-endian 3D Gaussian splat PLY)");
 }
 
+struct PlyProperty {
+  std::string name;
+  size_t size = 0;
+  bool is_double = false;
+};
+
+// The vertex element of a PLY header: its count and its properties in order.
+struct VertexLayout {
+  size_t count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+// Reads the header's lines up to "end_header", leaving `header` at the body.
+VertexLayout ReadVertexLayout(std::istringstream& header, const std::string& name) {
+  std::string line;
+  if (!std::getline(header, line) || line != "ply") Fail(name, "not a PLY file");
+  VertexLayout layout;
+  bool in_vertex = false, seen_vertex = false, little_endian = false;
+  while (std::getline(header, line) && line != "end_header") {
+    std::istringstream words(line);
+    std::string word;
+    words >> word;
+    if (word == "format") {
+      std::string kind;
+      words >> kind;
+      little_endian = kind == "binary_little_endian";
+    } else if (word == "element") {
+      std::string element;
+      words >> element;
+      if (seen_vertex && element != "vertex") break;  // later elements are not read
+      in_vertex = element == "vertex";
+      if (in_vertex && !(words >> layout.count)) Fail(name, "the vertex count cannot be read");
+      seen_vertex = seen_vertex || in_vertex;
+    } else if (word == "property" && in_vertex) {
+      std::string type, property;
+      words >> type >> property;
+      const std::map<std::string, size_t> sizes = {{"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8},
+                                                   {"uchar", 1}, {"uint8", 1},   {"char", 1},   {"int8", 1},
+                                                   {"short", 2}, {"ushort", 2},  {"int16", 2},  {"uint16", 2},
+                                                   {"int", 4},   {"uint", 4},    {"int32", 4},  {"uint32", 4}};
+      const auto size = sizes.find(type);
+      if (size == sizes.end()) Fail(name, "property '" + property + "' has an unsupported type '" + type + "'");
+      layout.properties.push_back({property, size->second, type == "double" || type == "float64"});
+    }
+  }
+  if (line != "end_header") Fail(name, "the header has no end_header");
+  if (!little_endian) Fail(name, "not binary little-endian");
+  if (!seen_vertex) Fail(name, "no vertex element");
+  return layout;
+}
+
 }  // namespace
 
 std::vector<char> SplatPlyBytes(const Gaussians<float>& gaussians, const std::vector<std::string>& comments) {
@@ -74,52 +125,12 @@ void WriteSplatPly(const std::filesystem::path& path, const Gaussians<float>& ga
 }
 
 Gaussians<float> ParseSplatPly(const std::string& bytes, const std::string& name) {
-  // The header: lines up to "end_header", the vertex element's properties in order.
   std::istringstream header(bytes);
-  std::string line;
-  if (!std::getline(header, line) || line != "ply") Fail(name, "not a PLY file");
-  size_t count = 0;
-  bool in_vertex = false, seen_vertex = false, little_endian = false;
-  struct Property {
-    std::string name;
-    size_t size = 0;
-    bool is_double = false;
-  };
-  std::vector<Property> properties;
-  while (std::getline(header, line) && line != "end_header") {
-    std::istringstream words(line);
-    std::string word;
-    words >> word;
-    if (word == "format") {
-      std::string kind;
-      words >> kind;
-      little_endian = kind == "binary_little_endian";
-    } else if (word == "element") {
-      std::string element;
-      words >> element;
-      if (seen_vertex && element != "vertex") break;  // later elements are not read
-      in_vertex = element == "vertex";
-      if (in_vertex && !(words >> count)) Fail(name, "the vertex count cannot be read");
-      seen_vertex = seen_vertex || in_vertex;
-    } else if (word == "property" && in_vertex) {
-      std::string type, property;
-      words >> type >> property;
-      const std::map<std::string, size_t> sizes = {{"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8},
-                                                   {"uchar", 1}, {"uint8", 1},   {"char", 1},   {"int8", 1},
-                                                   {"short", 2}, {"ushort", 2},  {"int16", 2},  {"uint16", 2},
-                                                   {"int", 4},   {"uint", 4},    {"int32", 4},  {"uint32", 4}};
-      const auto size = sizes.find(type);
-      if (size == sizes.end()) Fail(name, "property '" + property + "' has an unsupported type '" + type + "'");
-      properties.push_back({property, size->second, type == "double" || type == "float64"});
-    }
-  }
-  if (line != "end_header") Fail(name, "the header has no end_header");
-  if (!little_endian) Fail(name, "not binary little-endian");
-  if (!seen_vertex) Fail(name, "no vertex element");
-
+  const VertexLayout layout = ReadVertexLayout(header, name);
+  const size_t count = layout.count;
   size_t record = 0, rest = 0;
   std::map<std::string, std::pair<size_t, bool>> offsets;  // name -> offset, is double
-  for (const Property& p : properties) {
+  for (const PlyProperty& p : layout.properties) {
     offsets[p.name] = {record, p.is_double};
     record += p.size;
     if (p.name.rfind("f_rest_", 0) == 0) ++rest;
@@ -162,7 +173,7 @@ Gaussians<float> ParseSplatPly(const std::string& bytes, const std::string& name
 
 Gaussians<float> ReadSplatPly(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error("'" + path.string() + "' cannot be opened");
+  if (!in) throw std::runtime_error(path.string().insert(0, 1, '\'') + "' cannot be opened");
   std::ostringstream buffer;
   buffer << in.rdbuf();
   return ParseSplatPly(buffer.str(), path.string());

@@ -125,7 +125,7 @@ MeshOptions ChooseMeshOptions(const NerfModel& model, const ExportOptions& optio
 // Extracts the mesh (ChooseMeshOptions), writes mesh.ply (and mesh.obj) in `frame`; returns what the report says of
 // it.
 ExportReport::Mesh WriteMesh(const NerfModel& model, const ExportOptions& options, const DepthSamples& depths,
-                             const OutputFrame& frame, const fs::path& out) {
+                             const OutputFrame& frame, const ExportResult& out) {
   const MeshOptions mesh_options = ChooseMeshOptions(model, options, depths);
   Mesh mesh;
   {
@@ -150,15 +150,15 @@ ExportReport::Mesh WriteMesh(const NerfModel& model, const ExportOptions& option
              options.resolution, mesh_options.half_size, mesh_options.centre.x(), mesh_options.centre.y(),
              mesh_options.centre.z(), region == "box" ? "scene box" : "focus region", mesh_options.density_threshold,
              auto_threshold ? " (from the field)" : "")};
-  WriteMeshPly(out / "mesh.ply", mesh, comments);
-  if (options.obj) WriteMeshObj(out / "mesh.obj", mesh, comments);
+  WriteMeshPly(out.mesh(), mesh, comments);
+  if (options.obj) WriteMeshObj(out.mesh_obj(), mesh, comments);
   if (mesh.triangles.empty()) {
     LogWarning(
         format("export: the density never reaches {:.4g} inside the region meshed: the mesh is empty; lower "
                "--export.threshold",
                mesh_options.density_threshold));
   }
-  return {"mesh.ply",
+  return {ExportResult{}.mesh().string(),
           mesh.positions.size(),
           mesh.triangles.size(),
           edges.watertight(),
@@ -183,33 +183,33 @@ void ExportOptions::Check() const {
 }
 
 void ExportStage::Run(StageContext& context) const {
-  const ExportOptions options = ReadOptions<ExportOptions>(context.config, "export");
-  const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
-  const fs::path model_file = context.upstream_dirs.at("train") / "model.bin";
+  const ExportOptions options = ReadOptions<ExportOptions>(context.config);
+  const TrainResult train = Upstream<TrainResult>(context);
+  const fs::path model_file = train.model();
   const NerfModel model = LoadTrainedModel(model_file);
-  ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
+  ImportedDataset dataset = LoadTransformsJson(Upstream<PosesResult>(context).transforms(), context.workspace.root());
   const OutputFrame frame = MakeOutputFrame(options.frame, dataset);
-  const std::map<std::string, CameraCorrection> corrections =
-      ReadCameraCorrections(context.upstream_dirs.at("train") / "train_report.json");
+  const std::map<std::string, CameraCorrection> corrections = ReadCameraCorrections(train.report());
   ApplyCameraCorrections(corrections, &dataset);
   DepthSamples depths;
   if (options.points || options.threshold == 0 || RegionKind(model, options) == "focus")
     depths = SampleDepths(context, model_file, model, dataset, options);
 
+  const ExportResult out{context.output_dir};
   ExportReport report;
-  report.mesh = WriteMesh(model, options, depths, frame, context.output_dir);
+  report.mesh = WriteMesh(model, options, depths, frame, out);
   report.frame = options.frame;
-  WriteCameras(context.output_dir / "transforms.json", dataset, frame, !corrections.empty());
-  report.cameras = {"transforms.json", dataset.views.size(), !corrections.empty()};
+  WriteCameras(out.cameras(), dataset, frame, !corrections.empty());
+  report.cameras = {ExportResult{}.cameras().string(), dataset.views.size(), !corrections.empty()};
   if (options.points) {
     std::vector<ColouredPoint>& points = depths.points;
     for (ColouredPoint& point : points) point.position = frame.Point(point.position);
-    WritePly(context.output_dir / "points.ply", points,
+    WritePly(out.points(), points,
              {frame.description,
               format("points where the rendered opacity of a training view is at least {}", options.points_opacity)});
-    report.points = ExportedPoints{"points.ply", points.size()};
+    report.points = ExportedPoints{ExportResult{}.points().string(), points.size()};
   }
-  WriteJsonAtomic(context.output_dir / "export_report.json", report.ToJson());
+  WriteJsonAtomic(out.report(), report.ToJson());
   const ExportReport::Mesh& mesh = report.mesh;
   context.summary = {{"mesh_triangles", mesh.triangles}, {"watertight", mesh.watertight}};
   if (report.points) context.summary["points"] = report.points->count;

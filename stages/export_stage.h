@@ -7,11 +7,13 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/stage.h"
+#include "stages/stage_results.h"
 
 namespace p2n {
 
 struct ExportOptions {
+  static constexpr const char* kSection = "export";  // its options are export.NAME
+
   int resolution = 256;          // density samples along each side of the scene box
   double threshold = 0;          // surface density (1 / normalised unit); 0: from the field (SurfaceThreshold)
   std::string frame = "source";  // source: COLMAP's world (or the dataset's); normalized: the training frame
@@ -47,13 +49,11 @@ struct ExportOptions {
   void Check() const;
 };
 
-class ExportStage : public Stage {
+class ExportStage : public StageOf<ExportResult> {
  public:
-  std::string name() const override { return "export"; }
-  std::string folder() const override { return "50_export"; }
   // 5: the point cloud rendered at most 2 M pixels; 6: at the median depth (the splat stage's renders)
   int format_version() const override { return 6; }
-  std::vector<std::string> upstream() const override { return {"poses", "train"}; }
+  std::vector<std::string> upstream() const override { return {PosesResult::kId.name, TrainResult::kId.name}; }
   void Run(StageContext& context) const override;
 };
 

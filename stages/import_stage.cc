@@ -123,7 +123,7 @@ std::optional<Rgb> KnownBackground(const ImportOptions& options, const ImageCoun
 // transforms.json of the dataset's cameras (normalised, with a held-out split unless the dataset has one) and
 // sparse_points.ply when it has points, as the poses stage writes them.
 Normalization WriteCameras(const ImportedDataset& dataset, const fs::path& input, const PosesOptions& poses,
-                           const std::optional<Rgb>& background, const fs::path& out) {
+                           const std::optional<Rgb>& background, const PosesResult& out) {
   TransformsFile transforms;
   for (const ImportedView& view : dataset.views) transforms.views.push_back(view.view);
   std::vector<CameraView>& views = transforms.views;
@@ -142,14 +142,14 @@ Normalization WriteCameras(const ImportedDataset& dataset, const fs::path& input
   transforms.meta.dataset_kind = dataset.kind;
   transforms.meta.dataset_path = input.string();
   transforms.meta.background = background;
-  transforms.Write(out / "transforms.json");
+  transforms.Write(out.transforms());
   if (!dataset.points.empty()) {
     std::vector<ColouredPoint> cloud;
     for (size_t i = 0; i < dataset.points.size(); ++i) {
       cloud.push_back({(normalization.normalized_from_world * dataset.points[i].homogeneous()).head<3>().cast<float>(),
                        dataset.colours[i]});
     }
-    WritePly(out / "sparse_points.ply", cloud);
+    WritePly(out.sparse_points(), cloud);
   }
   return normalization;
 }
@@ -172,17 +172,18 @@ std::map<std::string, std::string> ImportStage::ExternalInputs(const Workspace& 
 }
 
 void ImportStage::Run(StageContext& context) const {
-  const PosesOptions poses = ReadOptions<PosesOptions>(context.config, "poses");
-  const ImportOptions options = ReadOptions<ImportOptions>(context.config, "import");
+  const PosesOptions poses = ReadOptions<PosesOptions>(context.config);
+  const ImportOptions options = ReadOptions<ImportOptions>(context.config);
   const fs::path input = Input(context.workspace);
   ImportedDataset dataset = LoadDataset(input);
   for (const std::string& warning : dataset.warnings) LogWarning("import: " + warning);
   LogInfo(format("import: {} dataset, {} views", dataset.kind, dataset.views.size()));
   ImageCounts counts;
   Borders borders;
-  WriteImages(dataset, poses.max_image_size, context.output_dir / "images", &counts, &borders);
+  const PosesResult out{context.output_dir};
+  WriteImages(dataset, poses.max_image_size, out.images(), &counts, &borders);
   const std::optional<Rgb> background = KnownBackground(options, counts, borders);
-  const Normalization normalization = WriteCameras(dataset, input, poses, background, context.output_dir);
+  const Normalization normalization = WriteCameras(dataset, input, poses, background, out);
   context.summary = {{"views", dataset.views.size()}, {"dataset", dataset.kind}};
   LogInfo(format("import: {} views ({} undistorted, {} with alpha, {} downsized to {} px), scene scale {:.4g}",
                  dataset.views.size(), counts.undistorted.load(), counts.transparent.load(), counts.downsized.load(),

@@ -6,11 +6,14 @@
 
 #include <string>
 
-#include "pipeline/stage.h"
+#include "stages/poses_stage.h"
+#include "stages/stage_results.h"
 
 namespace p2n {
 
 struct ImportOptions {
+  static constexpr const char* kSection = "import";  // its options are import.NAME
+
   std::string background = "white";  // transparent images are shown and scored on it; "keep": none recorded
 
   template <class V>
@@ -23,15 +26,15 @@ struct ImportOptions {
   void Check() const {}
 };
 
-class ImportStage : public Stage {
+class ImportStage : public StageOf<PosesResult> {
  public:
-  std::string name() const override { return "poses"; }
-  std::string folder() const override { return "20_poses"; }
   // 2: images downsized to poses.max_image_size; 3: the background recorded only where the images show it, and
   // fewer than 20 views (but LLFF data) hold out views inside the span of the others; 4: transparent images keep
   // their alpha
   int format_version() const override { return 4; }
-  std::vector<std::string> option_sections() const override { return {"poses", "import"}; }
+  std::vector<std::string> option_sections() const override {
+    return {PosesOptions::kSection, ImportOptions::kSection};
+  }
   // Every file of the dataset that the result depends on, by SHA-1.
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
   void Run(StageContext& context) const override;

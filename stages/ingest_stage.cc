@@ -144,15 +144,16 @@ std::map<std::string, std::string> IngestStage::ExternalInputs(const Workspace& 
 }
 
 void IngestStage::CheckResult(const fs::path& result_dir, const Config& config) const {
-  const IngestOptions options = ReadOptions<IngestOptions>(config, "ingest");
-  CheckImageCount(IngestReport::Read(result_dir / "ingest_report.json"), options.min_images);
+  const IngestOptions options = ReadOptions<IngestOptions>(config);
+  CheckImageCount(IngestReport::Read(IngestResult{result_dir}.report()), options.min_images);
 }
 
 void IngestStage::Run(StageContext& context) const {
-  const IngestOptions options = ReadOptions<IngestOptions>(context.config, "ingest");
+  const IngestOptions options = ReadOptions<IngestOptions>(context.config);
   const fs::path folder = InputFolder(context.workspace);
   const std::vector<fs::path> photos = ListPhotos(folder);
-  const fs::path images_dir = context.output_dir / "images";
+  const IngestResult out{context.output_dir};
+  const fs::path images_dir = out.images();
   fs::create_directories(images_dir);
 
   std::vector<std::variant<IngestedImage, SkippedPhoto>> results(photos.size());
@@ -199,7 +200,7 @@ void IngestStage::Run(StageContext& context) const {
     LogWarning(format("ingest: the photos have {} different sizes; sfm will give each size a camera of its own",
                       sizes.size()));
   }
-  WriteJsonAtomic(context.output_dir / "ingest_report.json", report.ToJson());
+  WriteJsonAtomic(out.report(), report.ToJson());
   CheckImageCount(report, options.min_images);
   context.summary = {{"images", report.images.size()}, {"skipped", report.skipped.size()}};
   LogInfo(format("ingest: {} images, {} skipped", report.images.size(), report.skipped.size()));

@@ -7,11 +7,13 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/stage.h"
+#include "stages/stage_results.h"
 
 namespace p2n {
 
 struct IngestOptions {
+  static constexpr const char* kSection = "ingest";  // its options are ingest.NAME
+
   int max_image_size = 0;  // Longest image side after downsizing (area filter), in pixels; 0 keeps the size.
   int min_images = 3;      // Fewer usable images than this is an error.
 
@@ -27,10 +29,8 @@ struct IngestOptions {
 // UserError when the folder is missing, is a file, or has none.
 std::vector<std::filesystem::path> ListPhotos(const std::filesystem::path& folder);
 
-class IngestStage : public Stage {
+class IngestStage : public StageOf<IngestResult> {
  public:
-  std::string name() const override { return "ingest"; }
-  std::string folder() const override { return "00_ingest"; }
   int format_version() const override { return 2; }  // 2: 8-bit output, copies skipped, CMYK re-encoded
   // "image NAME" -> SHA-1 of the file's bytes, for every photo of the input folder.
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;

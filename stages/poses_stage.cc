@@ -73,9 +73,9 @@ void PosesOptions::Check() const {
 }
 
 void PosesStage::Run(StageContext& context) const {
-  const PosesOptions options = ReadOptions<PosesOptions>(context.config, "poses");
-  const fs::path sfm = context.upstream_dirs.at("sfm");
-  const fs::path model_dir = sfm / "undistorted" / "sparse";
+  const PosesOptions options = ReadOptions<PosesOptions>(context.config);
+  const SfmResult sfm = Upstream<SfmResult>(context);
+  const fs::path model_dir = sfm.undistorted_model();
   const ColmapModel model = ReadColmapModel(model_dir);
   if (model.images.empty()) throw UserError(format("the model in '{}' has no registered image", model_dir.string()));
 
@@ -87,7 +87,8 @@ void PosesStage::Run(StageContext& context) const {
   std::vector<Eigen::Vector3d> points;
   for (const auto& [id, point] : model.points) points.push_back(point.xyz);
   // transforms.json names the images relative to itself: from this stage's folder into the sfm stage's.
-  const std::string images_from_poses = "../" + sfm.filename().string() + "/undistorted/images/";
+  const std::string images_from_poses =
+      "../" + sfm.undistorted_images().lexically_relative(sfm.dir.parent_path()).generic_string() + "/";
   size_t without_bounds = 0;
   for (const ColmapImage* image : images) {
     CameraView view;
@@ -126,14 +127,15 @@ void PosesStage::Run(StageContext& context) const {
   transforms.views = NormalizedViews(views, normalization);
   transforms.meta.normalization = normalization;
   transforms.meta.heldout_rule = heldout_rule;
-  transforms.Write(context.output_dir / "transforms.json");
+  const PosesResult out{context.output_dir};
+  transforms.Write(out.transforms());
 
   std::vector<ColouredPoint> cloud;
   for (const auto& [id, point] : model.points) {
     cloud.push_back(
         {(normalization.normalized_from_world * point.xyz.homogeneous()).head<3>().cast<float>(), point.rgb});
   }
-  WritePly(context.output_dir / "sparse_points.ply", cloud);
+  WritePly(out.sparse_points(), cloud);
   const size_t held_out =
       std::count_if(views.begin(), views.end(), [](const CameraView& v) { return v.split != "train"; });
   context.summary = {{"views", views.size()}, {"held_out", held_out}, {"points", cloud.size()}};

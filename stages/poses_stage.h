@@ -4,7 +4,7 @@
 // held-out split. Writes transforms.json (readable by instant-ngp and nerfstudio) and sparse_points.ply, and
 // downsized copies of the images larger than poses.max_image_size (images/; the others are named where they are).
 
-#include "pipeline/stage.h"
+#include "stages/stage_results.h"
 
 namespace p2n {
 
@@ -14,6 +14,8 @@ namespace p2n {
 inline constexpr int kDefaultMaxTrainingImageSize = 1920;
 
 struct PosesOptions {
+  static constexpr const char* kSection = "poses";  // its options are poses.NAME
+
   int holdout_every = 8;  // every Nth view (in name order) is held out for evaluation (AssignHoldout); 0: none
   bool normalize = true;  // centre, rotate (up = +z) and scale the scene into the unit cube
   int max_image_size = kDefaultMaxTrainingImageSize;  // longest side of the images later stages read; 0: as they are
@@ -33,13 +35,11 @@ struct PosesOptions {
   void Check() const;
 };
 
-class PosesStage : public Stage {
+class PosesStage : public StageOf<PosesResult> {
  public:
-  std::string name() const override { return "poses"; }
-  std::string folder() const override { return "20_poses"; }
   // 2: images downsized to poses.max_image_size; 3: fewer than 20 photos hold out views inside the span of the others
   int format_version() const override { return 3; }
-  std::vector<std::string> upstream() const override { return {"sfm"}; }
+  std::vector<std::string> upstream() const override { return {SfmResult::kId.name}; }
   void Run(StageContext& context) const override;
 };
 

@@ -103,7 +103,7 @@ PinholeCamera WithIntrinsics(const nlohmann::json& json, PinholeCamera camera, c
   return camera;
 }
 
-EvalReport RenderHeldout(const ViewRenderer& renderer, const ImportedDataset& dataset, const fs::path& out) {
+EvalReport RenderHeldout(const ViewRenderer& renderer, const ImportedDataset& dataset, const RenderResult& out) {
   EvalReport eval;
   eval.split = HeldoutSplit(dataset);
   eval.source = renderer.source;
@@ -120,7 +120,7 @@ EvalReport RenderHeldout(const ViewRenderer& renderer, const ImportedDataset& da
   double seconds = 0;
   size_t samples = 0, rays = 0;
   if (views.empty()) return eval;
-  fs::create_directories(out / "heldout");
+  fs::create_directories(out.heldout());
   Progress progress("render: held-out views", static_cast<int64_t>(pixels), "pixels");
   const auto on_pixels_done = [&](size_t n) {
     progress.Add(static_cast<int64_t>(n));
@@ -131,20 +131,21 @@ EvalReport RenderHeldout(const ViewRenderer& renderer, const ImportedDataset& da
     const FloatImage photo = PhotoOnBackground(photo_view, renderer.background);
     const RenderedView rendered = renderer.render(photo_view.camera, photo_view.near, photo_view.far, on_pixels_done);
     const std::string stem = view->source.stem().string();
+    // Named in eval.json relative to the stage's folder.
+    const fs::path render_name = RenderResult{}.heldout() / (stem + ".png");
+    const fs::path error_name = RenderResult{}.heldout() / (stem + "_error.png");
     double psnr = 0, ssim = 0;
     // Each on one core: side by side.
-    tbb::parallel_invoke(
-        [&] { Save(rendered.rgb, out / "heldout" / (stem + ".png")); },
-        [&] { Save(ErrorHeatMap(rendered.rgb, photo, kHeatMapMaxError), out / "heldout" / (stem + "_error.png")); },
-        [&] { psnr = Psnr(rendered.rgb, photo); }, [&] { ssim = Ssim(rendered.rgb, photo); });
+    tbb::parallel_invoke([&] { Save(rendered.rgb, out.dir / render_name); },
+                         [&] { Save(ErrorHeatMap(rendered.rgb, photo, kHeatMapMaxError), out.dir / error_name); },
+                         [&] { psnr = Psnr(rendered.rgb, photo); }, [&] { ssim = Ssim(rendered.rgb, photo); });
     psnrs.push_back(psnr);
     ssims.push_back(ssim);
     seconds += rendered.stats.seconds;
     samples += rendered.stats.samples_evaluated;
     rays += rendered.stats.rays;
-    eval.views.push_back({view->source.filename().string(), "heldout/" + stem + ".png",
-                          "heldout/" + stem + "_error.png", view->source.string(), psnrs.back(), ssims.back(),
-                          rendered.stats.seconds});
+    eval.views.push_back({view->source.filename().string(), render_name.generic_string(), error_name.generic_string(),
+                          view->source.string(), psnrs.back(), ssims.back(), rendered.stats.seconds});
   }
   eval.psnr = Mean(psnrs);
   eval.ssim = Mean(ssims);
@@ -168,7 +169,9 @@ std::vector<PinholeCamera> PathCameras(const RenderStageOptions& options, const 
   double radius = 0, elevation = 0;
   MeanCameraPlacement(cameras, &radius, &elevation);
   path.radius = options.radius > 0 ? options.radius : radius;
-  path.elevation_deg = options.elevation == "auto" ? elevation : std::stod(options.elevation);
+  std::optional<double> given_elevation;
+  ParseAutoOrNumber(options.elevation, &given_elevation);  // Check() has made sure it is one
+  path.elevation_deg = given_elevation ? *given_elevation : elevation;
   CapturedArc(cameras, kOrbitMaxGapDeg, &path.start_deg, &path.sweep_deg);
   if (path.sweep_deg < kForwardArcDeg) {  // photos from one side, orbited on request
     path.start_deg -= 0.5 * (kForwardArcDeg - path.sweep_deg);
@@ -200,21 +203,21 @@ struct PathRange {
 // Path frame `name`'s images, and the video's next frame when it has the video's size (`first` is the path's
 // first camera), each on one core.
 void WriteFrame(const RenderedView& frame, const std::string& name, const RenderStageOptions& options, double depth_max,
-                const fs::path& out, VideoWriter* video, const PinholeCamera& first) {
+                const RenderResult& out, VideoWriter* video, const PinholeCamera& first) {
   tbb::parallel_invoke(
       [&] {
-        Save(frame.rgb, out / "frames" / (name + ".png"));
-        if (options.exr) Save(frame.rgb, out / "frames" / (name + ".exr"));
+        Save(frame.rgb, out.frames() / (name + ".png"));
+        if (options.exr) Save(frame.rgb, out.frames() / (name + ".exr"));
       },
       [&] {
         if (!options.depth) return;
         FloatImage depth = frame.depth;
         for (float& d : depth.pixels) d = static_cast<float>(d / depth_max);
-        Save(depth, out / "depth" / (name + ".png"), /*sixteen_bits=*/true);
-        if (options.exr) Save(frame.depth, out / "depth" / (name + ".exr"));
+        Save(depth, out.depth() / (name + ".png"), /*sixteen_bits=*/true);
+        if (options.exr) Save(frame.depth, out.depth() / (name + ".exr"));
       },
       [&] {
-        if (options.depth) Save(frame.opacity, out / "opacity" / (name + ".png"));
+        if (options.depth) Save(frame.opacity, out.opacity() / (name + ".png"));
       },
       [&] {
         if (video && frame.rgb.width == first.width && frame.rgb.height == first.height) video->Add(frame.rgb);
@@ -223,13 +226,13 @@ void WriteFrame(const RenderedView& frame, const std::string& name, const Render
 
 PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& dataset,
                       const std::vector<PinholeCamera>& cameras, const RenderStageOptions& options,
-                      const fs::path& out) {
-  fs::create_directories(out / "frames");
+                      const RenderResult& out) {
+  fs::create_directories(out.frames());
   if (options.depth) {
-    fs::create_directories(out / "depth");
-    fs::create_directories(out / "opacity");
+    fs::create_directories(out.depth());
+    fs::create_directories(out.opacity());
   }
-  WriteCameraPath(out / "path.json", cameras);
+  WriteCameraPath(out.path(), cameras);
   // Depth PNGs share one scale (16 bits over 0..depth_max) so that the frames of a video match.
   double depth_max = 0;
   for (const PinholeCamera& camera : cameras)
@@ -245,7 +248,7 @@ PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& datas
   };
   std::unique_ptr<VideoWriter> video;
   if (options.video) {
-    video = std::make_unique<VideoWriter>(out / "video.mp4", cameras[0].width, cameras[0].height, options.fps);
+    video = std::make_unique<VideoWriter>(out.video(), cameras[0].width, cameras[0].height, options.fps);
     if (video->codec() != "avc1")
       LogWarning("render: no H.264 encoder; video.mp4 is MPEG-4 part 2, which browsers may not play");
   }
@@ -271,7 +274,7 @@ PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& datas
       if (last_use[original[f]] == f) kept.erase(original[f]);
       on_pixels_done(size_t(cameras[f].width) * cameras[f].height);
     }
-    WriteFrame(frame, format("{:04d}", f), options, depth_max, out, video.get(), cameras[0]);
+    WriteFrame(frame, RenderResult::FrameStem(f), options, depth_max, out, video.get(), cameras[0]);
   }
   PathReport report;
   report.source = renderer.source;
@@ -285,24 +288,39 @@ PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& datas
   report.depth_png_max = depth_max;
   if (video) {
     video->Close();
-    report.video = PathVideo{"video.mp4", video->codec(), options.fps};
+    report.video = PathVideo{RenderResult{}.video().string(), video->codec(), options.fps};
   }
   return report;
 }
 
-// The field's held-out PSNR as the train stage measured it (train.final_eval_pixels per view).
-std::optional<double> FieldPsnr(const StageContext& context) {
-  return TrainReport::Read(context.upstream_dirs.at("train") / "train_report.json").heldout_psnr;
+// What the render stage reads of its upstream stages, each file once.
+struct RenderInputs {
+  NerfModel model;
+  ImportedDataset poses;
+  std::optional<double> field_psnr;  // as the train stage measured it (train.final_eval_pixels per view)
+  std::optional<SplatResult> splat;  // when render.source lets the stage read the splats
+  std::optional<SplatReport> splat_report;
+};
+
+RenderInputs ReadInputs(const StageContext& context) {
+  RenderInputs in;
+  const TrainResult train = Upstream<TrainResult>(context);
+  in.model = LoadTrainedModel(train.model());
+  in.poses = LoadTransformsJson(Upstream<PosesResult>(context).transforms(), context.workspace.root());
+  in.field_psnr = TrainReport::Read(train.report()).heldout_psnr;
+  in.splat = UpstreamIfRead<SplatResult>(context);
+  if (in.splat) in.splat_report = SplatReport::Read(in.splat->report());
+  return in;
 }
 
 std::string DbText(const std::optional<double>& psnr) { return psnr ? format("{:.2f} dB", *psnr) : "none"; }
 
 // render.source resolved: auto takes the splats when their held-out PSNR is within kSplatPsnrMargin of the
 // field's (they render tens of times faster), else the field.
-ViewRenderer ChooseRenderer(const StageContext& context, const RenderStageOptions& options, const NerfModel& model,
-                            const RenderOptions& render, const ImportedDataset& poses) {
-  if (options.source == "field") return FieldRenderer(model, render);
-  const SplatReport splats = SplatReport::Read(context.upstream_dirs.at("splat") / "splat_report.json");
+ViewRenderer ChooseRenderer(const RenderStageOptions& options, const RenderInputs& in, const RenderOptions& render) {
+  const NerfModel& model = in.model;
+  if (options.source == "field" || !in.splat_report) return FieldRenderer(model, render);
+  const SplatReport& splats = *in.splat_report;
   if (!splats.enabled) {
     if (options.source == "splats") {
       throw UserError(
@@ -310,14 +328,14 @@ ViewRenderer ChooseRenderer(const StageContext& context, const RenderStageOption
     }
     return FieldRenderer(model, render);
   }
-  const std::optional<double> field_psnr = FieldPsnr(context), splat_psnr = splats.heldout_psnr;
+  const std::optional<double> field_psnr = in.field_psnr, splat_psnr = splats.heldout_psnr;
   const bool good = field_psnr && splat_psnr && *splat_psnr >= *field_psnr - kSplatPsnrMargin;
   if (options.source == "auto" && !good) {
     LogInfo(format("render: the splats' held-out PSNR ({}) is below the field's ({}): rendering the field",
                    DbText(splat_psnr), DbText(field_psnr)));
     return FieldRenderer(model, render);
   }
-  return SplatRenderer(context.upstream_dirs.at("splat"), poses, model.space == SceneSpace::kBounded);
+  return SplatRenderer(*in.splat, splats, in.poses, model.space == SceneSpace::kBounded);
 }
 
 }  // namespace
@@ -326,15 +344,10 @@ void RenderStageOptions::Check() const {
   CheckOption(path != "file" || !path_file.empty(), "render.path_file", "must name a file when render.path is file");
   CheckOption(frames >= 1 && frames <= 100000, "render.frames", "must be 1..100000");
   CheckOption(width >= 0 && width <= 16384, "render.width", "must be 0 (the photos') or 1..16384");
-  if (elevation != "auto") {
-    double degrees = 0;
-    try {
-      degrees = std::stod(elevation);
-    } catch (const std::exception&) {
-      CheckOption(false, "render.elevation", format("must be auto or a number of degrees, not '{}'", elevation));
-    }
-    CheckOption(degrees > -90 && degrees < 90, "render.elevation", "must be between -90 and 90 degrees");
-  }
+  std::optional<double> degrees;
+  CheckOption(ParseAutoOrNumber(elevation, &degrees), "render.elevation",
+              format("must be auto or a number of degrees, not '{}'", elevation));
+  CheckOption(!degrees || (*degrees > -90 && *degrees < 90), "render.elevation", "must be between -90 and 90 degrees");
   CheckOption(radius >= 0 && std::isfinite(radius), "render.radius", "must be 0 (from the cameras) or positive");
   CheckOption(fps > 0 && fps <= 240, "render.fps", "must be in (0, 240]");
   CheckOption(step_scale == 0 || (step_scale >= 0.01 && step_scale <= 100), "render.step_scale",
@@ -382,12 +395,12 @@ void WriteCameraPath(const fs::path& file, const std::vector<PinholeCamera>& cam
 }
 
 std::vector<std::string> RenderStage::UpstreamFor(const Config& config) const {
-  if (config.Get<std::string>("render.source") == "field") return {"poses", "train"};
+  if (ReadOptions<RenderStageOptions>(config).source == "field") return {PosesResult::kId.name, TrainResult::kId.name};
   return upstream();
 }
 
 std::map<std::string, std::string> RenderStage::ExternalInputs(const Workspace&, const Config& config) const {
-  const RenderStageOptions options = ReadOptions<RenderStageOptions>(config, "render");
+  const RenderStageOptions options = ReadOptions<RenderStageOptions>(config);
   if (options.path != "file") return {};
   if (!fs::is_regular_file(options.path_file)) {
     throw UserError(format("render.path_file '{}' is not a file", options.path_file));
@@ -396,25 +409,26 @@ std::map<std::string, std::string> RenderStage::ExternalInputs(const Workspace&,
 }
 
 void RenderStage::Run(StageContext& context) const {
-  const RenderStageOptions options = ReadOptions<RenderStageOptions>(context.config, "render");
-  const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
-  const NerfModel model = LoadTrainedModel(context.upstream_dirs.at("train") / "model.bin");
-  const ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
+  const RenderStageOptions options = ReadOptions<RenderStageOptions>(context.config);
+  const RenderInputs in = ReadInputs(context);
+  const NerfModel& model = in.model;
+  const ImportedDataset& dataset = in.poses;
+  const RenderResult out{context.output_dir};
   RenderOptions render;
   render.step_scale = options.step_scale;
-  const ViewRenderer renderer = ChooseRenderer(context, options, model, render, dataset);
+  const ViewRenderer renderer = ChooseRenderer(options, in, render);
 
   nlohmann::json summary = nlohmann::json::object();
   if (options.heldout) {
-    EvalReport eval = RenderHeldout(renderer, dataset, context.output_dir);
+    EvalReport eval = RenderHeldout(renderer, dataset, out);
     if (renderer.source == "field") eval.step_scale = StepScale(model, render);
-    eval.field_psnr = renderer.source == "field" ? eval.psnr : FieldPsnr(context);
+    eval.field_psnr = renderer.source == "field" ? eval.psnr : in.field_psnr;
     if (renderer.source == "splats") {
       eval.splats_psnr = eval.psnr;
-    } else if (const auto splat = context.upstream_dirs.find("splat"); splat != context.upstream_dirs.end()) {
-      eval.splats_psnr = SplatReport::Read(splat->second / "splat_report.json").heldout_psnr;
+    } else if (in.splat_report) {
+      eval.splats_psnr = in.splat_report->heldout_psnr;
     }
-    WriteJsonAtomic(context.output_dir / "eval.json", eval.ToJson());
+    WriteJsonAtomic(out.eval(), eval.ToJson());
     if (eval.psnr) {
       summary["heldout_psnr"] = *eval.psnr;
       summary["heldout_ssim"] = *eval.ssim;
@@ -434,9 +448,9 @@ void RenderStage::Run(StageContext& context) const {
     const int width = options.width > 0 ? options.width : std::min(first->view.camera.width, kDefaultMaxPathWidth);
     const PinholeCamera reference = ScaledCamera(first->view.camera, width);
     const std::vector<PinholeCamera> cameras = PathCameras(options, kind, dataset, reference);
-    PathReport path = RenderPath(renderer, dataset, cameras, options, context.output_dir);
+    PathReport path = RenderPath(renderer, dataset, cameras, options, out);
     path.kind = kind;
-    WriteJsonAtomic(context.output_dir / "render_report.json", {{"path", path.ToJson()}});
+    WriteJsonAtomic(out.report(), {{"path", path.ToJson()}});
     summary["frames"] = path.frames;
     summary["frames_per_second"] = path.frames_per_second;
     const std::string repeats =

@@ -10,13 +10,15 @@
 #include <vector>
 
 #include "nerf/camera.h"
-#include "pipeline/stage.h"
+#include "stages/stage_results.h"
 
 namespace p2n {
 
 inline constexpr int kDefaultMaxPathWidth = 320;
 
 struct RenderStageOptions {
+  static constexpr const char* kSection = "render";  // its options are render.NAME
+
   bool heldout = true;             // render and evaluate the held-out views
   std::string source = "auto";     // field | splats | auto: the splats when they score within 0.5 dB of the field
   std::string path = "auto";       // orbit | spiral | file | none; auto: spiral for LLFF data and one-sided captures
@@ -72,13 +74,13 @@ std::vector<PinholeCamera> ReadCameraPath(const std::filesystem::path& file, con
 // Writes cameras in that layout (what ReadCameraPath reads).
 void WriteCameraPath(const std::filesystem::path& file, const std::vector<PinholeCamera>& cameras);
 
-class RenderStage : public Stage {
+class RenderStage : public StageOf<RenderResult> {
  public:
-  std::string name() const override { return "render"; }
-  std::string folder() const override { return "40_render"; }
   // 2: renders from the splats when they are as good; 3: eval.json and render_report.json as stage_reports.h types them
   int format_version() const override { return 6; }  // 6: render.path auto by ForwardFacingCapture
-  std::vector<std::string> upstream() const override { return {"poses", "train", "splat"}; }
+  std::vector<std::string> upstream() const override {
+    return {PosesResult::kId.name, TrainResult::kId.name, SplatResult::kId.name};
+  }
   // Rendering the field (render.source field) reads no splats.
   std::vector<std::string> UpstreamFor(const Config& config) const override;
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;

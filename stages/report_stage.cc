@@ -36,16 +36,18 @@ std::string Number(const std::optional<double>& value, int digits = 4) {
   return value ? format("{:.{}g}", *value, digits) : "-";
 }
 
-// A link from the report's folder to `file` in a sibling stage's folder `dir` (an upstream_dirs entry).
-std::string Link(const fs::path& dir, const std::string& file) { return "../" + dir.filename().string() + "/" + file; }
+// A link from the report's folder to `file` in a sibling stage's folder (an upstream stage's result).
+std::string Link(const fs::path& file) {
+  return "../" + file.parent_path().filename().string() + "/" + file.filename().string();
+}
 
 std::string Card(const std::string& value, const std::string& label) {
   return format("<div class=\"card\"><div class=\"value\">{}</div><div class=\"label\">{}</div></div>\n",
                 HtmlEscape(value), HtmlEscape(label));
 }
 
-std::string TrainingSection(const fs::path& train_dir, const std::optional<TrainReport>& train) {
-  const std::string metrics = ReadTextFile(train_dir / "metrics.csv");
+std::string TrainingSection(const TrainResult& result, const std::optional<TrainReport>& train) {
+  const std::string metrics = ReadTextFile(result.metrics());
   std::string html = "<h2>Training: error against run time</h2>\n<div class=\"plots\">\n";
   html += SvgLinePlot({"held-out PSNR against training time", "training time (s)", "PSNR (dB)"},
                       {CsvSeries("held-out PSNR (dB)", metrics, 0, 3)});
@@ -98,8 +100,8 @@ std::string TrainingSection(const fs::path& train_dir, const std::optional<Train
 }
 
 // The splats: their numbers beside the field's, their error against optimisation time, and the file.
-std::string SplatSection(const fs::path& splat_dir, const std::optional<TrainReport>& train) {
-  const SplatReport report = SplatReport::Read(splat_dir / "splat_report.json");
+std::string SplatSection(const SplatResult& result, const SplatReport& report,
+                         const std::optional<TrainReport>& train) {
   if (!report.enabled) {
     return "<h2>Splats</h2>\n<p>Off (<code>--splat.enabled false</code>).</p>\n";
   }
@@ -108,10 +110,10 @@ std::string SplatSection(const fs::path& splat_dir, const std::optional<TrainRep
       "<p><a href=\"{}\"><b>Open the scene in the live viewer</b></a> (viewer.html, {:.1f} MB, "
       "works offline in any browser with WebGL 2: drag to orbit, right-drag to pan, wheel or pinch to zoom, W A S D "
       "to fly, the training cameras in its menu).</p>\n",
-      Link(splat_dir, "viewer.html"), report.viewer_bytes / 1e6);
+      Link(result.viewer()), report.viewer_bytes / 1e6);
   html += "<div class=\"plots\">\n";
   html += SvgLinePlot({"splats: held-out PSNR against optimisation time", "optimisation time (s)", "PSNR (dB)"},
-                      {CsvSeries("held-out PSNR (dB)", ReadTextFile(splat_dir / "metrics.csv"), 0, 4)});
+                      {CsvSeries("held-out PSNR (dB)", ReadTextFile(result.metrics()), 0, 4)});
   html += "</div>\n";
   html += format(
       "<p>The field baked into {} 3D Gaussian splats (spherical harmonics of degree {}; {} placed from the {}, "
@@ -120,20 +122,18 @@ std::string SplatSection(const fs::path& splat_dir, const std::optional<TrainRep
       "Gaussian Splatting layout, {}; SuperSplat, the PlayCanvas and three.js splat viewers open it as it is.</p>\n",
       report.splats, report.sh_degree, report.initial_splats, report.init == "sparse" ? "sparse points" : "field",
       report.seconds, report.steps, Number(report.heldout_psnr), Number(report.heldout_ssim, 3),
-      Number(train ? train->heldout_psnr : std::nullopt), report.seconds_per_view, Link(splat_dir, "splats.ply"),
+      Number(train ? train->heldout_psnr : std::nullopt), report.seconds_per_view, Link(result.splats()),
       report.file_bytes / 1e6, HtmlEscape(report.frame_description));
   return html;
 }
 
 // The signs of a failed fit the train and splat stages found (fit_checks.h), first on the page.
-std::string WarningsSection(const std::optional<TrainReport>& train, const fs::path& splat_report) {
+std::string WarningsSection(const std::optional<TrainReport>& train, const SplatReport& splat) {
   std::vector<std::pair<std::string, FitWarning>> warnings;
   if (train) {
     for (const FitWarning& w : train->warnings) warnings.emplace_back("training", w);
   }
-  if (const std::optional<SplatReport> splat = ReadReportIfExists<SplatReport>(splat_report)) {
-    for (const FitWarning& w : splat->warnings) warnings.emplace_back("splats", w);
-  }
+  for (const FitWarning& w : splat.warnings) warnings.emplace_back("splats", w);
   if (warnings.empty()) return "";
   std::string html =
       format("<div class=\"warnings\" id=\"warnings\"><h2>{} warning{}: this result may have failed</h2>\n<ul>\n",
@@ -151,7 +151,7 @@ std::string StagesSection(const StageContext& context) {
       "</th><th>key</th><th>summary</th><th>options set (the others at their defaults)</th></tr>\n";
   for (const StageStatus& status : context.runner->Status(context.workspace, context.config)) {
     const std::string name = status.stage->name();
-    if (name == "report") continue;
+    if (name == ReportResult::kId.name) continue;
     std::string summary, options;
     if (status.manifest) {
       for (const auto& [key, value] : status.manifest->summary.items()) summary += key + " " + Number(value) + "; ";
@@ -171,10 +171,10 @@ std::string StagesSection(const StageContext& context) {
 std::string CamerasSection(const StageContext& context, const ImportedDataset& dataset,
                            const std::string& heldout_split) {
   std::string html = "<h2>Cameras</h2>\n";
-  const Stage* sfm_stage = context.runner->Find("sfm");
   const std::optional<SfmReport> sfm =
-      sfm_stage ? ReadReportIfExists<SfmReport>(context.workspace.StageDir(sfm_stage->folder()) / "sfm_report.json")
-                : std::nullopt;
+      context.runner->Find(SfmResult::kId.name)
+          ? ReadReportIfExists<SfmReport>(InWorkspace<SfmResult>(context.workspace).report())
+          : std::nullopt;
   if (sfm && dataset.meta.dataset_kind.empty()) {
     html += format(
         "<p>COLMAP {}: {} of {} images registered ({:.0f}%), mean reprojection error {:.3g} px, {} sparse points, "
@@ -193,7 +193,7 @@ std::string CamerasSection(const StageContext& context, const ImportedDataset& d
   for (const ImportedView& view : dataset.views)
     cameras.push_back({view.view.camera, view.view.split == heldout_split});
   std::vector<ColouredPoint> points;
-  const fs::path sparse = context.upstream_dirs.at("poses") / "sparse_points.ply";
+  const fs::path sparse = Upstream<PosesResult>(context).sparse_points();
   if (fs::exists(sparse)) points = ReadPly(sparse);
   html += format("<p>{} cameras in the normalised frame{}.</p>\n", cameras.size(),
                  points.empty() ? "" : format(" with {} sparse points", points.size()));
@@ -211,7 +211,7 @@ std::string StepScaleNote(const EvalReport& eval, const std::optional<TrainRepor
       *eval.step_scale, Number(train->heldout_psnr), *train->heldout_step_scale);
 }
 
-std::string HeldoutSection(const fs::path& render_dir, const std::optional<EvalReport>& eval,
+std::string HeldoutSection(const RenderResult& render, const std::optional<EvalReport>& eval,
                            const std::optional<TrainReport>& train, const std::array<float, 3>& background,
                            int image_width) {
   if (!eval || eval->views.empty())
@@ -229,25 +229,25 @@ std::string HeldoutSection(const fs::path& render_dir, const std::optional<EvalR
                     HtmlEscape(caption));
     };
     html += "<div class=\"triple\">" + figure(ImageDataUri(view.photo, image_width, background), "photo " + view.view) +
-            figure(ImageDataUri(render_dir / view.render, image_width),
+            figure(ImageDataUri(render.dir / view.render, image_width),
                    format("render: {:.2f} dB, SSIM {:.3f}", view.psnr, view.ssim)) +
-            figure(ImageDataUri(render_dir / view.error_map, image_width), "error map") + "</div>\n";
+            figure(ImageDataUri(render.dir / view.error_map, image_width), "error map") + "</div>\n";
   }
   return html;
 }
 
-std::string ExportSection(const fs::path& export_dir, const ExportReport& exported) {
+std::string ExportSection(const ExportResult& result, const ExportReport& exported) {
   const ExportReport::Mesh& mesh = exported.mesh;
   std::string html = format(
       "<h2>Exports</h2>\n<p>Mesh <a href=\"{}\">mesh.ply</a>: {} vertices, {} triangles, "
       "{}watertight (marching cubes at {}^3 over {}, density threshold {:.4g}), in the {} frame.",
-      Link(export_dir, "mesh.ply"), mesh.vertices, mesh.triangles, mesh.watertight ? "" : "not ", mesh.resolution,
+      Link(result.mesh()), mesh.vertices, mesh.triangles, mesh.watertight ? "" : "not ", mesh.resolution,
       mesh.region == "box" ? std::string("the scene box")
                            : format("the region the photos look at (a cube of half size {:.3g})", mesh.half_size),
       mesh.threshold, HtmlEscape(exported.frame));
   if (exported.points) {
-    html += format(" Point cloud <a href=\"{}\">points.ply</a>: {} points.", Link(export_dir, "points.ply"),
-                   exported.points->count);
+    html +=
+        format(" Point cloud <a href=\"{}\">points.ply</a>: {} points.", Link(result.points()), exported.points->count);
   }
   return html + "</p>\n";
 }
@@ -259,15 +259,18 @@ void ReportOptions::Check() const {
 }
 
 void ReportStage::Run(StageContext& context) const {
-  const ReportOptions options = ReadOptions<ReportOptions>(context.config, "report");
-  const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
-  const fs::path render_dir = context.upstream_dirs.at("render"), export_dir = context.upstream_dirs.at("export");
-  const ImportedDataset dataset = LoadTransformsJson(transforms, context.workspace.root());
+  const ReportOptions options = ReadOptions<ReportOptions>(context.config);
+  const TrainResult train_result = Upstream<TrainResult>(context);
+  const SplatResult splat = Upstream<SplatResult>(context);
+  const RenderResult render = Upstream<RenderResult>(context);
+  const ExportResult export_result = Upstream<ExportResult>(context);
+  const ImportedDataset dataset =
+      LoadTransformsJson(Upstream<PosesResult>(context).transforms(), context.workspace.root());
   const std::string heldout_split = HeldoutSplit(dataset);
-  const std::optional<TrainReport> train =
-      ReadReportIfExists<TrainReport>(context.upstream_dirs.at("train") / "train_report.json");
-  const std::optional<EvalReport> eval = ReadReportIfExists<EvalReport>(render_dir / "eval.json");
-  const std::optional<ExportReport> exported = ReadReportIfExists<ExportReport>(export_dir / "export_report.json");
+  const std::optional<TrainReport> train = ReadReportIfExists<TrainReport>(train_result.report());
+  const SplatReport splat_report = SplatReport::Read(splat.report());
+  const std::optional<EvalReport> eval = ReadReportIfExists<EvalReport>(render.eval());
+  const std::optional<ExportReport> exported = ReadReportIfExists<ExportReport>(export_result.report());
   const std::array<float, 3> background = dataset.meta.Background();
 
   std::string body = "<h1>photo2nerf report</h1>\n";
@@ -275,7 +278,7 @@ void ReportStage::Run(StageContext& context) const {
       "<p class=\"muted\">Workspace <code>{}</code>; input <code>{}</code>; photo2nerf {}; made {} UTC.</p>\n",
       HtmlEscape(context.workspace.root().string()),
       HtmlEscape(context.workspace.input() ? context.workspace.input()->string() : "-"), kVersion, UtcTimestamp());
-  body += WarningsSection(train, context.upstream_dirs.at("splat") / "splat_report.json");
+  body += WarningsSection(train, splat_report);
   body += "<div class=\"cards\">\n";
   body += Card(eval && eval->psnr ? format("{:.2f} dB", *eval->psnr) : "-", "held-out PSNR");
   body += Card(eval && eval->ssim ? format("{:.3f}", *eval->ssim) : "-", "held-out SSIM");
@@ -283,33 +286,34 @@ void ReportStage::Run(StageContext& context) const {
   body += Card(format("{}", dataset.views.size()), "cameras");
   if (exported) body += Card(format("{}", exported->mesh.triangles), "mesh triangles");
   body += "</div>\n";
-  body += TrainingSection(context.upstream_dirs.at("train"), train);
-  body += SplatSection(context.upstream_dirs.at("splat"), train);
+  body += TrainingSection(train_result, train);
+  body += SplatSection(splat, splat_report, train);
   body += StagesSection(context);
   body += CamerasSection(context, dataset, heldout_split);
-  body += HeldoutSection(render_dir, eval, train, background, options.image_width);
-  if (const std::optional<PathReport> path = ReadReportIfExists<PathReport>(render_dir / "render_report.json")) {
+  body += HeldoutSection(render, eval, train, background, options.image_width);
+  if (const std::optional<PathReport> path = ReadReportIfExists<PathReport>(render.report())) {
     std::string how =
         path->samples_per_ray ? format("{:.3g} samples per ray", *path->samples_per_ray) : "from the " + path->source;
     if (path->rendered_frames < path->frames)
       how += format("; {} drawn, the others repeat them", path->rendered_frames);
     body += format("<h2>New views</h2>\n<p>{} path, {} frames of {}x{} at {:.2f} frames per second ({}).</p>\n",
                    HtmlEscape(path->kind), path->frames, path->width, path->height, path->frames_per_second, how);
-    const fs::path video = render_dir / "video.mp4";
+    const fs::path video = render.video();
     if (fs::exists(video)) {
-      const std::string source = options.embed_video ? FileDataUri(video, "video/mp4") : Link(render_dir, "video.mp4");
+      const std::string source = options.embed_video ? FileDataUri(video, "video/mp4") : Link(video);
       body +=
           format("<video id=\"path-video\" controls loop muted autoplay playsinline src=\"{}\" width=\"{}\"></video>\n",
                  source, options.image_width);
     } else {
       body += format("<img src=\"{}\" alt=\"first frame\">\n",
-                     ImageDataUri(render_dir / "frames" / "0000.png", options.image_width));
+                     ImageDataUri(render.frames() / (RenderResult::FrameStem(0) + ".png"), options.image_width));
     }
   }
-  if (exported) body += ExportSection(export_dir, *exported);
-  WriteFileAtomic(context.output_dir / "report.html", HtmlPage("photo2nerf report", body));
-  context.summary = {{"report", (context.workspace.StageDir(folder()) / "report.html").string()}};
-  LogInfo(format("report: {}", (context.workspace.StageDir(folder()) / "report.html").string()));
+  if (exported) body += ExportSection(export_result, *exported);
+  WriteFileAtomic(ReportResult{context.output_dir}.page(), HtmlPage("photo2nerf report", body));
+  const fs::path page = InWorkspace<ReportResult>(context.workspace).page();
+  context.summary = {{"report", page.string()}};
+  LogInfo(format("report: {}", page.string()));
 }
 
 }  // namespace p2n

@@ -4,11 +4,13 @@
 // time, the stages with their wall times, cache state and options, the camera recovery, the held-out photos
 // beside their renders and error maps, the video, a 3D view of the cameras and sparse points, the exports.
 
-#include "pipeline/stage.h"
+#include "stages/stage_results.h"
 
 namespace p2n {
 
 struct ReportOptions {
+  static constexpr const char* kSection = "report";  // its options are report.NAME
+
   int image_width = 480;    // images are embedded at most this wide
   bool embed_video = true;  // embed video.mp4 in the page (else link to it)
 
@@ -20,12 +22,13 @@ struct ReportOptions {
   void Check() const;
 };
 
-class ReportStage : public Stage {
+class ReportStage : public StageOf<ReportResult> {
  public:
-  std::string name() const override { return "report"; }
-  std::string folder() const override { return "60_report"; }
   int format_version() const override { return 1; }
-  std::vector<std::string> upstream() const override { return {"poses", "train", "splat", "render", "export"}; }
+  std::vector<std::string> upstream() const override {
+    return {PosesResult::kId.name, TrainResult::kId.name, SplatResult::kId.name, RenderResult::kId.name,
+            ExportResult::kId.name};
+  }
   void Run(StageContext& context) const override;
 };
 

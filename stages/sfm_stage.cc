@@ -19,6 +19,7 @@
 #include "stages/feature_matching.h"
 #include "stages/matcher_choice.h"
 #include "stages/stage_reports.h"
+#include "stages/stages.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -26,17 +27,11 @@ namespace {
 
 constexpr double kSuspiciousFocusAngleDeg = 20;  // correct orbit models stay near 8 (DESIGN.md §7)
 constexpr size_t kMaxNamesListed = 20;
-// How the mapper adjusts while the model grows (COLMAP's defaults otherwise):
-// - global adjustments stop when the cost changes by less than 1e-6 of it (COLMAP's default 0 runs each to its
-//   iteration limit), as 3D Gaussian Splatting's and nerfstudio's COLMAP scripts do: the final bundle adjustment
-//   refines the cameras anyway. Three runs each (`photo2nerf run PHOTOS -w WS --until poses`): fox mapping and
-//   adjustment 36.5 -> 31.7 s (medians), fern 10.0 -> 8.5 s, camera rotations as close to the references (fox
-//   0.033-0.043 against 0.033-0.045 deg, fern 0.39-0.50 against 0.40-0.43 deg);
-// - a global one runs when the images or points grew by 40% since the last (COLMAP's default 10%; its
-//   medium-quality preset 32%), and local ones stop after 10 iterations (25; medium 12). COLMAP's medium preset also
-//   halves the global adjustments' iterations, which moved fox's cameras by 0.095 deg (median) and fern's by 0.149;
-//   these two alone moved them by 0.023 and 0.027 deg, the synthetic scene's by 0.008 (before the final
-//   adjustment), for mapping in 35.1 s instead of 51.1 (fox), 12.0 instead of 13.6 (fern), 2.7 instead of 3.5.
+// How the mapper adjusts while the model grows (COLMAP's defaults otherwise): global adjustments stop when the cost
+// changes by less than 1e-6 of it (COLMAP's default 0 runs each to its iteration limit; the final bundle adjustment
+// refines the cameras anyway), a global one runs when the images or points grew by 40% since the last (COLMAP's
+// 10%), and local ones stop after 10 iterations (25): faster mapping, the cameras as close to the references
+// (docs/benchmarks.md, structure from motion).
 constexpr const char* kMapperTuning[] = {
     "--Mapper.ba_global_function_tolerance", "1e-6", "--Mapper.ba_global_images_ratio",      "1.4",
     "--Mapper.ba_global_points_ratio",       "1.4",  "--Mapper.ba_local_max_num_iterations", "10"};
@@ -103,9 +98,9 @@ std::vector<std::string> ImageNames(const fs::path& folder) {
 }
 
 // The ingested images' names by image size (ingest's report lists each image's size).
-std::map<std::pair<int, int>, std::vector<std::string>> ImagesBySize(const fs::path& ingest_dir) {
+std::map<std::pair<int, int>, std::vector<std::string>> ImagesBySize(const IngestResult& ingest) {
   std::map<std::pair<int, int>, std::vector<std::string>> groups;
-  for (const IngestedImage& image : IngestReport::Read(ingest_dir / "ingest_report.json").images) {
+  for (const IngestedImage& image : IngestReport::Read(ingest.report()).images) {
     groups[{image.width, image.height}].push_back(image.name);
   }
   return groups;
@@ -115,11 +110,12 @@ std::map<std::pair<int, int>, std::vector<std::string>> ImagesBySize(const fs::p
 struct ColmapRun {
   const SfmOptions& options;
   ColmapFlags flags;
-  fs::path images, out;
+  fs::path images;
+  SfmResult out;
   std::string seed, threads;
   StepRunner* steps;
 
-  fs::path database() const { return out / "database.db"; }  // always new: the staging folder starts empty
+  fs::path database() const { return out.database(); }  // always new: the staging folder starts empty
 
   // One extraction for every photo, or one per image size when `groups` (size -> names) is not empty.
   void ExtractFeatures(const std::map<std::pair<int, int>, std::vector<std::string>>& groups) const {
@@ -148,7 +144,7 @@ struct ColmapRun {
       return;
     }
     for (const auto& [size, group] : groups) {
-      const fs::path list = out / "logs" / (format("images_{}x{}", size.first, size.second) + ".txt");
+      const fs::path list = out.logs() / (format("images_{}x{}", size.first, size.second) + ".txt");
       std::string lines;
       for (const std::string& name : group) lines += name + "\n";
       WriteFileAtomic(list, lines);
@@ -161,7 +157,7 @@ struct ColmapRun {
   // A vocabulary tree of the photos' own features, for matching by retrieval (COLMAP's pretrained trees are a
   // download away; a few hundred photos' features are plenty to cluster).
   fs::path BuildVocabularyTree(size_t photos) const {
-    const fs::path tree = out / "vocab_tree.bin";
+    const fs::path tree = out.vocab_tree();
     const size_t words = std::clamp<size_t>(photos * options.max_num_features / kFeaturesPerWord, 256, 65536);
     steps->Run("vocabulary tree",
                {options.colmap, "vocab_tree_builder", "--database_path", database().string(), "--vocab_tree_path",
@@ -212,10 +208,10 @@ struct ColmapRun {
   // none.
   fs::path MapLargestModel(size_t photos, const std::string& step, const std::string& folder,
                            std::vector<SfmReport::Model>* models) const {
-    fs::create_directories(out / folder);
+    fs::create_directories(out.dir / folder);
     std::vector<std::string> command({options.colmap, "mapper", "--database_path", database().string(), "--image_path",
-                                      images.string(), "--output_path", (out / folder).string(), "--random_seed", seed,
-                                      "--Mapper.num_threads", threads, "--Mapper.min_model_size", "3"});
+                                      images.string(), "--output_path", (out.dir / folder).string(), "--random_seed",
+                                      seed, "--Mapper.num_threads", threads, "--Mapper.min_model_size", "3"});
     command.insert(command.end(), std::begin(kMapperTuning), std::end(kMapperTuning));
     const fs::path log = steps->Run(step, command, /*allow_failure=*/true);
     if (!steps->last_ok()) {
@@ -230,10 +226,10 @@ struct ColmapRun {
     models->clear();
     fs::path chosen;
     size_t most = 0;
-    for (const fs::directory_entry& entry : fs::directory_iterator(out / folder)) {
+    for (const fs::directory_entry& entry : fs::directory_iterator(out.dir / folder)) {
       if (!entry.is_directory()) continue;
       const size_t registered = ReadColmapModel(entry.path()).images.size();
-      models->push_back({fs::relative(entry.path(), out).string(), registered});
+      models->push_back({fs::relative(entry.path(), out.dir).string(), registered});
       if (registered > most) {
         most = registered;
         chosen = entry.path();
@@ -248,7 +244,7 @@ struct ColmapRun {
 
   // A final bundle adjustment that also refines the principal point; returns the refined model's folder.
   fs::path RefinePrincipalPoint(const fs::path& model) const {
-    const fs::path refined = out / "refined";
+    const fs::path refined = out.dir / "refined";
     fs::create_directories(refined);
     steps->Run("bundle adjustment", {options.colmap, "bundle_adjuster", "--input_path", model.string(), "--output_path",
                                      refined.string(), "--BundleAdjustment.refine_principal_point", "1"});
@@ -257,11 +253,11 @@ struct ColmapRun {
 
   // Pinhole images and model in out/undistorted (without COLMAP's dense-stereo scripts).
   void Undistort(const fs::path& model) const {
-    const fs::path undistorted = out / "undistorted";
+    const fs::path undistorted = out.undistorted();
     const fs::path log = steps->Run(
         "undistortion", {options.colmap, "image_undistorter", "--image_path", images.string(), "--input_path",
                          model.string(), "--output_path", undistorted.string(), "--output_type", "COLMAP"});
-    if (!fs::exists(undistorted / "sparse" / "cameras.bin")) {
+    if (!fs::exists(out.undistorted_model() / "cameras.bin")) {
       throw ExternalToolError(
           format("COLMAP's image_undistorter wrote no model into '{}'; log: {}", undistorted.string(), log.string()));
     }
@@ -362,7 +358,7 @@ void SfmOptions::Check() const {
 }
 
 std::map<std::string, std::string> SfmStage::ExternalInputs(const Workspace& workspace, const Config& config) const {
-  const std::string program = config.Get<std::string>("sfm.colmap");
+  const std::string program = ReadOptions<SfmOptions>(config).colmap;
   try {
     return {{"tool colmap", DetectColmapVersion(program, workspace.LogDir() / "colmap_version.log").ToString()}};
   } catch (const std::exception&) {
@@ -371,21 +367,22 @@ std::map<std::string, std::string> SfmStage::ExternalInputs(const Workspace& wor
 }
 
 void SfmStage::CheckResult(const fs::path& result_dir, const Config& config) const {
-  CheckRegistered(SfmReport::Read(result_dir / "sfm_report.json"),
-                  ReadOptions<SfmOptions>(config, "sfm").min_registered);
+  CheckRegistered(SfmReport::Read(SfmResult{result_dir}.report()), ReadOptions<SfmOptions>(config).min_registered);
 }
 
 void SfmStage::Run(StageContext& context) const {
-  const SfmOptions options = ReadOptions<SfmOptions>(context.config, "sfm");
-  const int threads = context.config.Get<int>("run.threads") > 0 ? context.config.Get<int>("run.threads") : -1;
-  const fs::path out = context.output_dir;
-  fs::create_directories(out / "logs");
-  const ColmapVersion version = DetectColmapVersion(options.colmap, out / "logs" / "version.log");
-  const fs::path images = context.upstream_dirs.at("ingest") / "images";
+  const SfmOptions options = ReadOptions<SfmOptions>(context.config);
+  const int run_threads = ReadOptions<RunOptions>(context.config).threads;
+  const int threads = run_threads > 0 ? run_threads : -1;
+  const SfmResult out{context.output_dir};
+  fs::create_directories(out.logs());
+  const ColmapVersion version = DetectColmapVersion(options.colmap, out.logs() / "version.log");
+  const IngestResult ingest = Upstream<IngestResult>(context);
+  const fs::path images = ingest.images();
   const std::vector<std::string> names = ImageNames(images);
   // COLMAP's shared camera would skip every photo of another size: with several sizes, features are extracted
   // once per size, each run making one camera for its photos.
-  const auto groups = ImagesBySize(context.upstream_dirs.at("ingest"));
+  const auto groups = ImagesBySize(ingest);
   const bool camera_per_size = options.single_camera && groups.size() > 1;
   if (camera_per_size) LogInfo(format("sfm: the photos have {} sizes: one camera for each size", groups.size()));
   const std::string matcher =
@@ -394,7 +391,7 @@ void SfmStage::Run(StageContext& context) const {
                  options.max_image_size));
   // Extraction (one per image size), the vocabulary tree or our matching, COLMAP's matching, mapping, the
   // principal point's adjustment, undistortion.
-  StepRunner steps(out / "logs", (options.refine_principal_point ? 6 : 5) + (camera_per_size ? groups.size() - 1 : 0));
+  StepRunner steps(out.logs(), (options.refine_principal_point ? 6 : 5) + (camera_per_size ? groups.size() - 1 : 0));
   const ColmapRun colmap{
       options, ColmapFlagsFor(version), images, out, std::to_string(options.seed), std::to_string(threads), &steps};
 
@@ -408,16 +405,16 @@ void SfmStage::Run(StageContext& context) const {
   report.colmap_version = version.ToString();
   report.matcher = matching;
   report.models = models;
-  report.chosen_model = fs::relative(chosen, out).string();
+  report.chosen_model = fs::relative(chosen, out.dir).string();
   report.steps = steps.timings();
-  WriteJsonAtomic(out / "sfm_report.json", report.ToJson());  // also for a run that fails the check below
+  WriteJsonAtomic(out.report(), report.ToJson());  // also for a run that fails the check below
   context.summary = {{"registered", model.images.size()}, {"images", names.size()}, {"points", model.points.size()}};
   LogInfo(format("sfm: {}/{} photos registered, {} points, mean reprojection error {:.2f} px", model.images.size(),
                  names.size(), model.points.size(), report.mean_reprojection_error_px));
   CheckRegistered(report, options.min_registered);
   colmap.Undistort(model_dir);
   report.steps = steps.timings();
-  WriteJsonAtomic(out / "sfm_report.json", report.ToJson());
+  WriteJsonAtomic(out.report(), report.ToJson());
 }
 
 }  // namespace p2n

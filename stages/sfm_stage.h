@@ -5,11 +5,13 @@
 
 #include <string>
 
-#include "pipeline/stage.h"
+#include "stages/stage_results.h"
 
 namespace p2n {
 
 struct SfmOptions {
+  static constexpr const char* kSection = "sfm";  // its options are sfm.NAME
+
   std::string camera_model = "RADIAL";  // COLMAP camera model of the photos
   bool single_camera = true;            // one camera shared by every photo
   std::string matcher = "auto";         // auto: AutoMatcher (matcher_choice.h)
@@ -17,7 +19,7 @@ struct SfmOptions {
   int sequential_overlap = 12;          // neighbours each photo is matched with (sequential)
   int retrieval_neighbours = 20;        // most similar photos each photo is matched with (vocab_tree)
   int max_image_size = 1024;            // longest side for feature extraction, pixels
-  int max_num_features = 2048;          // features per photo at most (README: 4096 against 2048)
+  int max_num_features = 2048;          // features per photo at most
   bool refine_principal_point = true;   // a final bundle adjustment that also refines cx, cy
   double min_registered = 0.5;          // fraction of photos that must be registered
   int seed = 0;                         // COLMAP's random seed
@@ -55,12 +57,10 @@ struct SfmOptions {
   void Check() const;
 };
 
-class SfmStage : public Stage {
+class SfmStage : public StageOf<SfmResult> {
  public:
-  std::string name() const override { return "sfm"; }
-  std::string folder() const override { return "10_sfm"; }
   int format_version() const override { return 1; }
-  std::vector<std::string> upstream() const override { return {"ingest"}; }
+  std::vector<std::string> upstream() const override { return {IngestResult::kId.name}; }
   // "tool colmap" -> its version: a result made with another COLMAP is stale.
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
   void Run(StageContext& context) const override;

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "formats/output_frame.h"
 #include "formats/ply.h"
@@ -13,7 +14,6 @@
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/log.h"
-#include "pipeline/progress.h"
 #include "splat/field_init.h"
 #include "splat/splat_ply.h"
 #include "splat/splat_trainer.h"
@@ -22,6 +22,7 @@
 #include "stages/splat_viewer.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"
+#include "stages/timed_run.h"
 #include "stages/train_stage.h"
 #include "stages/training_data.h"
 #include "stages/view_renders.h"
@@ -46,8 +47,7 @@ void SplatOptions::Check() const {
 
 double SplatTimeBudget(const SplatOptions& options, const std::string& train_preset) {
   if (options.time_budget > 0 || options.steps > 0) return options.time_budget;
-  // default: see the train stage's presets. quality: on a 5-minute field 480 s gave fox's splats 29.88 dB against
-  // 28.40 after 180 s, fern's 23.69 against 23.23 (SSIM 0.758 against 0.733), lego 800's 33.11 against 32.12.
+  // The default preset's split between the field and the splats, and quality's 480 s: docs/benchmarks.md.
   if (train_preset == "fast") return 30;
   return train_preset == "quality" ? 480 : 180;
 }
@@ -99,15 +99,15 @@ Gaussians<float> GaussiansFromSparseFile(const fs::path& file, const FieldInitOp
 
 SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& options) {
   SplatSetup setup;
-  const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
-  const fs::path train_dir = context.upstream_dirs.at("train");
-  const NerfModel model = LoadTrainedModel(train_dir / "model.bin");
-  const ImportedDataset poses = LoadTransformsJson(transforms, context.workspace.root());
+  const PosesResult poses_result = Upstream<PosesResult>(context);
+  const TrainResult train = Upstream<TrainResult>(context);
+  const NerfModel model = LoadTrainedModel(train.model());
+  const ImportedDataset poses = LoadTransformsJson(poses_result.transforms(), context.workspace.root());
   setup.data = LoadTrainingData(poses);
   setup.background = model.background;
   if (model.info.contains("heldout_psnr") && model.info["heldout_psnr"].is_number())
     setup.field_psnr = model.info["heldout_psnr"].get<double>();
-  const std::map<std::string, CameraCorrection> corrections = ReadCameraCorrections(train_dir / "train_report.json");
+  const std::map<std::string, CameraCorrection> corrections = ReadCameraCorrections(train.report());
   for (TrainView& view : setup.data.train) {
     const auto found = corrections.find(view.name);
     if (found != corrections.end()) view.camera = CorrectedCamera(view.camera, found->second.data());
@@ -121,11 +121,10 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   init.max_gaussians = std::min(static_cast<size_t>(options.max_gaussians), pixels / kPixelsPerSplat);
   init.sh_degree = options.sh_degree;
   if (options.init == "sparse") {
-    setup.gaussians = GaussiansFromSparseFile(context.upstream_dirs.at("poses") / "sparse_points.ply", init);
+    setup.gaussians = GaussiansFromSparseFile(poses_result.sparse_points(), init);
   } else {
-    const std::shared_ptr<const ViewRenders> renders =
-        RenderViewsSmall(context, train_dir / "model.bin", model, setup.data.train, options.init_width,
-                         "splat: placing splats from the field");
+    const std::shared_ptr<const ViewRenders> renders = RenderViewsSmall(
+        context, train.model(), model, setup.data.train, options.init_width, "splat: placing splats from the field");
     setup.gaussians = GaussiansFromRenders(model, renders->cameras, renders->renders, init);
   }
 
@@ -139,12 +138,8 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
     for (TrainView& view : *views) view.camera.world_from_cam = setup.frame.Pose(view.camera.world_from_cam);
   }
   setup.extent = CameraExtent(setup.data.train);
-  // Fox's photos (1080 x 1920), 180 s on one 5-minute field: optimised at 540 x 960 (halved) 29.64, 29.92 and 29.75 dB
-  // at full size against 28.92, 28.92 and 28.82 at their own size (twice the steps); 480 s: 30.40 against 30.24.
-  // Fitted to 1080 rather than halved, on another field: 30.08 and 30.05 against 30.09 and 30.07 halved. Fox downsized
-  // to 788 x 1400 (poses.max_image_size 1400), where halving goes to 700: fitted 30.54 and 30.42, halved 30.20 and
-  // 30.17, as they are 30.31 and 30.33. Fern's and lego's photos (1008, 800) are used as they are; fern halved to 504
-  // loses 1.2 dB.
+  // Large photos are optimised downsized (splat.max_image_size): more steps on fewer pixels score better at full
+  // size (docs/benchmarks.md, splats).
   const int full_width = setup.data.train.front().camera.width;
   setup.data.train = FittedViews(setup.data.train, options.max_image_size);
   if (setup.data.train.front().camera.width != full_width) {
@@ -178,89 +173,32 @@ Scores Evaluate(const Gaussians<float>& gaussians, const std::array<float, 3>& b
   return scores;
 }
 
-// The run's state besides the trainer's, kept in checkpoints.
-struct RunState {
-  double seconds = 0;
-  std::string metrics;  // metrics.csv rows so far
-  double loss_sum = 0;
-  int loss_steps = 0;
-};
-
-void SaveCheckpoint(const fs::path& path, const std::string& key, const RunState& state, const SplatTrainer& trainer) {
-  BinaryWriter writer;
-  writer.PutString(key);
-  writer.Put<double>(state.seconds);
-  writer.PutString(state.metrics);
-  writer.Put<double>(state.loss_sum);
-  writer.Put<int32_t>(state.loss_steps);
-  trainer.Save(&writer);
-  fs::create_directories(path.parent_path());
-  WriteBinaryFileAtomic(path, writer.buffer());
-}
-
-// Resumes from `path` when it is a checkpoint of this very result (same key); false otherwise.
-bool LoadCheckpoint(const fs::path& path, const std::string& key, RunState* state, SplatTrainer* trainer) {
-  if (!fs::exists(path)) return false;
-  try {
-    BinaryReader reader(ReadBinaryFile(path), path.string());
-    if (reader.GetString() != key) return false;
-    RunState loaded;
-    loaded.seconds = reader.Get<double>();
-    loaded.metrics = reader.GetString();
-    loaded.loss_sum = reader.Get<double>();
-    loaded.loss_steps = reader.Get<int32_t>();
-    trainer->Load(&reader);
-    *state = loaded;
-    return true;
-  } catch (const std::runtime_error& error) {
-    LogWarning(format("splat: cannot resume ({}); starting over", error.what()));
-    return false;
-  }
-}
-
 // A metrics.csv row: the run so far, the training loss since the last row and the held-out PSNR.
 void AddMetricsRow(const SplatTrainer& trainer, const Scores& scores, RunState* state) {
+  const double loss = state->TakeMeanLoss(0);
   state->metrics += format("{:.3f},{},{},{:.6g},{:.4f}\n", state->seconds, trainer.step(), trainer.gaussians().size(),
-                           state->loss_sum / std::max(state->loss_steps, 1), Mean(scores.psnr));
-  state->loss_sum = 0;
-  state->loss_steps = 0;
+                           loss, Mean(scores.psnr));
 }
 
-// Optimises until the budget (seconds, else steps) is spent: a metrics row at every evaluation, checkpoints.
+// Optimises until the budget (seconds, else steps) is spent: a metrics row at every evaluation but the last (the
+// caller's final evaluation makes it), checkpoints.
 void OptimiseUntilDone(SplatTrainer& trainer, const SplatSetup& setup, const SplatOptions& options, double budget,
                        double near, const fs::path& checkpoint, const std::string& key, RunState* state) {
-  using Clock = std::chrono::steady_clock;
-  // The share of the run done: of the time budget, or of the steps, whichever is further (done at 1).
-  const auto share = [&] {
-    return std::max(budget > 0 ? state->seconds / budget : 0.0,
-                    options.steps > 0 ? double(trainer.step()) / options.steps : 0.0);
-  };
-  const auto done = [&] { return share() >= 1; };
-  Progress progress("splat", budget > 0 ? static_cast<int64_t>(budget) : options.steps, budget > 0 ? "s" : "steps");
-  progress.Add(budget > 0 ? static_cast<int64_t>(state->seconds) : trainer.step());
-  double next_eval = (std::floor(state->seconds / options.eval_interval) + 1) * options.eval_interval;
-  auto last_checkpoint = Clock::now();
+  const RunLoop loop{"splat", budget, options.steps, options.eval_interval, 1, false, options.checkpoint_interval};
   const std::vector<TrainView> coarse = options.coarse > 0 ? HalfSizeViews(setup.data.train) : std::vector<TrainView>{};
-  while (!done()) {
-    ThrowIfCancelled();
-    trainer.SetViews(!coarse.empty() && share() < options.coarse ? &coarse : &setup.data.train);
-    trainer.SetProgress(share());
-    const auto start = Clock::now();
-    state->loss_sum += trainer.Step();
-    ++state->loss_steps;
-    const int64_t whole_before = static_cast<int64_t>(state->seconds);
-    state->seconds += std::chrono::duration<double>(Clock::now() - start).count();
-    progress.Add(budget > 0 ? static_cast<int64_t>(state->seconds) - whole_before : 1);
-    if (state->seconds >= next_eval && !done()) {  // the last row is the final evaluation's
-      AddMetricsRow(trainer, Evaluate(trainer.gaussians(), trainer.background(), setup, near, false), state);
-      next_eval = (std::floor(state->seconds / options.eval_interval) + 1) * options.eval_interval;
-    }
-    if (options.checkpoint_interval > 0 &&
-        std::chrono::duration<double>(Clock::now() - last_checkpoint).count() >= options.checkpoint_interval) {
-      WriteOrExplain([&] { SaveCheckpoint(checkpoint, key, *state, trainer); });
-      last_checkpoint = Clock::now();
-    }
-  }
+  const auto step = [&](double share) -> std::optional<double> {
+    trainer.SetViews(!coarse.empty() && share < options.coarse ? &coarse : &setup.data.train);
+    trainer.SetProgress(share);
+    return trainer.Step();
+  };
+  const auto add_row = [&](RunState* run) {
+    AddMetricsRow(trainer, Evaluate(trainer.gaussians(), trainer.background(), setup, near, false), run);
+  };
+  const auto save = [&](const RunState& run) {
+    WriteOrExplain([&] { SaveRunCheckpoint(checkpoint, key, run, [&](BinaryWriter* w) { trainer.Save(w); }); });
+  };
+  loop.Run(
+      state, [&] { return trainer.step(); }, step, add_row, save);
 }
 
 }  // namespace
@@ -293,14 +231,14 @@ SplatReport MakeSplatReport(const SplatTrainer& trainer, const SplatSetup& setup
 }
 
 void SplatStage::Run(StageContext& context) const {
-  const SplatOptions options = ReadOptions<SplatOptions>(context.config, "splat");
-  const fs::path out = context.output_dir;
+  const SplatOptions options = ReadOptions<SplatOptions>(context.config);
+  const SplatResult out{context.output_dir};
   if (!options.enabled) {
-    WriteJsonAtomic(out / "splat_report.json", SplatReport{}.ToJson());
+    WriteJsonAtomic(out.report(), SplatReport{}.ToJson());
     context.summary["splats"] = "off";
     return;
   }
-  const TrainOptions train_options = ReadOptions<TrainOptions>(context.config, "train");
+  const TrainOptions train_options = ReadOptions<TrainOptions>(context.config);
   const double budget = SplatTimeBudget(options, train_options.preset);
   const SplatSetup setup = LoadSplatSetup(context, options);
   const double near = 0.01 * setup.extent;
@@ -318,15 +256,17 @@ void SplatStage::Run(StageContext& context) const {
       options.background == "auto" && FirstWithAlpha(setup.data.train) == nullptr && !setup.data.background_known;
   SplatTrainer trainer(setup.gaussians, scene, trainer_options);
   RunState state;
-  const fs::path checkpoint = context.resume_dir / "checkpoint.bin";
-  const int resumed_from = LoadCheckpoint(checkpoint, context.key, &state, &trainer) ? trainer.step() : 0;
+  const fs::path checkpoint = CheckpointFile(context);
+  const bool resumed =
+      LoadRunCheckpoint(checkpoint, context.key, name(), &state, [&](BinaryReader* r) { trainer.Load(r); });
+  const int resumed_from = resumed ? trainer.step() : 0;
   if (resumed_from > 0) LogInfo(format("splat: resumed at step {} from {}", resumed_from, checkpoint.string()));
   OptimiseUntilDone(trainer, setup, options, budget, near, checkpoint, context.key, &state);
 
   const Scores scores = Evaluate(trainer.gaussians(), trainer.background(), setup, near, true);
   AddMetricsRow(trainer, scores, &state);
   WriteOrExplain([&] {
-    WriteSplatPly(out / "splats.ply", trainer.gaussians(),
+    WriteSplatPly(out.splats(), trainer.gaussians(),
                   {setup.frame.description,
                    format("{} splats of SH degree {}", trainer.gaussians().size(), trainer.gaussians().sh_degree)});
   });
@@ -335,22 +275,22 @@ void SplatStage::Run(StageContext& context) const {
     fs::path root = context.workspace.root().lexically_normal();
     if (!root.has_filename()) root = root.parent_path();  // "ws/" -> "ws"
     const std::string scene = root.filename().string();
-    viewer_bytes = WriteSplatViewer(out / "viewer.html", "photo2nerf: " + scene, trainer.gaussians(), setup.data,
-                                    setup.frame, trainer.background(), near);
+    viewer_bytes = WriteSplatViewer(out.viewer(), "photo2nerf: " + scene, trainer.gaussians(), setup.data, setup.frame,
+                                    trainer.background(), near);
   });
   const std::string metrics = "wall_seconds,step,splats,train_loss,heldout_psnr\n" + state.metrics;
-  WriteFileAtomic(out / "metrics.csv", metrics);
+  WriteFileAtomic(out.metrics(), metrics);
   const PlotSeries curve = CsvSeries("held-out PSNR", metrics, 0, 4);
   if (!curve.x.empty()) {
     WriteOrExplain([&] {
-      WriteLinePlot(out / "psnr.png", {"splats: held-out PSNR against optimisation time", "time (s)", "PSNR (dB)"},
+      WriteLinePlot(out.psnr_plot(), {"splats: held-out PSNR against optimisation time", "time (s)", "PSNR (dB)"},
                     {curve});
     });
   }
   SplatReport report = MakeSplatReport(trainer, setup, options, scores, state.seconds, resumed_from, near);
-  report.file_bytes = fs::file_size(out / "splats.ply");
+  report.file_bytes = fs::file_size(out.splats());
   report.viewer_bytes = viewer_bytes;
-  WriteJsonAtomic(out / "splat_report.json", report.ToJson());
+  WriteJsonAtomic(out.report(), report.ToJson());
   context.summary["splats"] = trainer.gaussians().size();
   if (!setup.data.heldout.empty()) context.summary["splat_psnr"] = Mean(scores.psnr);
   LogInfo(format("splat: {} splats, held-out PSNR {:.2f} dB, {:.3f} s per held-out view", trainer.gaussians().size(),

@@ -7,11 +7,13 @@
 
 #include <string>
 
-#include "pipeline/stage.h"
+#include "stages/stage_results.h"
 
 namespace p2n {
 
 struct SplatOptions {
+  static constexpr const char* kSection = "splat";  // its options are splat.NAME
+
   bool enabled = true;
   double time_budget = 0;  // seconds of optimisation; 0: by the training preset (SplatTimeBudget)
   int steps = 0;           // stop after this many steps; 0: no step limit
@@ -70,15 +72,13 @@ struct SplatOptions {
 // splat.time_budget, or the training preset's share when it is 0.
 double SplatTimeBudget(const SplatOptions& options, const std::string& train_preset);
 
-class SplatStage : public Stage {
+class SplatStage : public StageOf<SplatResult> {
  public:
-  std::string name() const override { return "splat"; }
-  std::string folder() const override { return "35_splat"; }
   // 2: the SSIM term; 3: placed from at most 2 M pixels (the export's renders); 4: the background learnt (auto);
   // 5: optimised on photos of at most splat.max_image_size (halved); 6: downsized to it with an area filter
   // 7: a background the import knows stays fixed (auto)
   int format_version() const override { return 7; }
-  std::vector<std::string> upstream() const override { return {"poses", "train"}; }
+  std::vector<std::string> upstream() const override { return {PosesResult::kId.name, TrainResult::kId.name}; }
   void Run(StageContext& context) const override;
 };
 

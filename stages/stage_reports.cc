@@ -6,6 +6,7 @@
 #include "pipeline/errors.h"
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
+#include "stages/stage_results.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -159,7 +160,7 @@ nlohmann::json IngestReport::ToJson() const {
 
 IngestReport IngestReport::Read(const fs::path& file) {
   const nlohmann::json json = ReadJsonFile(file);
-  const Fields fields(json, file, "ingest");
+  const Fields fields(json, file, IngestResult::kId.name);
   IngestReport report;
   fields.Get("input_folder", &report.input_folder);
   fields.ForEach("images", [&](const Fields& image) {
@@ -207,7 +208,7 @@ nlohmann::json SfmReport::ToJson() const {
 
 SfmReport SfmReport::Read(const fs::path& file) {
   const nlohmann::json json = ReadJsonFile(file);
-  const Fields fields(json, file, "sfm");
+  const Fields fields(json, file, SfmResult::kId.name);
   SfmReport report;
   fields.Get("images_given", &report.images_given);
   fields.Get("registered", &report.registered);
@@ -292,7 +293,7 @@ nlohmann::json TrainReport::ToJson() const {
 
 TrainReport TrainReport::Read(const fs::path& file) {
   const nlohmann::json json = ReadJsonFile(file);
-  const Fields fields(json, file, "train");
+  const Fields fields(json, file, TrainResult::kId.name);
   TrainReport report;
   fields.Get("steps", &report.steps);
   fields.Get("wall_seconds", &report.wall_seconds);
@@ -375,16 +376,16 @@ nlohmann::json SplatReport::ToJson() const {
           {"frame_description", frame_description},
           {"near", near},
           {"background", background},
-          {"file", "splats.ply"},
+          {"file", SplatResult{}.splats().string()},
           {"file_bytes", file_bytes},
-          {"viewer", "viewer.html"},
+          {"viewer", SplatResult{}.viewer().string()},
           {"viewer_bytes", viewer_bytes},
           {"warnings", WarningsJson(warnings)}};
 }
 
 SplatReport SplatReport::Read(const fs::path& file) {
   const nlohmann::json json = ReadJsonFile(file);
-  const Fields fields(json, file, "splat");
+  const Fields fields(json, file, SplatResult::kId.name);
   SplatReport report;
   fields.Get("enabled", &report.enabled);
   if (!report.enabled) return report;
@@ -438,7 +439,7 @@ nlohmann::json EvalReport::ToJson() const {
 
 EvalReport EvalReport::Read(const fs::path& file) {
   const nlohmann::json json = ReadJsonFile(file);
-  const Fields fields(json, file, "render");
+  const Fields fields(json, file, RenderResult::kId.name);
   EvalReport report;
   fields.Get("split", &report.split);
   fields.Get("source", &report.source);
@@ -480,7 +481,7 @@ nlohmann::json PathReport::ToJson() const {
 
 PathReport PathReport::Read(const fs::path& render_report) {
   const nlohmann::json json = ReadJsonFile(render_report);
-  const Fields fields = Fields(json, render_report, "render").Object("path");
+  const Fields fields = Fields(json, render_report, RenderResult::kId.name).Object("path");
   PathReport report;
   fields.Get("source", &report.source);
   fields.Get("kind", &report.kind);
@@ -524,7 +525,7 @@ nlohmann::json ExportReport::ToJson() const {
 
 ExportReport ExportReport::Read(const fs::path& file) {
   const nlohmann::json json = ReadJsonFile(file);
-  const Fields fields(json, file, "export");
+  const Fields fields(json, file, ExportResult::kId.name);
   ExportReport report;
   const Fields mesh = fields.Object("mesh");
   mesh.Get("file", &report.mesh.file);

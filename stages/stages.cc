@@ -20,32 +20,32 @@ void RunOptions::Check() const {
 
 namespace {
 
-// Calls `section.operator()<Options>(name)` for every option section, in the order `--help` lists them: the one
+// Calls `section.operator()<Options>()` for every option section, in the order `--help` lists them: the one
 // table of sections.
 template <class Section>
 void ForEachSection(Section&& section) {
-  section.template operator()<RunOptions>("run");
-  section.template operator()<IngestOptions>("ingest");
-  section.template operator()<SfmOptions>("sfm");
-  section.template operator()<PosesOptions>("poses");
-  section.template operator()<ImportOptions>("import");
-  section.template operator()<TrainOptions>("train");
-  section.template operator()<SplatOptions>("splat");
-  section.template operator()<RenderStageOptions>("render");
-  section.template operator()<ExportOptions>("export");
-  section.template operator()<ReportOptions>("report");
+  section.template operator()<RunOptions>();
+  section.template operator()<IngestOptions>();
+  section.template operator()<SfmOptions>();
+  section.template operator()<PosesOptions>();
+  section.template operator()<ImportOptions>();
+  section.template operator()<TrainOptions>();
+  section.template operator()<SplatOptions>();
+  section.template operator()<RenderStageOptions>();
+  section.template operator()<ExportOptions>();
+  section.template operator()<ReportOptions>();
 }
 
 }  // namespace
 
 OptionRegistry AllOptions() {
   OptionRegistry registry;
-  ForEachSection([&]<class Options>(const char* name) { RegisterOptions<Options>(registry, name); });
+  ForEachSection([&]<class Options>() { RegisterOptions<Options>(registry, Options::kSection); });
   return registry;
 }
 
 void CheckAllOptions(const Config& config) {
-  ForEachSection([&]<class Options>(const char* name) { ReadOptions<Options>(config, name); });
+  ForEachSection([&]<class Options>() { ReadOptions<Options>(config); });
 }
 
 Runner MakeRunner(const std::optional<std::filesystem::path>& input) {

@@ -12,6 +12,8 @@ namespace p2n {
 
 // Options that change no result: not in any cache key, not remembered in the workspace.
 struct RunOptions {
+  static constexpr const char* kSection = "run";  // its options are run.NAME
+
   int threads = 0;                 // Worker threads; 0 uses every core.
   std::string log_level = "info";  // Console log level.
   std::string progress = "auto";   // Progress display.

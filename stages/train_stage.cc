@@ -1,8 +1,8 @@
 #include "stages/train_stage.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "formats/dataset_import.h"
 #include "nerf/appearance.h"
@@ -16,11 +16,11 @@
 #include "pipeline/file_util.h"
 #include "pipeline/format.h"
 #include "pipeline/log.h"
-#include "pipeline/progress.h"
 #include "stages/camera_corrections.h"
 #include "stages/fit_checks.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"
+#include "stages/timed_run.h"
 #include "stages/train_presets.h"
 #include "stages/training_data.h"
 
@@ -48,49 +48,6 @@ struct FinalEvaluation {
   RenderStats stats;
   BehindScene behind;
 };
-
-// The run's state besides the trainer's, kept in checkpoints.
-struct RunState {
-  double train_seconds = 0;
-  std::string metrics;  // metrics.csv rows so far
-  double loss_sum = 0;  // since the last row
-  int loss_steps = 0;
-};
-
-void SaveCheckpoint(const fs::path& path, const std::string& key, const RunState& state, const Trainer& trainer) {
-  BinaryWriter writer;
-  writer.PutString(key);
-  writer.Put<double>(state.train_seconds);
-  writer.PutString(state.metrics);
-  writer.Put<double>(state.loss_sum);
-  writer.Put<int32_t>(state.loss_steps);
-  trainer.SaveCheckpoint(&writer);
-  fs::create_directories(path.parent_path());
-  WriteBinaryFileAtomic(path, writer.buffer());
-}
-
-// Resumes from `path` when it is a checkpoint of this very result (same key); false otherwise.
-bool LoadCheckpoint(const fs::path& path, const std::string& key, RunState* state, Trainer* trainer) {
-  if (!fs::exists(path)) return false;
-  try {
-    BinaryReader reader(ReadBinaryFile(path), path.string());
-    if (reader.GetString() != key) {
-      LogInfo(format("train: the checkpoint in {} is of other inputs or options; starting over", path.string()));
-      return false;
-    }
-    RunState loaded;
-    loaded.train_seconds = reader.Get<double>();
-    loaded.metrics = reader.GetString();
-    loaded.loss_sum = reader.Get<double>();
-    loaded.loss_steps = reader.Get<int32_t>();
-    trainer->LoadCheckpoint(&reader);
-    *state = loaded;
-    return true;
-  } catch (const std::runtime_error& error) {
-    LogWarning(format("train: cannot resume ({}); starting over", error.what()));
-    return false;
-  }
-}
 
 // This session of the run (a resumed run counts from its resumption): its held-out evaluations during training and
 // its steps.
@@ -183,9 +140,8 @@ bool ModelIsFinite(NerfModel& model) {
 
 }  // namespace
 
-// Fern, side by side on one thread each (1,200 s, about 10 minutes on two): forward 21.28 / 22.24 / 22.90 / 23.24 /
-// 23.41 dB at 150 / 300 / 600 / 900 / 1,200 s against unbounded's 21.17 / 22.00 / 22.61 / 22.94 / 23.14, with
-// 13.4 samples a ray rendered against 18.9.
+// A forward-facing capture trains in normalised device coordinates: fewer samples a ray and a better fit than
+// contracted space (docs/benchmarks.md, training options).
 SceneSpace ResolveSceneSpace(const TrainOptions& options, const ImportedDataset& poses) {
   if (options.scene != "auto") return SceneSpaceFromName(options.scene);
   const std::string& kind = poses.meta.dataset_kind;
@@ -202,15 +158,9 @@ void TrainOptions::Check() const {
               "must be 0 (the preset's) or 10..24");
   CheckOption(vanilla_samples >= 1 && vanilla_samples <= 1024, "train.vanilla_samples", "must be 1..1024");
   CheckOption(learning_rate >= 0 && learning_rate < 1, "train.learning_rate", "must be 0 (the field's) or in (0, 1)");
-  bool distortion_ok = distortion == "auto";
-  if (!distortion_ok) {
-    try {
-      size_t end = 0;
-      distortion_ok = std::stod(distortion, &end) >= 0 && end == distortion.size();
-    } catch (const std::exception&) {
-    }
-  }
-  CheckOption(distortion_ok, "train.distortion", format("must be auto or a weight >= 0, not '{}'", distortion));
+  std::optional<double> weight;
+  CheckOption(ParseAutoOrNumber(distortion, &weight) && (!weight || *weight >= 0), "train.distortion",
+              format("must be auto or a weight >= 0, not '{}'", distortion));
   CheckOption(refine_cameras == "off" || field == "ngp", "train.refine_cameras",
               "needs train.field ngp (the vanilla field has no gradient with respect to its input)");
   CheckOption(eval_interval > 0, "train.eval_interval", "must be positive");
@@ -227,8 +177,9 @@ double ResolvedTimeBudget(const TrainOptions& options) {
 
 // train.distortion as a weight (Check() has made sure it is auto or a number >= 0).
 double DistortionWeight(const TrainOptions& options, SceneSpace space) {
-  if (options.distortion == "auto") return space != SceneSpace::kBounded ? kAutoDistortion : 0.0;
-  return std::stod(options.distortion);
+  std::optional<double> weight;
+  ParseAutoOrNumber(options.distortion, &weight);
+  return weight ? *weight : space != SceneSpace::kBounded ? kAutoDistortion : 0.0;
 }
 
 TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space) {
@@ -279,91 +230,64 @@ void CheckCancel(size_t) { ThrowIfCancelled(); }  // Ctrl-C stops an evaluation 
 // train.checkpoint_interval seconds into `checkpoint`, tagged with the result's `key`.
 void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptions& options, double budget,
                     const fs::path& checkpoint, const std::string& key, RunState* state, SessionLog* session) {
-  using Clock = std::chrono::steady_clock;
-  const auto done = [&] {
-    return (budget > 0 && state->train_seconds >= budget) || (options.steps > 0 && trainer.step() >= options.steps);
+  const RunLoop loop{
+      "train", budget, options.steps, options.eval_interval, options.eval_share, true, options.checkpoint_interval};
+  int consecutive_skips = 0;
+  const auto step = [&](double share) -> std::optional<double> {
+    const StepResult result = trainer.Step(share);
+    session->steps.rays += result.rays;
+    session->steps.samples += result.samples;
+    if (!result.skipped) {
+      consecutive_skips = 0;
+      return result.loss;
+    }
+    LogWarning(format("train: step {} skipped: {}", trainer.step(), result.problem));
+    if (++consecutive_skips >= kMaxConsecutiveSkips) {
+      throw InternalError(
+          format("training failed: {} steps in a row were not finite (last: {})", consecutive_skips, result.problem));
+    }
+    return std::nullopt;
   };
-  const auto progress_of = [&] {
-    const double by_time = budget > 0 ? state->train_seconds / budget : 0;
-    const double by_steps = options.steps > 0 ? double(trainer.step()) / options.steps : 0;
-    return std::clamp(std::max(by_time, by_steps), 0.0, 1.0);
-  };
-  const auto add_row = [&] {  // returns the seconds it took
-    const auto start = Clock::now();
+  const auto add_row = [&](RunState* run) {
     const double psnr =
         data.heldout.empty() ? std::nan("") : Mean(trainer.HeldoutPsnr(options.eval_pixels, nullptr, CheckCancel));
-    const double loss = state->loss_steps > 0 ? state->loss_sum / state->loss_steps : std::nan("");
-    state->metrics += format("{:.3f},{},{:.6g},{:.4f}\n", state->train_seconds, trainer.step(), loss, psnr);
-    state->loss_sum = 0;
-    state->loss_steps = 0;
-    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    session->evaluation_seconds += seconds;
-    ++session->evaluations;
-    return seconds;
+    const double loss = run->TakeMeanLoss(std::nan(""));
+    run->metrics += format("{:.3f},{},{:.6g},{:.4f}\n", run->seconds, trainer.step(), loss, psnr);
   };
-
-  Progress progress("train", budget > 0 ? static_cast<int64_t>(budget) : options.steps, budget > 0 ? "s" : "steps");
-  progress.Add(budget > 0 ? static_cast<int64_t>(state->train_seconds) : trainer.step());
-  double next_eval = (std::floor(state->train_seconds / options.eval_interval) + 1) * options.eval_interval;
-  auto last_checkpoint = Clock::now();
-  int consecutive_skips = 0;
-  while (!done()) {
-    ThrowIfCancelled();
-    const auto start = Clock::now();
-    const StepResult step = trainer.Step(progress_of());
-    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    const int64_t whole_before = static_cast<int64_t>(state->train_seconds);
-    state->train_seconds += seconds;
-    TrainReport::Throughput& counted = session->steps;
-    ++counted.steps;
-    counted.seconds += seconds;
-    counted.rays += step.rays;
-    counted.samples += step.samples;
-    progress.Add(budget > 0 ? static_cast<int64_t>(state->train_seconds) - whole_before : 1);
-    if (step.skipped) {
-      LogWarning(format("train: step {} skipped: {}", trainer.step(), step.problem));
-      if (++consecutive_skips >= kMaxConsecutiveSkips) {
-        throw InternalError(
-            format("training failed: {} steps in a row were not finite (last: {})", consecutive_skips, step.problem));
-      }
-      continue;
-    }
-    consecutive_skips = 0;
-    state->loss_sum += step.loss;
-    ++state->loss_steps;
-    if (state->train_seconds >= next_eval || done()) {
-      const double eval_seconds = add_row();
-      next_eval = std::max((std::floor(state->train_seconds / options.eval_interval) + 1) * options.eval_interval,
-                           state->train_seconds + eval_seconds * (1 - options.eval_share) / options.eval_share);
-    }
-    if (options.checkpoint_interval > 0 &&
-        std::chrono::duration<double>(Clock::now() - last_checkpoint).count() >= options.checkpoint_interval) {
-      if (ModelIsFinite(trainer.model())) WriteOrExplain([&] { SaveCheckpoint(checkpoint, key, *state, trainer); });
-      last_checkpoint = Clock::now();
-    }
-  }
+  const auto save = [&](const RunState& run) {
+    if (!ModelIsFinite(trainer.model())) return;
+    WriteOrExplain([&] {
+      SaveRunCheckpoint(checkpoint, key, run, [&](BinaryWriter* writer) { trainer.SaveCheckpoint(writer); });
+    });
+  };
+  const RunSession run = loop.Run(
+      state, [&] { return trainer.step(); }, step, add_row, save);
+  session->steps.steps += run.steps;
+  session->steps.seconds += run.step_seconds;
+  session->evaluations += run.rows;
+  session->evaluation_seconds += run.row_seconds;
 }
 
 // What a finished training writes besides the model: train_report.json, metrics.csv and psnr.png; returns the
 // report.
-TrainReport WriteTrainReport(const fs::path& out, Trainer& trainer, const TrainingSetup& setup,
+TrainReport WriteTrainReport(const TrainResult& out, Trainer& trainer, const TrainingSetup& setup,
                              const FinalEvaluation& evaluation, const RunState& state, int resumed_from,
                              const SessionLog& session) {
   TrainReport report =
       MakeTrainReport(trainer, setup.trainer, setup.options, setup.data, evaluation, resumed_from, session);
-  report.wall_seconds = state.train_seconds;
+  report.wall_seconds = state.seconds;
   report.heldout_split = setup.heldout_split;
   report.heldout_rule = setup.heldout_rule;
   std::vector<std::string> names;
   for (const TrainView& view : setup.data.train) names.push_back(view.name);
   report.camera_refinement = CameraRefinementJson(names, trainer.camera_corrections());
-  WriteJsonAtomic(out / "train_report.json", report.ToJson());
+  WriteJsonAtomic(out.report(), report.ToJson());
   const std::string metrics = "wall_seconds,step,train_loss,heldout_psnr\n" + state.metrics;
-  WriteFileAtomic(out / "metrics.csv", metrics);
+  WriteFileAtomic(out.metrics(), metrics);
   const PlotSeries curve = CsvSeries("held-out PSNR", metrics, 0, 3);
   if (!curve.x.empty()) {
     WriteOrExplain([&] {
-      WriteLinePlot(out / "psnr.png", {"held-out PSNR against training time", "training time (s)", "PSNR (dB)"},
+      WriteLinePlot(out.psnr_plot(), {"held-out PSNR against training time", "training time (s)", "PSNR (dB)"},
                     {curve});
     });
   }
@@ -374,9 +298,9 @@ TrainReport WriteTrainReport(const fs::path& out, Trainer& trainer, const Traini
 
 void TrainStage::Run(StageContext& context) const {
   TrainingSetup setup;
-  setup.options = ReadOptions<TrainOptions>(context.config, "train");
+  setup.options = ReadOptions<TrainOptions>(context.config);
   const TrainOptions& options = setup.options;
-  const fs::path transforms = context.upstream_dirs.at("poses") / "transforms.json";
+  const fs::path transforms = Upstream<PosesResult>(context).transforms();
   const ImportedDataset poses = LoadTransformsJson(transforms, context.workspace.root());
   setup.heldout_split = HeldoutSplit(poses);
   setup.heldout_rule = poses.meta.heldout_rule;
@@ -402,11 +326,12 @@ void TrainStage::Run(StageContext& context) const {
                  budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
 
   RunState state;
-  const fs::path checkpoint = context.resume_dir / "checkpoint.bin";
+  const fs::path checkpoint = CheckpointFile(context);
   int resumed_from = 0;
-  if (LoadCheckpoint(checkpoint, context.key, &state, &trainer)) {
+  if (LoadRunCheckpoint(checkpoint, context.key, name(), &state,
+                        [&](BinaryReader* reader) { trainer.LoadCheckpoint(reader); })) {
     resumed_from = trainer.step();
-    LogInfo(format("train: resumed at step {} ({:.1f} s of training) from {}", trainer.step(), state.train_seconds,
+    LogInfo(format("train: resumed at step {} ({:.1f} s of training) from {}", trainer.step(), state.seconds,
                    checkpoint.string()));
   }
   SessionLog session;
@@ -425,17 +350,17 @@ void TrainStage::Run(StageContext& context) const {
                 {"distortion_weight", setup.trainer.distortion_weight},
                 {"appearance", setup.trainer.appearance},
                 {"refine_cameras", setup.trainer.refine_cameras}};
-  WriteOrExplain([&] { SaveModel(model, context.output_dir / "model.bin"); });
-  const TrainReport report =
-      WriteTrainReport(context.output_dir, trainer, setup, evaluation, state, resumed_from, session);
+  const TrainResult out{context.output_dir};
+  WriteOrExplain([&] { SaveModel(model, out.model()); });
+  const TrainReport report = WriteTrainReport(out, trainer, setup, evaluation, state, resumed_from, session);
   context.summary = {{"steps", trainer.step()},
-                     {"train_seconds", state.train_seconds},
+                     {"train_seconds", state.seconds},
                      {"heldout_psnr", report.heldout_psnr ? nlohmann::json(*report.heldout_psnr) : nullptr}};
   LogInfo(format(
       "train: {} steps in {:.1f} s ({:.2f} M samples/s, {:.1f} a ray); held-out PSNR {:.2f} dB over {} views ({:.1f} "
       "samples per ray rendered)",
-      trainer.step(), state.train_seconds, session.steps.SamplesPerSecond() / 1e6, session.steps.SamplesPerRay(),
-      Mean(psnrs), psnrs.size(), report.samples_per_ray_rendered));
+      trainer.step(), state.seconds, session.steps.SamplesPerSecond() / 1e6, session.steps.SamplesPerRay(), Mean(psnrs),
+      psnrs.size(), report.samples_per_ray_rendered));
   LogFitWarnings("train", report.warnings);
 }
 

@@ -9,11 +9,13 @@
 
 #include "formats/dataset_import.h"
 #include "nerf/trainer.h"
-#include "pipeline/stage.h"
+#include "stages/stage_results.h"
 
 namespace p2n {
 
 struct TrainOptions {
+  static constexpr const char* kSection = "train";  // its options are train.NAME
+
   std::string preset = "default";  // fast | default | quality: sizes, sample spacing and time budget together
   std::string field = "ngp";       // ngp (hash grid) or vanilla (the seed's positional-encoding MLP)
   std::string scene = "auto";      // bounded, unbounded, forward (nerf_model.h), or auto (ResolveSceneSpace)
@@ -67,18 +69,16 @@ struct TrainOptions {
       "auto: the weight measured best on real captures for unbounded scenes, 0 for bounded ones");
     v("appearance", appearance,
       "on: a colour transform per training photo learnt with the field, for photos that differ in exposure and "
-      "white balance (novel views show the average photo); off by measurement: fox after 5 minutes, held-out "
-      "PSNR 24.56 dB on against 25.83 off, and 26.15 against 25.92 with each held-out photo's transform fitted",
+      "white balance (novel views show the average photo)",
       "", OptionKind::kResult, {"off", "on"});
     v("refine_cameras", refine_cameras,
       "on: each training photo's camera is corrected by a small turn and shift learnt with the field (ngp only); "
-      "train_report.json says how far each moved, and the refined cameras are exported; off by measurement: fox "
-      "after 5 minutes, held-out PSNR 25.27 dB on against 25.76 off",
+      "train_report.json says how far each moved, and the refined cameras are exported; for cameras off by a pixel "
+      "or more",
       "", OptionKind::kResult, {"off", "on"});
     v("error_sampling", error_sampling,
       "on: training pixels are drawn half uniformly and half where the recent error is large (instant-ngp's error "
-      "map), their losses weighted so that the expected gradient is the uniform one's; off by measurement: 5 "
-      "minutes of default, fox 26.59 dB on against 26.62 off, fern 22.30 against 22.26, lego 28.25 against 28.09",
+      "map), their losses weighted so that the expected gradient is the uniform one's",
       "", OptionKind::kResult, {"off", "on"});
     v("eval_interval", eval_interval, "training time between held-out evaluations (metrics.csv rows)", "s");
     v("eval_share", eval_share,
@@ -102,17 +102,15 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
 // The preset's time budget unless one is given.
 double ResolvedTimeBudget(const TrainOptions& options);
 
-class TrainStage : public Stage {
+class TrainStage : public StageOf<TrainResult> {
  public:
-  std::string name() const override { return "train"; }
-  std::string folder() const override { return "30_train"; }
   // 3: photos without alpha learn the background; 4: the default preset's learning rate ends at 0.3 of its start
   // 7: train.scene auto picks forward for forward-facing captures
   // 9: bounded scenes' steps take 2^17 samples in the run's second half; 8: their hash table 2^19, occupancy 256^3
   // 10: a background the import knows stays fixed (auto); runs shorter than kShortBudget take the fast sizes
   // 11: LLFF data is forward only when its cameras face forward
   int format_version() const override { return 11; }
-  std::vector<std::string> upstream() const override { return {"poses"}; }
+  std::vector<std::string> upstream() const override { return {PosesResult::kId.name}; }
   void Run(StageContext& context) const override;
 };
 

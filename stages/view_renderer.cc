@@ -65,9 +65,9 @@ RenderedView RenderSplatView(const Gaussians<float>& splats, const OutputFrame& 
 
 }  // namespace
 
-ViewRenderer SplatRenderer(const fs::path& splat_dir, const ImportedDataset& poses, bool bounded) {
-  const fs::path file = splat_dir / "splats.ply";
-  const SplatReport report = SplatReport::Read(splat_dir / "splat_report.json");
+ViewRenderer SplatRenderer(const SplatResult& splat, const SplatReport& report, const ImportedDataset& poses,
+                           bool bounded) {
+  const fs::path file = splat.splats();
   std::shared_ptr<const Gaussians<float>> splats;
   try {
     splats = std::make_shared<const Gaussians<float>>(ReadSplatPly(file));

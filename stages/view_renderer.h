@@ -12,6 +12,8 @@
 #include "nerf/camera.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
+#include "stages/stage_reports.h"
+#include "stages/stage_results.h"
 
 namespace p2n {
 
@@ -28,8 +30,9 @@ struct ViewRenderer {
 
 // The field, rendered with `options` (its progress callback is replaced by each call's).
 ViewRenderer FieldRenderer(const NerfModel& model, const RenderOptions& options);
-// The splat stage's result in `splat_dir` (splats.ply, splat_report.json); UserError naming a file that cannot be
+// The splats of the splat stage's result `splat` and its `report`; UserError naming splats.ply when it cannot be
 // read. `poses` is the poses stage's transforms.json (LoadTransformsJson), for the splats' frame.
-ViewRenderer SplatRenderer(const std::filesystem::path& splat_dir, const ImportedDataset& poses, bool bounded);
+ViewRenderer SplatRenderer(const SplatResult& splat, const SplatReport& report, const ImportedDataset& poses,
+                           bool bounded);
 
 }  // namespace p2n

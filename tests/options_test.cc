@@ -91,4 +91,19 @@ TEST_CASE("config files: nested or dotted keys, unknown keys rejected with their
   CHECK_THROWS_WITH(config.MergeFile(dir / "missing.json"), Catch::Contains("cannot read config file"));
 }
 
+TEST_CASE("an auto-or-number option's text: auto, a whole number, or neither", "[options]") {
+  std::optional<double> value = 3.0;
+  CHECK(ParseAutoOrNumber("auto", &value));
+  CHECK_FALSE(value);
+  REQUIRE(ParseAutoOrNumber("-12.5", &value));
+  CHECK(value == -12.5);
+  CHECK(ParseAutoOrNumber("2e-3", &value));
+  CHECK(*value == Approx(0.002));
+  for (const char* bad : {"", "Auto", "10abc", "1e999", "nan", "inf", " "}) {
+    INFO(bad);
+    CHECK_FALSE(ParseAutoOrNumber(bad, &value));
+    CHECK_FALSE(value);
+  }
+}
+
 }  // namespace p2n::testing

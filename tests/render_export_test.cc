@@ -193,7 +193,7 @@ TEST_CASE("the splats' depth: the distance along each pixel's ray in normalised 
     camera.world_from_cam(2, 3) = 2;  // OpenGL axes: the camera looks down -z
     WriteSplatPly(dir.path() / "splats.ply", splat);
     WriteJsonAtomic(dir.path() / "splat_report.json", report.ToJson());
-    const RenderedView view = SplatRenderer(dir.path(), poses, true).render(camera, 0.1, 10, {});
+    const RenderedView view = SplatRenderer(SplatResult{dir.path()}, report, poses, true).render(camera, 0.1, 10, {});
     for (int y = 0; y < camera.height; ++y) {
       for (int x = 0; x < camera.width; ++x) {
         const double u = (x + 0.5 - camera.cx) / camera.fx, v = (y + 0.5 - camera.cy) / camera.fy;

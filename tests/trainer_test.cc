@@ -15,6 +15,7 @@
 #include "nerf/ngp_field.h"
 #include "nerf/synthetic_scene.h"
 #include "nerf/trainer.h"
+#include "pipeline/file_util.h"
 #include "test_util.h"
 
 namespace p2n::testing {
