@@ -9,9 +9,9 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "base/file_util.h"
 #include "formats/output_frame.h"
 #include "nerf/heap.h"
-#include "pipeline/file_util.h"
 #include "splat/rasterizer.h"
 #include "splat/splat_ply.h"
 #include "stages/stage_reports.h"

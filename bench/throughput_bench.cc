@@ -130,9 +130,9 @@ int main(int argc, char** argv) {
   std::printf("MLP FLOPs per sample (fwd+bwd)    %.0f\n", mlp_flops);
   // The field's grid as NgpFieldConfig has it, as the default preset trains it (a table of 2^17 entries a level)
   // and as the quality preset does (8 levels of 4 features).
-  for (const auto& [name, layout] :
-       {std::pair("NgpFieldConfig", config.grid), std::pair("default preset", p2n::PresetFor("default").grid),
-        std::pair("quality preset", p2n::PresetFor("quality").grid)}) {
+  for (const auto& [name, layout] : {std::pair("NgpFieldConfig", config.grid),
+                                     std::pair("default preset", p2n::PresetFor(p2n::PresetName::kDefault).grid),
+                                     std::pair("quality preset", p2n::PresetFor(p2n::PresetName::kQuality).grid)}) {
     p2n::NgpFieldConfig measured_config = config;
     measured_config.grid = layout;
     p2n::NgpField<float> measured(measured_config, 1);

@@ -4,11 +4,12 @@
 
 #include <filesystem>
 
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
+#include "stages/sfm_stage.h"
 #include "stages/stages.h"
 
 namespace p2n {
@@ -18,8 +19,8 @@ void AddCommonFlags(CLI::App& app, const OptionRegistry& registry, CommonFlags* 
   app.add_option("-w,--workspace", flags->workspace, "workspace folder (results, logs, cache)")->required();
   app.add_option("--config", flags->config_file, "JSON file of options, nested or as dotted keys");
   app.add_option_function<std::string>(
-      "--colmap", [flags](const std::string& program) { flags->option_text["sfm.colmap"] = program; },
-      "the COLMAP program, when it is not `colmap` on PATH (same as --sfm.colmap)");
+      "--colmap", [flags](const std::string& program) { flags->option_text[OptionKey(&SfmOptions::colmap)] = program; },
+      format("the COLMAP program, when it is not `colmap` on PATH (same as --{})", OptionKey(&SfmOptions::colmap)));
   AddOptionFlags(app, registry, &flags->option_text);
 }
 
@@ -107,8 +108,8 @@ std::string RememberedOptionsText(const Workspace& workspace) {
 
 std::unique_ptr<tbb::global_control> ApplyRunOptions(const Config& config, const fs::path& log_file) {
   const RunOptions options = ReadOptions<RunOptions>(config);
-  SetLogLevel(ParseLogLevel(options.log_level));
-  SetProgressStyle(ParseProgressStyle(options.progress));
+  SetLogLevel(options.log_level);
+  SetProgressStyle(options.progress);
   SetLogFile(log_file);
   if (options.threads == 0) return nullptr;
   return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,

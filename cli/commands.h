@@ -1,6 +1,6 @@
 #pragma once
 // The subcommands of photo2nerf: each is `int RunX(argc, argv)` with argv[0] the subcommand's name. They throw
-// the typed errors of pipeline/errors.h; main() maps them to exit codes.
+// the typed errors of base/errors.h; main() maps them to exit codes.
 
 namespace p2n {
 

@@ -4,13 +4,13 @@
 #include <filesystem>
 #include <fstream>
 
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 #include "cli/cli_options.h"
 #include "cli/commands.h"
 #include "nerf/image_fit.h"
 #include "nerf/plot.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "stages/stages.h"
 

@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
+#include "base/errors.h"
 #include "cli/commands.h"
 #include "nerf/heap.h"
 #include "photo2nerf/version.h"
 #include "pipeline/cancel.h"
-#include "pipeline/errors.h"
 #include "pipeline/log.h"
 #include "pipeline/options.h"
 #include "stages/stages.h"

@@ -6,12 +6,12 @@
 #include <filesystem>
 #include <iostream>
 
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 #include "cli/cli_options.h"
 #include "cli/commands.h"
 #include "formats/dataset_import.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/runner.h"
 #include "stages/stage_reports.h"
@@ -95,7 +95,7 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
     if (force) request.force.push_back(stage);
   }
   if (!photos.empty() && !fs::exists(photos)) throw UserError(format("photo folder '{}' does not exist", photos));
-  if (!photos.empty() && !fs::is_directory(photos) && DatasetKind(photos).empty()) {
+  if (!photos.empty() && !fs::is_directory(photos) && !DetectDataset(photos)) {
     throw UserError(format("'{}' is a file, not a folder; give the folder that holds your photos", photos));
   }
   if (!photos.empty()) {
@@ -143,9 +143,10 @@ int RunStatus(int argc, char** argv) {
   const Runner runner = MakeRunner(workspace.input());
   std::cout << "workspace " << workspace.root().string() << "\n";
   if (workspace.input()) {
-    const std::string kind = DatasetKind(*workspace.input());
-    std::cout << (kind.empty() ? "photos    " : "dataset   ") << workspace.input()->string() << "\n";
-    if (!kind.empty()) std::cout << "          a " << kind << " dataset with cameras: ingest and sfm are not needed\n";
+    const std::optional<DatasetKind> kind = DetectDataset(*workspace.input());
+    std::cout << (kind ? "dataset   " : "photos    ") << workspace.input()->string() << "\n";
+    if (kind)
+      std::cout << "          a " << EnumName(*kind) << " dataset with cameras: ingest and sfm are not needed\n";
   }
   const std::string remembered = RememberedOptionsText(workspace);
   std::cout << "options   " << (remembered.empty() ? "the defaults" : remembered)

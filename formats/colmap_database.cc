@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cstring>
 
-#include "pipeline/errors.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/format.h"
 
 namespace p2n {
 namespace {

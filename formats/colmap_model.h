@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "nerf/camera.h"
+#include "base/camera.h"
 
 namespace p2n {
 

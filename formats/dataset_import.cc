@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
+#include "base/image_io.h"
 #include "formats/colmap_model.h"
 #include "formats/npy.h"
-#include "nerf/image_io.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -165,6 +165,17 @@ void LoadNpz(const fs::path& file, ImportedDataset* out) {
   }
 }
 
+// The .npz file a dataset is: `input` itself, or the (last) one in the folder `input`.
+fs::path NpzFile(const fs::path& input) {
+  fs::path file = input;
+  if (fs::is_directory(input)) {
+    for (const fs::directory_entry& entry : fs::directory_iterator(input)) {
+      if (LowerExtension(entry.path()) == "npz") file = entry.path();
+    }
+  }
+  return file;
+}
+
 }  // namespace
 
 std::vector<PinholeCamera> ImportedDataset::Cameras() const {
@@ -173,51 +184,50 @@ std::vector<PinholeCamera> ImportedDataset::Cameras() const {
   return cameras;
 }
 
-std::string DatasetKind(const fs::path& input) {
-  if (fs::is_regular_file(input) && LowerExtension(input) == "npz") return "npz";
-  if (!fs::is_directory(input)) return "";
-  if (fs::exists(input / "transforms.json")) return "transforms.json";
-  if (fs::exists(input / "transforms_train.json")) return "blender";
-  if (fs::exists(input / "poses_bounds.npy")) return "llff";
-  if (fs::is_directory(input / "images") && fs::is_directory(input / "sparse")) return "colmap";
+std::optional<DatasetKind> DetectDataset(const fs::path& input) {
+  if (fs::is_regular_file(input) && LowerExtension(input) == "npz") return DatasetKind::kNpz;
+  if (!fs::is_directory(input)) return std::nullopt;
+  if (fs::exists(input / "transforms.json")) return DatasetKind::kTransformsJson;
+  if (fs::exists(input / "transforms_train.json")) return DatasetKind::kBlender;
+  if (fs::exists(input / "poses_bounds.npy")) return DatasetKind::kLlff;
+  if (fs::is_directory(input / "images") && fs::is_directory(input / "sparse")) return DatasetKind::kColmap;
   for (const fs::directory_entry& entry : fs::directory_iterator(input)) {
-    if (LowerExtension(entry.path()) == "npz") return "npz";
+    if (LowerExtension(entry.path()) == "npz") return DatasetKind::kNpz;
   }
-  return "";
+  return std::nullopt;
 }
 
 ImportedDataset LoadTransformsJson(const fs::path& file, const fs::path& root) {
   ImportedDataset dataset;
-  dataset.kind = "transforms.json";
   dataset.meta = AddTransforms(root, file, "train", &dataset);
   if (dataset.views.empty()) throw UserError(format("'{}' has no view whose image exists", file.string()));
   return dataset;
 }
 
 ImportedDataset LoadDataset(const fs::path& input) {
+  const std::optional<DatasetKind> kind = DetectDataset(input);
+  if (!kind) throw UserError(format("'{}' is not a dataset with cameras", input.string()));
   ImportedDataset dataset;
-  dataset.kind = DatasetKind(input);
-  if (dataset.kind == "transforms.json") {
-    AddTransforms(input, input / "transforms.json", "train", &dataset);
-  } else if (dataset.kind == "blender") {
-    for (const char* split : kBlenderSplits) {
-      const fs::path file = input / (std::string("transforms_") + split + ".json");
-      if (fs::exists(file)) AddTransforms(input, file, split, &dataset);
-    }
-  } else if (dataset.kind == "llff") {
-    LoadLlff(input, &dataset);
-  } else if (dataset.kind == "colmap") {
-    LoadColmapProject(input, &dataset);
-  } else if (dataset.kind == "npz") {
-    fs::path file = input;
-    if (fs::is_directory(input)) {
-      for (const fs::directory_entry& entry : fs::directory_iterator(input)) {
-        if (LowerExtension(entry.path()) == "npz") file = entry.path();
+  dataset.kind = *kind;
+  switch (*kind) {
+    case DatasetKind::kTransformsJson:
+      AddTransforms(input, input / "transforms.json", "train", &dataset);
+      break;
+    case DatasetKind::kBlender:
+      for (const char* split : kBlenderSplits) {
+        const fs::path file = input / (std::string("transforms_") + split + ".json");
+        if (fs::exists(file)) AddTransforms(input, file, split, &dataset);
       }
-    }
-    LoadNpz(file, &dataset);
-  } else {
-    throw UserError(format("'{}' is not a dataset with cameras", input.string()));
+      break;
+    case DatasetKind::kLlff:
+      LoadLlff(input, &dataset);
+      break;
+    case DatasetKind::kColmap:
+      LoadColmapProject(input, &dataset);
+      break;
+    case DatasetKind::kNpz:
+      LoadNpz(NpzFile(input), &dataset);
+      break;
   }
   if (dataset.views.empty()) throw UserError(format("the dataset '{}' has no usable view", input.string()));
   // Output names: the source file names, made unique by their folder where two share one (Blender splits).

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,7 +25,7 @@ struct ImportedView {
 };
 
 struct ImportedDataset {
-  std::string kind;  // "transforms.json", "blender", "llff", "colmap", "npz"
+  DatasetKind kind = DatasetKind::kTransformsJson;
   std::vector<ImportedView> views;
   std::vector<Eigen::Vector3d> points;  // sparse points, when the dataset has them
   std::vector<std::array<uint8_t, 3>> colours;
@@ -35,8 +36,8 @@ struct ImportedDataset {
   std::vector<PinholeCamera> Cameras() const;  // every view's, in order
 };
 
-// The kind of dataset at `input` ("" for a plain photo folder).
-std::string DatasetKind(const std::filesystem::path& input);
+// The kind of dataset at `input`; none for a plain photo folder.
+std::optional<DatasetKind> DetectDataset(const std::filesystem::path& input);
 // Reads the cameras (not the pixels of image files) of a dataset; UserError naming the file and field.
 ImportedDataset LoadDataset(const std::filesystem::path& input);
 // One transforms.json (with its frames' split, near and far and its meta fields) whose image paths must stay

@@ -2,9 +2,9 @@
 
 #include <cstring>
 
+#include "base/file_util.h"
+#include "base/format.h"
 #include "formats/ply.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 
 namespace p2n {
 

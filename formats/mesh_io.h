@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "nerf/mesh.h"
+#include "base/triangle_mesh.h"
 
 namespace p2n {
 

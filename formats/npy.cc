@@ -8,8 +8,8 @@
 #include <regex>
 #include <sstream>
 
-#include "pipeline/errors.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/format.h"
 
 namespace p2n {
 namespace {

@@ -4,9 +4,9 @@
 
 #include <cmath>
 
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 
 namespace p2n {
 
@@ -36,10 +36,10 @@ CameraView OutputFrame::Camera(const CameraView& view) const {
   return out;
 }
 
-OutputFrame MakeOutputFrame(const std::string& frame, const ImportedDataset& poses) {
+OutputFrame MakeOutputFrame(FrameKind kind, const ImportedDataset& poses) {
   OutputFrame out;
-  out.name = frame;
-  if (frame == "normalized") {
+  out.kind = kind;
+  if (kind == FrameKind::kNormalized) {
     out.description = "frame: normalized (the training frame of 20_poses/transforms.json)";
     return out;
   }

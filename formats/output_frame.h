@@ -9,15 +9,24 @@
 #include <filesystem>
 #include <string>
 
+#include "base/enum_names.h"
 #include "formats/dataset_import.h"
 
 namespace p2n {
+
+// Which frame: COLMAP's world or the dataset's (source), or the training frame (normalized).
+enum class FrameKind { kSource, kNormalized };
+template <>
+struct EnumNames<FrameKind> {
+  static constexpr std::pair<FrameKind, const char*> kValues[] = {{FrameKind::kSource, "source"},
+                                                                  {FrameKind::kNormalized, "normalized"}};
+};
 
 // The similarity from the normalised frame to the one the files are written in.
 struct OutputFrame {
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // out_from_normalized, scaled
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
-  std::string name = "normalized";  // "normalized" or "source"
+  FrameKind kind = FrameKind::kNormalized;
   std::string description;
 
   Eigen::Vector3f Point(const Eigen::Vector3f& p) const;
@@ -29,8 +38,8 @@ struct OutputFrame {
   CameraView Camera(const CameraView& view) const;
 };
 
-// "normalized" or "source" (the inverse of the applied_transform of the poses stage's transforms.json, read by
+// The frame `kind` of the poses stage's transforms.json (source: the inverse of its applied_transform, read by
 // LoadTransformsJson); UserError naming the file when that cannot be inverted.
-OutputFrame MakeOutputFrame(const std::string& frame, const ImportedDataset& poses);
+OutputFrame MakeOutputFrame(FrameKind kind, const ImportedDataset& poses);
 
 }  // namespace p2n

@@ -6,9 +6,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 
 namespace p2n {
 namespace {

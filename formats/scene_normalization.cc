@@ -6,9 +6,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/errors.h"
+#include "base/float_image.h"
 #include "formats/camera_geometry.h"
-#include "nerf/float_image.h"
-#include "pipeline/errors.h"
 
 namespace p2n {
 namespace {

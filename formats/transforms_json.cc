@@ -7,10 +7,10 @@
 #include <algorithm>
 #include <cmath>
 
-#include "nerf/image_io.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
+#include "base/image_io.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -83,7 +83,7 @@ nlohmann::json MetaJson(const TransformsMeta& meta) {
                          {"applied_transform", MatrixJson(n.normalized_from_world.topRows<3>())},
                          {"applied_scale", n.scale},
                          {"normalization", {{"centre_from", n.centre_from}, {"up_from", n.up_from}}}};
-  if (!meta.dataset_kind.empty()) json["dataset"] = {{"kind", meta.dataset_kind}, {"path", meta.dataset_path}};
+  if (meta.dataset_kind) json["dataset"] = {{"kind", EnumName(*meta.dataset_kind)}, {"path", meta.dataset_path}};
   if (meta.background) json["background"] = *meta.background;
   if (!meta.heldout_rule.empty()) json["heldout_rule"] = meta.heldout_rule;
   if (!meta.frame.empty()) json.update({{"frame", meta.frame}, {"cameras_refined", meta.cameras_refined}});
@@ -154,7 +154,9 @@ TransformsMeta ReadMeta(const nlohmann::json& json, const fs::path& file) {
     n.up_from = json["normalization"].value("up_from", "");
   }
   if (json.contains("dataset")) {
-    meta.dataset_kind = json["dataset"].value("kind", "");
+    const std::string kind = json["dataset"].value("kind", "");
+    meta.dataset_kind = EnumFromName<DatasetKind>(kind);
+    if (!meta.dataset_kind) Bad(file, "dataset.kind", format("is '{}', not {}", kind, EnumNamesText<DatasetKind>()));
     meta.dataset_path = json["dataset"].value("path", "");
   }
   if (json.contains("background") && !json["background"].is_null()) {

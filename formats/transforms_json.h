@@ -15,10 +15,22 @@
 #include <string>
 #include <vector>
 
+#include "base/camera.h"
+#include "base/enum_names.h"
 #include "formats/scene_normalization.h"
-#include "nerf/camera.h"
 
 namespace p2n {
+
+// The kinds of dataset with cameras that the import stage reads (dataset_import.h).
+enum class DatasetKind { kTransformsJson, kBlender, kLlff, kColmap, kNpz };
+template <>
+struct EnumNames<DatasetKind> {
+  static constexpr std::pair<DatasetKind, const char*> kValues[] = {{DatasetKind::kTransformsJson, "transforms.json"},
+                                                                    {DatasetKind::kBlender, "blender"},
+                                                                    {DatasetKind::kLlff, "llff"},
+                                                                    {DatasetKind::kColmap, "colmap"},
+                                                                    {DatasetKind::kNpz, "npz"}};
+};
 
 struct CameraView {
   std::string file_path;  // as written in transforms.json, relative to it
@@ -33,7 +45,8 @@ struct TransformsMeta {
   // applied_transform and applied_scale: the similarity from the source world (COLMAP's, or the dataset's) to
   // the frame of the views; centre_from and up_from: how it was chosen ("" when it was not).
   Normalization normalization;
-  std::string dataset_kind, dataset_path;  // the dataset imported ("blender", "llff", ...); empty for photos
+  std::optional<DatasetKind> dataset_kind;  // the dataset imported; none for photos
+  std::string dataset_path;
   // The colour behind the scene when the import knows it (the colour transparent images were composited on, or the
   // plain one every image's border shows); none: unknown, learnt from photos (white stands in).
   std::optional<std::array<float, 3>> background;

@@ -5,7 +5,7 @@
 #include <memory>
 #include <string>
 
-#include "nerf/float_image.h"
+#include "base/float_image.h"
 
 namespace p2n {
 

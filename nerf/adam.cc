@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "nerf/config_check.h"
+#include "base/config_check.h"
 
 namespace p2n {
 

@@ -10,7 +10,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "nerf/binary_io.h"
+#include "base/binary_io.h"
 #include "nerf/touch_marks.h"
 
 namespace p2n {

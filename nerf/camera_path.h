@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "nerf/camera.h"
+#include "base/camera.h"
 
 namespace p2n {
 

@@ -12,7 +12,7 @@
 
 #include <vector>
 
-#include "nerf/camera.h"
+#include "base/camera.h"
 #include "nerf/rays.h"
 
 namespace p2n {

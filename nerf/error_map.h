@@ -13,7 +13,7 @@
 #include <utility>
 #include <vector>
 
-#include "nerf/binary_io.h"
+#include "base/binary_io.h"
 
 namespace p2n {
 

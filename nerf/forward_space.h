@@ -13,7 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "nerf/camera.h"
+#include "base/camera.h"
 #include "nerf/rays.h"
 
 namespace p2n {

@@ -11,10 +11,10 @@
 #include <random>
 #include <sstream>
 
+#include "base/image_io.h"
 #include "nerf/adam.h"
 #include "nerf/denormals.h"
 #include "nerf/encoding.h"
-#include "nerf/image_io.h"
 #include "nerf/mlp.h"
 
 namespace p2n {

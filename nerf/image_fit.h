@@ -12,7 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "nerf/float_image.h"
+#include "base/float_image.h"
 
 namespace p2n {
 

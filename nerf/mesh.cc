@@ -11,9 +11,9 @@
 #include <mutex>
 #include <stdexcept>
 
-#include "nerf/config_check.h"
+#include "base/config_check.h"
+#include "base/float_image.h"
 #include "nerf/denormals.h"
-#include "nerf/float_image.h"
 
 namespace p2n {
 namespace {

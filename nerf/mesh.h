@@ -9,15 +9,18 @@
 #include <functional>
 #include <vector>
 
+#include "base/enum_names.h"
+#include "base/triangle_mesh.h"
 #include "nerf/nerf_model.h"
 
 namespace p2n {
 
-struct Mesh {
-  std::vector<Eigen::Vector3f> positions;  // world units of the normalised frame
-  std::vector<Eigen::Vector3f> normals;    // unit, pointing out of the surface (down the density gradient)
-  std::vector<std::array<uint8_t, 3>> colours;
-  std::vector<std::array<uint32_t, 3>> triangles;  // counter-clockwise seen from outside
+// The cube meshed (export.region): the whole scene box, or a cube round what the views look at (FitCube).
+enum class MeshRegion { kAuto, kBox, kFocus };
+template <>
+struct EnumNames<MeshRegion> {
+  static constexpr std::pair<MeshRegion, const char*> kValues[] = {
+      {MeshRegion::kAuto, "auto"}, {MeshRegion::kBox, "box"}, {MeshRegion::kFocus, "focus"}};
 };
 
 struct MeshOptions {

@@ -4,7 +4,7 @@
 #include <cstring>
 #include <fstream>
 
-#include "pipeline/file_util.h"
+#include "base/file_util.h"
 
 namespace p2n {
 namespace {

@@ -16,7 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "nerf/binary_io.h"
+#include "base/binary_io.h"
 #include "nerf/forward_space.h"
 #include "nerf/occupancy_grid.h"
 #include "nerf/radiance_field.h"

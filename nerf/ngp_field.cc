@@ -5,7 +5,7 @@
 #include <type_traits>
 #include <utility>
 
-#include "nerf/config_check.h"
+#include "base/config_check.h"
 #include "nerf/render_mlp.h"
 #include "nerf/spherical_harmonics.h"
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "nerf/float_image.h"
+#include "base/float_image.h"
 
 namespace p2n {
 

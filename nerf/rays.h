@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <optional>
 
-#include "nerf/camera.h"
+#include "base/camera.h"
 
 namespace p2n {
 

@@ -7,7 +7,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "nerf/config_check.h"
+#include "base/config_check.h"
 #include "nerf/denormals.h"
 #include "nerf/ray_march.h"
 #include "nerf/volume_rendering.h"

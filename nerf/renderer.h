@@ -9,8 +9,8 @@
 #include <random>
 #include <vector>
 
-#include "nerf/camera.h"
-#include "nerf/float_image.h"
+#include "base/camera.h"
+#include "base/float_image.h"
 #include "nerf/nerf_model.h"
 
 namespace p2n {

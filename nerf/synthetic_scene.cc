@@ -10,7 +10,7 @@
 #include <random>
 #include <stdexcept>
 
-#include "nerf/image_io.h"
+#include "base/image_io.h"
 
 namespace p2n {
 namespace {

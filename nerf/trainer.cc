@@ -10,9 +10,9 @@
 #include <stdexcept>
 #include <utility>
 
+#include "base/config_check.h"
 #include "nerf/appearance.h"
 #include "nerf/camera_refinement.h"
-#include "nerf/config_check.h"
 #include "nerf/denormals.h"
 #include "nerf/distortion_loss.h"
 #include "nerf/random_streams.h"
@@ -96,7 +96,6 @@ void TrainerOptions::Check() const {
              min_batch_rays);
   CheckField(learning_rate > 0, kWhat, "learning_rate", "be positive", learning_rate);
   CheckField(final_learning_rate > 0, kWhat, "final_learning_rate", "be positive", final_learning_rate);
-  CheckField(loss == "mse" || loss == "huber", kWhat, "loss", "be mse or huber", loss);
   CheckField(distortion_weight >= 0, kWhat, "distortion_weight", "be at least 0", distortion_weight);
   CheckField(min_transmittance >= 0 && min_transmittance < 1, kWhat, "min_transmittance", "be in [0, 1)",
              min_transmittance);
@@ -321,7 +320,7 @@ void Trainer::BackpropagateChunk(const RayBatch& batch, const std::vector<Ray>& 
   }
   Eigen::MatrixXf d_density = Eigen::MatrixXf::Zero(1, n), d_colour = Eigen::MatrixXf::Zero(3, n);
   const float scale = 1.0f / (3.0f * static_cast<float>(rays.size()));
-  const bool huber = options_.loss == "huber";
+  const bool huber = options_.loss == PhotometricLoss::kHuber;
   const bool appearance = !appearance_.empty() && !batch.views.empty();
   if (appearance) chunk->d_appearance.assign(appearance_.size(), 0.0f);
   for (size_t r = 0; r < chunk->count; ++r) {

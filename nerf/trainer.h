@@ -17,41 +17,23 @@
 
 #include <nlohmann/json.hpp>
 
+#include "base/camera.h"
+#include "base/enum_names.h"
+#include "base/float_image.h"
+#include "base/posed_image.h"
 #include "nerf/adam.h"
-#include "nerf/camera.h"
 #include "nerf/error_map.h"
-#include "nerf/float_image.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
 
 namespace p2n {
 
-// One posed image. Cameras are in the normalised world (transforms.json's frame); pixels are 8-bit RGB or
-// RGBA (straight alpha), row-major.
-struct TrainView {
-  PinholeCamera camera;
-  double near = -1, far = -1;  // world units; negative: the whole box
-  int channels = 3;
-  std::vector<uint8_t> pixels;
-  std::string name;
-
-  // Channel c (0-2) of a pixel (index y * width + x) as a float in [0, 1], over `background` by its alpha.
-  float OnBackground(size_t pixel, int c, float background) const {
-    const uint8_t* value = pixels.data() + pixel * channels;
-    const float alpha = channels == 4 ? value[3] / 255.0f : 1.0f;
-    return alpha * (value[c] / 255.0f) + (1 - alpha) * background;
-  }
-};
-
-// The photo as floats (RGB), composited on `background` where it has alpha: what a render is compared with.
-FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& background);
-// The first of `views` with an alpha channel (composited on a background the trainers must keep), or null.
-const TrainView* FirstWithAlpha(const std::vector<TrainView>& views);
-
-struct TrainingData {
-  std::vector<TrainView> train, heldout;
-  std::array<float, 3> background{1, 1, 1};  // behind the scene: the known colour, or where a learnt one starts
-  bool background_known = false;             // the images were rendered or composited on `background`
+// The photometric loss of a ray: squared error, or Huber's (delta 0.1).
+enum class PhotometricLoss { kMse, kHuber };
+template <>
+struct EnumNames<PhotometricLoss> {
+  static constexpr std::pair<PhotometricLoss, const char*> kValues[] = {{PhotometricLoss::kMse, "mse"},
+                                                                        {PhotometricLoss::kHuber, "huber"}};
 };
 
 struct TrainerOptions {
@@ -71,7 +53,7 @@ struct TrainerOptions {
   int min_batch_rays = 256, max_batch_rays = 16384;
   double learning_rate = 1e-2;
   double final_learning_rate = 1e-3;  // reached at the end (exponential decay)
-  std::string loss = "mse";           // "mse" or "huber" (delta 0.1)
+  PhotometricLoss loss = PhotometricLoss::kMse;
   // Weight of mip-NeRF 360's distortion loss (distortion_loss.h) per ray, in the sampler's metric; 0: off.
   double distortion_weight = 0;
   float min_transmittance = 1e-4f;

@@ -8,23 +8,6 @@
 
 namespace p2n {
 
-FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& background) {
-  FloatImage image{view.camera.width, view.camera.height, 3, {}};
-  const size_t pixels = size_t(image.width) * image.height;
-  image.pixels.resize(3 * pixels);
-  for (size_t i = 0; i < pixels; ++i) {
-    for (int c = 0; c < 3; ++c) image.pixels[3 * i + c] = view.OnBackground(i, c, background[c]);
-  }
-  return image;
-}
-
-const TrainView* FirstWithAlpha(const std::vector<TrainView>& views) {
-  for (const TrainView& view : views) {
-    if (view.channels == 4) return &view;
-  }
-  return nullptr;
-}
-
 namespace {
 
 // n colours as an image one pixel high.

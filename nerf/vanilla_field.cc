@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-#include "nerf/config_check.h"
+#include "base/config_check.h"
 
 namespace p2n {
 

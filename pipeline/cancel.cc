@@ -3,7 +3,7 @@
 #include <atomic>
 #include <csignal>
 
-#include "pipeline/errors.h"
+#include "base/errors.h"
 
 namespace p2n {
 namespace {

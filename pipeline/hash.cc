@@ -6,7 +6,7 @@
 #include <fstream>
 #include <vector>
 
-#include "pipeline/errors.h"
+#include "base/errors.h"
 
 namespace p2n {
 

@@ -6,8 +6,8 @@
 #include <fstream>
 #include <mutex>
 
-#include "pipeline/errors.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/format.h"
 #include "pipeline/progress.h"
 
 namespace p2n {
@@ -48,14 +48,6 @@ std::string UtcTimestamp() {
   char text[32];
   std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%SZ", &utc);
   return text;
-}
-
-LogLevel ParseLogLevel(std::string_view text) {
-  if (text == "debug") return LogLevel::kDebug;
-  if (text == "info") return LogLevel::kInfo;
-  if (text == "warning") return LogLevel::kWarning;
-  if (text == "error") return LogLevel::kError;
-  throw UserError(format("unknown log level '{}': use debug, info, warning or error", text));
 }
 
 void SetLogLevel(LogLevel level) {

@@ -5,12 +5,19 @@
 #include <string>
 #include <string_view>
 
+#include "base/enum_names.h"
+
 namespace p2n {
 
 enum class LogLevel { kDebug = 0, kInfo = 1, kWarning = 2, kError = 3 };
+template <>
+struct EnumNames<LogLevel> {
+  static constexpr std::pair<LogLevel, const char*> kValues[] = {{LogLevel::kDebug, "debug"},
+                                                                 {LogLevel::kInfo, "info"},
+                                                                 {LogLevel::kWarning, "warning"},
+                                                                 {LogLevel::kError, "error"}};
+};
 
-// Parses "debug", "info", "warning", "error"; throws UserError otherwise.
-LogLevel ParseLogLevel(std::string_view text);
 // Console threshold; the log file always receives kInfo and above (kDebug too when the console does).
 void SetLogLevel(LogLevel level);
 // Appends every later message to `path` (created with its folder); an empty path closes the file.

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <set>
 
-#include "pipeline/errors.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/format.h"
 #include "pipeline/hash.h"
 
 namespace p2n {

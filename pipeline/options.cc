@@ -5,8 +5,8 @@
 #include <cmath>
 #include <fstream>
 
-#include "pipeline/errors.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/format.h"
 
 namespace p2n {
 namespace {
@@ -83,6 +83,9 @@ void Config::Set(std::string_view key, const nlohmann::json& value, std::string_
   const OptionSpec* spec = registry_->Find(key);
   if (spec == nullptr) throw UserError(UnknownKeyMessage(*registry_, key, origin));
   const nlohmann::json& expected = spec->default_value;
+  if (expected.is_boolean() && value.is_string()) {  // "on" in a config file, as on a command line
+    return SetFromText(key, value.get<std::string>(), origin);
+  }
   const bool type_ok = (expected.is_boolean() && value.is_boolean()) ||
                        (expected.is_number_integer() && value.is_number_integer()) ||
                        (expected.is_number_float() && value.is_number()) || (expected.is_string() && value.is_string());
@@ -202,8 +205,15 @@ bool ParseAutoOrNumber(const std::string& text, std::optional<double>* value) {
   }
 }
 
-void CheckOption(bool condition, std::string_view key, std::string_view rule) {
-  if (!condition) throw UserError(format("option {} {}", key, rule));
+std::string AutoOrNumberText(const AutoOrNumber& option) {
+  return option.value ? nlohmann::json(*option.value).dump() : "auto";
 }
+
+std::string OptionKeyOf(std::string_view section, const char* name) {
+  if (name == nullptr) throw InternalError(format("OptionKey: a field that is not one of the {} options", section));
+  return std::string(section).append(".").append(name);
+}
+
+void FailOption(std::string_view key, std::string_view rule) { throw UserError(format("option {} {}", key, rule)); }
 
 }  // namespace p2n

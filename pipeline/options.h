@@ -4,16 +4,18 @@
 // on every field, and a member template Visit() that names its fields once:
 //
 //   struct IngestOptions {
+//     static constexpr const char* kSection = "ingest";  // its options are ingest.NAME
 //     int max_image_size = 0;  // Longest side in pixels after downscaling; 0 keeps the full size.
 //     template <class V> void Visit(V& v) {
 //       v("max_image_size", max_image_size, "longest image side after downscaling; 0 keeps it", "px");
 //     }
-//     void Check() const;  // throws UserError naming the field and the rule
+//     void Check() const;  // CheckOption(*this, max_image_size, rule holds, "must ..."): UserError naming the key
 //   };
 //
-// RegisterOptions<IngestOptions>(registry, "ingest") declares the keys with the struct's defaults;
-// ReadOptions<IngestOptions>(config, "ingest") fills a struct from a resolved Config and checks it. A struct that
-// names its section (static constexpr const char* kSection = "ingest") is read with ReadOptions<IngestOptions>(config).
+// A field is a bool, a number, a string, an enum with EnumNames (base/enum_names.h: its names are the option's
+// choices) or an AutoOrNumber. RegisterOptions<IngestOptions>(registry, "ingest") declares the keys with the
+// struct's defaults; ReadOptions<IngestOptions>(config) fills a struct from a resolved Config and checks it;
+// OptionKey names a field's key wherever a message needs it.
 
 #include <nlohmann/json.hpp>
 
@@ -22,7 +24,10 @@
 #include <set>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
+
+#include "base/enum_names.h"
 
 namespace p2n {
 
@@ -90,6 +95,19 @@ class Config {
   std::set<std::string> explicit_keys_;
 };
 
+// An option that is "auto" or a number (train.distortion, render.elevation): the number, or nothing for auto.
+// Given as text ("auto", "0.01"); reading it refuses other text, naming the key.
+struct AutoOrNumber {
+  std::optional<double> value;
+};
+
+// An "auto or a number" option's text: *value is nothing for "auto", else the number the whole text is. False when
+// it is neither.
+bool ParseAutoOrNumber(const std::string& text, std::optional<double>* value);
+std::string AutoOrNumberText(const AutoOrNumber& option);
+// Throws UserError "option KEY RULE".
+[[noreturn]] void FailOption(std::string_view key, std::string_view rule);
+
 namespace internal {
 
 struct RegisterVisitor {
@@ -98,7 +116,14 @@ struct RegisterVisitor {
   template <class T>
   void operator()(const char* name, const T& field, const char* help, const char* unit = "",
                   OptionKind kind = OptionKind::kResult, std::vector<std::string> choices = {}) {
-    registry.Add({std::string(section) + "." + name, nlohmann::json(field), help, unit, kind, std::move(choices)});
+    std::string key = std::string(section).append(".").append(name);
+    if constexpr (std::is_enum_v<T>) {
+      registry.Add({std::move(key), EnumName(field), help, unit, kind, EnumNameList<T>()});
+    } else if constexpr (std::is_same_v<T, AutoOrNumber>) {
+      registry.Add({std::move(key), AutoOrNumberText(field), help, unit, kind, std::move(choices)});
+    } else {
+      registry.Add({std::move(key), nlohmann::json(field), help, unit, kind, std::move(choices)});
+    }
   }
 };
 
@@ -108,7 +133,28 @@ struct ReadVisitor {
   template <class T>
   void operator()(const char* name, T& field, const char*, const char* = "", OptionKind = OptionKind::kResult,
                   const std::vector<std::string>& = {}) {
-    field = config.Get<T>(std::string(section) + "." + name);
+    const std::string key = std::string(section).append(".").append(name);
+    if constexpr (std::is_enum_v<T>) {
+      field = *EnumFromName<T>(config.Get<std::string>(key));  // Config::Set allows the names alone
+    } else if constexpr (std::is_same_v<T, AutoOrNumber>) {
+      const std::string text = config.Get<std::string>(key);
+      if (!ParseAutoOrNumber(text, &field.value)) {
+        FailOption(key, std::string("must be auto or a number, not '").append(text).append("'"));
+      }
+    } else {
+      field = config.Get<T>(key);
+    }
+  }
+};
+
+// Finds the name a struct's Visit() gives the field at `target`.
+struct NameFinder {
+  const void* target;
+  const char* found = nullptr;
+  template <class T>
+  void operator()(const char* name, const T& field, const char*, const char* = "", OptionKind = OptionKind::kResult,
+                  const std::vector<std::string>& = {}) {
+    if (static_cast<const void*>(&field) == target) found = name;
   }
 };
 
@@ -135,11 +181,27 @@ Options ReadOptions(const Config& config) {
   return ReadOptions<Options>(config, Options::kSection);
 }
 
-// An "auto or a number" option's text (train.distortion, render.elevation): *value is nothing for "auto", else the
-// number the whole text is. False when it is neither.
-bool ParseAutoOrNumber(const std::string& text, std::optional<double>* value);
+// The dotted key of `field`, a member of `options`, from the struct's declaration: in TrainOptions::Check(),
+// OptionKey(*this, steps) is "train.steps". InternalError when `field` is not one of its options.
+std::string OptionKeyOf(std::string_view section, const char* name);
+template <class Options, class T>
+std::string OptionKey(const Options& options, const T& field) {
+  internal::NameFinder finder{&field};
+  const_cast<Options&>(options).Visit(finder);  // a visit that only reads
+  return OptionKeyOf(Options::kSection, finder.found);
+}
+// The key of a member: OptionKey(&SfmOptions::colmap) is "sfm.colmap".
+template <class Options, class T>
+std::string OptionKey(T Options::*member) {
+  Options options;
+  return OptionKey(options, options.*member);
+}
 
-// Throws UserError "option KEY RULE" when `condition` is false; for XxxOptions::Check().
-void CheckOption(bool condition, std::string_view key, std::string_view rule);
+// Throws UserError "option KEY RULE" when `condition` is false; for XxxOptions::Check(), which names the field
+// (CheckOption(*this, steps, steps >= 0, "must be 0 (no limit) or positive")) and never spells its key.
+template <class Options, class T>
+void CheckOption(const Options& options, const T& field, bool condition, std::string_view rule) {
+  if (!condition) FailOption(OptionKey(options, field), rule);
+}
 
 }  // namespace p2n

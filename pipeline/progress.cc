@@ -4,8 +4,8 @@
 
 #include <cstdio>
 
-#include "pipeline/errors.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/format.h"
 
 namespace p2n {
 namespace {
@@ -28,14 +28,6 @@ std::string Duration(double seconds) {
 }
 
 }  // namespace
-
-ProgressStyle ParseProgressStyle(std::string_view text) {
-  if (text == "auto") return ProgressStyle::kAuto;
-  if (text == "bar") return ProgressStyle::kBar;
-  if (text == "plain") return ProgressStyle::kPlain;
-  if (text == "none") return ProgressStyle::kNone;
-  throw UserError(format("unknown progress style '{}': use auto, bar, plain or none", text));
-}
 
 void SetProgressStyle(ProgressStyle style) { g_style = style; }
 

@@ -9,11 +9,19 @@
 #include <string>
 #include <string_view>
 
+#include "base/enum_names.h"
+
 namespace p2n {
 
 enum class ProgressStyle { kAuto, kBar, kPlain, kNone };
+template <>
+struct EnumNames<ProgressStyle> {
+  static constexpr std::pair<ProgressStyle, const char*> kValues[] = {{ProgressStyle::kAuto, "auto"},
+                                                                      {ProgressStyle::kBar, "bar"},
+                                                                      {ProgressStyle::kPlain, "plain"},
+                                                                      {ProgressStyle::kNone, "none"}};
+};
 
-ProgressStyle ParseProgressStyle(std::string_view text);  // auto|bar|plain|none; UserError otherwise
 void SetProgressStyle(ProgressStyle style);
 // Put before every label from now on: the runner's "[4/7] " says where a stage is in the whole run.
 void SetProgressPrefix(std::string prefix);

@@ -2,11 +2,11 @@
 
 #include <chrono>
 
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 #include "photo2nerf/version.h"
 #include "pipeline/cancel.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
 

@@ -12,9 +12,9 @@
 #include <fstream>
 #include <thread>
 
+#include "base/errors.h"
+#include "base/format.h"
 #include "pipeline/cancel.h"
-#include "pipeline/errors.h"
-#include "pipeline/format.h"
 
 extern char** environ;
 

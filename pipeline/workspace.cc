@@ -7,9 +7,9 @@
 #include <cerrno>
 #include <cstring>
 
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 
 namespace p2n {
 namespace fs = std::filesystem;

@@ -7,7 +7,7 @@
 
 #include <Eigen/Core>
 
-#include "nerf/camera.h"
+#include "base/camera.h"
 #include "splat/gaussians.h"
 
 namespace p2n {

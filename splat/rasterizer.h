@@ -10,7 +10,7 @@
 #include <array>
 #include <vector>
 
-#include "nerf/camera.h"
+#include "base/camera.h"
 #include "splat/gaussians.h"
 #include "splat/projection.h"
 

@@ -7,7 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "pipeline/file_util.h"
+#include "base/file_util.h"
 
 namespace p2n {
 namespace {

@@ -6,8 +6,8 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "nerf/camera.h"
-#include "nerf/config_check.h"
+#include "base/camera.h"
+#include "base/config_check.h"
 
 namespace p2n {
 

@@ -11,10 +11,10 @@
 #include <random>
 #include <vector>
 
+#include "base/binary_io.h"
+#include "base/float_image.h"
+#include "base/posed_image.h"
 #include "nerf/adam.h"
-#include "nerf/binary_io.h"
-#include "nerf/float_image.h"
-#include "nerf/trainer.h"
 #include "splat/gaussians.h"
 #include "splat/rasterizer.h"
 #include "splat/ssim_loss.h"

@@ -3,9 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
+#include "stages/stage_results.h"
 
 namespace p2n {
 namespace {
@@ -32,8 +33,9 @@ nlohmann::json CameraRefinementJson(const std::vector<std::string>& names, const
   }
   return {{"enabled", true},
           {"correction_is",
-           "a rotation vector about the camera's centre (radians, world axes), then a shift of the "
-           "centre; normalised units, the frame of 20_poses/transforms.json"},
+           format("a rotation vector about the camera's centre (radians, world axes), then a shift of the centre; "
+                  "normalised units, the frame of {}",
+                  WorkspaceRelative<PosesResult>().transforms().string())},
           {"rotation_degrees_median", Median(degrees)},
           {"rotation_degrees_max", *std::max_element(degrees.begin(), degrees.end())},
           {"shift_median", Median(shifts)},
@@ -41,14 +43,12 @@ nlohmann::json CameraRefinementJson(const std::vector<std::string>& names, const
           {"per_view", per_view}};
 }
 
-std::map<std::string, CameraCorrection> ReadCameraCorrections(const std::filesystem::path& train_report) {
+std::map<std::string, CameraCorrection> CameraCorrections(const nlohmann::json& camera_refinement,
+                                                          const std::filesystem::path& train_report) {
   std::map<std::string, CameraCorrection> corrections;
-  const nlohmann::json report = ReadJsonFile(train_report);
   try {
-    if (!report.contains("camera_refinement") || !report["camera_refinement"].value("enabled", false)) {
-      return corrections;
-    }
-    for (const nlohmann::json& view : report["camera_refinement"].at("per_view")) {
+    if (!camera_refinement.is_object() || !camera_refinement.value("enabled", false)) return corrections;
+    for (const nlohmann::json& view : camera_refinement.at("per_view")) {
       const CameraCorrection correction = view.at("correction").get<CameraCorrection>();
       if (!std::all_of(correction.begin(), correction.end(), [](float v) { return std::isfinite(v); })) {
         throw UserError(format("'{}': the camera correction of {} is not finite; rerun the train stage",

@@ -21,8 +21,10 @@ using CameraCorrection = std::array<float, kPoseParams>;
 // was off): every view's correction, turn (degrees) and shift (normalised units), with their medians and maxima.
 nlohmann::json CameraRefinementJson(const std::vector<std::string>& names, const std::vector<float>& corrections);
 
-// Each training view's correction by image name, from `train_report` (empty when refinement was off or the file
-// predates it); UserError naming the file when the section is malformed.
-std::map<std::string, CameraCorrection> ReadCameraCorrections(const std::filesystem::path& train_report);
+// Each training view's correction by image name, from the section `camera_refinement` of the file `train_report`
+// (TrainReport::camera_refinement; empty when refinement was off, or null when the file predates it); UserError
+// naming the file when the section is malformed.
+std::map<std::string, CameraCorrection> CameraCorrections(const nlohmann::json& camera_refinement,
+                                                          const std::filesystem::path& train_report);
 
 }  // namespace p2n

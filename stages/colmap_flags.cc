@@ -4,9 +4,9 @@
 #include <mutex>
 #include <regex>
 
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 #include "pipeline/subprocess.h"
 
 namespace p2n {

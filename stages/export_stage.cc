@@ -5,6 +5,9 @@
 #include <cmath>
 #include <map>
 
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 #include "formats/dataset_import.h"
 #include "formats/mesh_io.h"
 #include "formats/output_frame.h"
@@ -14,9 +17,6 @@
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
 #include "pipeline/cancel.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
 #include "stages/camera_corrections.h"
@@ -53,10 +53,10 @@ void WriteCameras(const fs::path& path, const ImportedDataset& dataset, const Ou
   transforms.Write(path);
 }
 
-// export.region resolved: "box" or "focus".
-std::string RegionKind(const NerfModel& model, const ExportOptions& options) {
-  if (options.region != "auto") return options.region;
-  return model.space == SceneSpace::kBounded ? "box" : "focus";
+// export.region resolved: box or focus.
+MeshRegion RegionKind(const NerfModel& model, const ExportOptions& options) {
+  if (options.region != MeshRegion::kAuto) return options.region;
+  return model.space == SceneSpace::kBounded ? MeshRegion::kBox : MeshRegion::kFocus;
 }
 
 // Where the training views' rays end (their median depth), where they are opaque.
@@ -76,7 +76,7 @@ DepthSamples SampleDepths(const StageContext& context, const fs::path& model_fil
   const std::shared_ptr<const ViewRenders> views_rendered =
       RenderViewsSmall(context, model_file, model, views, options.points_width, "export: point cloud");
   DepthSamples samples;
-  const bool want_central = RegionKind(model, options) == "focus";
+  const bool want_central = RegionKind(model, options) == MeshRegion::kFocus;
   for (size_t v = 0; v < views.size(); ++v) {
     const PinholeCamera& camera = views_rendered->cameras[v];
     const RenderedView& rendered = views_rendered->renders[v];
@@ -108,7 +108,7 @@ DepthSamples SampleDepths(const StageContext& context, const fs::path& model_fil
 MeshOptions ChooseMeshOptions(const NerfModel& model, const ExportOptions& options, const DepthSamples& depths) {
   MeshOptions mesh;
   mesh.resolution = options.resolution;
-  if (RegionKind(model, options) == "focus") FitCube(depths.central, &mesh);
+  if (RegionKind(model, options) == MeshRegion::kFocus) FitCube(depths.central, &mesh);
   mesh.density_threshold = static_cast<float>(options.threshold);
   if (options.threshold > 0) return mesh;
   std::vector<Eigen::Vector3d> surface;
@@ -141,22 +141,21 @@ ExportReport::Mesh WriteMesh(const NerfModel& model, const ExportOptions& option
   if (frame.rotation.determinant() < 0) {
     for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
   }
-  const std::string region = RegionKind(model, options);
+  const MeshRegion region = RegionKind(model, options);
   const bool auto_threshold = options.threshold == 0;
   const std::vector<std::string> comments = {
       frame.description,
       format("marching cubes at {}^3 samples of the cube of half size {:.4g} around ({:.4g}, {:.4g}, {:.4g}) "
              "(normalised; the {}), density threshold {:.4g}{}",
              options.resolution, mesh_options.half_size, mesh_options.centre.x(), mesh_options.centre.y(),
-             mesh_options.centre.z(), region == "box" ? "scene box" : "focus region", mesh_options.density_threshold,
-             auto_threshold ? " (from the field)" : "")};
+             mesh_options.centre.z(), region == MeshRegion::kBox ? "scene box" : "focus region",
+             mesh_options.density_threshold, auto_threshold ? " (from the field)" : "")};
   WriteMeshPly(out.mesh(), mesh, comments);
   if (options.obj) WriteMeshObj(out.mesh_obj(), mesh, comments);
   if (mesh.triangles.empty()) {
     LogWarning(
-        format("export: the density never reaches {:.4g} inside the region meshed: the mesh is empty; lower "
-               "--export.threshold",
-               mesh_options.density_threshold));
+        format("export: the density never reaches {:.4g} inside the region meshed: the mesh is empty; lower --{}",
+               mesh_options.density_threshold, OptionKey(&ExportOptions::threshold)));
   }
   return {ExportResult{}.mesh().string(),
           mesh.positions.size(),
@@ -176,23 +175,24 @@ ExportReport::Mesh WriteMesh(const NerfModel& model, const ExportOptions& option
 }  // namespace
 
 void ExportOptions::Check() const {
-  CheckOption(resolution >= 8 && resolution <= 1024, "export.resolution", "must be 8..1024");
-  CheckOption(threshold >= 0 && std::isfinite(threshold), "export.threshold", "must be 0 (from the field) or positive");
-  CheckOption(points_width >= 8 && points_width <= 8192, "export.points_width", "must be 8..8192");
-  CheckOption(points_opacity > 0 && points_opacity <= 1, "export.points_opacity", "must be in (0, 1]");
+  CheckOption(*this, resolution, resolution >= 8 && resolution <= 1024, "must be 8..1024");
+  CheckOption(*this, threshold, threshold >= 0 && std::isfinite(threshold), "must be 0 (from the field) or positive");
+  CheckOption(*this, points_width, points_width >= 8 && points_width <= 8192, "must be 8..8192");
+  CheckOption(*this, points_opacity, points_opacity > 0 && points_opacity <= 1, "must be in (0, 1]");
 }
 
 void ExportStage::Run(StageContext& context) const {
   const ExportOptions options = ReadOptions<ExportOptions>(context.config);
   const TrainResult train = Upstream<TrainResult>(context);
   const fs::path model_file = train.model();
-  const NerfModel model = LoadTrainedModel(model_file);
+  const TrainedField trained = ReadTrainedField(train);
+  const NerfModel& model = trained.model;
   ImportedDataset dataset = LoadTransformsJson(Upstream<PosesResult>(context).transforms(), context.workspace.root());
   const OutputFrame frame = MakeOutputFrame(options.frame, dataset);
-  const std::map<std::string, CameraCorrection> corrections = ReadCameraCorrections(train.report());
+  const std::map<std::string, CameraCorrection>& corrections = trained.corrections;
   ApplyCameraCorrections(corrections, &dataset);
   DepthSamples depths;
-  if (options.points || options.threshold == 0 || RegionKind(model, options) == "focus")
+  if (options.points || options.threshold == 0 || RegionKind(model, options) == MeshRegion::kFocus)
     depths = SampleDepths(context, model_file, model, dataset, options);
 
   const ExportResult out{context.output_dir};

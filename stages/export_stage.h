@@ -7,6 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "formats/output_frame.h"
+#include "nerf/mesh.h"
+#include "pipeline/options.h"
 #include "stages/stage_results.h"
 
 namespace p2n {
@@ -14,14 +17,14 @@ namespace p2n {
 struct ExportOptions {
   static constexpr const char* kSection = "export";  // its options are export.NAME
 
-  int resolution = 256;          // density samples along each side of the scene box
-  double threshold = 0;          // surface density (1 / normalised unit); 0: from the field (SurfaceThreshold)
-  std::string frame = "source";  // source: COLMAP's world (or the dataset's); normalized: the training frame
-  bool obj = false;              // also write mesh.obj
-  bool points = true;            // write points.ply
+  int resolution = 256;                  // density samples along each side of the scene box
+  double threshold = 0;                  // surface density (1 / normalised unit); 0: from the field (SurfaceThreshold)
+  FrameKind frame = FrameKind::kSource;  // the files' coordinates
+  bool obj = false;                      // also write mesh.obj
+  bool points = true;                    // write points.ply
   int points_width = 128;        // the training views are rendered this wide for the point cloud (at most 2 M pixels)
   double points_opacity = 0.95;  // pixels at least this opaque give points
-  std::string region = "auto";   // the cube meshed: box (the scene box), focus (what the views look at), auto
+  MeshRegion region = MeshRegion::kAuto;  // the cube meshed
 
   template <class V>
   void Visit(V& v) {
@@ -33,8 +36,7 @@ struct ExportOptions {
       "1/unit");
     v("frame", frame,
       "coordinates of the files: source (COLMAP's world, or the dataset's) or normalized (the "
-      "training frame)",
-      "", OptionKind::kResult, {"source", "normalized"});
+      "training frame)");
     v("obj", obj, "also write the mesh as mesh.obj");
     v("points", points, "write points.ply, a coloured point cloud from the rendered depth of the training views");
     v("points_width", points_width,
@@ -43,8 +45,7 @@ struct ExportOptions {
     v("region", region,
       "the cube meshed: box (the whole scene box [-1, 1]^3), focus (around where the middle of the training views "
       "ends: the subject, not the walls and floaters around it), auto: focus for unbounded and forward-facing "
-      "scenes, box for bounded ones",
-      "", OptionKind::kResult, {"auto", "box", "focus"});
+      "scenes, box for bounded ones");
   }
   void Check() const;
 };

@@ -3,9 +3,14 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/format.h"
 #include "formats/camera_geometry.h"
-#include "pipeline/format.h"
 #include "pipeline/log.h"
+#include "pipeline/options.h"
+#include "stages/import_stage.h"
+#include "stages/splat_stage.h"
+#include "stages/stage_results.h"
+#include "stages/train_stage.h"
 
 namespace p2n {
 namespace {
@@ -46,8 +51,10 @@ void CheckViews(const std::vector<HeldoutViewFit>& views, const char* source, st
         views[v].outside_span
             ? "its camera lies outside the span of the training cameras, so it measures extrapolation; photos "
               "taken beyond it would cover what it sees"
-            : "its camera lies among the training cameras: look at the photo (blur, exposure, something that "
-              "moved) and at its camera (10_sfm/sfm_report.json)";
+            : format(
+                  "its camera lies among the training cameras: look at the photo (blur, exposure, something that "
+                  "moved) and at its camera ({})",
+                  WorkspaceRelative<SfmResult>().report().string());
     warnings->push_back({"heldout_view_low", gap,
                          format("held-out view {} scores {:.1f} dB from the {}, {:.1f} dB below the other held-out "
                                 "views' median {:.1f}: {}",
@@ -75,10 +82,10 @@ std::vector<FitWarning> CheckFieldFit(const FieldFit& fit) {
     warnings.push_back(
         {"heldout_below_training", gap,
          format("the held-out views score {:.1f} dB, {:.1f} dB below the training photos' {:.1f}: the field fits its "
-                "photos but not new views. Check the cameras (10_sfm/sfm_report.json: reprojection error, photos "
-                "left out); with few photos, take more between the held-out ones; for photos that differ in "
-                "exposure, try --train.appearance on",
-                *fit.heldout_psnr, gap, *fit.training_psnr)});
+                "photos but not new views. Check the cameras ({}: reprojection error, photos left out); with few "
+                "photos, take more between the held-out ones; for photos that differ in exposure, try --{} on",
+                *fit.heldout_psnr, gap, *fit.training_psnr, WorkspaceRelative<SfmResult>().report().string(),
+                OptionKey(&TrainOptions::appearance))});
   }
   CheckViews(fit.views, "field", &warnings);
   if (fit.background_learnt && fit.behind_colour) {
@@ -89,9 +96,9 @@ std::vector<FitWarning> CheckFieldFit(const FieldFit& fit) {
           {"background_off", distance,
            format("the learnt background {} is {:.2f} from what the held-out photos show where the rays end on "
                   "nothing {}: the field may paint the true background as fog in front of the scene. Images "
-                  "rendered or composited on a plain colour: import them with it (--import.background) or train "
-                  "with --train.background fixed",
-                  Colour(fit.background), distance, Colour(*fit.behind_colour))});
+                  "rendered or composited on a plain colour: import them with it (--{}) or train with --{} fixed",
+                  Colour(fit.background), distance, Colour(*fit.behind_colour), OptionKey(&ImportOptions::background),
+                  OptionKey(&TrainOptions::background))});
     }
   }
   if (fit.bounded && (fit.occupied_fraction > kFogOccupied || fit.samples_per_ray > kFogSamplesPerRay)) {
@@ -99,8 +106,8 @@ std::vector<FitWarning> CheckFieldFit(const FieldFit& fit) {
         {"fog", fit.occupied_fraction,
          format("{:.0f}% of the object's box is occupied and a ray takes {:.0f} samples: the field fills the box "
                 "with fog. The usual cause is a background that is not the images' (train_report.json: "
-                "trainer.background_colour); images composited on a colour should say which (--import.background)",
-                100 * fit.occupied_fraction, fit.samples_per_ray)});
+                "trainer.background_colour); images composited on a colour should say which (--{})",
+                100 * fit.occupied_fraction, fit.samples_per_ray, OptionKey(&ImportOptions::background))});
   }
   return warnings;
 }
@@ -113,8 +120,8 @@ std::vector<FitWarning> CheckSplatFit(const std::vector<HeldoutViewFit>& views, 
     const double gap = *field_psnr - *splats_psnr;
     warnings.push_back({"splats_below_field", gap,
                         format("the splats score {:.1f} dB held out, {:.1f} dB below the field's {:.1f}, so the "
-                               "render stage shows the field (slower); try a longer --splat.time_budget",
-                               *splats_psnr, gap, *field_psnr)});
+                               "render stage shows the field (slower); try a longer --{}",
+                               *splats_psnr, gap, *field_psnr, OptionKey(&SplatOptions::time_budget))});
   }
   return warnings;
 }

@@ -5,12 +5,12 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
+#include "base/image_io.h"
 #include "formats/dataset_import.h"
 #include "formats/ply.h"
-#include "nerf/image_io.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/hash.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
@@ -112,8 +112,8 @@ void WriteImages(ImportedDataset& dataset, int max_side, const fs::path& images,
 // all the images show (a dataset rendered on a plain background, as the NeRF course's .npz); none for photos.
 std::optional<Rgb> KnownBackground(const ImportOptions& options, const ImageCounts& counts, const Borders& borders) {
   if (counts.transparent > 0) {
-    if (options.background == "keep") return std::nullopt;
-    return options.background == "white" ? Rgb{1, 1, 1} : Rgb{0, 0, 0};
+    if (options.background == ImportBackground::kKeep) return std::nullopt;
+    return options.background == ImportBackground::kWhite ? Rgb{1, 1, 1} : Rgb{0, 0, 0};
   }
   std::vector<Rgb> pixels;
   for (const std::vector<Rgb>& border : borders) pixels.insert(pixels.end(), border.begin(), border.end());
@@ -130,7 +130,8 @@ Normalization WriteCameras(const ImportedDataset& dataset, const fs::path& input
   const bool has_split =
       std::any_of(views.begin(), views.end(), [](const CameraView& v) { return v.split != "train"; });
   // LLFF data keeps the NeRF paper's protocol (every 8th from the first), whatever its size.
-  if (!has_split) transforms.meta.heldout_rule = AssignHoldout(&views, poses.holdout_every, dataset.kind != "llff");
+  if (!has_split)
+    transforms.meta.heldout_rule = AssignHoldout(&views, poses.holdout_every, dataset.kind != DatasetKind::kLlff);
   Normalization& normalization = transforms.meta.normalization;
   if (poses.normalize) {
     std::vector<Eigen::Vector3d> centres, ups, axes;
@@ -177,14 +178,14 @@ void ImportStage::Run(StageContext& context) const {
   const fs::path input = Input(context.workspace);
   ImportedDataset dataset = LoadDataset(input);
   for (const std::string& warning : dataset.warnings) LogWarning("import: " + warning);
-  LogInfo(format("import: {} dataset, {} views", dataset.kind, dataset.views.size()));
+  LogInfo(format("import: {} dataset, {} views", EnumName(dataset.kind), dataset.views.size()));
   ImageCounts counts;
   Borders borders;
   const PosesResult out{context.output_dir};
   WriteImages(dataset, poses.max_image_size, out.images(), &counts, &borders);
   const std::optional<Rgb> background = KnownBackground(options, counts, borders);
   const Normalization normalization = WriteCameras(dataset, input, poses, background, out);
-  context.summary = {{"views", dataset.views.size()}, {"dataset", dataset.kind}};
+  context.summary = {{"views", dataset.views.size()}, {"dataset", EnumName(dataset.kind)}};
   LogInfo(format("import: {} views ({} undistorted, {} with alpha, {} downsized to {} px), scene scale {:.4g}",
                  dataset.views.size(), counts.undistorted.load(), counts.transparent.load(), counts.downsized.load(),
                  poses.max_image_size, normalization.scale));

@@ -11,17 +11,24 @@
 
 namespace p2n {
 
+// import.background: keep records none.
+enum class ImportBackground { kWhite, kBlack, kKeep };
+template <>
+struct EnumNames<ImportBackground> {
+  static constexpr std::pair<ImportBackground, const char*> kValues[] = {
+      {ImportBackground::kWhite, "white"}, {ImportBackground::kBlack, "black"}, {ImportBackground::kKeep, "keep"}};
+};
+
 struct ImportOptions {
   static constexpr const char* kSection = "import";  // its options are import.NAME
 
-  std::string background = "white";  // transparent images are shown and scored on it; "keep": none recorded
+  ImportBackground background = ImportBackground::kWhite;  // transparent images are shown and scored on it
 
   template <class V>
   void Visit(V& v) {
     v("background", background,
       "the colour transparent (RGBA) images are shown and scored on (their alpha is kept: training puts random "
-      "colours behind them); keep: no colour recorded (shown on white)",
-      "", OptionKind::kResult, {"white", "black", "keep"});
+      "colours behind them); keep: no colour recorded (shown on white)");
   }
   void Check() const {}
 };

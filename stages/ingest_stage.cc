@@ -7,11 +7,11 @@
 #include <set>
 #include <variant>
 
-#include "nerf/image_io.h"
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
+#include "base/image_io.h"
 #include "pipeline/cancel.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/hash.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
@@ -94,9 +94,9 @@ void CheckImageCount(const IngestReport& report, int min_images) {
 }  // namespace
 
 void IngestOptions::Check() const {
-  CheckOption(max_image_size == 0 || max_image_size >= 16, "ingest.max_image_size",
+  CheckOption(*this, max_image_size, max_image_size == 0 || max_image_size >= 16,
               format("must be 0 (keep the size) or at least 16 pixels, not {}", max_image_size));
-  CheckOption(min_images >= 1, "ingest.min_images", format("must be at least 1, not {}", min_images));
+  CheckOption(*this, min_images, min_images >= 1, format("must be at least 1, not {}", min_images));
 }
 
 std::vector<fs::path> ListPhotos(const fs::path& folder) {

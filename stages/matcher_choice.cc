@@ -58,20 +58,20 @@ bool LooksLikeFrameSequence(const std::vector<std::string>& names) {
 
 namespace {
 
-std::string Unordered(size_t photos) {
-  return static_cast<int>(photos) <= kRetrievalMinImages ? "exhaustive" : "vocab_tree";
+Matcher Unordered(size_t photos) {
+  return static_cast<int>(photos) <= kRetrievalMinImages ? Matcher::kExhaustive : Matcher::kVocabTree;
 }
 
 }  // namespace
 
-std::string AutoMatcher(const std::vector<std::string>& names, int exhaustive_max_images) {
-  if (static_cast<int>(names.size()) <= exhaustive_max_images) return "exhaustive";
-  return LooksLikeFrameSequence(names) ? "sequential" : Unordered(names.size());
+Matcher AutoMatcher(const std::vector<std::string>& names, int exhaustive_max_images) {
+  if (static_cast<int>(names.size()) <= exhaustive_max_images) return Matcher::kExhaustive;
+  return LooksLikeFrameSequence(names) ? Matcher::kSequential : Unordered(names.size());
 }
 
-std::string RetryMatcher(const std::string& first, size_t photos) {
-  if (first == "exhaustive") return "";
-  return first == "sequential" ? Unordered(photos) : "sequential";
+std::optional<Matcher> RetryMatcher(Matcher first, size_t photos) {
+  if (first == Matcher::kExhaustive) return std::nullopt;
+  return first == Matcher::kSequential ? Unordered(photos) : Matcher::kSequential;
 }
 
 }  // namespace p2n

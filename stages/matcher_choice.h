@@ -6,10 +6,23 @@
 // image retrieval (a vocabulary tree built from the photos themselves) pairs each photo with the ones that look
 // most alike, whatever their order.
 
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "base/enum_names.h"
+
 namespace p2n {
+
+// sfm.matcher: auto chooses one of the others (AutoMatcher).
+enum class Matcher { kAuto, kExhaustive, kSequential, kVocabTree };
+template <>
+struct EnumNames<Matcher> {
+  static constexpr std::pair<Matcher, const char*> kValues[] = {{Matcher::kAuto, "auto"},
+                                                                {Matcher::kExhaustive, "exhaustive"},
+                                                                {Matcher::kSequential, "sequential"},
+                                                                {Matcher::kVocabTree, "vocab_tree"}};
+};
 
 // Whether the names read as one numbered sequence: (nearly) all end in a number after one common prefix, and the
 // numbers, sorted, step by about the same amount (frames 1, 2, 3 or 5, 10, 15; a camera's counter): the median
@@ -27,11 +40,11 @@ inline constexpr int kRetrievalMinImages = 100;
 
 // sfm.matcher auto: exhaustive up to `exhaustive_max_images` photos; above, sequential for a numbered sequence,
 // and for other names exhaustive up to kRetrievalMinImages and vocab_tree (retrieval) beyond.
-std::string AutoMatcher(const std::vector<std::string>& names, int exhaustive_max_images);
+Matcher AutoMatcher(const std::vector<std::string>& names, int exhaustive_max_images);
 
 // The matcher to add when `first` registered too few photos: one that does not assume their order (exhaustive up
-// to kRetrievalMinImages, else retrieval) after sequential, sequential after retrieval; empty after exhaustive,
+// to kRetrievalMinImages, else retrieval) after sequential, sequential after retrieval; none after exhaustive,
 // whose pairs contain every other matcher's.
-std::string RetryMatcher(const std::string& first, size_t photos);
+std::optional<Matcher> RetryMatcher(Matcher first, size_t photos);
 
 }  // namespace p2n

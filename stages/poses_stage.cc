@@ -5,16 +5,16 @@
 #include <algorithm>
 #include <cmath>
 
+#include "base/camera.h"
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/float_image.h"
+#include "base/format.h"
+#include "base/image_io.h"
 #include "formats/colmap_model.h"
 #include "formats/ply.h"
 #include "formats/scene_normalization.h"
 #include "formats/transforms_json.h"
-#include "nerf/camera.h"
-#include "nerf/float_image.h"
-#include "nerf/image_io.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
 
@@ -60,15 +60,15 @@ void DownsizeLargeImages(const fs::path& out, int max_side, std::vector<CameraVi
     view.camera = ResizedCamera(view.camera, image.spec().width, image.spec().height);
     progress.Add();
   });
-  LogInfo(format("poses: {} of {} images downsized to {} pixels on their longest side (poses.max_image_size)",
-                 large.size(), views->size(), max_side));
+  LogInfo(format("poses: {} of {} images downsized to {} pixels on their longest side ({})", large.size(),
+                 views->size(), max_side, OptionKey(&PosesOptions::max_image_size)));
 }
 
 }  // namespace
 
 void PosesOptions::Check() const {
-  CheckOption(holdout_every >= 0, "poses.holdout_every", "must be 0 (none) or positive");
-  CheckOption(max_image_size == 0 || max_image_size >= 16, "poses.max_image_size",
+  CheckOption(*this, holdout_every, holdout_every >= 0, "must be 0 (none) or positive");
+  CheckOption(*this, max_image_size, max_image_size == 0 || max_image_size >= 16,
               format("must be 0 (as they are) or at least 16 pixels, not {}", max_image_size));
 }
 

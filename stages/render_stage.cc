@@ -8,19 +8,20 @@
 #include <map>
 #include <numeric>
 
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/float_image.h"
+#include "base/format.h"
 #include "formats/dataset_import.h"
 #include "formats/video.h"
 #include "nerf/camera_path.h"
-#include "nerf/float_image.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
 #include "pipeline/cancel.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/hash.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
+#include "stages/splat_stage.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"
 #include "stages/training_data.h"
@@ -40,9 +41,9 @@ constexpr double kForwardArcDeg = 30;
 
 // render.path resolved: auto is a spiral for a forward-facing capture (which trains in normalised device
 // coordinates, where an orbit would leave what the field holds), else an orbit.
-std::string PathKind(const RenderStageOptions& options, const ImportedDataset& dataset) {
-  if (options.path != "auto") return options.path;
-  return ForwardFacingCapture(dataset) ? "spiral" : "orbit";
+PathChoice PathKind(const RenderStageOptions& options, const ImportedDataset& dataset) {
+  if (options.path != PathChoice::kAuto) return options.path;
+  return ForwardFacingCapture(dataset) ? PathChoice::kSpiral : PathChoice::kOrbit;
 }
 
 // Image writes fail for the user's reasons (a full disk, permissions): UserError naming the file.
@@ -106,7 +107,7 @@ PinholeCamera WithIntrinsics(const nlohmann::json& json, PinholeCamera camera, c
 EvalReport RenderHeldout(const ViewRenderer& renderer, const ImportedDataset& dataset, const RenderResult& out) {
   EvalReport eval;
   eval.split = HeldoutSplit(dataset);
-  eval.source = renderer.source;
+  eval.source = EnumName(renderer.source);
   eval.heat_map_max_error = kHeatMapMaxError;
   const std::string& split = eval.split;
   std::vector<const ImportedView*> views;
@@ -150,17 +151,17 @@ EvalReport RenderHeldout(const ViewRenderer& renderer, const ImportedDataset& da
   eval.psnr = Mean(psnrs);
   eval.ssim = Mean(ssims);
   eval.seconds_per_view = seconds / views.size();
-  if (renderer.source == "field") eval.samples_per_ray = double(samples) / std::max<size_t>(rays, 1);
+  if (renderer.source == RenderSource::kField) eval.samples_per_ray = double(samples) / std::max<size_t>(rays, 1);
   return eval;
 }
 
-std::vector<PinholeCamera> PathCameras(const RenderStageOptions& options, const std::string& kind,
+std::vector<PinholeCamera> PathCameras(const RenderStageOptions& options, PathChoice kind,
                                        const ImportedDataset& dataset, const PinholeCamera& reference) {
-  if (kind == "file") return ReadCameraPath(options.path_file, reference);
+  if (kind == PathChoice::kFile) return ReadCameraPath(options.path_file, reference);
   const std::vector<PinholeCamera> cameras = dataset.Cameras();
   CameraPathOptions path;
   path.frames = options.frames;
-  if (kind == "spiral") {
+  if (kind == PathChoice::kSpiral) {
     path.radius = options.radius > 0 ? options.radius : 1.0;
     double focus = 0;  // the distance from the mean camera to the centre, which the normalisation put at the origin
     for (const PinholeCamera& camera : cameras) focus += camera.world_from_cam.block<3, 1>(0, 3).norm();
@@ -169,9 +170,7 @@ std::vector<PinholeCamera> PathCameras(const RenderStageOptions& options, const 
   double radius = 0, elevation = 0;
   MeanCameraPlacement(cameras, &radius, &elevation);
   path.radius = options.radius > 0 ? options.radius : radius;
-  std::optional<double> given_elevation;
-  ParseAutoOrNumber(options.elevation, &given_elevation);  // Check() has made sure it is one
-  path.elevation_deg = given_elevation ? *given_elevation : elevation;
+  path.elevation_deg = options.elevation.value.value_or(elevation);
   CapturedArc(cameras, kOrbitMaxGapDeg, &path.start_deg, &path.sweep_deg);
   if (path.sweep_deg < kForwardArcDeg) {  // photos from one side, orbited on request
     path.start_deg -= 0.5 * (kForwardArcDeg - path.sweep_deg);
@@ -277,14 +276,14 @@ PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& datas
     WriteFrame(frame, RenderResult::FrameStem(f), options, depth_max, out, video.get(), cameras[0]);
   }
   PathReport report;
-  report.source = renderer.source;
+  report.source = EnumName(renderer.source);
   report.frames = static_cast<int>(cameras.size());
   report.width = cameras[0].width;
   report.height = cameras[0].height;
   report.rendered_frames = static_cast<int>(rendered);
   report.seconds_per_frame = seconds / rendered;
   report.frames_per_second = rendered / std::max(seconds, 1e-9);
-  if (renderer.source == "field") report.samples_per_ray = double(samples) / std::max<size_t>(rays, 1);
+  if (renderer.source == RenderSource::kField) report.samples_per_ray = double(samples) / std::max<size_t>(rays, 1);
   report.depth_png_max = depth_max;
   if (video) {
     video->Close();
@@ -304,10 +303,10 @@ struct RenderInputs {
 
 RenderInputs ReadInputs(const StageContext& context) {
   RenderInputs in;
-  const TrainResult train = Upstream<TrainResult>(context);
-  in.model = LoadTrainedModel(train.model());
+  TrainedField trained = ReadTrainedField(Upstream<TrainResult>(context));
+  in.model = std::move(trained.model);
   in.poses = LoadTransformsJson(Upstream<PosesResult>(context).transforms(), context.workspace.root());
-  in.field_psnr = TrainReport::Read(train.report()).heldout_psnr;
+  in.field_psnr = trained.report.heldout_psnr;
   in.splat = UpstreamIfRead<SplatResult>(context);
   if (in.splat) in.splat_report = SplatReport::Read(in.splat->report());
   return in;
@@ -319,18 +318,18 @@ std::string DbText(const std::optional<double>& psnr) { return psnr ? format("{:
 // field's (they render tens of times faster), else the field.
 ViewRenderer ChooseRenderer(const RenderStageOptions& options, const RenderInputs& in, const RenderOptions& render) {
   const NerfModel& model = in.model;
-  if (options.source == "field" || !in.splat_report) return FieldRenderer(model, render);
+  if (options.source == RenderSource::kField || !in.splat_report) return FieldRenderer(model, render);
   const SplatReport& splats = *in.splat_report;
   if (!splats.enabled) {
-    if (options.source == "splats") {
-      throw UserError(
-          "render.source splats: the splat stage is off (splat.enabled false); turn it on or render the field");
+    if (options.source == RenderSource::kSplats) {
+      throw UserError(format("{} splats: the splat stage is off ({} false); turn it on or render the field",
+                             OptionKey(options, options.source), OptionKey(&SplatOptions::enabled)));
     }
     return FieldRenderer(model, render);
   }
   const std::optional<double> field_psnr = in.field_psnr, splat_psnr = splats.heldout_psnr;
   const bool good = field_psnr && splat_psnr && *splat_psnr >= *field_psnr - kSplatPsnrMargin;
-  if (options.source == "auto" && !good) {
+  if (options.source == RenderSource::kAuto && !good) {
     LogInfo(format("render: the splats' held-out PSNR ({}) is below the field's ({}): rendering the field",
                    DbText(splat_psnr), DbText(field_psnr)));
     return FieldRenderer(model, render);
@@ -341,16 +340,15 @@ ViewRenderer ChooseRenderer(const RenderStageOptions& options, const RenderInput
 }  // namespace
 
 void RenderStageOptions::Check() const {
-  CheckOption(path != "file" || !path_file.empty(), "render.path_file", "must name a file when render.path is file");
-  CheckOption(frames >= 1 && frames <= 100000, "render.frames", "must be 1..100000");
-  CheckOption(width >= 0 && width <= 16384, "render.width", "must be 0 (the photos') or 1..16384");
-  std::optional<double> degrees;
-  CheckOption(ParseAutoOrNumber(elevation, &degrees), "render.elevation",
-              format("must be auto or a number of degrees, not '{}'", elevation));
-  CheckOption(!degrees || (*degrees > -90 && *degrees < 90), "render.elevation", "must be between -90 and 90 degrees");
-  CheckOption(radius >= 0 && std::isfinite(radius), "render.radius", "must be 0 (from the cameras) or positive");
-  CheckOption(fps > 0 && fps <= 240, "render.fps", "must be in (0, 240]");
-  CheckOption(step_scale == 0 || (step_scale >= 0.01 && step_scale <= 100), "render.step_scale",
+  CheckOption(*this, path_file, path != PathChoice::kFile || !path_file.empty(),
+              format("must name a file when {} is file", OptionKey(*this, path)));
+  CheckOption(*this, frames, frames >= 1 && frames <= 100000, "must be 1..100000");
+  CheckOption(*this, width, width >= 0 && width <= 16384, "must be 0 (the photos') or 1..16384");
+  const std::optional<double>& degrees = elevation.value;
+  CheckOption(*this, elevation, !degrees || (*degrees > -90 && *degrees < 90), "must be between -90 and 90 degrees");
+  CheckOption(*this, radius, radius >= 0 && std::isfinite(radius), "must be 0 (from the cameras) or positive");
+  CheckOption(*this, fps, fps > 0 && fps <= 240, "must be in (0, 240]");
+  CheckOption(*this, step_scale, step_scale == 0 || (step_scale >= 0.01 && step_scale <= 100),
               "must be 0 (by the scene) or 0.01..100");
 }
 
@@ -395,15 +393,16 @@ void WriteCameraPath(const fs::path& file, const std::vector<PinholeCamera>& cam
 }
 
 std::vector<std::string> RenderStage::UpstreamFor(const Config& config) const {
-  if (ReadOptions<RenderStageOptions>(config).source == "field") return {PosesResult::kId.name, TrainResult::kId.name};
+  if (ReadOptions<RenderStageOptions>(config).source == RenderSource::kField)
+    return {PosesResult::kId.name, TrainResult::kId.name};
   return upstream();
 }
 
 std::map<std::string, std::string> RenderStage::ExternalInputs(const Workspace&, const Config& config) const {
   const RenderStageOptions options = ReadOptions<RenderStageOptions>(config);
-  if (options.path != "file") return {};
+  if (options.path != PathChoice::kFile) return {};
   if (!fs::is_regular_file(options.path_file)) {
-    throw UserError(format("render.path_file '{}' is not a file", options.path_file));
+    throw UserError(format("{} '{}' is not a file", OptionKey(options, options.path_file), options.path_file));
   }
   return {{"camera path " + options.path_file, Sha1OfFile(options.path_file)}};
 }
@@ -421,9 +420,9 @@ void RenderStage::Run(StageContext& context) const {
   nlohmann::json summary = nlohmann::json::object();
   if (options.heldout) {
     EvalReport eval = RenderHeldout(renderer, dataset, out);
-    if (renderer.source == "field") eval.step_scale = StepScale(model, render);
-    eval.field_psnr = renderer.source == "field" ? eval.psnr : in.field_psnr;
-    if (renderer.source == "splats") {
+    if (renderer.source == RenderSource::kField) eval.step_scale = StepScale(model, render);
+    eval.field_psnr = renderer.source == RenderSource::kField ? eval.psnr : in.field_psnr;
+    if (renderer.source == RenderSource::kSplats) {
       eval.splats_psnr = eval.psnr;
     } else if (in.splat_report) {
       eval.splats_psnr = in.splat_report->heldout_psnr;
@@ -433,11 +432,11 @@ void RenderStage::Run(StageContext& context) const {
       summary["heldout_psnr"] = *eval.psnr;
       summary["heldout_ssim"] = *eval.ssim;
       LogInfo(format("render: held-out {} views from the {}: PSNR {:.2f} dB, SSIM {:.3f}, {:.2f} s per view",
-                     eval.views.size(), renderer.source, *eval.psnr, *eval.ssim, eval.seconds_per_view));
+                     eval.views.size(), EnumName(renderer.source), *eval.psnr, *eval.ssim, eval.seconds_per_view));
     }
   }
-  const std::string kind = PathKind(options, dataset);
-  if (kind != "none") {
+  const PathChoice kind = PathKind(options, dataset);
+  if (kind != PathChoice::kNone) {
     const ImportedView* first = &dataset.views.front();
     for (const ImportedView& view : dataset.views) {
       if (view.view.split == "train") {
@@ -449,14 +448,14 @@ void RenderStage::Run(StageContext& context) const {
     const PinholeCamera reference = ScaledCamera(first->view.camera, width);
     const std::vector<PinholeCamera> cameras = PathCameras(options, kind, dataset, reference);
     PathReport path = RenderPath(renderer, dataset, cameras, options, out);
-    path.kind = kind;
+    path.kind = EnumName(kind);
     WriteJsonAtomic(out.report(), {{"path", path.ToJson()}});
     summary["frames"] = path.frames;
     summary["frames_per_second"] = path.frames_per_second;
     const std::string repeats =
         path.rendered_frames < path.frames ? format(" ({} drawn, the others repeat them)", path.rendered_frames) : "";
-    LogInfo(format("render: {} path from the {}, {} frames of {}x{}{} at {:.2f} frames per second", kind,
-                   renderer.source, path.frames, path.width, path.height, repeats, path.frames_per_second));
+    LogInfo(format("render: {} path from the {}, {} frames of {}x{}{} at {:.2f} frames per second", EnumName(kind),
+                   EnumName(renderer.source), path.frames, path.width, path.height, repeats, path.frames_per_second));
   }
   context.summary = summary;
 }

@@ -9,44 +9,54 @@
 #include <string>
 #include <vector>
 
-#include "nerf/camera.h"
+#include "base/camera.h"
+#include "pipeline/options.h"
 #include "stages/stage_results.h"
+#include "stages/view_renderer.h"
 
 namespace p2n {
 
 inline constexpr int kDefaultMaxPathWidth = 320;
 
+enum class PathChoice { kAuto, kOrbit, kSpiral, kFile, kNone };
+template <>
+struct EnumNames<PathChoice> {
+  static constexpr std::pair<PathChoice, const char*> kValues[] = {{PathChoice::kAuto, "auto"},
+                                                                   {PathChoice::kOrbit, "orbit"},
+                                                                   {PathChoice::kSpiral, "spiral"},
+                                                                   {PathChoice::kFile, "file"},
+                                                                   {PathChoice::kNone, "none"}};
+};
+
 struct RenderStageOptions {
   static constexpr const char* kSection = "render";  // its options are render.NAME
 
-  bool heldout = true;             // render and evaluate the held-out views
-  std::string source = "auto";     // field | splats | auto: the splats when they score within 0.5 dB of the field
-  std::string path = "auto";       // orbit | spiral | file | none; auto: spiral for LLFF data and one-sided captures
-  std::string path_file;           // cameras of the path (transforms.json layout) when path = file
-  int frames = 60;                 // frames of an orbit or spiral
-  int width = 0;                   // path frames' width in pixels (height by the aspect); 0: the photos',
-                                   // at most kDefaultMaxPathWidth
-  std::string elevation = "auto";  // orbit: degrees above the horizontal; auto: the cameras' mean
-  double radius = 0;               // orbit: distance from the centre (normalised units); spiral: amplitude
-                                   // (times the cameras' spread); 0: the cameras' mean distance, or 1
-  double fps = 24;                 // video frames per second
-  bool video = true;               // write video.mp4 of the path
-  bool depth = true;               // write depth and opacity images of the path
-  bool exr = false;                // also write linear float EXR images (RGB and depth)
-  double step_scale = 0;           // sample spacing as a multiple of the model's (training) step; 0: by the scene
+  bool heldout = true;                        // render and evaluate the held-out views
+  RenderSource source = RenderSource::kAuto;  // auto: the splats when they score within 0.5 dB of the field
+  PathChoice path = PathChoice::kAuto;        // auto: spiral for LLFF data and one-sided captures
+  std::string path_file;                      // cameras of the path (transforms.json layout) when path = file
+  int frames = 60;                            // frames of an orbit or spiral
+  int width = 0;                              // path frames' width in pixels (height by the aspect); 0: the photos',
+                                              // at most kDefaultMaxPathWidth
+  AutoOrNumber elevation;                     // orbit: degrees above the horizontal; auto: the cameras' mean
+  double radius = 0;                          // orbit: distance from the centre (normalised units); spiral: amplitude
+                                              // (times the cameras' spread); 0: the cameras' mean distance, or 1
+  double fps = 24;                            // video frames per second
+  bool video = true;                          // write video.mp4 of the path
+  bool depth = true;                          // write depth and opacity images of the path
+  bool exr = false;                           // also write linear float EXR images (RGB and depth)
+  double step_scale = 0;  // sample spacing as a multiple of the model's (training) step; 0: by the scene
 
   template <class V>
   void Visit(V& v) {
     v("heldout", heldout, "render the held-out views and compare them with their photos (PSNR, SSIM)");
     v("source", source,
       "what renders the views: field (ray marching), splats (rasterized, tens of times faster) or auto: the "
-      "splats when their held-out PSNR is within 0.5 dB of the field's, else the field",
-      "", OptionKind::kResult, {"auto", "field", "splats"});
+      "splats when their held-out PSNR is within 0.5 dB of the field's, else the field");
     v("path", path,
       "camera path: orbit (round the centre, over the arc of directions the photos were taken from, there and "
       "back; all the way round when they surround it), spiral (in front of the capture), file, none; auto: spiral "
-      "for LLFF data and for photos taken from one side (within 30 degrees), else orbit",
-      "", OptionKind::kResult, {"auto", "orbit", "spiral", "file", "none"});
+      "for LLFF data and for photos taken from one side (within 30 degrees), else orbit");
     v("path_file", path_file,
       "cameras of the path when render.path is file (transforms.json layout, e.g. an "
       "edited path.json)");

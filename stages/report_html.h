@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "base/camera.h"
 #include "formats/ply.h"
-#include "nerf/camera.h"
 
 namespace p2n {
 

@@ -4,14 +4,16 @@
 #include <cmath>
 #include <optional>
 
+#include "base/file_util.h"
+#include "base/format.h"
 #include "formats/dataset_import.h"
 #include "nerf/plot.h"
 #include "photo2nerf/version.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/runner.h"
+#include "stages/render_stage.h"
 #include "stages/report_html.h"
+#include "stages/splat_stage.h"
 #include "stages/stage_reports.h"
 #include "stages/training_data.h"
 
@@ -103,7 +105,7 @@ std::string TrainingSection(const TrainResult& result, const std::optional<Train
 std::string SplatSection(const SplatResult& result, const SplatReport& report,
                          const std::optional<TrainReport>& train) {
   if (!report.enabled) {
-    return "<h2>Splats</h2>\n<p>Off (<code>--splat.enabled false</code>).</p>\n";
+    return format("<h2>Splats</h2>\n<p>Off (<code>--{} false</code>).</p>\n", OptionKey(&SplatOptions::enabled));
   }
   std::string html = "<h2>Splats: error against optimisation time</h2>\n";
   html += format(
@@ -175,7 +177,7 @@ std::string CamerasSection(const StageContext& context, const ImportedDataset& d
       context.runner->Find(SfmResult::kId.name)
           ? ReadReportIfExists<SfmReport>(InWorkspace<SfmResult>(context.workspace).report())
           : std::nullopt;
-  if (sfm && dataset.meta.dataset_kind.empty()) {
+  if (sfm && !dataset.meta.dataset_kind) {
     html += format(
         "<p>COLMAP {}: {} of {} images registered ({:.0f}%), mean reprojection error {:.3g} px, {} sparse points, "
         "mean track length {:.3g}, {} matching.</p>\n",
@@ -187,7 +189,7 @@ std::string CamerasSection(const StageContext& context, const ImportedDataset& d
     html += "</table>\n";
   } else {
     html += format("<p>Cameras imported from a {} dataset (no structure from motion needed).</p>\n",
-                   HtmlEscape(dataset.meta.dataset_kind));
+                   dataset.meta.dataset_kind ? EnumName(*dataset.meta.dataset_kind) : "given");
   }
   std::vector<ViewerCamera> cameras;
   for (const ImportedView& view : dataset.views)
@@ -206,16 +208,18 @@ std::string StepScaleNote(const EvalReport& eval, const std::optional<TrainRepor
       std::abs(*eval.step_scale - *train->heldout_step_scale) < 1e-9)
     return "";
   return format(
-      " The field was sampled at {:.3g} times its training step here (render.step_scale); the training's own "
-      "evaluation, {} dB, at {:.3g}.",
-      *eval.step_scale, Number(train->heldout_psnr), *train->heldout_step_scale);
+      " The field was sampled at {:.3g} times its training step here ({}); the training's own evaluation, {} dB, at "
+      "{:.3g}.",
+      *eval.step_scale, OptionKey(&RenderStageOptions::step_scale), Number(train->heldout_psnr),
+      *train->heldout_step_scale);
 }
 
 std::string HeldoutSection(const RenderResult& render, const std::optional<EvalReport>& eval,
                            const std::optional<TrainReport>& train, const std::array<float, 3>& background,
                            int image_width) {
   if (!eval || eval->views.empty())
-    return "<h2>Held-out views</h2>\n<p>None rendered: no view was held out, or render.heldout is false.</p>\n";
+    return format("<h2>Held-out views</h2>\n<p>None rendered: no view was held out, or {} is false.</p>\n",
+                  OptionKey(&RenderStageOptions::heldout));
   std::string html = format(
       "<h2>Held-out views</h2>\n<p>{} views of the {} split ({}), never trained on: PSNR {} dB, SSIM {} "
       "on average.{} Error maps: mean absolute RGB error, black 0 to yellow {} and above.</p>\n",
@@ -242,9 +246,10 @@ std::string ExportSection(const ExportResult& result, const ExportReport& export
       "<h2>Exports</h2>\n<p>Mesh <a href=\"{}\">mesh.ply</a>: {} vertices, {} triangles, "
       "{}watertight (marching cubes at {}^3 over {}, density threshold {:.4g}), in the {} frame.",
       Link(result.mesh()), mesh.vertices, mesh.triangles, mesh.watertight ? "" : "not ", mesh.resolution,
-      mesh.region == "box" ? std::string("the scene box")
-                           : format("the region the photos look at (a cube of half size {:.3g})", mesh.half_size),
-      mesh.threshold, HtmlEscape(exported.frame));
+      mesh.region == MeshRegion::kBox
+          ? std::string("the scene box")
+          : format("the region the photos look at (a cube of half size {:.3g})", mesh.half_size),
+      mesh.threshold, EnumName(exported.frame));
   if (exported.points) {
     html +=
         format(" Point cloud <a href=\"{}\">points.ply</a>: {} points.", Link(result.points()), exported.points->count);
@@ -255,7 +260,7 @@ std::string ExportSection(const ExportResult& result, const ExportReport& export
 }  // namespace
 
 void ReportOptions::Check() const {
-  CheckOption(image_width >= 32 && image_width <= 4096, "report.image_width", "must be 32..4096");
+  CheckOption(*this, image_width, image_width >= 32 && image_width <= 4096, "must be 32..4096");
 }
 
 void ReportStage::Run(StageContext& context) const {

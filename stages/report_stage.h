@@ -17,7 +17,7 @@ struct ReportOptions {
   template <class V>
   void Visit(V& v) {
     v("image_width", image_width, "images are embedded at most this wide", "pixels");
-    v("embed_video", embed_video, "embed the video in the page (else link to 40_render/video.mp4)");
+    v("embed_video", embed_video, "embed the video in the page (else link to the render stage's video)");
   }
   void Check() const;
 };

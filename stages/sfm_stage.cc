@@ -7,12 +7,12 @@
 #include <functional>
 #include <set>
 
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 #include "formats/camera_geometry.h"
 #include "formats/colmap_model.h"
 #include "pipeline/cancel.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/subprocess.h"
 #include "stages/colmap_flags.h"
@@ -40,9 +40,12 @@ constexpr const char* kMapperTuning[] = {
 // which took 175 s for fox's 50 photos on 2 cores; these settings took a third of that.
 constexpr size_t kFeaturesPerWord = 64;
 constexpr int kTreeBranching = 16, kTreeIterations = 5, kTreeMaxImages = 30;
-constexpr const char* kAdvice =
-    "try --sfm.matcher exhaustive, more features (--sfm.max_num_features), a larger "
-    "--sfm.max_image_size, or photos with more overlap";
+// What to try when too few photos register.
+std::string Advice() {
+  return format("try --{} exhaustive, more features (--{}), a larger --{}, or photos with more overlap",
+                OptionKey(&SfmOptions::matcher), OptionKey(&SfmOptions::max_num_features),
+                OptionKey(&SfmOptions::max_image_size));
+}
 
 // Runs the COLMAP steps in order with their own logs and timings.
 class StepRunner {
@@ -170,19 +173,21 @@ struct ColmapRun {
   // COLMAP's matcher finds the raw matches of exhaustive and sequential matching in the database (ours, see
   // feature_matching.h) and only verifies them; it matches by retrieval itself, and every pair we could not (a
   // database we cannot read, as another COLMAP version might write it).
-  void Match(const std::string& matcher, size_t photos) const {
-    if (matcher != "vocab_tree") {
+  void Match(Matcher matcher, size_t photos) const {
+    const std::string name = EnumName(matcher);
+    if (matcher != Matcher::kVocabTree) {
       steps->RunHere("descriptor matching", [&] {
         try {
-          MatchIntoDatabase(database(), matcher == "exhaustive" ? ExhaustivePairs(photos)
-                                                                : SequentialPairs(photos, options.sequential_overlap));
+          MatchIntoDatabase(database(), matcher == Matcher::kExhaustive
+                                            ? ExhaustivePairs(photos)
+                                            : SequentialPairs(photos, options.sequential_overlap));
         } catch (const ExternalToolError& e) {
           LogWarning(format("sfm: COLMAP matches the photos itself (slower): {}", e.what()));
         }
       });
     }
     std::vector<std::string> match = {options.colmap,
-                                      matcher + "_matcher",
+                                      name + "_matcher",
                                       "--database_path",
                                       database().string(),
                                       "--random_seed",
@@ -191,16 +196,16 @@ struct ColmapRun {
                                       "0",
                                       flags.matching_num_threads,
                                       threads};
-    if (matcher == "sequential") {
+    if (matcher == Matcher::kSequential) {
       match.insert(match.end(), {"--SequentialMatching.overlap", std::to_string(options.sequential_overlap),
                                  "--SequentialMatching.loop_detection", "0"});
     }
-    if (matcher == "vocab_tree") {
+    if (matcher == Matcher::kVocabTree) {
       const fs::path tree = BuildVocabularyTree(photos);
       match.insert(match.end(), {"--VocabTreeMatching.vocab_tree_path", tree.string(), "--VocabTreeMatching.num_images",
                                  std::to_string(options.retrieval_neighbours + 1)});  // the photo itself comes first
     }
-    steps->Run(matcher + " matching", match);
+    steps->Run(name + " matching", match);
   }
 
   // Runs the mapper (the step `step`) into out/`folder`; returns the folder of the model with the most registered
@@ -219,7 +224,7 @@ struct ColmapRun {
         throw UserError(
             format("COLMAP found no pair of photos to start the reconstruction from (log: {}): the "
                    "photos overlap too little or show too little texture; {}",
-                   log.string(), kAdvice));
+                   log.string(), Advice()));
       }
       throw ExternalToolError(format("COLMAP's mapper failed; log: {}", log.string()));
     }
@@ -237,7 +242,7 @@ struct ColmapRun {
     }
     if (chosen.empty()) {
       throw UserError(format("COLMAP could not reconstruct any camera from the {} photos (log: {}); {}", photos,
-                             log.string(), kAdvice));
+                             log.string(), Advice()));
     }
     return chosen;
   }
@@ -299,7 +304,7 @@ SfmReport ModelReport(const ColmapModel& model, const std::vector<std::string>& 
       LogWarning(
           format("sfm: the cameras' optical axes miss their common focus point by a median {:.1f} degrees; "
                  "for photos taken around an object this suggests a wrong reconstruction; {}",
-                 focus->median_angle_deg, kAdvice));
+                 focus->median_angle_deg, Advice()));
     }
   }
   return report;
@@ -314,47 +319,47 @@ void CheckRegistered(const SfmReport& report, double min_registered) {
     listed += (i ? ", " : "") + report.left_out[i];
   if (report.left_out.size() > kMaxNamesListed)
     listed += format(" and {} more", report.left_out.size() - kMaxNamesListed);
-  throw UserError(
-      format("COLMAP registered only {} of {} photos ({:.0f}%, sfm.min_registered is {:.0f}%); left out: "
-             "{}; {}",
-             report.registered, report.images_given, 100 * fraction, 100 * min_registered, listed, kAdvice));
+  throw UserError(format("COLMAP registered only {} of {} photos ({:.0f}%, {} is {:.0f}%); left out: {}; {}",
+                         report.registered, report.images_given, 100 * fraction, OptionKey(&SfmOptions::min_registered),
+                         100 * min_registered, listed, Advice()));
 }
 
-// Matches with *matcher and maps; when that registers less than sfm.min_registered of the photos (or nothing),
-// adds the other kind of matching (RetryMatcher) once and maps again, *matcher then naming both ("sequential +
+// Matches with `matcher` and maps; when that registers less than sfm.min_registered of the photos (or nothing),
+// adds the other kind of matching (RetryMatcher) once and maps again, *matching then naming both ("sequential +
 // vocab_tree"). Returns the chosen model's folder.
-fs::path MatchAndMap(const ColmapRun& colmap, const SfmOptions& options, size_t photos, std::string* matcher,
-                     std::vector<SfmReport::Model>* models) {
-  colmap.Match(*matcher, photos);
-  const std::string retry = options.matcher == "auto" ? RetryMatcher(*matcher, photos) : "";
+fs::path MatchAndMap(const ColmapRun& colmap, const SfmOptions& options, size_t photos, Matcher matcher,
+                     std::string* matching, std::vector<SfmReport::Model>* models) {
+  *matching = EnumName(matcher);
+  colmap.Match(matcher, photos);
+  const std::optional<Matcher> retry = options.matcher == Matcher::kAuto ? RetryMatcher(matcher, photos) : std::nullopt;
   std::string failure;
   try {
     const fs::path chosen = colmap.MapLargestModel(photos, "mapping", "sparse", models);
     const size_t registered = ReadColmapModel(chosen).images.size();
-    if (retry.empty() || registered >= options.min_registered * photos) return chosen;
+    if (!retry || registered >= options.min_registered * photos) return chosen;
     failure = format("registered {} of {} photos", registered, photos);
   } catch (const UserError&) {
-    if (retry.empty()) throw;
+    if (!retry) throw;
     failure = "reconstructed nothing";
   }
-  LogWarning(format("sfm: {} matching {}; adding {} matching and mapping again", *matcher, failure, retry));
+  LogWarning(format("sfm: {} matching {}; adding {} matching and mapping again", *matching, failure, EnumName(*retry)));
   colmap.steps->AddSteps(3);  // the vocabulary tree or our descriptor matching, COLMAP's matching, mapping
-  colmap.Match(retry, photos);
-  *matcher += " + " + retry;
+  colmap.Match(*retry, photos);
+  matching->append(" + ").append(EnumName(*retry));
   return colmap.MapLargestModel(photos, "mapping again", "sparse_again", models);
 }
 
 }  // namespace
 
 void SfmOptions::Check() const {
-  CheckOption(exhaustive_max_images >= 2, "sfm.exhaustive_max_images", "must be at least 2");
-  CheckOption(sequential_overlap >= 1, "sfm.sequential_overlap", "must be at least 1");
-  CheckOption(retrieval_neighbours >= 1, "sfm.retrieval_neighbours", "must be at least 1");
-  CheckOption(max_image_size >= 100, "sfm.max_image_size",
+  CheckOption(*this, exhaustive_max_images, exhaustive_max_images >= 2, "must be at least 2");
+  CheckOption(*this, sequential_overlap, sequential_overlap >= 1, "must be at least 1");
+  CheckOption(*this, retrieval_neighbours, retrieval_neighbours >= 1, "must be at least 1");
+  CheckOption(*this, max_image_size, max_image_size >= 100,
               format("must be at least 100 pixels, not {}", max_image_size));
-  CheckOption(max_num_features >= 100, "sfm.max_num_features", "must be at least 100");
-  CheckOption(min_registered > 0 && min_registered <= 1, "sfm.min_registered", "must be in (0, 1]");
-  CheckOption(!colmap.empty(), "sfm.colmap", "must name the COLMAP program");
+  CheckOption(*this, max_num_features, max_num_features >= 100, "must be at least 100");
+  CheckOption(*this, min_registered, min_registered > 0 && min_registered <= 1, "must be in (0, 1]");
+  CheckOption(*this, colmap, !colmap.empty(), "must name the COLMAP program");
 }
 
 std::map<std::string, std::string> SfmStage::ExternalInputs(const Workspace& workspace, const Config& config) const {
@@ -385,10 +390,10 @@ void SfmStage::Run(StageContext& context) const {
   const auto groups = ImagesBySize(ingest);
   const bool camera_per_size = options.single_camera && groups.size() > 1;
   if (camera_per_size) LogInfo(format("sfm: the photos have {} sizes: one camera for each size", groups.size()));
-  const std::string matcher =
-      options.matcher != "auto" ? options.matcher : AutoMatcher(names, options.exhaustive_max_images);
-  LogInfo(format("sfm: COLMAP {}, {} photos, {} matching, features at {} px", version.ToString(), names.size(), matcher,
-                 options.max_image_size));
+  const Matcher matcher =
+      options.matcher != Matcher::kAuto ? options.matcher : AutoMatcher(names, options.exhaustive_max_images);
+  LogInfo(format("sfm: COLMAP {}, {} photos, {} matching, features at {} px", version.ToString(), names.size(),
+                 EnumName(matcher), options.max_image_size));
   // Extraction (one per image size), the vocabulary tree or our matching, COLMAP's matching, mapping, the
   // principal point's adjustment, undistortion.
   StepRunner steps(out.logs(), (options.refine_principal_point ? 6 : 5) + (camera_per_size ? groups.size() - 1 : 0));
@@ -397,8 +402,8 @@ void SfmStage::Run(StageContext& context) const {
 
   colmap.ExtractFeatures(camera_per_size ? groups : decltype(groups){});
   std::vector<SfmReport::Model> models;
-  std::string matching = matcher;
-  const fs::path chosen = MatchAndMap(colmap, options, names.size(), &matching, &models);
+  std::string matching;
+  const fs::path chosen = MatchAndMap(colmap, options, names.size(), matcher, &matching, &models);
   const fs::path model_dir = options.refine_principal_point ? colmap.RefinePrincipalPoint(chosen) : chosen;
   const ColmapModel model = ReadColmapModel(model_dir);
   SfmReport report = ModelReport(model, names);

@@ -5,6 +5,8 @@
 
 #include <string>
 
+#include "pipeline/options.h"
+#include "stages/matcher_choice.h"
 #include "stages/stage_results.h"
 
 namespace p2n {
@@ -14,7 +16,7 @@ struct SfmOptions {
 
   std::string camera_model = "RADIAL";  // COLMAP camera model of the photos
   bool single_camera = true;            // one camera shared by every photo
-  std::string matcher = "auto";         // auto: AutoMatcher (matcher_choice.h)
+  Matcher matcher = Matcher::kAuto;     // auto: AutoMatcher (matcher_choice.h)
   int exhaustive_max_images = 100;      // photos above which auto matching is sequential or by retrieval
   int sequential_overlap = 12;          // neighbours each photo is matched with (sequential)
   int retrieval_neighbours = 20;        // most similar photos each photo is matched with (vocab_tree)
@@ -36,8 +38,7 @@ struct SfmOptions {
       "camera's counter), vocab_tree (the most similar photos, by a vocabulary tree built from them: any order), or "
       "auto: exhaustive up to sfm.exhaustive_max_images photos; above, sequential when the names are a numbered "
       "sequence, else vocab_tree; when too few photos register, the other kind of matching is added once and the "
-      "mapping rerun",
-      "", OptionKind::kResult, {"auto", "exhaustive", "sequential", "vocab_tree"});
+      "mapping rerun");
     v("exhaustive_max_images", exhaustive_max_images,
       "photos above which auto matching is sequential (numbered names) or by retrieval (others)", "images");
     v("sequential_overlap", sequential_overlap, "neighbours each photo is matched with (sequential)", "images");

@@ -4,15 +4,15 @@
 #include <cmath>
 #include <optional>
 
+#include "base/binary_io.h"
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 #include "formats/output_frame.h"
 #include "formats/ply.h"
-#include "nerf/binary_io.h"
 #include "nerf/plot.h"
 #include "nerf/renderer.h"
 #include "pipeline/cancel.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "splat/field_init.h"
 #include "splat/splat_ply.h"
@@ -32,24 +32,24 @@ namespace p2n {
 namespace fs = std::filesystem;
 
 void SplatOptions::Check() const {
-  CheckOption(time_budget >= 0, "splat.time_budget", "must be 0 (by the preset) or positive");
-  CheckOption(steps >= 0, "splat.steps", "must be 0 (no limit) or positive");
-  CheckOption(sh_degree >= 0 && sh_degree <= kMaxShDegree, "splat.sh_degree", "must be 0..3");
-  CheckOption(init_width >= 8 && init_width <= 8192, "splat.init_width", "must be 8..8192");
-  CheckOption(max_gaussians >= 1, "splat.max_gaussians", "must be positive");
-  CheckOption(coarse >= 0 && coarse <= 1, "splat.coarse", "must be 0..1");
-  CheckOption(max_image_size == 0 || max_image_size >= 16, "splat.max_image_size",
+  CheckOption(*this, time_budget, time_budget >= 0, "must be 0 (by the preset) or positive");
+  CheckOption(*this, steps, steps >= 0, "must be 0 (no limit) or positive");
+  CheckOption(*this, sh_degree, sh_degree >= 0 && sh_degree <= kMaxShDegree, "must be 0..3");
+  CheckOption(*this, init_width, init_width >= 8 && init_width <= 8192, "must be 8..8192");
+  CheckOption(*this, max_gaussians, max_gaussians >= 1, "must be positive");
+  CheckOption(*this, coarse, coarse >= 0 && coarse <= 1, "must be 0..1");
+  CheckOption(*this, max_image_size, max_image_size == 0 || max_image_size >= 16,
               "must be 0 (as they are) or at least 16 pixels");
-  CheckOption(ssim_weight >= 0 && ssim_weight <= 1, "splat.ssim_weight", "must be 0..1");
-  CheckOption(eval_interval > 0, "splat.eval_interval", "must be positive");
-  CheckOption(checkpoint_interval >= 0, "splat.checkpoint_interval", "must be 0 (none) or positive");
+  CheckOption(*this, ssim_weight, ssim_weight >= 0 && ssim_weight <= 1, "must be 0..1");
+  CheckOption(*this, eval_interval, eval_interval > 0, "must be positive");
+  CheckOption(*this, checkpoint_interval, checkpoint_interval >= 0, "must be 0 (none) or positive");
 }
 
-double SplatTimeBudget(const SplatOptions& options, const std::string& train_preset) {
+double SplatTimeBudget(const SplatOptions& options, PresetName train_preset) {
   if (options.time_budget > 0 || options.steps > 0) return options.time_budget;
   // The default preset's split between the field and the splats, and quality's 480 s: docs/benchmarks.md.
-  if (train_preset == "fast") return 30;
-  return train_preset == "quality" ? 480 : 180;
+  if (train_preset == PresetName::kFast) return 30;
+  return train_preset == PresetName::kQuality ? 480 : 180;
 }
 
 namespace {
@@ -84,9 +84,8 @@ Gaussians<float> GaussiansFromSparseFile(const fs::path& file, const FieldInitOp
   const std::vector<ColouredPoint> cloud = fs::exists(file) ? ReadPly(file) : std::vector<ColouredPoint>{};
   if (cloud.empty()) {
     throw UserError(
-        format("splat.init sparse: '{}' has no points (a dataset imported with its cameras has none); "
-               "use --splat.init field",
-               file.string()));
+        format("{0} sparse: '{1}' has no points (a dataset imported with its cameras has none); use --{0} field",
+               OptionKey(&SplatOptions::init), file.string()));
   }
   std::vector<Eigen::Vector3d> points;
   std::vector<Eigen::Vector3f> rgb;
@@ -101,16 +100,15 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   SplatSetup setup;
   const PosesResult poses_result = Upstream<PosesResult>(context);
   const TrainResult train = Upstream<TrainResult>(context);
-  const NerfModel model = LoadTrainedModel(train.model());
+  const TrainedField trained = ReadTrainedField(train);
+  const NerfModel& model = trained.model;
   const ImportedDataset poses = LoadTransformsJson(poses_result.transforms(), context.workspace.root());
   setup.data = LoadTrainingData(poses);
   setup.background = model.background;
-  if (model.info.contains("heldout_psnr") && model.info["heldout_psnr"].is_number())
-    setup.field_psnr = model.info["heldout_psnr"].get<double>();
-  const std::map<std::string, CameraCorrection> corrections = ReadCameraCorrections(train.report());
+  setup.field_psnr = trained.report.heldout_psnr;
   for (TrainView& view : setup.data.train) {
-    const auto found = corrections.find(view.name);
-    if (found != corrections.end()) view.camera = CorrectedCamera(view.camera, found->second.data());
+    const auto found = trained.corrections.find(view.name);
+    if (found != trained.corrections.end()) view.camera = CorrectedCamera(view.camera, found->second.data());
   }
 
   FieldInitOptions init;
@@ -120,7 +118,7 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   for (const TrainView& view : setup.data.train) pixels += size_t(view.camera.width) * view.camera.height;
   init.max_gaussians = std::min(static_cast<size_t>(options.max_gaussians), pixels / kPixelsPerSplat);
   init.sh_degree = options.sh_degree;
-  if (options.init == "sparse") {
+  if (options.init == SplatInit::kSparse) {
     setup.gaussians = GaussiansFromSparseFile(poses_result.sparse_points(), init);
   } else {
     const std::shared_ptr<const ViewRenders> renders = RenderViewsSmall(
@@ -131,7 +129,7 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   setup.frame = MakeOutputFrame(options.frame, poses);
   if (setup.frame.rotation.determinant() <= 0) {
     LogWarning("splat: the source frame is mirrored; splats.ply is written in the normalised frame");
-    setup.frame = MakeOutputFrame("normalized", poses);
+    setup.frame = MakeOutputFrame(FrameKind::kNormalized, poses);
   }
   ApplySimilarity(setup.frame.rotation, setup.frame.translation, &setup.gaussians);
   for (auto* views : {&setup.data.train, &setup.data.heldout}) {
@@ -143,8 +141,8 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   const int full_width = setup.data.train.front().camera.width;
   setup.data.train = FittedViews(setup.data.train, options.max_image_size);
   if (setup.data.train.front().camera.width != full_width) {
-    LogInfo(format("splat: optimised on the photos at {}x{} (splat.max_image_size {})",
-                   setup.data.train.front().camera.width, setup.data.train.front().camera.height,
+    LogInfo(format("splat: optimised on the photos at {}x{} ({} {})", setup.data.train.front().camera.width,
+                   setup.data.train.front().camera.height, OptionKey(options, options.max_image_size),
                    options.max_image_size));
   }
   return setup;
@@ -210,7 +208,7 @@ SplatReport MakeSplatReport(const SplatTrainer& trainer, const SplatSetup& setup
   report.enabled = true;
   report.splats = trainer.gaussians().size();
   report.initial_splats = setup.gaussians.size();
-  report.init = options.init;
+  report.init = EnumName(options.init);
   report.sh_degree = trainer.gaussians().sh_degree;
   report.steps = trainer.step();
   report.seconds = seconds;
@@ -222,7 +220,7 @@ SplatReport MakeSplatReport(const SplatTrainer& trainer, const SplatSetup& setup
   }
   report.heldout_psnr_per_view = scores.psnr;
   report.seconds_per_view = scores.seconds_per_view;
-  report.frame = setup.frame.name;
+  report.frame = setup.frame.kind;
   report.frame_description = setup.frame.description;
   report.near = near;
   report.background = trainer.background();
@@ -243,7 +241,7 @@ void SplatStage::Run(StageContext& context) const {
   const SplatSetup setup = LoadSplatSetup(context, options);
   const double near = 0.01 * setup.extent;
   LogInfo(format("splat: {} splats placed from the {}; {} training and {} held-out views, {}", setup.gaussians.size(),
-                 options.init == "sparse" ? "sparse points" : "field", setup.data.train.size(),
+                 options.init == SplatInit::kSparse ? "sparse points" : "field", setup.data.train.size(),
                  setup.data.heldout.size(),
                  budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
 
@@ -252,8 +250,8 @@ void SplatStage::Run(StageContext& context) const {
   trainer_options.max_gaussians = 2 * static_cast<size_t>(options.max_gaussians);
   trainer_options.ssim_weight = options.ssim_weight;
   SplatScene scene{&setup.data.train, setup.background, setup.extent, near};
-  scene.learn_background =
-      options.background == "auto" && FirstWithAlpha(setup.data.train) == nullptr && !setup.data.background_known;
+  scene.learn_background = options.background == SplatBackground::kAuto &&
+                           FirstWithAlpha(setup.data.train) == nullptr && !setup.data.background_known;
   SplatTrainer trainer(setup.gaussians, scene, trainer_options);
   RunState state;
   const fs::path checkpoint = CheckpointFile(context);

@@ -7,9 +7,26 @@
 
 #include <string>
 
+#include "formats/output_frame.h"
+#include "pipeline/options.h"
 #include "stages/stage_results.h"
+#include "stages/train_presets.h"
 
 namespace p2n {
+
+enum class SplatInit { kField, kSparse };
+template <>
+struct EnumNames<SplatInit> {
+  static constexpr std::pair<SplatInit, const char*> kValues[] = {{SplatInit::kField, "field"},
+                                                                  {SplatInit::kSparse, "sparse"}};
+};
+
+enum class SplatBackground { kAuto, kFixed };
+template <>
+struct EnumNames<SplatBackground> {
+  static constexpr std::pair<SplatBackground, const char*> kValues[] = {{SplatBackground::kAuto, "auto"},
+                                                                        {SplatBackground::kFixed, "fixed"}};
+};
 
 struct SplatOptions {
   static constexpr const char* kSection = "splat";  // its options are splat.NAME
@@ -18,14 +35,14 @@ struct SplatOptions {
   double time_budget = 0;  // seconds of optimisation; 0: by the training preset (SplatTimeBudget)
   int steps = 0;           // stop after this many steps; 0: no step limit
   int sh_degree = 3;
-  std::string init = "field";       // field | sparse: where the first Gaussians come from
-  int init_width = 128;             // training views rendered this wide to place the first Gaussians
-  int max_gaussians = 100'000;      // of the first; densification may double it. Fewer: more steps for the time
-  double coarse = 0.75;             // share of the optimisation on the photos at half size
-  int max_image_size = 1080;        // the photos are downsized to at most this on their longest side; 0: any size
-  double ssim_weight = 0.1;         // the loss: (1 - w) L1 + w (1 - SSIM)
-  std::string background = "auto";  // auto: learnt behind photos, the field's where known; fixed: the field's
-  std::string frame = "source";
+  SplatInit init = SplatInit::kField;  // where the first Gaussians come from
+  int init_width = 128;                // training views rendered this wide to place the first Gaussians
+  int max_gaussians = 100'000;         // of the first; densification may double it. Fewer: more steps for the time
+  double coarse = 0.75;                // share of the optimisation on the photos at half size
+  int max_image_size = 1080;           // the photos are downsized to at most this on their longest side; 0: any size
+  double ssim_weight = 0.1;            // the loss: (1 - w) L1 + w (1 - SSIM)
+  SplatBackground background = SplatBackground::kAuto;  // learnt behind photos, the field's where known
+  FrameKind frame = FrameKind::kSource;
   double eval_interval = 30;  // seconds of optimisation between held-out evaluations (each of every held-out view)
   double checkpoint_interval = 60;
   int seed = 0;
@@ -39,8 +56,7 @@ struct SplatOptions {
     v("sh_degree", sh_degree, "spherical-harmonics degree of the splats' colours (0: one colour each)");
     v("init", init,
       "where the first splats come from: field (its surfaces, seen by the training views) or sparse (COLMAP's "
-      "sparse points, as 3D Gaussian Splatting starts; for comparison)",
-      "", OptionKind::kResult, {"field", "sparse"});
+      "sparse points, as 3D Gaussian Splatting starts; for comparison)");
     v("init_width", init_width,
       "width the training views are rendered at to place the first splats (narrower beyond 2 M pixels in all)",
       "pixels");
@@ -56,11 +72,9 @@ struct SplatOptions {
     v("background", background,
       "the colour behind the splats: auto (learnt with them where the photos have no alpha: what lies beyond the "
       "splats, a sky or a far wall; the field's where the images have alpha or the import knows the colour they were "
-      "composited or rendered on) or fixed (the field's)",
-      "", OptionKind::kResult, {"auto", "fixed"});
+      "composited or rendered on) or fixed (the field's)");
     v("frame", frame,
-      "coordinates of splats.ply: source (COLMAP's world, or the dataset's) or normalized (the training frame)", "",
-      OptionKind::kResult, {"source", "normalized"});
+      "coordinates of splats.ply: source (COLMAP's world, or the dataset's) or normalized (the training frame)");
     v("eval_interval", eval_interval, "optimisation time between held-out evaluations (metrics.csv rows)", "s");
     v("checkpoint_interval", checkpoint_interval, "time between checkpoints that a killed run resumes from; 0: none",
       "s", OptionKind::kRuntime);
@@ -70,7 +84,7 @@ struct SplatOptions {
 };
 
 // splat.time_budget, or the training preset's share when it is 0.
-double SplatTimeBudget(const SplatOptions& options, const std::string& train_preset);
+double SplatTimeBudget(const SplatOptions& options, PresetName train_preset);
 
 class SplatStage : public StageOf<SplatResult> {
  public:

@@ -1,6 +1,6 @@
 #include "stages/splat_viewer.h"
 
-#include "pipeline/file_util.h"
+#include "base/file_util.h"
 #include "splat/compressed_ply.h"
 #include "viewer/viewer_page.h"
 

@@ -1,7 +1,7 @@
 #include "stages/stage_io.h"
 
-#include "pipeline/errors.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/format.h"
 
 namespace p2n {
 
@@ -24,6 +24,12 @@ NerfModel LoadTrainedModel(const std::filesystem::path& model_bin) {
   } catch (const std::runtime_error& error) {
     throw UserError(format("{}; remake it with: photo2nerf train -w WORKSPACE --force", error.what()));
   }
+}
+
+TrainedField ReadTrainedField(const TrainResult& train) {
+  TrainedField field{LoadTrainedModel(train.model()), TrainReport::Read(train.report()), {}};
+  field.corrections = CameraCorrections(field.report.camera_refinement, train.report());
+  return field;
 }
 
 }  // namespace p2n

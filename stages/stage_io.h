@@ -6,6 +6,9 @@
 #include <functional>
 
 #include "nerf/nerf_model.h"
+#include "stages/camera_corrections.h"
+#include "stages/stage_reports.h"
+#include "stages/stage_results.h"
 
 namespace p2n {
 
@@ -15,5 +18,13 @@ void WriteOrExplain(const std::function<void()>& write);
 
 // LoadModel, with a damaged or foreign file reported as a UserError that says how to remake it.
 NerfModel LoadTrainedModel(const std::filesystem::path& model_bin);
+
+// The train stage's result as the later stages take it, each file read once.
+struct TrainedField {
+  NerfModel model;
+  TrainReport report;
+  std::map<std::string, CameraCorrection> corrections;  // by training image name; empty without camera refinement
+};
+TrainedField ReadTrainedField(const TrainResult& train);
 
 }  // namespace p2n

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <type_traits>
 
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 #include "stages/stage_results.h"
 
 namespace p2n {
@@ -80,480 +80,484 @@ class Fields {
   std::string prefix_;
 };
 
-nlohmann::json OrNull(const std::optional<double>& value) {
-  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+template <class T>
+struct IsOptional : std::false_type {};
+template <class T>
+struct IsOptional<std::optional<T>> : std::true_type {};
+template <class T>
+struct IsVector : std::false_type {};
+template <class T>
+struct IsVector<std::vector<T>> : std::true_type {};
+
+// A report's struct declares its JSON once, in Describe(s, value) below: s(key, field) for each field, and
+//   s.Optional(key, field)  a field older reports lack (read as its default when missing);
+//   s.Written(key, value)   written for whoever reads the file, never read back (rates, file names);
+//   s.ReadOnly(key, field)  read from a section another field writes (a summary of it);
+//   s.With<Codec>(key, field) written and read by Codec (a count written "all" for 0);
+//   s.Object(key, fn)       fields of this struct nested in an object;
+//   s.Check(key, problem, ok) a rule that a file read must satisfy.
+// Describe takes the struct by non-const reference; the writer only reads it.
+template <class T, class = void>
+struct HasDescribe : std::false_type {};
+
+class JsonWriter;
+template <class T>
+struct HasDescribe<T, std::void_t<decltype(Describe(std::declval<JsonWriter&>(), std::declval<T&>()))>>
+    : std::true_type {};
+
+template <class T>
+nlohmann::json ToJsonValue(const T& value);
+
+class JsonWriter {
+ public:
+  template <class T>
+  void operator()(const char* key, const T& value) {
+    json[key] = ToJsonValue(value);
+  }
+  template <class T>
+  void Optional(const char* key, const T& value) {
+    (*this)(key, value);
+  }
+  template <class T>
+  void Written(const char* key, const T& value) {
+    (*this)(key, value);
+  }
+  template <class T>
+  void ReadOnly(const char*, const T&) {}
+  template <class Codec, class T>
+  void With(const char* key, const T& value) {
+    json[key] = Codec::Write(value);
+  }
+  template <class Fn>
+  void Object(const char* key, Fn describe) {
+    JsonWriter inner;
+    describe(inner);
+    json[key] = std::move(inner.json);
+  }
+  template <class Ok>
+  void Check(const char*, const char*, Ok) {}
+
+  nlohmann::json json = nlohmann::json::object();
+};
+
+template <class T>
+nlohmann::json ToJsonValue(const T& value) {
+  if constexpr (IsOptional<T>::value) {
+    return value ? ToJsonValue(*value) : nlohmann::json(nullptr);
+  } else if constexpr (IsVector<T>::value) {
+    nlohmann::json array = nlohmann::json::array();
+    for (const auto& element : value) array.push_back(ToJsonValue(element));
+    return array;
+  } else if constexpr (std::is_enum_v<T>) {
+    return EnumName(value);
+  } else if constexpr (HasDescribe<T>::value) {
+    JsonWriter writer;
+    Describe(writer, const_cast<T&>(value));
+    return std::move(writer.json);
+  } else {
+    return nlohmann::json(value);
+  }
 }
 
-// The rates are written beside the counts for whoever reads the file; Read() takes the counts.
-nlohmann::json ThroughputJson(const std::optional<TrainReport::Throughput>& throughput) {
-  if (!throughput) return nullptr;
-  const TrainReport::Throughput& t = *throughput;
-  return {{"steps", t.steps},
-          {"seconds", t.seconds},
-          {"rays", t.rays},
-          {"samples", t.samples},
-          {"samples_per_second", t.SamplesPerSecond()},
-          {"samples_per_ray", t.SamplesPerRay()}};
+template <class T>
+struct IsDescribedVector : std::false_type {};
+template <class T>
+struct IsDescribedVector<std::vector<T>> : HasDescribe<T> {};
+
+class JsonReader {
+ public:
+  explicit JsonReader(Fields fields) : fields_(std::move(fields)) {}
+
+  template <class T>
+  void operator()(const char* key, T& value) {
+    Read(fields_, key, &value);
+  }
+  template <class T>
+  void Optional(const char* key, T& value) {
+    if (fields_.Has(key)) Read(fields_, key, &value);
+  }
+  template <class T>
+  void Written(const char*, const T&) {}
+  template <class T>
+  void ReadOnly(const char* key, T& value) {
+    Read(fields_, key, &value);
+  }
+  template <class Codec, class T>
+  void With(const char* key, T& value) {
+    value = Codec::Read(fields_, key);
+  }
+  template <class Fn>
+  void Object(const char* key, Fn describe) {
+    JsonReader inner(fields_.Object(key));
+    describe(inner);
+  }
+  template <class Ok>
+  void Check(const char* key, const char* problem, Ok ok) {
+    if (!ok()) fields_.Fail(key, problem);
+  }
+
+  template <class T>
+  static void Read(const Fields& fields, const char* key, T* value) {
+    if constexpr (IsOptional<T>::value) {
+      value->reset();
+      if (fields.Has(key)) Read(fields, key, &value->emplace());
+    } else if constexpr (IsDescribedVector<T>::value) {
+      value->clear();
+      fields.ForEach(key, [&](const Fields& element) {
+        JsonReader reader(element);
+        Describe(reader, value->emplace_back());
+      });
+    } else if constexpr (std::is_enum_v<T>) {
+      std::string name;
+      fields.Get(key, &name);
+      const std::optional<T> named = EnumFromName<T>(name);
+      if (!named) fields.Fail(key, format("must be {}, not '{}'", EnumNamesText<T>(), name));
+      *value = *named;
+    } else if constexpr (HasDescribe<T>::value) {
+      JsonReader reader(fields.Object(key));
+      Describe(reader, *value);
+    } else {
+      fields.Get(key, value);
+    }
+  }
+
+ private:
+  Fields fields_;
+};
+
+// A report read from `file`, written by `stage`.
+template <class Report>
+Report ReadReport(const fs::path& file, const char* stage) {
+  const nlohmann::json json = ReadJsonFile(file);
+  JsonReader reader{Fields(json, file, stage)};
+  Report report;
+  Describe(reader, report);
+  return report;
+}
+
+template <class Report>
+nlohmann::json WriteReport(const Report& report) {
+  return ToJsonValue(report);
 }
 
 // A pixels-per-view count as written: the number, or "all" for 0.
-nlohmann::json PixelsPerView(int pixels) { return pixels == 0 ? nlohmann::json("all") : nlohmann::json(pixels); }
-
-int ReadPixelsPerView(const Fields& fields, const char* key) {
-  const nlohmann::json& value = fields.At(key);
-  if (value == "all") return 0;
-  if (!value.is_number_integer() || value.get<int64_t>() < 1) fields.Fail(key, "must be \"all\" or a positive count");
-  return value.get<int>();
-}
-
-void ReadAppearance(const Fields& fields, TrainReport::Appearance* appearance) {
-  fields.Get("enabled", &appearance->enabled);
-  if (!appearance->enabled) return;
-  fields.Get("gain_min", &appearance->gain_min);
-  fields.Get("gain_max", &appearance->gain_max);
-  fields.ForEach("per_view", [&](const Fields& view) {
-    TrainReport::AppearanceView& out = appearance->per_view.emplace_back();
-    view.Get("view", &out.view);
-    view.Get("gain", &out.gain);
-    view.Get("transform", &out.transform);
-  });
-}
-
-nlohmann::json WarningsJson(const std::vector<FitWarning>& warnings) {
-  nlohmann::json json = nlohmann::json::array();
-  for (const FitWarning& w : warnings) json.push_back({{"code", w.code}, {"figure", w.figure}, {"message", w.message}});
-  return json;
-}
-
-// "warnings", where the report has them (reports written before they were checked have none).
-std::vector<FitWarning> ReadWarnings(const Fields& fields) {
-  std::vector<FitWarning> warnings;
-  if (!fields.Has("warnings")) return warnings;
-  fields.ForEach("warnings", [&](const Fields& warning) {
-    FitWarning& read = warnings.emplace_back();
-    warning.Get("code", &read.code);
-    warning.Get("figure", &read.figure);
-    warning.Get("message", &read.message);
-  });
-  return warnings;
-}
+struct PixelsPerView {
+  static nlohmann::json Write(int pixels) { return pixels == 0 ? nlohmann::json("all") : nlohmann::json(pixels); }
+  static int Read(const Fields& fields, const char* key) {
+    const nlohmann::json& value = fields.At(key);
+    if (value == "all") return 0;
+    if (!value.is_number_integer() || value.get<int64_t>() < 1) fields.Fail(key, "must be \"all\" or a positive count");
+    return value.get<int>();
+  }
+};
 
 }  // namespace
 
-nlohmann::json IngestReport::ToJson() const {
-  nlohmann::json images_json = nlohmann::json::array(), skipped_json = nlohmann::json::array();
-  for (const IngestedImage& image : images) {
-    images_json.push_back({{"name", image.name},
-                           {"source", image.source},
-                           {"width", image.width},
-                           {"height", image.height},
-                           {"channels", image.channels},
-                           {"source_width", image.source_width},
-                           {"source_height", image.source_height},
-                           {"exif_orientation", image.orientation},
-                           {"from_cmyk", image.from_cmyk},
-                           {"fingerprint", image.fingerprint}});
-  }
-  for (const SkippedPhoto& skip : skipped) skipped_json.push_back({{"file", skip.file}, {"reason", skip.reason}});
-  return {{"input_folder", input_folder}, {"images", images_json}, {"skipped", skipped_json}};
+template <class S>
+void Describe(S& s, IngestedImage& image) {
+  s("name", image.name);
+  s("source", image.source);
+  s("width", image.width);
+  s("height", image.height);
+  s("channels", image.channels);
+  s("source_width", image.source_width);
+  s("source_height", image.source_height);
+  s("exif_orientation", image.orientation);
+  s("from_cmyk", image.from_cmyk);
+  s("fingerprint", image.fingerprint);
+  s.Check("width", "and height must be positive", [&] { return image.width >= 1 && image.height >= 1; });
 }
 
-IngestReport IngestReport::Read(const fs::path& file) {
-  const nlohmann::json json = ReadJsonFile(file);
-  const Fields fields(json, file, IngestResult::kId.name);
-  IngestReport report;
-  fields.Get("input_folder", &report.input_folder);
-  fields.ForEach("images", [&](const Fields& image) {
-    IngestedImage& out = report.images.emplace_back();
-    image.Get("name", &out.name);
-    image.Get("source", &out.source);
-    image.Get("width", &out.width);
-    image.Get("height", &out.height);
-    image.Get("channels", &out.channels);
-    image.Get("source_width", &out.source_width);
-    image.Get("source_height", &out.source_height);
-    image.Get("exif_orientation", &out.orientation);
-    image.Get("from_cmyk", &out.from_cmyk);
-    image.Get("fingerprint", &out.fingerprint);
-    if (out.width < 1 || out.height < 1) image.Fail("width", "and height must be positive");
+template <class S>
+void Describe(S& s, SkippedPhoto& skip) {
+  s("file", skip.file);
+  s("reason", skip.reason);
+}
+
+template <class S>
+void Describe(S& s, IngestReport& report) {
+  s("input_folder", report.input_folder);
+  s("images", report.images);
+  s("skipped", report.skipped);
+}
+
+template <class S>
+void Describe(S& s, SfmReport::Model& model) {
+  s("path", model.path);
+  s("registered", model.registered);
+}
+
+template <class S>
+void Describe(S& s, SfmReport::Step& step) {
+  s("step", step.step);
+  s("wall_seconds", step.wall_seconds);
+  s("log", step.log);
+}
+
+template <class S>
+void Describe(S& s, SfmReport& report) {
+  s("images_given", report.images_given);
+  s("registered", report.registered);
+  s("registered_percent", report.registered_percent);
+  s("left_out", report.left_out);
+  s("points", report.points);
+  s("mean_reprojection_error_px", report.mean_reprojection_error_px);
+  s("mean_track_length", report.mean_track_length);
+  s("median_axis_to_focus_angle_deg", report.median_axis_to_focus_angle_deg);
+  s("colmap_version", report.colmap_version);
+  s("matcher", report.matcher);
+  s("models", report.models);
+  s("chosen_model", report.chosen_model);
+  s("steps", report.steps);
+  s.Check("registered", "must be at most images_given, which must be positive",
+          [&] { return report.images_given > 0 && report.registered <= report.images_given; });
+}
+
+template <class S>
+void Describe(S& s, FitWarning& warning) {
+  s("code", warning.code);
+  s("figure", warning.figure);
+  s("message", warning.message);
+}
+
+template <class S>
+void Describe(S& s, TrainReport::ViewPsnr& view) {
+  s("view", view.view);
+  s("psnr", view.psnr);
+}
+
+template <class S>
+void Describe(S& s, TrainReport::Evaluations& evaluations) {
+  s("count", evaluations.count);
+  s("seconds", evaluations.seconds);
+  s.template With<PixelsPerView>("pixels_per_view", evaluations.pixels_per_view);
+}
+
+template <class S>
+void Describe(S& s, TrainReport::Throughput& throughput) {
+  s("steps", throughput.steps);
+  s("seconds", throughput.seconds);
+  s("rays", throughput.rays);
+  s("samples", throughput.samples);
+  s.Written("samples_per_second", throughput.SamplesPerSecond());
+  s.Written("samples_per_ray", throughput.SamplesPerRay());
+}
+
+template <class S>
+void Describe(S& s, TrainReport::Trainer& trainer) {
+  s("march_step", trainer.march_step);
+  s("rendered_march_step", trainer.rendered_march_step);
+  s("batch_samples", trainer.batch_samples);
+  s("late_batch_samples", trainer.late_batch_samples);
+  s("scene", trainer.scene);
+  s("learning_rate", trainer.learning_rate);
+  s("distortion_weight", trainer.distortion_weight);
+  s("appearance", trainer.appearance);
+  s("refine_cameras", trainer.refine_cameras);
+  s("error_sampling", trainer.error_sampling);
+  s("background", trainer.background);
+  s("background_colour", trainer.background_colour);
+}
+
+template <class S>
+void Describe(S& s, TrainReport::AppearanceView& view) {
+  s("view", view.view);
+  s("gain", view.gain);
+  s("transform", view.transform);
+}
+
+template <class S>
+void Describe(S& s, TrainReport::Appearance& appearance) {
+  s("enabled", appearance.enabled);
+  if (!appearance.enabled) return;
+  s("gain_min", appearance.gain_min);
+  s("gain_max", appearance.gain_max);
+  s("per_view", appearance.per_view);
+}
+
+template <class S>
+void Describe(S& s, TrainReport::Refinement& refinement) {
+  s("enabled", refinement.enabled);
+  if (!refinement.enabled) return;
+  s("rotation_degrees_median", refinement.rotation_degrees_median);
+  s("rotation_degrees_max", refinement.rotation_degrees_max);
+  s("shift_median", refinement.shift_median);
+  s("shift_max", refinement.shift_max);
+}
+
+template <class S>
+void Describe(S& s, TrainReport& report) {
+  s("steps", report.steps);
+  s("wall_seconds", report.wall_seconds);
+  s("heldout_psnr", report.heldout_psnr);
+  s("heldout_step_scale", report.heldout_step_scale);
+  s("heldout_views", report.heldout_views);
+  s("heldout_split", report.heldout_split);
+  s.template With<PixelsPerView>("heldout_pixels_per_view", report.heldout_pixels_per_view);
+  s("heldout_per_view", report.heldout_per_view);
+  s.Optional("heldout_rule", report.heldout_rule);
+  s("training_psnr", report.training_psnr);
+  s.Optional("warnings", report.warnings);
+  s("heldout_psnr_fitted", report.heldout_psnr_fitted);
+  s.Written("heldout_psnr_fitted_is",
+            "each held-out photo's colour transform fitted (least squares) on its left half, PSNR on its right half "
+            "(NeRF-W)");
+  s("evaluations_during_training", report.evaluations_during_training);
+  s("skipped_steps", report.skipped_steps);
+  s("resumed_from_step", report.resumed_from_step);
+  s("training_views", report.training_views);
+  s("samples_per_ray_rendered", report.samples_per_ray_rendered);
+  s("render_seconds_per_view", report.render_seconds_per_view);
+  s("occupied_fraction", report.occupied_fraction);
+  s("throughput", report.throughput);
+  s("field", report.field);
+  s("trainer", report.trainer);
+  s("appearance", report.appearance);
+  s("camera_refinement", report.camera_refinement);
+  s.ReadOnly("camera_refinement", report.refinement);
+}
+
+template <class S>
+void Describe(S& s, SplatReport& report) {
+  s("enabled", report.enabled);
+  if (!report.enabled) return;
+  s("splats", report.splats);
+  s("initial_splats", report.initial_splats);
+  s("init", report.init);
+  s("sh_degree", report.sh_degree);
+  s("steps", report.steps);
+  s("seconds", report.seconds);
+  s("resumed_from_step", report.resumed_from_step);
+  s("heldout_views", report.heldout_views);
+  s("heldout_psnr", report.heldout_psnr);
+  s("heldout_ssim", report.heldout_ssim);
+  s("heldout_psnr_per_view", report.heldout_psnr_per_view);
+  s("seconds_per_view", report.seconds_per_view);
+  s("frame", report.frame);
+  s("frame_description", report.frame_description);
+  s("near", report.near);
+  s("background", report.background);
+  s.Written("file", SplatResult{}.splats().string());
+  s("file_bytes", report.file_bytes);
+  s.Written("viewer", SplatResult{}.viewer().string());
+  s("viewer_bytes", report.viewer_bytes);
+  s.Optional("warnings", report.warnings);
+  s.Check("near", "must be positive", [&] { return report.near > 0; });
+}
+
+template <class S>
+void Describe(S& s, HeldoutScore& score) {
+  s("view", score.view);
+  s("render", score.render);
+  s("error_map", score.error_map);
+  s("photo", score.photo);
+  s("psnr", score.psnr);
+  s("ssim", score.ssim);
+  s("seconds", score.seconds);
+}
+
+template <class S>
+void Describe(S& s, EvalReport& report) {
+  s("split", report.split);
+  s("source", report.source);
+  s("views", report.views);
+  s("psnr", report.psnr);
+  s("ssim", report.ssim);
+  s("seconds_per_view", report.seconds_per_view);
+  s("samples_per_ray", report.samples_per_ray);
+  s("step_scale", report.step_scale);
+  s("heat_map_max_error", report.heat_map_max_error);
+  s("field_psnr", report.field_psnr);
+  s("splats_psnr", report.splats_psnr);
+}
+
+template <class S>
+void Describe(S& s, PathVideo& video) {
+  s("file", video.file);
+  s("codec", video.codec);
+  s("fps", video.fps);
+}
+
+template <class S>
+void Describe(S& s, PathReport& report) {
+  s("source", report.source);
+  s("kind", report.kind);
+  s("frames", report.frames);
+  s("rendered_frames", report.rendered_frames);
+  s("width", report.width);
+  s("height", report.height);
+  s("seconds_per_frame", report.seconds_per_frame);
+  s("frames_per_second", report.frames_per_second);
+  s("samples_per_ray", report.samples_per_ray);
+  s("depth_png_max", report.depth_png_max);
+  s("video", report.video);
+}
+
+template <class S>
+void Describe(S& s, ExportReport::Mesh& mesh) {
+  s("file", mesh.file);
+  s("vertices", mesh.vertices);
+  s("triangles", mesh.triangles);
+  s("watertight", mesh.watertight);
+  s("border_edges", mesh.border_edges);
+  s("non_manifold_edges", mesh.non_manifold_edges);
+  s("misoriented_edges", mesh.misoriented_edges);
+  s("resolution", mesh.resolution);
+  s("threshold", mesh.threshold);
+  s("threshold_from_field", mesh.threshold_from_field);
+  s.Object("region", [&](auto& region) {
+    region("kind", mesh.region);
+    region("centre", mesh.centre);
+    region("half_size", mesh.half_size);
   });
-  fields.ForEach("skipped", [&](const Fields& skip) {
-    SkippedPhoto& out = report.skipped.emplace_back();
-    skip.Get("file", &out.file);
-    skip.Get("reason", &out.reason);
-  });
-  return report;
 }
 
-nlohmann::json SfmReport::ToJson() const {
-  nlohmann::json models_json = nlohmann::json::array(), steps_json = nlohmann::json::array();
-  for (const Model& m : models) models_json.push_back({{"path", m.path}, {"registered", m.registered}});
-  for (const Step& step : steps)
-    steps_json.push_back({{"step", step.step}, {"wall_seconds", step.wall_seconds}, {"log", step.log}});
-  nlohmann::json json = {{"images_given", images_given},
-                         {"registered", registered},
-                         {"registered_percent", registered_percent},
-                         {"left_out", left_out},
-                         {"points", points},
-                         {"mean_reprojection_error_px", mean_reprojection_error_px},
-                         {"mean_track_length", mean_track_length},
-                         {"colmap_version", colmap_version},
-                         {"matcher", matcher},
-                         {"models", models_json},
-                         {"chosen_model", chosen_model},
-                         {"steps", steps_json}};
-  if (median_axis_to_focus_angle_deg) json["median_axis_to_focus_angle_deg"] = *median_axis_to_focus_angle_deg;
-  return json;
+template <class S>
+void Describe(S& s, ExportReport::Cameras& cameras) {
+  s("file", cameras.file);
+  s("views", cameras.views);
+  s("refined", cameras.refined);
 }
 
-SfmReport SfmReport::Read(const fs::path& file) {
-  const nlohmann::json json = ReadJsonFile(file);
-  const Fields fields(json, file, SfmResult::kId.name);
-  SfmReport report;
-  fields.Get("images_given", &report.images_given);
-  fields.Get("registered", &report.registered);
-  fields.Get("registered_percent", &report.registered_percent);
-  fields.Get("left_out", &report.left_out);
-  fields.Get("points", &report.points);
-  fields.Get("mean_reprojection_error_px", &report.mean_reprojection_error_px);
-  fields.Get("mean_track_length", &report.mean_track_length);
-  fields.Get("median_axis_to_focus_angle_deg", &report.median_axis_to_focus_angle_deg);
-  fields.Get("colmap_version", &report.colmap_version);
-  fields.Get("matcher", &report.matcher);
-  fields.Get("chosen_model", &report.chosen_model);
-  fields.ForEach("models", [&](const Fields& model) {
-    Model& out = report.models.emplace_back();
-    model.Get("path", &out.path);
-    model.Get("registered", &out.registered);
-  });
-  fields.ForEach("steps", [&](const Fields& step) {
-    Step& out = report.steps.emplace_back();
-    step.Get("step", &out.step);
-    step.Get("wall_seconds", &out.wall_seconds);
-    step.Get("log", &out.log);
-  });
-  if (report.images_given == 0 || report.registered > report.images_given)
-    fields.Fail("registered", "must be at most images_given, which must be positive");
-  return report;
+template <class S>
+void Describe(S& s, ExportedPoints& points) {
+  s("file", points.file);
+  s("count", points.count);
 }
 
-nlohmann::json TrainReport::ToJson() const {
-  nlohmann::json per_view = nlohmann::json::array();
-  for (const ViewPsnr& v : heldout_per_view) per_view.push_back({{"view", v.view}, {"psnr", v.psnr}});
-  nlohmann::json appearance_json = {{"enabled", appearance.enabled}};
-  if (appearance.enabled) {
-    nlohmann::json views = nlohmann::json::array();
-    for (const AppearanceView& v : appearance.per_view)
-      views.push_back({{"view", v.view}, {"gain", v.gain}, {"transform", v.transform}});
-    appearance_json.update({{"gain_min", appearance.gain_min}, {"gain_max", appearance.gain_max}, {"per_view", views}});
-  }
-  return {{"steps", steps},
-          {"wall_seconds", wall_seconds},
-          {"heldout_psnr", OrNull(heldout_psnr)},
-          {"heldout_step_scale", OrNull(heldout_step_scale)},
-          {"heldout_views", heldout_views},
-          {"heldout_split", heldout_split},
-          {"heldout_pixels_per_view", PixelsPerView(heldout_pixels_per_view)},
-          {"heldout_per_view", per_view},
-          {"heldout_rule", heldout_rule},
-          {"training_psnr", OrNull(training_psnr)},
-          {"warnings", WarningsJson(warnings)},
-          {"heldout_psnr_fitted", OrNull(heldout_psnr_fitted)},
-          {"heldout_psnr_fitted_is",
-           "each held-out photo's colour transform fitted (least squares) on its left half, PSNR on its right half "
-           "(NeRF-W)"},
-          {"evaluations_during_training",
-           {{"count", evaluations_during_training.count},
-            {"seconds", evaluations_during_training.seconds},
-            {"pixels_per_view", PixelsPerView(evaluations_during_training.pixels_per_view)}}},
-          {"skipped_steps", skipped_steps},
-          {"resumed_from_step", resumed_from_step},
-          {"training_views", training_views},
-          {"samples_per_ray_rendered", samples_per_ray_rendered},
-          {"render_seconds_per_view", render_seconds_per_view},
-          {"occupied_fraction", occupied_fraction},
-          {"throughput", ThroughputJson(throughput)},
-          {"field", field},
-          {"trainer",
-           {{"march_step", trainer.march_step},
-            {"rendered_march_step", trainer.rendered_march_step},
-            {"batch_samples", trainer.batch_samples},
-            {"late_batch_samples", trainer.late_batch_samples},
-            {"scene", trainer.scene},
-            {"learning_rate", trainer.learning_rate},
-            {"distortion_weight", trainer.distortion_weight},
-            {"appearance", trainer.appearance},
-            {"refine_cameras", trainer.refine_cameras},
-            {"error_sampling", trainer.error_sampling},
-            {"background", trainer.background},
-            {"background_colour", trainer.background_colour}}},
-          {"appearance", appearance_json},
-          {"camera_refinement", camera_refinement}};
+template <class S>
+void Describe(S& s, ExportReport& report) {
+  s("mesh", report.mesh);
+  s("frame", report.frame);
+  s("cameras", report.cameras);
+  s("points", report.points);
 }
 
-TrainReport TrainReport::Read(const fs::path& file) {
-  const nlohmann::json json = ReadJsonFile(file);
-  const Fields fields(json, file, TrainResult::kId.name);
-  TrainReport report;
-  fields.Get("steps", &report.steps);
-  fields.Get("wall_seconds", &report.wall_seconds);
-  fields.Get("heldout_psnr", &report.heldout_psnr);
-  fields.Get("heldout_step_scale", &report.heldout_step_scale);
-  fields.Get("heldout_views", &report.heldout_views);
-  fields.Get("heldout_split", &report.heldout_split);
-  report.heldout_pixels_per_view = ReadPixelsPerView(fields, "heldout_pixels_per_view");
-  fields.ForEach("heldout_per_view", [&](const Fields& view) {
-    ViewPsnr& score = report.heldout_per_view.emplace_back();
-    view.Get("view", &score.view);
-    view.Get("psnr", &score.psnr);
-  });
-  fields.Get("heldout_psnr_fitted", &report.heldout_psnr_fitted);
-  if (fields.Has("heldout_rule")) fields.Get("heldout_rule", &report.heldout_rule);
-  fields.Get("training_psnr", &report.training_psnr);
-  report.warnings = ReadWarnings(fields);
-  const Fields evaluations = fields.Object("evaluations_during_training");
-  evaluations.Get("count", &report.evaluations_during_training.count);
-  evaluations.Get("seconds", &report.evaluations_during_training.seconds);
-  report.evaluations_during_training.pixels_per_view = ReadPixelsPerView(evaluations, "pixels_per_view");
-  fields.Get("skipped_steps", &report.skipped_steps);
-  fields.Get("resumed_from_step", &report.resumed_from_step);
-  fields.Get("training_views", &report.training_views);
-  fields.Get("samples_per_ray_rendered", &report.samples_per_ray_rendered);
-  fields.Get("render_seconds_per_view", &report.render_seconds_per_view);
-  fields.Get("occupied_fraction", &report.occupied_fraction);
-  if (json.contains("throughput") && !json.at("throughput").is_null()) {
-    const Fields throughput = fields.Object("throughput");
-    TrainReport::Throughput read;
-    throughput.Get("steps", &read.steps);
-    throughput.Get("seconds", &read.seconds);
-    throughput.Get("rays", &read.rays);
-    throughput.Get("samples", &read.samples);
-    report.throughput = read;
-  }
-  fields.Get("field", &report.field);
-  const Fields trainer = fields.Object("trainer");
-  trainer.Get("march_step", &report.trainer.march_step);
-  trainer.Get("rendered_march_step", &report.trainer.rendered_march_step);
-  trainer.Get("batch_samples", &report.trainer.batch_samples);
-  trainer.Get("late_batch_samples", &report.trainer.late_batch_samples);
-  trainer.Get("scene", &report.trainer.scene);
-  trainer.Get("learning_rate", &report.trainer.learning_rate);
-  trainer.Get("distortion_weight", &report.trainer.distortion_weight);
-  trainer.Get("appearance", &report.trainer.appearance);
-  trainer.Get("refine_cameras", &report.trainer.refine_cameras);
-  trainer.Get("error_sampling", &report.trainer.error_sampling);
-  trainer.Get("background", &report.trainer.background);
-  trainer.Get("background_colour", &report.trainer.background_colour);
-  ReadAppearance(fields.Object("appearance"), &report.appearance);
-  fields.Get("camera_refinement", &report.camera_refinement);
-  const Fields refinement = fields.Object("camera_refinement");
-  refinement.Get("enabled", &report.refinement.enabled);
-  if (report.refinement.enabled) {
-    refinement.Get("rotation_degrees_median", &report.refinement.rotation_degrees_median);
-    refinement.Get("rotation_degrees_max", &report.refinement.rotation_degrees_max);
-    refinement.Get("shift_median", &report.refinement.shift_median);
-    refinement.Get("shift_max", &report.refinement.shift_max);
-  }
-  return report;
-}
+nlohmann::json IngestReport::ToJson() const { return WriteReport(*this); }
+IngestReport IngestReport::Read(const fs::path& file) { return ReadReport<IngestReport>(file, IngestResult::kId.name); }
 
-nlohmann::json SplatReport::ToJson() const {
-  if (!enabled) return {{"enabled", false}};
-  return {{"enabled", true},
-          {"splats", splats},
-          {"initial_splats", initial_splats},
-          {"init", init},
-          {"sh_degree", sh_degree},
-          {"steps", steps},
-          {"seconds", seconds},
-          {"resumed_from_step", resumed_from_step},
-          {"heldout_views", heldout_views},
-          {"heldout_psnr", OrNull(heldout_psnr)},
-          {"heldout_ssim", OrNull(heldout_ssim)},
-          {"heldout_psnr_per_view", heldout_psnr_per_view},
-          {"seconds_per_view", seconds_per_view},
-          {"frame", frame},
-          {"frame_description", frame_description},
-          {"near", near},
-          {"background", background},
-          {"file", SplatResult{}.splats().string()},
-          {"file_bytes", file_bytes},
-          {"viewer", SplatResult{}.viewer().string()},
-          {"viewer_bytes", viewer_bytes},
-          {"warnings", WarningsJson(warnings)}};
-}
+nlohmann::json SfmReport::ToJson() const { return WriteReport(*this); }
+SfmReport SfmReport::Read(const fs::path& file) { return ReadReport<SfmReport>(file, SfmResult::kId.name); }
 
-SplatReport SplatReport::Read(const fs::path& file) {
-  const nlohmann::json json = ReadJsonFile(file);
-  const Fields fields(json, file, SplatResult::kId.name);
-  SplatReport report;
-  fields.Get("enabled", &report.enabled);
-  if (!report.enabled) return report;
-  fields.Get("splats", &report.splats);
-  fields.Get("initial_splats", &report.initial_splats);
-  fields.Get("init", &report.init);
-  fields.Get("sh_degree", &report.sh_degree);
-  fields.Get("steps", &report.steps);
-  fields.Get("seconds", &report.seconds);
-  fields.Get("resumed_from_step", &report.resumed_from_step);
-  fields.Get("heldout_views", &report.heldout_views);
-  fields.Get("heldout_psnr", &report.heldout_psnr);
-  fields.Get("heldout_ssim", &report.heldout_ssim);
-  fields.Get("heldout_psnr_per_view", &report.heldout_psnr_per_view);
-  fields.Get("seconds_per_view", &report.seconds_per_view);
-  fields.Get("frame", &report.frame);
-  fields.Get("frame_description", &report.frame_description);
-  fields.Get("near", &report.near);
-  fields.Get("background", &report.background);
-  fields.Get("file_bytes", &report.file_bytes);
-  fields.Get("viewer_bytes", &report.viewer_bytes);
-  report.warnings = ReadWarnings(fields);
-  if (report.frame != "normalized" && report.frame != "source") fields.Fail("frame", "must be normalized or source");
-  if (!(report.near > 0)) fields.Fail("near", "must be positive");
-  return report;
-}
+nlohmann::json TrainReport::ToJson() const { return WriteReport(*this); }
+TrainReport TrainReport::Read(const fs::path& file) { return ReadReport<TrainReport>(file, TrainResult::kId.name); }
 
-nlohmann::json EvalReport::ToJson() const {
-  nlohmann::json per_view = nlohmann::json::array();
-  for (const HeldoutScore& v : views) {
-    per_view.push_back({{"view", v.view},
-                        {"render", v.render},
-                        {"error_map", v.error_map},
-                        {"photo", v.photo},
-                        {"psnr", v.psnr},
-                        {"ssim", v.ssim},
-                        {"seconds", v.seconds}});
-  }
-  return {{"split", split},
-          {"source", source},
-          {"views", per_view},
-          {"psnr", OrNull(psnr)},
-          {"ssim", OrNull(ssim)},
-          {"seconds_per_view", seconds_per_view},
-          {"samples_per_ray", OrNull(samples_per_ray)},
-          {"step_scale", OrNull(step_scale)},
-          {"heat_map_max_error", heat_map_max_error},
-          {"field_psnr", OrNull(field_psnr)},
-          {"splats_psnr", OrNull(splats_psnr)}};
-}
+nlohmann::json SplatReport::ToJson() const { return WriteReport(*this); }
+SplatReport SplatReport::Read(const fs::path& file) { return ReadReport<SplatReport>(file, SplatResult::kId.name); }
 
-EvalReport EvalReport::Read(const fs::path& file) {
-  const nlohmann::json json = ReadJsonFile(file);
-  const Fields fields(json, file, RenderResult::kId.name);
-  EvalReport report;
-  fields.Get("split", &report.split);
-  fields.Get("source", &report.source);
-  fields.ForEach("views", [&](const Fields& view) {
-    HeldoutScore& score = report.views.emplace_back();
-    view.Get("view", &score.view);
-    view.Get("render", &score.render);
-    view.Get("error_map", &score.error_map);
-    view.Get("photo", &score.photo);
-    view.Get("psnr", &score.psnr);
-    view.Get("ssim", &score.ssim);
-    view.Get("seconds", &score.seconds);
-  });
-  fields.Get("psnr", &report.psnr);
-  fields.Get("ssim", &report.ssim);
-  fields.Get("seconds_per_view", &report.seconds_per_view);
-  fields.Get("samples_per_ray", &report.samples_per_ray);
-  fields.Get("step_scale", &report.step_scale);
-  fields.Get("heat_map_max_error", &report.heat_map_max_error);
-  fields.Get("field_psnr", &report.field_psnr);
-  fields.Get("splats_psnr", &report.splats_psnr);
-  return report;
-}
+nlohmann::json EvalReport::ToJson() const { return WriteReport(*this); }
+EvalReport EvalReport::Read(const fs::path& file) { return ReadReport<EvalReport>(file, RenderResult::kId.name); }
 
-nlohmann::json PathReport::ToJson() const {
-  nlohmann::json json = {{"source", source},
-                         {"kind", kind},
-                         {"frames", frames},
-                         {"rendered_frames", rendered_frames},
-                         {"width", width},
-                         {"height", height},
-                         {"seconds_per_frame", seconds_per_frame},
-                         {"frames_per_second", frames_per_second},
-                         {"samples_per_ray", OrNull(samples_per_ray)},
-                         {"depth_png_max", depth_png_max}};
-  if (video) json["video"] = {{"file", video->file}, {"codec", video->codec}, {"fps", video->fps}};
-  return json;
-}
-
+nlohmann::json PathReport::ToJson() const { return WriteReport(*this); }
 PathReport PathReport::Read(const fs::path& render_report) {
   const nlohmann::json json = ReadJsonFile(render_report);
-  const Fields fields = Fields(json, render_report, RenderResult::kId.name).Object("path");
+  JsonReader reader{Fields(json, render_report, RenderResult::kId.name).Object("path")};
   PathReport report;
-  fields.Get("source", &report.source);
-  fields.Get("kind", &report.kind);
-  fields.Get("frames", &report.frames);
-  fields.Get("rendered_frames", &report.rendered_frames);
-  fields.Get("width", &report.width);
-  fields.Get("height", &report.height);
-  fields.Get("seconds_per_frame", &report.seconds_per_frame);
-  fields.Get("frames_per_second", &report.frames_per_second);
-  fields.Get("samples_per_ray", &report.samples_per_ray);
-  fields.Get("depth_png_max", &report.depth_png_max);
-  if (fields.Has("video")) {
-    const Fields video = fields.Object("video");
-    PathVideo& out = report.video.emplace();
-    video.Get("file", &out.file);
-    video.Get("codec", &out.codec);
-    video.Get("fps", &out.fps);
-  }
+  Describe(reader, report);
   return report;
 }
 
-nlohmann::json ExportReport::ToJson() const {
-  nlohmann::json json = {
-      {"mesh",
-       {{"file", mesh.file},
-        {"vertices", mesh.vertices},
-        {"triangles", mesh.triangles},
-        {"watertight", mesh.watertight},
-        {"border_edges", mesh.border_edges},
-        {"non_manifold_edges", mesh.non_manifold_edges},
-        {"misoriented_edges", mesh.misoriented_edges},
-        {"resolution", mesh.resolution},
-        {"threshold", mesh.threshold},
-        {"threshold_from_field", mesh.threshold_from_field},
-        {"region", {{"kind", mesh.region}, {"centre", mesh.centre}, {"half_size", mesh.half_size}}}}},
-      {"frame", frame},
-      {"cameras", {{"file", cameras.file}, {"views", cameras.views}, {"refined", cameras.refined}}}};
-  if (points) json["points"] = {{"file", points->file}, {"count", points->count}};
-  return json;
-}
-
-ExportReport ExportReport::Read(const fs::path& file) {
-  const nlohmann::json json = ReadJsonFile(file);
-  const Fields fields(json, file, ExportResult::kId.name);
-  ExportReport report;
-  const Fields mesh = fields.Object("mesh");
-  mesh.Get("file", &report.mesh.file);
-  mesh.Get("vertices", &report.mesh.vertices);
-  mesh.Get("triangles", &report.mesh.triangles);
-  mesh.Get("watertight", &report.mesh.watertight);
-  mesh.Get("border_edges", &report.mesh.border_edges);
-  mesh.Get("non_manifold_edges", &report.mesh.non_manifold_edges);
-  mesh.Get("misoriented_edges", &report.mesh.misoriented_edges);
-  mesh.Get("resolution", &report.mesh.resolution);
-  mesh.Get("threshold", &report.mesh.threshold);
-  mesh.Get("threshold_from_field", &report.mesh.threshold_from_field);
-  const Fields region = mesh.Object("region");
-  region.Get("kind", &report.mesh.region);
-  region.Get("centre", &report.mesh.centre);
-  region.Get("half_size", &report.mesh.half_size);
-  fields.Get("frame", &report.frame);
-  const Fields cameras = fields.Object("cameras");
-  cameras.Get("file", &report.cameras.file);
-  cameras.Get("views", &report.cameras.views);
-  cameras.Get("refined", &report.cameras.refined);
-  if (fields.Has("points")) {
-    const Fields points = fields.Object("points");
-    ExportedPoints& out = report.points.emplace();
-    points.Get("file", &out.file);
-    points.Get("count", &out.count);
-  }
-  return report;
-}
+nlohmann::json ExportReport::ToJson() const { return WriteReport(*this); }
+ExportReport ExportReport::Read(const fs::path& file) { return ReadReport<ExportReport>(file, ExportResult::kId.name); }
 
 }  // namespace p2n

@@ -1,11 +1,12 @@
 #pragma once
 // The reports that one stage writes and others read (DESIGN.md §5), one struct each: the writer fills it and
-// writes it with ToJson(), every reader reads it with Read(), so a field has one name and one type. A reader
+// writes it with ToJson(), every reader reads it with Read(), both from one declaration of its JSON per struct
+// (Describe in stage_reports.cc), so a field has one name and one type. A reader
 // meets a missing or mistyped field as a UserError that names the file and the field and says which stage to
 // rerun, never as an internal error at a distance.
 //   00_ingest/ingest_report.json IngestReport (its image-count check, the sfm stage's cameras by image size)
 //   10_sfm/sfm_report.json       SfmReport   (the sfm stage's registration check, report)
-//   30_train/train_report.json   TrainReport (render, report)
+//   30_train/train_report.json   TrainReport (splat, render and export through ReadTrainedField, report)
 //   35_splat/splat_report.json   SplatReport (render, its view renderer, report, splat_bench)
 //   40_render/eval.json          EvalReport  (report, the run summary)
 //   40_render/render_report.json PathReport, under "path" (report)
@@ -18,6 +19,9 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "formats/output_frame.h"
+#include "nerf/mesh.h"
 
 namespace p2n {
 
@@ -134,7 +138,7 @@ struct TrainReport {
     double gain_min = 0, gain_max = 0;
     std::vector<AppearanceView> per_view;
   } appearance;
-  // The section camera_corrections.h writes (CameraRefinementJson) and reads back (ReadCameraCorrections), and
+  // The section camera_corrections.h writes (CameraRefinementJson) and reads back (CameraCorrections), and
   // the summary of it that Read() takes from it.
   nlohmann::json camera_refinement = {{"enabled", false}};
   struct Refinement {
@@ -156,7 +160,8 @@ struct SplatReport {
   std::optional<double> heldout_psnr, heldout_ssim;  // none without held-out views
   std::vector<double> heldout_psnr_per_view;
   double seconds_per_view = 0;  // rendering a held-out view on the CPU
-  std::string frame = "normalized", frame_description;
+  FrameKind frame = FrameKind::kNormalized;
+  std::string frame_description;
   double near = 0.01;
   std::array<float, 3> background{1, 1, 1};
   size_t file_bytes = 0, viewer_bytes = 0;  // splats.ply, viewer.html
@@ -222,11 +227,11 @@ struct ExportReport {
     int resolution = 0;
     double threshold = 0;  // the density the surface crosses
     bool threshold_from_field = false;
-    std::string region;  // box | focus: the cube meshed (normalised units) ...
+    MeshRegion region = MeshRegion::kBox;  // the cube meshed (normalised units) ...
     std::array<double, 3> centre{};
     double half_size = 1;
   } mesh;
-  std::string frame;  // source | normalized
+  FrameKind frame = FrameKind::kSource;
   struct Cameras {
     std::string file;
     size_t views = 0;

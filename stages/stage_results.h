@@ -8,7 +8,7 @@
 #include <optional>
 #include <string>
 
-#include "pipeline/format.h"
+#include "base/format.h"
 #include "pipeline/stage.h"
 #include "pipeline/workspace.h"
 
@@ -124,6 +124,13 @@ std::optional<Result> UpstreamIfRead(const StageContext& context) {
   const auto found = context.upstream_dirs.find(Result::kId.name);
   if (found == context.upstream_dirs.end()) return std::nullopt;
   return Result{found->second};
+}
+
+// The result's paths relative to the workspace (for messages: WorkspaceRelative<SfmResult>().report() is
+// 10_sfm/sfm_report.json).
+template <class Result>
+Result WorkspaceRelative() {
+  return Result{Result::kId.folder};
 }
 
 // The result's folder in `workspace`, made or not.

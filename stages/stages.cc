@@ -1,7 +1,7 @@
 #include "stages/stages.h"
 
+#include "base/format.h"
 #include "formats/dataset_import.h"
-#include "pipeline/format.h"
 #include "stages/export_stage.h"
 #include "stages/import_stage.h"
 #include "stages/ingest_stage.h"
@@ -15,7 +15,7 @@
 namespace p2n {
 
 void RunOptions::Check() const {
-  CheckOption(threads >= 0, "run.threads", format("must be 0 (every core) or more, not {}", threads));
+  CheckOption(*this, threads, threads >= 0, format("must be 0 (every core) or more, not {}", threads));
 }
 
 namespace {
@@ -50,7 +50,7 @@ void CheckAllOptions(const Config& config) {
 
 Runner MakeRunner(const std::optional<std::filesystem::path>& input) {
   std::vector<std::unique_ptr<Stage>> stages;
-  if (input && !DatasetKind(*input).empty()) {
+  if (input && DetectDataset(*input)) {
     stages.push_back(std::make_unique<ImportStage>());
   } else {
     stages.push_back(std::make_unique<IngestStage>());

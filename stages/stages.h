@@ -5,7 +5,9 @@
 #include <memory>
 #include <optional>
 
+#include "pipeline/log.h"
 #include "pipeline/options.h"
+#include "pipeline/progress.h"
 #include "pipeline/runner.h"
 
 namespace p2n {
@@ -14,16 +16,15 @@ namespace p2n {
 struct RunOptions {
   static constexpr const char* kSection = "run";  // its options are run.NAME
 
-  int threads = 0;                 // Worker threads; 0 uses every core.
-  std::string log_level = "info";  // Console log level.
-  std::string progress = "auto";   // Progress display.
+  int threads = 0;                                // Worker threads; 0 uses every core.
+  LogLevel log_level = LogLevel::kInfo;           // Console log level.
+  ProgressStyle progress = ProgressStyle::kAuto;  // Progress display.
 
   template <class V>
   void Visit(V& v) {
     v("threads", threads, "worker threads; 0 uses every core", "threads", OptionKind::kRuntime);
-    v("log_level", log_level, "console log level", "", OptionKind::kRuntime, {"debug", "info", "warning", "error"});
-    v("progress", progress, "progress display: a live bar, plain lines (files, CI), or none", "", OptionKind::kRuntime,
-      {"auto", "bar", "plain", "none"});
+    v("log_level", log_level, "console log level", "", OptionKind::kRuntime);
+    v("progress", progress, "progress display: a live bar, plain lines (files, CI), or none", "", OptionKind::kRuntime);
   }
   void Check() const;
 };

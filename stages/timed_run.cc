@@ -4,10 +4,10 @@
 #include <chrono>
 #include <cmath>
 
+#include "base/file_util.h"
+#include "base/format.h"
 #include "nerf/nerf_model.h"
 #include "pipeline/cancel.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
 

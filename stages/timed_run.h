@@ -7,7 +7,7 @@
 #include <optional>
 #include <string>
 
-#include "nerf/binary_io.h"
+#include "base/binary_io.h"
 
 namespace p2n {
 

@@ -2,11 +2,17 @@
 // The train stage's presets (train.preset: fast, default, quality) and the settings it picks by the scene, each
 // chosen by measurement (docs/benchmarks.md, the presets).
 
-#include <string>
-
+#include "base/enum_names.h"
 #include "nerf/encoding.h"
 
 namespace p2n {
+
+enum class PresetName { kFast, kDefault, kQuality };
+template <>
+struct EnumNames<PresetName> {
+  static constexpr std::pair<PresetName, const char*> kValues[] = {
+      {PresetName::kFast, "fast"}, {PresetName::kDefault, "default"}, {PresetName::kQuality, "quality"}};
+};
 
 // train.distortion auto in unbounded and forward scenes.
 inline constexpr double kAutoDistortion = 0.002;
@@ -23,15 +29,14 @@ struct TrainPreset {
   int bounded_late_batch_samples = 0;
 };
 
-// The preset of that name (train.preset; its options have been checked): default for any other.
-TrainPreset PresetFor(const std::string& name);
+TrainPreset PresetFor(PresetName name);
 
 // Runs shorter than this many seconds train with the fast preset's sizes, whichever preset is named: the larger
 // table, grid and batches of the others pay after minutes, and cost a short run the steps it needs to get out of
 // its first haze (docs/benchmarks.md, short budgets).
 inline constexpr double kShortBudget = 45;
 // The settings of preset `name` for a run of `budget` seconds (0: a run by steps, the preset's own).
-TrainPreset PresetForBudget(const std::string& name, double budget);
+TrainPreset PresetForBudget(PresetName name, double budget);
 
 // ngp's learning rate ends at 0.3 of its start rather than a tenth, in every preset: each underfits at its end.
 inline constexpr double kNgpFinalLearningRate = 0.3;

@@ -4,17 +4,17 @@
 #include <cmath>
 #include <optional>
 
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/float_image.h"
+#include "base/format.h"
 #include "formats/dataset_import.h"
 #include "nerf/appearance.h"
-#include "nerf/float_image.h"
 #include "nerf/ngp_field.h"
 #include "nerf/plot.h"
 #include "nerf/renderer.h"
 #include "nerf/vanilla_field.h"
 #include "pipeline/cancel.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/log.h"
 #include "stages/camera_corrections.h"
 #include "stages/fit_checks.h"
@@ -143,31 +143,40 @@ bool ModelIsFinite(NerfModel& model) {
 // A forward-facing capture trains in normalised device coordinates: fewer samples a ray and a better fit than
 // contracted space (docs/benchmarks.md, training options).
 SceneSpace ResolveSceneSpace(const TrainOptions& options, const ImportedDataset& poses) {
-  if (options.scene != "auto") return SceneSpaceFromName(options.scene);
-  const std::string& kind = poses.meta.dataset_kind;
-  if (kind == "blender" || kind == "npz") return SceneSpace::kBounded;
+  switch (options.scene) {
+    case SceneChoice::kBounded:
+      return SceneSpace::kBounded;
+    case SceneChoice::kUnbounded:
+      return SceneSpace::kUnbounded;
+    case SceneChoice::kForward:
+      return SceneSpace::kForward;
+    case SceneChoice::kAuto:
+      break;
+  }
+  const std::optional<DatasetKind> kind = poses.meta.dataset_kind;
+  if (kind == DatasetKind::kBlender || kind == DatasetKind::kNpz) return SceneSpace::kBounded;
   return ForwardFacingCapture(poses) ? SceneSpace::kForward : SceneSpace::kUnbounded;
 }
 
 void TrainOptions::Check() const {
-  CheckOption(time_budget >= 0, "train.time_budget", "must be 0 (the preset's) or positive");
-  CheckOption(steps >= 0, "train.steps", "must be 0 (no limit) or positive");
-  CheckOption(batch_samples >= 0 && batch_samples <= (1 << 24), "train.batch_samples", "must be 0..16777216");
-  CheckOption(march_samples >= 0 && march_samples <= 8192, "train.march_samples", "must be 0..8192");
-  CheckOption(hash_table_log2 == 0 || (hash_table_log2 >= 10 && hash_table_log2 <= 24), "train.hash_table_log2",
+  CheckOption(*this, time_budget, time_budget >= 0, "must be 0 (the preset's) or positive");
+  CheckOption(*this, steps, steps >= 0, "must be 0 (no limit) or positive");
+  CheckOption(*this, batch_samples, batch_samples >= 0 && batch_samples <= (1 << 24), "must be 0..16777216");
+  CheckOption(*this, march_samples, march_samples >= 0 && march_samples <= 8192, "must be 0..8192");
+  CheckOption(*this, hash_table_log2, hash_table_log2 == 0 || (hash_table_log2 >= 10 && hash_table_log2 <= 24),
               "must be 0 (the preset's) or 10..24");
-  CheckOption(vanilla_samples >= 1 && vanilla_samples <= 1024, "train.vanilla_samples", "must be 1..1024");
-  CheckOption(learning_rate >= 0 && learning_rate < 1, "train.learning_rate", "must be 0 (the field's) or in (0, 1)");
-  std::optional<double> weight;
-  CheckOption(ParseAutoOrNumber(distortion, &weight) && (!weight || *weight >= 0), "train.distortion",
-              format("must be auto or a weight >= 0, not '{}'", distortion));
-  CheckOption(refine_cameras == "off" || field == "ngp", "train.refine_cameras",
-              "needs train.field ngp (the vanilla field has no gradient with respect to its input)");
-  CheckOption(eval_interval > 0, "train.eval_interval", "must be positive");
-  CheckOption(eval_share > 0 && eval_share <= 1, "train.eval_share", "must be in (0, 1]");
-  CheckOption(eval_pixels >= 0, "train.eval_pixels", "must be 0 (all) or positive");
-  CheckOption(final_eval_pixels >= 0, "train.final_eval_pixels", "must be 0 (all) or positive");
-  CheckOption(checkpoint_interval >= 0, "train.checkpoint_interval", "must be 0 (none) or positive");
+  CheckOption(*this, vanilla_samples, vanilla_samples >= 1 && vanilla_samples <= 1024, "must be 1..1024");
+  CheckOption(*this, learning_rate, learning_rate >= 0 && learning_rate < 1, "must be 0 (the field's) or in (0, 1)");
+  CheckOption(*this, distortion, !distortion.value || *distortion.value >= 0,
+              format("must be auto or a weight >= 0, not {}", AutoOrNumberText(distortion)));
+  CheckOption(
+      *this, refine_cameras, !refine_cameras || field == FieldKind::kNgp,
+      format("needs {} ngp (the vanilla field has no gradient with respect to its input)", OptionKey(*this, field)));
+  CheckOption(*this, eval_interval, eval_interval > 0, "must be positive");
+  CheckOption(*this, eval_share, eval_share > 0 && eval_share <= 1, "must be in (0, 1]");
+  CheckOption(*this, eval_pixels, eval_pixels >= 0, "must be 0 (all) or positive");
+  CheckOption(*this, final_eval_pixels, final_eval_pixels >= 0, "must be 0 (all) or positive");
+  CheckOption(*this, checkpoint_interval, checkpoint_interval >= 0, "must be 0 (none) or positive");
 }
 
 double ResolvedTimeBudget(const TrainOptions& options) {
@@ -175,17 +184,16 @@ double ResolvedTimeBudget(const TrainOptions& options) {
   return options.steps > 0 ? 0.0 : PresetFor(options.preset).time_budget;
 }
 
-// train.distortion as a weight (Check() has made sure it is auto or a number >= 0).
+// train.distortion as a weight: auto is kAutoDistortion where space reaches past the box, 0 in a bounded scene.
 double DistortionWeight(const TrainOptions& options, SceneSpace space) {
-  std::optional<double> weight;
-  ParseAutoOrNumber(options.distortion, &weight);
+  const std::optional<double>& weight = options.distortion.value;
   return weight ? *weight : space != SceneSpace::kBounded ? kAutoDistortion : 0.0;
 }
 
 TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space) {
   const TrainPreset preset = PresetForBudget(options.preset, ResolvedTimeBudget(options));
   TrainerOptions trainer;
-  const bool vanilla = options.field == "vanilla";
+  const bool vanilla = options.field == FieldKind::kVanilla;
   if (vanilla) {
     trainer.field = VanillaFieldConfig{}.ToJson();
     trainer.stratified_samples = options.vanilla_samples;
@@ -214,9 +222,9 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
   trainer.loss = options.loss;
   trainer.space = space;
   trainer.distortion_weight = DistortionWeight(options, space);
-  trainer.appearance = options.appearance == "on";
-  trainer.refine_cameras = options.refine_cameras == "on";
-  trainer.error_sampling = options.error_sampling == "on";
+  trainer.appearance = options.appearance;
+  trainer.refine_cameras = options.refine_cameras;
+  trainer.error_sampling = options.error_sampling;
   trainer.seed = static_cast<uint64_t>(options.seed);
   return trainer;
 }
@@ -309,20 +317,22 @@ void TrainStage::Run(StageContext& context) const {
   setup.trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, poses));
   const TrainView* with_alpha = FirstWithAlpha(data.train);
   const bool alpha = with_alpha != nullptr;
-  if (options.background == "learnt" && alpha) {
+  const BackgroundChoice background = options.background;
+  if (background == BackgroundChoice::kLearnt && alpha) {
     throw UserError(
-        format("train.background is learnt, but {} (in {}) has alpha: it was composited on a known "
-               "colour, which must stay; use auto or fixed",
-               with_alpha->name, transforms.string()));
+        format("{} is learnt, but {} (in {}) has alpha: it was composited on a known colour, which must stay; use "
+               "auto or fixed",
+               OptionKey(options, options.background), with_alpha->name, transforms.string()));
   }
   const bool learn_when_auto = !alpha && !data.background_known;
-  setup.trainer.random_background = options.background == "random" || (options.background == "auto" && alpha);
-  setup.trainer.learn_background = options.background == "learnt" || (options.background == "auto" && learn_when_auto);
+  const bool automatic = background == BackgroundChoice::kAuto;
+  setup.trainer.random_background = background == BackgroundChoice::kRandom || (automatic && alpha);
+  setup.trainer.learn_background = background == BackgroundChoice::kLearnt || (automatic && learn_when_auto);
   Trainer trainer(setup.trainer, data);
   const double budget = ResolvedTimeBudget(options);
-  LogInfo(format("train: {} field, {} scene, preset {}, {} training and {} held-out ({}) views, {}", options.field,
-                 SceneSpaceName(setup.trainer.space), options.preset, data.train.size(), data.heldout.size(),
-                 setup.heldout_split,
+  LogInfo(format("train: {} field, {} scene, preset {}, {} training and {} held-out ({}) views, {}",
+                 EnumName(options.field), SceneSpaceName(setup.trainer.space), EnumName(options.preset),
+                 data.train.size(), data.heldout.size(), setup.heldout_split,
                  budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
 
   RunState state;

@@ -9,48 +9,76 @@
 
 #include "formats/dataset_import.h"
 #include "nerf/trainer.h"
+#include "pipeline/options.h"
 #include "stages/stage_results.h"
+#include "stages/train_presets.h"
 
 namespace p2n {
+
+// train.field: the hash grid with tiny MLPs, or the seed's positional-encoding MLP.
+enum class FieldKind { kNgp, kVanilla };
+template <>
+struct EnumNames<FieldKind> {
+  static constexpr std::pair<FieldKind, const char*> kValues[] = {{FieldKind::kNgp, "ngp"},
+                                                                  {FieldKind::kVanilla, "vanilla"}};
+};
+
+// train.scene: a scene space, or auto.
+enum class SceneChoice { kAuto, kBounded, kUnbounded, kForward };
+template <>
+struct EnumNames<SceneChoice> {
+  static constexpr std::pair<SceneChoice, const char*> kValues[] = {{SceneChoice::kAuto, "auto"},
+                                                                    {SceneChoice::kBounded, "bounded"},
+                                                                    {SceneChoice::kUnbounded, "unbounded"},
+                                                                    {SceneChoice::kForward, "forward"}};
+};
+
+// train.background.
+enum class BackgroundChoice { kAuto, kRandom, kLearnt, kFixed };
+template <>
+struct EnumNames<BackgroundChoice> {
+  static constexpr std::pair<BackgroundChoice, const char*> kValues[] = {{BackgroundChoice::kAuto, "auto"},
+                                                                         {BackgroundChoice::kRandom, "random"},
+                                                                         {BackgroundChoice::kLearnt, "learnt"},
+                                                                         {BackgroundChoice::kFixed, "fixed"}};
+};
 
 struct TrainOptions {
   static constexpr const char* kSection = "train";  // its options are train.NAME
 
-  std::string preset = "default";  // fast | default | quality: sizes, sample spacing and time budget together
-  std::string field = "ngp";       // ngp (hash grid) or vanilla (the seed's positional-encoding MLP)
-  std::string scene = "auto";      // bounded, unbounded, forward (nerf_model.h), or auto (ResolveSceneSpace)
-  double time_budget = 0;          // seconds of training; 0: the preset's (fast 60, default 240, quality 900)
-  int steps = 0;                   // stop after this many steps (0: no step limit)
-  int batch_samples = 0;           // samples per step; 0: the preset's
-  int march_samples = 0;           // samples across the scene cube's diagonal (ngp); 0: the preset's
-  int vanilla_samples = 64;        // stratified samples per ray (vanilla)
-  int hash_table_log2 = 0;         // log2 of the hash-grid entries per level (ngp); 0: the preset's
-  double learning_rate = 0;        // 0: the field's (ngp 1e-2, vanilla 5e-4)
-  std::string loss = "mse";
-  std::string background = "auto";     // auto: random for images with alpha, fixed where known, else learnt
-  std::string distortion = "auto";     // weight of the distortion loss; auto: by the scene (train_stage.cc)
-  std::string appearance = "off";      // a colour transform per training photo (on, off)
-  std::string refine_cameras = "off";  // a pose correction per training photo (on, off; ngp only)
-  std::string error_sampling = "off";  // pixels drawn where the error is (on, off)
-  double eval_interval = 10;           // seconds of training between held-out evaluations
-  double eval_share = 0.1;             // held-out evaluations during training take at most this share of wall time
-  int eval_pixels = 4096;              // held-out pixels per view in each evaluation during training (0: all)
-  int final_eval_pixels = 65536;       // held-out pixels per view in the final evaluation (0: all)
-  double checkpoint_interval = 60;     // seconds between checkpoints (0: none)
+  PresetName preset = PresetName::kDefault;  // sizes, sample spacing and time budget together
+  FieldKind field = FieldKind::kNgp;
+  SceneChoice scene = SceneChoice::kAuto;  // a SceneSpace (nerf_model.h), or auto (ResolveSceneSpace)
+  double time_budget = 0;                  // seconds of training; 0: the preset's (fast 60, default 240, quality 900)
+  int steps = 0;                           // stop after this many steps (0: no step limit)
+  int batch_samples = 0;                   // samples per step; 0: the preset's
+  int march_samples = 0;                   // samples across the scene cube's diagonal (ngp); 0: the preset's
+  int vanilla_samples = 64;                // stratified samples per ray (vanilla)
+  int hash_table_log2 = 0;                 // log2 of the hash-grid entries per level (ngp); 0: the preset's
+  double learning_rate = 0;                // 0: the field's (ngp 1e-2, vanilla 5e-4)
+  PhotometricLoss loss = PhotometricLoss::kMse;
+  // Auto: random for images with alpha, fixed where the import knows it, else learnt.
+  BackgroundChoice background = BackgroundChoice::kAuto;
+  AutoOrNumber distortion;          // weight of the distortion loss; auto: by the scene (DistortionWeight)
+  bool appearance = false;          // a colour transform per training photo
+  bool refine_cameras = false;      // a pose correction per training photo (ngp only)
+  bool error_sampling = false;      // pixels drawn where the error is
+  double eval_interval = 10;        // seconds of training between held-out evaluations
+  double eval_share = 0.1;          // held-out evaluations during training take at most this share of wall time
+  int eval_pixels = 4096;           // held-out pixels per view in each evaluation during training (0: all)
+  int final_eval_pixels = 65536;    // held-out pixels per view in the final evaluation (0: all)
+  double checkpoint_interval = 60;  // seconds between checkpoints (0: none)
   int seed = 0;
 
   template <class V>
   void Visit(V& v) {
-    v("preset", preset, "fast (a preview in about a minute), default, or quality", "", OptionKind::kResult,
-      {"fast", "default", "quality"});
-    v("field", field, "ngp (hash grid + tiny MLPs) or vanilla (the seed's positional-encoding MLP)", "",
-      OptionKind::kResult, {"ngp", "vanilla"});
+    v("preset", preset, "fast (a preview in about a minute), default, or quality");
+    v("field", field, "ngp (hash grid + tiny MLPs) or vanilla (the seed's positional-encoding MLP)");
     v("scene", scene,
       "bounded (an object inside the unit box), unbounded (space beyond it contracted), forward (every camera "
       "looking one way, as LLFF captures: a mean camera's normalised device coordinates), or auto: bounded for "
       "Blender and .npz datasets, forward for captures whose cameras all look within 15 degrees of their "
-      "mean direction (LLFF data or photos), else unbounded",
-      "", OptionKind::kResult, {"auto", "bounded", "unbounded", "forward"});
+      "mean direction (LLFF data or photos), else unbounded");
     v("time_budget", time_budget, "training time; 0: the preset's (fast 60, default 240, quality 900)", "s");
     v("steps", steps, "stop after this many steps; 0: no step limit", "steps");
     v("batch_samples", batch_samples, "samples per training step; 0: the preset's", "samples");
@@ -58,28 +86,24 @@ struct TrainOptions {
     v("vanilla_samples", vanilla_samples, "stratified samples per ray (vanilla)", "samples");
     v("hash_table_log2", hash_table_log2, "log2 of the hash-grid entries per level (ngp); 0: the preset's");
     v("learning_rate", learning_rate, "Adam learning rate; 0: the field's (ngp 1e-2, vanilla 5e-4)");
-    v("loss", loss, "photometric loss", "", OptionKind::kResult, {"mse", "huber"});
+    v("loss", loss, "photometric loss: mse, or huber (delta 0.1)");
     v("background", background,
       "the colour behind the scene; auto: random behind images with alpha (they learn transparency), fixed where "
       "the import knows it (images composited or rendered on a plain colour), learnt for photos (a sky, a far "
-      "wall); fixed: the dataset's background colour (white when unknown)",
-      "", OptionKind::kResult, {"auto", "random", "learnt", "fixed"});
+      "wall); fixed: the dataset's background colour (white when unknown)");
     v("distortion", distortion,
       "weight of the distortion loss, which gathers each ray's weight into one place (against haze and floaters); "
       "auto: the weight measured best on real captures for unbounded scenes, 0 for bounded ones");
     v("appearance", appearance,
       "on: a colour transform per training photo learnt with the field, for photos that differ in exposure and "
-      "white balance (novel views show the average photo)",
-      "", OptionKind::kResult, {"off", "on"});
+      "white balance (novel views show the average photo)");
     v("refine_cameras", refine_cameras,
       "on: each training photo's camera is corrected by a small turn and shift learnt with the field (ngp only); "
       "train_report.json says how far each moved, and the refined cameras are exported; for cameras off by a pixel "
-      "or more",
-      "", OptionKind::kResult, {"off", "on"});
+      "or more");
     v("error_sampling", error_sampling,
       "on: training pixels are drawn half uniformly and half where the recent error is large (instant-ngp's error "
-      "map), their losses weighted so that the expected gradient is the uniform one's",
-      "", OptionKind::kResult, {"off", "on"});
+      "map), their losses weighted so that the expected gradient is the uniform one's");
     v("eval_interval", eval_interval, "training time between held-out evaluations (metrics.csv rows)", "s");
     v("eval_share", eval_share,
       "held-out evaluations during training take at most this share of the wall time (the interval grows when "

@@ -5,11 +5,11 @@
 
 #include <algorithm>
 
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
+#include "base/image_io.h"
 #include "nerf/forward_space.h"
-#include "nerf/image_io.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/progress.h"
 
 namespace p2n {

@@ -5,10 +5,10 @@
 #include <memory>
 #include <stdexcept>
 
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 #include "formats/output_frame.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "splat/rasterizer.h"
 #include "splat/splat_ply.h"
 #include "stages/stage_reports.h"
@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 
 ViewRenderer FieldRenderer(const NerfModel& model, const RenderOptions& options) {
   ViewRenderer renderer;
-  renderer.source = "field";
+  renderer.source = RenderSource::kField;
   renderer.background = model.background;
   renderer.bounded = model.space == SceneSpace::kBounded;
   renderer.render = [&model, options](const PinholeCamera& camera, double near, double far,
@@ -78,7 +78,7 @@ ViewRenderer SplatRenderer(const SplatResult& splat, const SplatReport& report, 
   RasterOptions options;
   options.projection.near = report.near;
   ViewRenderer renderer;
-  renderer.source = "splats";
+  renderer.source = RenderSource::kSplats;
   renderer.bounded = bounded;
   renderer.background = report.background;
   for (int c = 0; c < 3; ++c) options.background[c] = report.background[c];

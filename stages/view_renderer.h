@@ -8,8 +8,9 @@
 #include <functional>
 #include <string>
 
+#include "base/camera.h"
+#include "base/enum_names.h"
 #include "formats/dataset_import.h"
-#include "nerf/camera.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
 #include "stages/stage_reports.h"
@@ -17,8 +18,16 @@
 
 namespace p2n {
 
+// What draws the views (render.source); a ViewRenderer is the field or the splats, never auto.
+enum class RenderSource { kAuto, kField, kSplats };
+template <>
+struct EnumNames<RenderSource> {
+  static constexpr std::pair<RenderSource, const char*> kValues[] = {
+      {RenderSource::kAuto, "auto"}, {RenderSource::kField, "field"}, {RenderSource::kSplats, "splats"}};
+};
+
 struct ViewRenderer {
-  std::string source;  // "field" or "splats"
+  RenderSource source = RenderSource::kField;
   std::array<float, 3> background{1, 1, 1};
   bool bounded = true;  // the scene lies in the unit box
   // Renders `camera` between `near` and `far` (the field's; splats ignore them); on_pixels_done(n) may report

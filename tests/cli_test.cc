@@ -4,8 +4,8 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <catch2/catch.hpp>
 
+#include "base/file_util.h"
 #include "formats/colmap_model.h"
-#include "pipeline/file_util.h"
 #include "pipeline/workspace.h"
 #include "tests/test_util.h"
 

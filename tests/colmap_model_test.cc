@@ -5,9 +5,9 @@
 #include <cstring>
 #include <fstream>
 
+#include "base/errors.h"
 #include "formats/colmap_model.h"
 #include "formats/npy.h"
-#include "pipeline/errors.h"
 #include "stages/colmap_flags.h"
 #include "tests/test_util.h"
 

@@ -17,8 +17,8 @@ namespace p2n::testing {
 TEST_CASE("engine option checks name the field, the rule and the value", "[config]") {
   TrainerOptions trainer;
   CHECK_NOTHROW(trainer.Check());
-  trainer.loss = "l1";
-  CHECK_THROWS_WITH(trainer.Check(), "trainer.loss must be mse or huber, not l1");
+  trainer.distortion_weight = -0.5;
+  CHECK_THROWS_WITH(trainer.Check(), "trainer.distortion_weight must be at least 0, not -0.5");
   trainer = TrainerOptions{};
   trainer.min_batch_rays = trainer.max_batch_rays + 1;
   CHECK_THROWS_WITH(trainer.Check(), Catch::StartsWith("trainer.min_batch_rays must be 1..max_batch_rays"));

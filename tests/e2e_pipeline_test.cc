@@ -9,8 +9,8 @@
 
 #include <cstdlib>
 
+#include "base/file_util.h"
 #include "nerf/synthetic_scene.h"
-#include "pipeline/file_util.h"
 #include "splat/splat_ply.h"
 #include "tests/test_util.h"
 

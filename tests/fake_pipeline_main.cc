@@ -3,7 +3,7 @@
 
 #include <iostream>
 
-#include "pipeline/errors.h"
+#include "base/errors.h"
 #include "tests/fake_stages.h"
 
 int main(int argc, char** argv) {

@@ -5,9 +5,9 @@
 #include <sstream>
 #include <thread>
 
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 #include "pipeline/hash.h"
 
 namespace p2n::testing {

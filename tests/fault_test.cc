@@ -14,7 +14,7 @@
 #include <chrono>
 #include <thread>
 
-#include "pipeline/file_util.h"
+#include "base/file_util.h"
 #include "pipeline/hash.h"
 #include "stage_fixtures.h"
 

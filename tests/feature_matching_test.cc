@@ -8,8 +8,8 @@
 #include <cmath>
 #include <random>
 
+#include "base/errors.h"
 #include "formats/colmap_database.h"
-#include "pipeline/errors.h"
 #include "stages/descriptor_similarity.h"
 #include "stages/feature_matching.h"
 #include "tests/test_util.h"

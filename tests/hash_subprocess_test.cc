@@ -6,9 +6,9 @@
 #include <future>
 #include <thread>
 
+#include "base/errors.h"
+#include "base/file_util.h"
 #include "pipeline/cancel.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
 #include "pipeline/hash.h"
 #include "pipeline/subprocess.h"
 #include "tests/test_util.h"

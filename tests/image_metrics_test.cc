@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-#include "nerf/float_image.h"
+#include "base/float_image.h"
 
 namespace p2n::testing {
 namespace {

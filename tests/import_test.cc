@@ -7,11 +7,11 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 
+#include "base/errors.h"
+#include "base/file_util.h"
 #include "formats/colmap_model.h"
 #include "formats/dataset_import.h"
 #include "nerf/synthetic_scene.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
 #include "stages/stages.h"
 #include "tests/test_util.h"
 
@@ -79,7 +79,7 @@ TEST_CASE("import: a transforms.json dataset keeps its cameras up to a similarit
   TempDir dir;
   WriteSyntheticScene(SmallScene(6), dir / "data");
   fs::rename(dir / "data" / "ground_truth_cameras.json", dir / "data" / "transforms.json");
-  CHECK(DatasetKind(dir / "data") == "transforms.json");
+  CHECK(DetectDataset(dir / "data") == DatasetKind::kTransformsJson);
   const nlohmann::json transforms = Import(dir / "data", dir / "ws");
   const nlohmann::json truth = ReadJsonFile(dir / "data" / "transforms.json");
   REQUIRE(transforms["frames"].size() == 6);
@@ -170,7 +170,7 @@ TEST_CASE("import: a COLMAP project folder (images/ + sparse/0) keeps its camera
   }
   for (uint64_t p = 1; p <= 20; ++p) model.points[p] = {p, Eigen::Vector3d(0.05 * p, 0.1, 0.3), {1, 2, 3}, 0.5, {}};
   WriteColmapModelBinary(model, dir / "data" / "sparse" / "0");
-  CHECK(DatasetKind(dir / "data") == "colmap");
+  CHECK(DetectDataset(dir / "data") == DatasetKind::kColmap);
   const nlohmann::json transforms = Import(dir / "data", dir / "ws");
   REQUIRE(transforms["frames"].size() == 5);
   std::vector<Eigen::Matrix4d> ours, truth;
@@ -210,7 +210,7 @@ TEST_CASE("transforms.json reads back exactly what was written: cameras, bounds,
   meta.normalization.scale = 0.5;
   meta.normalization.centre_from = "focus point";
   meta.normalization.up_from = "camera up vectors";
-  meta.dataset_kind = "llff";
+  meta.dataset_kind = DatasetKind::kLlff;
   meta.dataset_path = "/data/fern";
   meta.background = {0.0f, 0.25f, 1.0f};
   meta.frame = "frame: source";
@@ -249,7 +249,7 @@ TEST_CASE("transforms.json reads back exactly what was written: cameras, bounds,
   WriteText(dir / "transforms.json", R"({"fl_x": 10, "w": 8, "h": 6, "frames": [{"file_path": "images/a.png",
       "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]})");
   const TransformsFile plain = TransformsFile::Read(dir / "transforms.json", dir.path(), "test");
-  CHECK(plain.meta.dataset_kind.empty());
+  CHECK_FALSE(plain.meta.dataset_kind);
   CHECK_FALSE(plain.meta.background.has_value());
   CHECK(plain.meta.Background() == std::array<float, 3>{1, 1, 1});
   CHECK(plain.meta.normalization.normalized_from_world == Eigen::Matrix4d::Identity());
@@ -315,14 +315,14 @@ TEST_CASE("import: the shared datasets (fox, lego, lego_200, fern)", "[import][d
   TempDir dir;
   SECTION("instant-ngp fox: frames without images are left out; distorted images are undistorted") {
     const ImportedDataset fox = LoadDataset(kData / "fox");
-    CHECK(fox.kind == "transforms.json");
+    CHECK(fox.kind == DatasetKind::kTransformsJson);
     CHECK(fox.views.size() == 50);
     CHECK(fox.views[0].view.distortion[0] != 0.0);
     CHECK(fox.warnings.size() == 1);
   }
   SECTION("Blender lego: the three splits") {
     const ImportedDataset lego = LoadDataset(kData / "lego");
-    CHECK(lego.kind == "blender");
+    CHECK(lego.kind == DatasetKind::kBlender);
     std::map<std::string, int> splits;
     for (const ImportedView& view : lego.views) ++splits[view.view.split];
     CHECK(splits == std::map<std::string, int>{{"test", 25}, {"train", 100}, {"val", 10}});
@@ -330,7 +330,7 @@ TEST_CASE("import: the shared datasets (fox, lego, lego_200, fern)", "[import][d
   }
   SECTION("the course's lego_200 .npz: train and val with their pixels, the same cameras as Blender's lego") {
     const ImportedDataset npz = LoadDataset(kData / "lego_200" / "lego_200x200.npz");
-    CHECK(npz.kind == "npz");
+    CHECK(npz.kind == DatasetKind::kNpz);
     CHECK(npz.views.size() == 110);
     CHECK(npz.views[0].pixels.spec().width == 200);
     CHECK(npz.views[0].view.camera.fx == Approx(277.7778).epsilon(1e-4));
@@ -342,7 +342,7 @@ TEST_CASE("import: the shared datasets (fox, lego, lego_200, fern)", "[import][d
   }
   SECTION("LLFF fern: poses_bounds rows with their near and far") {
     const ImportedDataset fern = LoadDataset(kData / "fern");
-    CHECK(fern.kind == "llff");
+    CHECK(fern.kind == DatasetKind::kLlff);
     REQUIRE(fern.views.size() == 20);
     CHECK(fern.views[0].view.near > 10);
     CHECK(fern.views[0].view.camera.width == 1008);

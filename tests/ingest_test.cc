@@ -11,10 +11,10 @@
 
 #include <jpeglib.h>
 
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/image_io.h"
 #include "formats/dataset_import.h"
-#include "nerf/image_io.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
 #include "stages/ingest_stage.h"
 #include "stages/stages.h"
 #include "stages/training_data.h"

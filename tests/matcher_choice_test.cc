@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <random>
 
-#include "pipeline/format.h"
+#include "base/format.h"
 #include "stages/matcher_choice.h"
 
 namespace p2n::testing {
@@ -47,19 +47,19 @@ TEST_CASE("matcher choice: numbered sequences are sequential, unordered names ar
   CHECK_FALSE(LooksLikeFrameSequence(numbers));
   CHECK_FALSE(LooksLikeFrameSequence(words));
 
-  CHECK(AutoMatcher(fox, 40) == "sequential");
-  CHECK(AutoMatcher(std::vector<std::string>(hex.begin(), hex.begin() + 40), 40) == "exhaustive");
-  CHECK(AutoMatcher(hex, 40) == "exhaustive");  // 60 unordered: as cheap as retrieval
+  CHECK(AutoMatcher(fox, 40) == Matcher::kSequential);
+  CHECK(AutoMatcher(std::vector<std::string>(hex.begin(), hex.begin() + 40), 40) == Matcher::kExhaustive);
+  CHECK(AutoMatcher(hex, 40) == Matcher::kExhaustive);  // 60 unordered: as cheap as retrieval
   std::vector<std::string> many = hex;
   for (int i = 0; i < 60; ++i) many.push_back(format("{:08x}.png", random()));
-  CHECK(AutoMatcher(many, 40) == "vocab_tree");
+  CHECK(AutoMatcher(many, 40) == Matcher::kVocabTree);
 }
 
 TEST_CASE("matcher choice: a failed first matching adds the other kind once", "[sfm]") {
-  CHECK(RetryMatcher("sequential", 60) == "exhaustive");
-  CHECK(RetryMatcher("sequential", 150) == "vocab_tree");
-  CHECK(RetryMatcher("vocab_tree", 150) == "sequential");
-  CHECK(RetryMatcher("exhaustive", 30).empty());  // its pairs contain every other matcher's
+  CHECK(RetryMatcher(Matcher::kSequential, 60) == Matcher::kExhaustive);
+  CHECK(RetryMatcher(Matcher::kSequential, 150) == Matcher::kVocabTree);
+  CHECK(RetryMatcher(Matcher::kVocabTree, 150) == Matcher::kSequential);
+  CHECK_FALSE(RetryMatcher(Matcher::kExhaustive, 30));  // its pairs contain every other matcher's
 }
 
 }  // namespace p2n::testing

@@ -2,7 +2,8 @@
 
 #include <catch2/catch.hpp>
 
-#include "pipeline/errors.h"
+#include "base/errors.h"
+#include "base/format.h"
 #include "pipeline/options.h"
 #include "tests/test_util.h"
 
@@ -10,6 +11,7 @@ namespace p2n::testing {
 namespace {
 
 struct ExampleOptions {
+  static constexpr const char* kSection = "train";
   int steps = 100;  // an integer
   double learning_rate = 0.01;
   bool verbose = false;
@@ -22,7 +24,43 @@ struct ExampleOptions {
     v("verbose", verbose, "print more", "", OptionKind::kRuntime);
     v("mode", mode, "preset", "", OptionKind::kResult, {"fast", "slow"});
   }
-  void Check() const { CheckOption(steps > 0, "train.steps", "must be positive, not " + std::to_string(steps)); }
+  void Check() const { CheckOption(*this, steps, steps > 0, "must be positive, not " + std::to_string(steps)); }
+};
+
+enum class Colour { kRed, kGreen, kBlue };
+
+}  // namespace
+}  // namespace p2n::testing
+
+template <>
+struct p2n::EnumNames<p2n::testing::Colour> {
+  using Colour = p2n::testing::Colour;
+  static constexpr std::pair<Colour, const char*> kValues[] = {
+      {Colour::kRed, "red"}, {Colour::kGreen, "green"}, {Colour::kBlue, "blue"}};
+};
+
+namespace p2n::testing {
+namespace {
+
+// The typed kinds of option: a closed set, "auto or a number", a switch.
+struct PaintOptions {
+  static constexpr const char* kSection = "paint";
+  Colour colour = Colour::kGreen;
+  AutoOrNumber thinning;
+  bool glossy = false;
+  int coats = 2;
+
+  template <class V>
+  void Visit(V& v) {
+    v("colour", colour, "the colour");
+    v("thinning", thinning, "share of thinner; auto: by the colour");
+    v("glossy", glossy, "a glossy finish");
+    v("coats", coats, "coats of paint");
+  }
+  void Check() const {
+    CheckOption(*this, coats, coats >= 1 || colour != Colour::kRed,
+                format("must be at least 1 when {} is {}", OptionKey(*this, colour), EnumName(colour)));
+  }
 };
 
 OptionRegistry Registry() {
@@ -104,6 +142,46 @@ TEST_CASE("an auto-or-number option's text: auto, a whole number, or neither", "
     CHECK_FALSE(ParseAutoOrNumber(bad, &value));
     CHECK_FALSE(value);
   }
+}
+
+TEST_CASE("typed options: closed sets by their names, auto or a number, switches as on/off", "[options]") {
+  OptionRegistry registry;
+  RegisterOptions<PaintOptions>(registry, PaintOptions::kSection);
+  CHECK(registry.Find("paint.colour")->default_value == "green");
+  CHECK(registry.Find("paint.colour")->choices == std::vector<std::string>{"red", "green", "blue"});
+  CHECK(registry.Find("paint.thinning")->default_value == "auto");
+  CHECK(EnumNamesText<Colour>() == "red, green or blue");
+  CHECK(EnumFromName<Colour>("blue") == Colour::kBlue);
+  CHECK_FALSE(EnumFromName<Colour>("Blue"));
+
+  Config config(registry);
+  PaintOptions defaults = ReadOptions<PaintOptions>(config);
+  CHECK(defaults.colour == Colour::kGreen);
+  CHECK_FALSE(defaults.thinning.value);
+  config.SetFromText("paint.colour", "red", "--paint.colour");
+  config.SetFromText("paint.thinning", "0.25", "--paint.thinning");
+  config.Merge(nlohmann::json{{"paint", {{"glossy", "on"}}}}, "paint.json");  // as a config file may say it
+  const PaintOptions read = ReadOptions<PaintOptions>(config);
+  CHECK(read.colour == Colour::kRed);
+  CHECK(read.thinning.value == 0.25);
+  CHECK(read.glossy);
+  CHECK_THROWS_WITH(config.SetFromText("paint.colour", "purple", "x"), Catch::Contains("one of: red, green, blue"));
+  CHECK_THROWS_WITH(config.Set("paint.glossy", "shiny", "x"), Catch::Contains("true or false"));
+  config.SetFromText("paint.thinning", "some", "--paint.thinning");
+  CHECK_THROWS_WITH(ReadOptions<PaintOptions>(config),
+                    Catch::Equals("option paint.thinning must be auto or a number, not 'some'"));
+}
+
+TEST_CASE("Check() names an option's key from its declaration, never by spelling it", "[options]") {
+  PaintOptions options;
+  CHECK(OptionKey(options, options.thinning) == "paint.thinning");
+  CHECK(OptionKey(&PaintOptions::coats) == "paint.coats");
+  const int elsewhere = 0;
+  CHECK_THROWS_AS(OptionKey(options, elsewhere), InternalError);
+  options.coats = 0;
+  CHECK_NOTHROW(options.Check());
+  options.colour = Colour::kRed;
+  CHECK_THROWS_WITH(options.Check(), Catch::Equals("option paint.coats must be at least 1 when paint.colour is red"));
 }
 
 }  // namespace p2n::testing

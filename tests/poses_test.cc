@@ -6,10 +6,10 @@
 
 #include <random>
 
+#include "base/camera.h"
+#include "base/errors.h"
 #include "formats/ply.h"
 #include "formats/scene_normalization.h"
-#include "nerf/camera.h"
-#include "pipeline/errors.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {

@@ -15,13 +15,13 @@
 #include <cmath>
 #include <map>
 
+#include "base/file_util.h"
+#include "base/float_image.h"
+#include "base/format.h"
 #include "formats/dataset_import.h"
 #include "formats/mesh_io.h"
 #include "formats/ply.h"
 #include "nerf/camera_refinement.h"
-#include "nerf/float_image.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "pipeline/hash.h"
 #include "splat/gaussians.h"
 #include "splat/splat_ply.h"
@@ -177,7 +177,7 @@ TEST_CASE("the splats' depth: the distance along each pixel's ray in normalised 
     normalized_from_source.topRightCorner<3, 1>() = Eigen::Vector3d(0.3, -0.2, 0.5);
     SplatReport report;
     report.enabled = true;
-    report.frame = scale == 1.0 ? "normalized" : "source";
+    report.frame = scale == 1.0 ? FrameKind::kNormalized : FrameKind::kSource;
     Gaussians<float> splat;
     splat.sh_degree = 0;
     splat.Resize(1);
@@ -398,7 +398,7 @@ TEST_CASE("export stage: transforms.json holds the cameras, the training ones as
   const nlohmann::json poses = ReadJsonFile(setup.dir / "ws" / "20_poses" / "transforms.json");
   const nlohmann::json exported = ReadJsonFile(setup.dir / "ws" / "50_export" / "transforms.json");
   const std::map<std::string, CameraCorrection> corrections =
-      ReadCameraCorrections(setup.dir / "ws" / "30_train" / "train_report.json");
+      ReadTrainedField(InWorkspace<TrainResult>(setup.workspace)).corrections;
   CHECK(exported["cameras_refined"] == true);
   REQUIRE(exported["frames"].size() == poses["frames"].size());
   const auto matrix = [](const nlohmann::json& json) {

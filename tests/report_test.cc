@@ -9,8 +9,8 @@
 #include <cmath>
 #include <regex>
 
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
+#include "base/file_util.h"
+#include "base/format.h"
 #include "stage_fixtures.h"
 
 namespace p2n::testing {

@@ -8,8 +8,8 @@
 #include <chrono>
 #include <thread>
 
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
+#include "base/errors.h"
+#include "base/file_util.h"
 #include "tests/fake_stages.h"
 #include "tests/test_util.h"
 

@@ -11,9 +11,9 @@
 
 #include <cstdlib>
 
+#include "base/file_util.h"
+#include "base/format.h"
 #include "nerf/synthetic_scene.h"
-#include "pipeline/file_util.h"
-#include "pipeline/format.h"
 #include "stages/stages.h"
 #include "tests/test_util.h"
 

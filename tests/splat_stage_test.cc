@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "base/file_util.h"
 #include "formats/output_frame.h"
-#include "pipeline/file_util.h"
 #include "splat/splat_ply.h"
 #include "stage_fixtures.h"
 
@@ -44,7 +44,8 @@ TEST_CASE("splat stage: splats where the scene is, scored on the held-out views,
 
   // In the source frame, the splats lie where the normalised scene's unit box maps to.
   const fs::path ws = setup.dir / "ws";
-  const OutputFrame frame = MakeOutputFrame("source", LoadTransformsJson(ws / "20_poses" / "transforms.json", ws));
+  const OutputFrame frame =
+      MakeOutputFrame(FrameKind::kSource, LoadTransformsJson(ws / "20_poses" / "transforms.json", ws));
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (size_t i = 0; i < splats.size(); ++i) {
     mean += Eigen::Vector3d(splats.positions[3 * i], splats.positions[3 * i + 1], splats.positions[3 * i + 2]);

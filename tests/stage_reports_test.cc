@@ -3,8 +3,8 @@
 
 #include <catch2/catch.hpp>
 
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
+#include "base/errors.h"
+#include "base/file_util.h"
 #include "stages/stage_reports.h"
 #include "test_util.h"
 
@@ -86,7 +86,7 @@ SplatReport SomeSplatReport() {
   report.heldout_ssim = 0.81;
   report.heldout_psnr_per_view = {24.0, 24.5};
   report.seconds_per_view = 0.031;
-  report.frame = "source";
+  report.frame = FrameKind::kSource;
   report.frame_description = "COLMAP's world";
   report.near = 0.02;
   report.background = {0.0f, 0.5f, 1.0f};
@@ -128,8 +128,9 @@ PathReport SomePathReport() {
 
 ExportReport SomeExportReport() {
   ExportReport report;
-  report.mesh = {"mesh.ply", 1000, 1990, false, 4, 1, 0, 256, 21.5, true, "focus", {0.125, -0.25, 0.5}, 0.375};
-  report.frame = "source";
+  report.mesh = {"mesh.ply",          1000, 1990, false, 4, 1, 0, 256, 21.5, true, MeshRegion::kFocus,
+                 {0.125, -0.25, 0.5}, 0.375};
+  report.frame = FrameKind::kSource;
   report.cameras = {"transforms.json", 50, true};
   report.points = ExportedPoints{"points.ply", 12345};
   return report;
@@ -236,6 +237,9 @@ TEST_CASE("Reports between stages read back exactly what was written", "[reports
                                           nlohmann::json::array({1, 2})),
              Catch::Contains("export_report.json") && Catch::Contains("\"mesh.region.centre\"") &&
                  Catch::Contains("photo2nerf export"));
+  CHECK_THAT(
+      ErrorAfterEdit<ExportReport>(dir.path() / "export_report.json", exported.ToJson(), "/mesh/region/kind", "sphere"),
+      Catch::Contains("\"mesh.region.kind\" must be auto, box or focus, not 'sphere'"));
 }
 
 TEST_CASE("A damaged report names its file, the field and the stage to rerun", "[reports]") {
@@ -280,7 +284,7 @@ TEST_CASE("A damaged report names its file, the field and the stage to rerun", "
   CHECK_THAT(ErrorAfterEdit<SplatReport>(splat, splat_json, "/background", nlohmann::json::array({1, 1})),
              Catch::Contains("\"background\" must be 3 numbers"));
   CHECK_THAT(ErrorAfterEdit<SplatReport>(splat, splat_json, "/frame", "sideways"),
-             Catch::Contains("\"frame\" must be normalized or source"));
+             Catch::Contains("\"frame\" must be source or normalized, not 'sideways'"));
   CHECK_THAT(ErrorAfterEdit<SplatReport>(splat, splat_json, "/steps", nlohmann::json::value_t::discarded),
              Catch::Contains("\"steps\" is missing"));
 

@@ -8,7 +8,7 @@
 
 #include <fstream>
 
-#include "nerf/camera.h"
+#include "base/camera.h"
 #include "nerf/synthetic_scene.h"
 #include "tests/test_util.h"
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <vector>
 
-#include "nerf/camera.h"
+#include "base/camera.h"
 
 namespace p2n::testing {
 

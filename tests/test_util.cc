@@ -6,7 +6,7 @@
 #include <random>
 #include <sstream>
 
-#include "pipeline/file_util.h"
+#include "base/file_util.h"
 #include "pipeline/subprocess.h"
 
 namespace p2n::testing {

@@ -6,11 +6,11 @@
 
 #include <thread>
 
+#include "base/errors.h"
+#include "base/file_util.h"
 #include "nerf/nerf_model.h"
 #include "nerf/ngp_field.h"
 #include "pipeline/cancel.h"
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
 #include "stage_fixtures.h"
 #include "stages/stage_reports.h"
 #include "stages/stages.h"
@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 TEST_CASE(
     "train stage: train.scene auto is bounded for Blender and .npz data, forward for one-sided captures of any format",
     "[train]") {
-  const auto dataset = [](const std::string& kind, const std::vector<double>& azimuths_deg) {
+  const auto dataset = [](std::optional<DatasetKind> kind, const std::vector<double>& azimuths_deg) {
     ImportedDataset poses;
     poses.meta.dataset_kind = kind;
     for (const PinholeCamera& camera : RingOfCameras(azimuths_deg)) {
@@ -36,15 +36,15 @@ TEST_CASE(
   };
   const std::vector<double> one_side = {-10, 0, 10}, around = {0, 60, 120, 180, 240, 300};
   TrainOptions options;
-  CHECK(ResolveSceneSpace(options, dataset("blender", one_side)) == SceneSpace::kBounded);
-  CHECK(ResolveSceneSpace(options, dataset("npz", around)) == SceneSpace::kBounded);
-  CHECK(ResolveSceneSpace(options, dataset("llff", one_side)) == SceneSpace::kForward);
+  CHECK(ResolveSceneSpace(options, dataset(DatasetKind::kBlender, one_side)) == SceneSpace::kBounded);
+  CHECK(ResolveSceneSpace(options, dataset(DatasetKind::kNpz, around)) == SceneSpace::kBounded);
+  CHECK(ResolveSceneSpace(options, dataset(DatasetKind::kLlff, one_side)) == SceneSpace::kForward);
   // poses_bounds.npy holds captures taken around an object too (maryrose): unbounded like any such photos
-  CHECK(ResolveSceneSpace(options, dataset("llff", around)) == SceneSpace::kUnbounded);
-  CHECK(ResolveSceneSpace(options, dataset("", one_side)) == SceneSpace::kForward);
-  CHECK(ResolveSceneSpace(options, dataset("colmap", around)) == SceneSpace::kUnbounded);
-  options.scene = "unbounded";
-  CHECK(ResolveSceneSpace(options, dataset("", one_side)) == SceneSpace::kUnbounded);
+  CHECK(ResolveSceneSpace(options, dataset(DatasetKind::kLlff, around)) == SceneSpace::kUnbounded);
+  CHECK(ResolveSceneSpace(options, dataset(std::nullopt, one_side)) == SceneSpace::kForward);
+  CHECK(ResolveSceneSpace(options, dataset(DatasetKind::kColmap, around)) == SceneSpace::kUnbounded);
+  options.scene = SceneChoice::kUnbounded;
+  CHECK(ResolveSceneSpace(options, dataset(std::nullopt, one_side)) == SceneSpace::kUnbounded);
 }
 
 TEST_CASE("train stage: bounded scenes get the default preset's larger hash table, occupancy grid and late batch",
@@ -67,7 +67,7 @@ TEST_CASE("train stage: bounded scenes get the default preset's larger hash tabl
   options.batch_samples = 32768;
   CHECK(MakeTrainerOptions(options, SceneSpace::kBounded).late_batch_samples == 0);
   options.batch_samples = 0;
-  options.preset = "fast";
+  options.preset = PresetName::kFast;
   CHECK(table_log2(options, SceneSpace::kBounded) == 15);
   CHECK(MakeTrainerOptions(options, SceneSpace::kBounded).occupancy_resolution == 64);
   CHECK(MakeTrainerOptions(options, SceneSpace::kBounded).late_batch_samples == 0);
@@ -81,7 +81,7 @@ TEST_CASE("train stage: a short time budget trains with the fast preset's sizes,
     return NgpFieldConfig::FromJson(MakeTrainerOptions(options, space).field).grid.log2_table_size;
   };
   TrainOptions options;
-  for (const char* preset : {"default", "quality"}) {
+  for (const PresetName preset : {PresetName::kDefault, PresetName::kQuality}) {
     options.preset = preset;
     options.time_budget = kShortBudget - 1;
     CHECK(table_log2(options, SceneSpace::kBounded) == 15);
@@ -93,7 +93,7 @@ TEST_CASE("train stage: a short time budget trains with the fast preset's sizes,
     CHECK(table_log2(options, SceneSpace::kBounded) == 19);
   }
   // A run by steps keeps the preset's sizes.
-  options.preset = "default";
+  options.preset = PresetName::kDefault;
   options.time_budget = 0;
   options.steps = 100;
   CHECK(table_log2(options, SceneSpace::kBounded) == 19);

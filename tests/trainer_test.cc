@@ -9,13 +9,13 @@
 #include <random>
 #include <stdexcept>
 
+#include "base/file_util.h"
+#include "base/float_image.h"
 #include "nerf/appearance.h"
 #include "nerf/camera_refinement.h"
-#include "nerf/float_image.h"
 #include "nerf/ngp_field.h"
 #include "nerf/synthetic_scene.h"
 #include "nerf/trainer.h"
-#include "pipeline/file_util.h"
 #include "test_util.h"
 
 namespace p2n::testing {

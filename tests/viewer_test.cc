@@ -11,8 +11,8 @@
 #include <random>
 #include <set>
 
-#include "nerf/float_image.h"
-#include "pipeline/file_util.h"
+#include "base/file_util.h"
+#include "base/float_image.h"
 #include "splat/compressed_ply.h"
 #include "splat/splat_ply.h"
 #include "splat/splat_trainer.h"

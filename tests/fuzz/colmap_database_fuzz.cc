@@ -1,7 +1,7 @@
 // libFuzzer: COLMAP's database (an SQLite file) as the sfm stage reads it: the images, each image's descriptors
 // and a pair's matches.
+#include "base/errors.h"
 #include "formats/colmap_database.h"
-#include "pipeline/errors.h"
 #include "tests/fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -1,8 +1,8 @@
 // libFuzzer: COLMAP models, binary and text: the input is split into cameras, images and points3D.
 #include <fstream>
 
+#include "base/errors.h"
 #include "formats/colmap_model.h"
-#include "pipeline/errors.h"
 #include "tests/fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

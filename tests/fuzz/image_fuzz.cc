@@ -3,7 +3,7 @@
 // OpenImageIO tries first.
 #include <array>
 
-#include "nerf/image_io.h"
+#include "base/image_io.h"
 #include "tests/fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

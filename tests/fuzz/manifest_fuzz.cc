@@ -1,6 +1,6 @@
 // libFuzzer: a stage's manifest.json, as the runner reads it to tell whether the stage is fresh.
-#include "pipeline/errors.h"
-#include "pipeline/file_util.h"
+#include "base/errors.h"
+#include "base/file_util.h"
 #include "pipeline/manifest.h"
 #include "tests/fuzz/fuzz_util.h"
 

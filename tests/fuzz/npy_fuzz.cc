@@ -1,6 +1,6 @@
 // libFuzzer: NumPy .npy (in memory) and .npz (as a file).
+#include "base/errors.h"
 #include "formats/npy.h"
-#include "pipeline/errors.h"
 #include "tests/fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -1,8 +1,8 @@
 // libFuzzer: the PLY reader, and the writer's round trip of what it read.
 #include <cstdlib>
 
+#include "base/errors.h"
 #include "formats/ply.h"
-#include "pipeline/errors.h"
 #include "tests/fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -1,7 +1,7 @@
 // libFuzzer: the reports between stages (ingest_report.json, sfm_report.json, train_report.json,
-// splat_report.json, eval.json, render_report.json, export_report.json) as their readers read them: any input is read or refused with
-// a UserError.
-#include "pipeline/errors.h"
+// splat_report.json, eval.json, render_report.json, export_report.json) as their readers read them: any input is read
+// or refused with a UserError.
+#include "base/errors.h"
 #include "stages/stage_reports.h"
 #include "tests/fuzz/fuzz_util.h"
 

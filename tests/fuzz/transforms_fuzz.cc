@@ -1,6 +1,6 @@
 // libFuzzer: a dataset's transforms.json (the importer's parsing and validation; no image exists).
+#include "base/errors.h"
 #include "formats/dataset_import.h"
-#include "pipeline/errors.h"
 #include "tests/fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

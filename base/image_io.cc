@@ -1,4 +1,4 @@
-#include "nerf/image_io.h"
+#include "base/image_io.h"
 
 #include <OpenImageIO/hash.h>
 #include <OpenImageIO/imagebufalgo.h>

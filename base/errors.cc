@@ -1,4 +1,4 @@
-#include "pipeline/errors.h"
+#include "base/errors.h"
 
 namespace p2n {
 

@@ -1,4 +1,4 @@
-#include "nerf/float_image.h"
+#include "base/float_image.h"
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
@@ -11,7 +11,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "nerf/image_io.h"
+#include "base/image_io.h"
 
 namespace p2n {
 

@@ -1,0 +1,43 @@
+#pragma once
+// Posed photos as the optimisers read them (a field's trainer and the splats' alike): the camera, the 8-bit
+// pixels, and the background they were composited on.
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "base/camera.h"
+#include "base/float_image.h"
+
+namespace p2n {
+
+// One posed image. Cameras are in the normalised world (transforms.json's frame); pixels are 8-bit RGB or
+// RGBA (straight alpha), row-major.
+struct TrainView {
+  PinholeCamera camera;
+  double near = -1, far = -1;  // world units; negative: the whole box
+  int channels = 3;
+  std::vector<uint8_t> pixels;
+  std::string name;
+
+  // Channel c (0-2) of a pixel (index y * width + x) as a float in [0, 1], over `background` by its alpha.
+  float OnBackground(size_t pixel, int c, float background) const {
+    const uint8_t* value = pixels.data() + pixel * channels;
+    const float alpha = channels == 4 ? value[3] / 255.0f : 1.0f;
+    return alpha * (value[c] / 255.0f) + (1 - alpha) * background;
+  }
+};
+
+// The photo as floats (RGB), composited on `background` where it has alpha: what a render is compared with.
+FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& background);
+// The first of `views` with an alpha channel (composited on a background the trainers must keep), or null.
+const TrainView* FirstWithAlpha(const std::vector<TrainView>& views);
+
+struct TrainingData {
+  std::vector<TrainView> train, heldout;
+  std::array<float, 3> background{1, 1, 1};  // behind the scene: the known colour, or where a learnt one starts
+  bool background_known = false;             // the images were rendered or composited on `background`
+};
+
+}  // namespace p2n
