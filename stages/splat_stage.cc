@@ -182,7 +182,8 @@ void AddMetricsRow(const SplatTrainer& trainer, const Scores& scores, RunState* 
 // caller's final evaluation makes it), checkpoints.
 void OptimiseUntilDone(SplatTrainer& trainer, const SplatSetup& setup, const SplatOptions& options, double budget,
                        double near, const fs::path& checkpoint, const std::string& key, RunState* state) {
-  const RunLoop loop{"splat", budget, options.steps, options.eval_interval, 1, false, options.checkpoint_interval};
+  const RunLoop loop{SplatResult::kId.name,      budget, options.steps, options.eval_interval, 1, false,
+                     options.checkpoint_interval};
   const std::vector<TrainView> coarse = options.coarse > 0 ? HalfSizeViews(setup.data.train) : std::vector<TrainView>{};
   const auto step = [&](double share) -> std::optional<double> {
     trainer.SetViews(!coarse.empty() && share < options.coarse ? &coarse : &setup.data.train);
@@ -293,7 +294,7 @@ void SplatStage::Run(StageContext& context) const {
   if (!setup.data.heldout.empty()) context.summary["splat_psnr"] = Mean(scores.psnr);
   LogInfo(format("splat: {} splats, held-out PSNR {:.2f} dB, {:.3f} s per held-out view", trainer.gaussians().size(),
                  Mean(scores.psnr), scores.seconds_per_view));
-  LogFitWarnings("splat", report.warnings);
+  LogFitWarnings(SplatResult::kId.name, report.warnings);
 }
 
 }  // namespace p2n

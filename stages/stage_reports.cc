@@ -200,7 +200,10 @@ class JsonReader {
   static void Read(const Fields& fields, const char* key, T* value) {
     if constexpr (IsOptional<T>::value) {
       value->reset();
-      if (fields.Has(key)) Read(fields, key, &value->emplace());
+      if (!fields.Has(key)) return;
+      typename T::value_type read{};  // not emplace(): clang takes a nested struct for one it cannot default-construct
+      Read(fields, key, &read);
+      *value = std::move(read);
     } else if constexpr (IsDescribedVector<T>::value) {
       value->clear();
       fields.ForEach(key, [&](const Fields& element) {

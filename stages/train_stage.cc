@@ -238,8 +238,8 @@ void CheckCancel(size_t) { ThrowIfCancelled(); }  // Ctrl-C stops an evaluation 
 // train.checkpoint_interval seconds into `checkpoint`, tagged with the result's `key`.
 void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptions& options, double budget,
                     const fs::path& checkpoint, const std::string& key, RunState* state, SessionLog* session) {
-  const RunLoop loop{
-      "train", budget, options.steps, options.eval_interval, options.eval_share, true, options.checkpoint_interval};
+  const RunLoop loop{TrainResult::kId.name,      budget, options.steps, options.eval_interval, options.eval_share, true,
+                     options.checkpoint_interval};
   int consecutive_skips = 0;
   const auto step = [&](double share) -> std::optional<double> {
     const StepResult result = trainer.Step(share);
@@ -371,7 +371,7 @@ void TrainStage::Run(StageContext& context) const {
       "samples per ray rendered)",
       trainer.step(), state.seconds, session.steps.SamplesPerSecond() / 1e6, session.steps.SamplesPerRay(), Mean(psnrs),
       psnrs.size(), report.samples_per_ray_rendered));
-  LogFitWarnings("train", report.warnings);
+  LogFitWarnings(TrainResult::kId.name, report.warnings);
 }
 
 }  // namespace p2n
