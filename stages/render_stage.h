@@ -58,7 +58,7 @@ struct RenderStageOptions {
       "back; all the way round when they surround it), spiral (in front of the capture), file, none; auto: spiral "
       "for LLFF data and for photos taken from one side (within 30 degrees), else orbit");
     v("path_file", path_file,
-      "cameras of the path when render.path is file (transforms.json layout, e.g. an "
+      "cameras of the path when path is file (transforms.json layout, e.g. an "
       "edited path.json)");
     v("frames", frames, "frames of an orbit or spiral", "frames");
     v("width", width, "width of the path frames; 0: the photos' width, at most 320", "pixels");

@@ -36,7 +36,7 @@ struct SfmOptions {
     v("matcher", matcher,
       "feature matching: exhaustive (every pair), sequential (neighbours in file-name order, as video frames or a "
       "camera's counter), vocab_tree (the most similar photos, by a vocabulary tree built from them: any order), or "
-      "auto: exhaustive up to sfm.exhaustive_max_images photos; above, sequential when the names are a numbered "
+      "auto: exhaustive up to exhaustive_max_images photos; above, sequential when the names are a numbered "
       "sequence, else vocab_tree; when too few photos register, the other kind of matching is added once and the "
       "mapping rerun");
     v("exhaustive_max_images", exhaustive_max_images,

@@ -51,7 +51,7 @@ struct SplatOptions {
   void Visit(V& v) {
     v("enabled", enabled, "bake the trained field into 3D Gaussian splats (splats.ply, for live viewing)");
     v("time_budget", time_budget,
-      "optimisation time of the splats; 0: by train.preset (fast 30, default 180, quality 480)", "s");
+      "optimisation time of the splats; 0: by the training preset (fast 30, default 180, quality 480)", "s");
     v("steps", steps, "stop after this many steps (one training photo each); 0: no step limit", "steps");
     v("sh_degree", sh_degree, "spherical-harmonics degree of the splats' colours (0: one colour each)");
     v("init", init,

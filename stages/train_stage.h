@@ -107,7 +107,7 @@ struct TrainOptions {
     v("eval_interval", eval_interval, "training time between held-out evaluations (metrics.csv rows)", "s");
     v("eval_share", eval_share,
       "held-out evaluations during training take at most this share of the wall time (the interval grows when "
-      "they would take more); 1: every train.eval_interval whatever they cost");
+      "they would take more); 1: every eval_interval whatever they cost");
     v("eval_pixels", eval_pixels, "held-out pixels per view in each evaluation during training; 0: all", "pixels");
     v("final_eval_pixels", final_eval_pixels, "held-out pixels per view in the final evaluation; 0: all", "pixels");
     v("checkpoint_interval", checkpoint_interval, "time between checkpoints that a killed run resumes from; 0: none",
