@@ -14,7 +14,6 @@
 #include <optional>
 #include <string>
 #include <string_view>
-#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -22,11 +21,6 @@ namespace p2n {
 
 template <class E>
 struct EnumNames;
-
-template <class E, class = void>
-struct HasEnumNames : std::false_type {};
-template <class E>
-struct HasEnumNames<E, std::void_t<decltype(EnumNames<E>::kValues)>> : std::true_type {};
 
 // The name of `value` ("?" for a value without one, which a specialisation that names every value never gives).
 template <class E>

@@ -33,15 +33,6 @@ class Fields {
     if (values.size() != N) Fail(key, "must be " + std::to_string(N) + " numbers");
     std::copy(values.begin(), values.end(), value->begin());
   }
-  // Missing or null: none.
-  template <class T>
-  void Get(const char* key, std::optional<T>* value) const {
-    value->reset();
-    if (!json_.contains(key) || json_.at(key).is_null()) return;
-    T converted;
-    Convert(key, json_.at(key), &converted);
-    *value = converted;
-  }
   // Calls read(fields of the element) for each element of the array at `key`, in order.
   template <class Read>
   void ForEach(const char* key, Read read) const {
@@ -228,19 +219,15 @@ class JsonReader {
   Fields fields_;
 };
 
-// A report read from `file`, written by `stage`.
+// A report read from `file` (from its object `section`, when given), written by `stage`.
 template <class Report>
-Report ReadReport(const fs::path& file, const char* stage) {
+Report ReadReport(const fs::path& file, const char* stage, const char* section = nullptr) {
   const nlohmann::json json = ReadJsonFile(file);
-  JsonReader reader{Fields(json, file, stage)};
+  const Fields fields(json, file, stage);
+  JsonReader reader{section ? fields.Object(section) : fields};
   Report report;
   Describe(reader, report);
   return report;
-}
-
-template <class Report>
-nlohmann::json WriteReport(const Report& report) {
-  return ToJsonValue(report);
 }
 
 // A pixels-per-view count as written: the number, or "all" for 0.
@@ -536,31 +523,27 @@ void Describe(S& s, ExportReport& report) {
   s("points", report.points);
 }
 
-nlohmann::json IngestReport::ToJson() const { return WriteReport(*this); }
+nlohmann::json IngestReport::ToJson() const { return ToJsonValue(*this); }
 IngestReport IngestReport::Read(const fs::path& file) { return ReadReport<IngestReport>(file, IngestResult::kId.name); }
 
-nlohmann::json SfmReport::ToJson() const { return WriteReport(*this); }
+nlohmann::json SfmReport::ToJson() const { return ToJsonValue(*this); }
 SfmReport SfmReport::Read(const fs::path& file) { return ReadReport<SfmReport>(file, SfmResult::kId.name); }
 
-nlohmann::json TrainReport::ToJson() const { return WriteReport(*this); }
+nlohmann::json TrainReport::ToJson() const { return ToJsonValue(*this); }
 TrainReport TrainReport::Read(const fs::path& file) { return ReadReport<TrainReport>(file, TrainResult::kId.name); }
 
-nlohmann::json SplatReport::ToJson() const { return WriteReport(*this); }
+nlohmann::json SplatReport::ToJson() const { return ToJsonValue(*this); }
 SplatReport SplatReport::Read(const fs::path& file) { return ReadReport<SplatReport>(file, SplatResult::kId.name); }
 
-nlohmann::json EvalReport::ToJson() const { return WriteReport(*this); }
+nlohmann::json EvalReport::ToJson() const { return ToJsonValue(*this); }
 EvalReport EvalReport::Read(const fs::path& file) { return ReadReport<EvalReport>(file, RenderResult::kId.name); }
 
-nlohmann::json PathReport::ToJson() const { return WriteReport(*this); }
+nlohmann::json PathReport::ToJson() const { return ToJsonValue(*this); }
 PathReport PathReport::Read(const fs::path& render_report) {
-  const nlohmann::json json = ReadJsonFile(render_report);
-  JsonReader reader{Fields(json, render_report, RenderResult::kId.name).Object("path")};
-  PathReport report;
-  Describe(reader, report);
-  return report;
+  return ReadReport<PathReport>(render_report, RenderResult::kId.name, "path");
 }
 
-nlohmann::json ExportReport::ToJson() const { return WriteReport(*this); }
+nlohmann::json ExportReport::ToJson() const { return ToJsonValue(*this); }
 ExportReport ExportReport::Read(const fs::path& file) { return ReadReport<ExportReport>(file, ExportResult::kId.name); }
 
 }  // namespace p2n
