@@ -9,6 +9,7 @@
 #include "base/errors.h"
 #include "base/file_util.h"
 #include "base/format.h"
+#include "base/video_io.h"
 #include "cli/cli_options.h"
 #include "cli/commands.h"
 #include "formats/dataset_import.h"
@@ -78,7 +79,8 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
   bool force = false;
   if (is_run || stage == IngestResult::kId.name) {
     app.add_option("photos", photos,
-                   "folder of photos, or a dataset with cameras (transforms.json, Blender, LLFF, COLMAP project, "
+                   "folder of photos (and videos), a video, or a dataset with cameras (transforms.json, Blender, LLFF, "
+                   "COLMAP project, "
                    ".npz); remembered by the workspace");
   }
   if (is_run) {
@@ -95,8 +97,8 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
     if (force) request.force.push_back(stage);
   }
   if (!photos.empty() && !fs::exists(photos)) throw UserError(format("photo folder '{}' does not exist", photos));
-  if (!photos.empty() && !fs::is_directory(photos) && !DetectDataset(photos)) {
-    throw UserError(format("'{}' is a file, not a folder; give the folder that holds your photos", photos));
+  if (!photos.empty() && !fs::is_directory(photos) && !DetectDataset(photos) && !IsVideoFile(photos)) {
+    throw UserError(format("'{}' is a file, not a folder or a video; give the folder that holds your photos", photos));
   }
   if (!photos.empty()) {
     // Unknown stage names fail before anything is written.

@@ -3,7 +3,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <tbb/parallel_for.h>
 
-#include <mutex>
+#include <cmath>
 #include <set>
 #include <variant>
 
@@ -11,10 +11,12 @@
 #include "base/file_util.h"
 #include "base/format.h"
 #include "base/image_io.h"
+#include "base/video_io.h"
 #include "pipeline/cancel.h"
 #include "pipeline/hash.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
+#include "stages/ingest_video.h"
 #include "stages/stage_reports.h"
 
 namespace p2n {
@@ -91,55 +93,122 @@ void CheckImageCount(const IngestReport& report, int min_images) {
              duplicates ? format(", {} of them copies of another photo", duplicates) : "", min_images));
 }
 
+std::vector<std::variant<IngestedImage, SkippedPhoto>> IngestPhotos(const std::vector<fs::path>& photos,
+                                                                    const fs::path& images_dir,
+                                                                    const IngestOptions& options) {
+  std::vector<std::variant<IngestedImage, SkippedPhoto>> results(photos.size());
+  if (photos.empty()) return results;
+  Progress progress("ingest: decoding", static_cast<int64_t>(photos.size()), "images");
+  tbb::parallel_for(size_t{0}, photos.size(), [&](size_t i) {
+    if (CancelRequested()) return;
+    results[i] = IngestOne(photos[i], images_dir, options);
+    progress.Add();
+  });
+  ThrowIfCancelled();
+  return results;
+}
+
+// Adds the decoded images to the report, skipping copies of an earlier one; UserError when two map to one name.
+void AddImages(const std::vector<std::variant<IngestedImage, SkippedPhoto>>& results, const fs::path& input,
+               const fs::path& images_dir, IngestReport* report) {
+  std::set<std::string> names;
+  std::map<std::string, std::string> first_with_fingerprint;
+  std::set<std::pair<int, int>> sizes;
+  for (const auto& result : results) {
+    if (const SkippedPhoto* skip = std::get_if<SkippedPhoto>(&result)) {
+      LogWarning(format("ingest: skipped {}: {}", skip->file, skip->reason));
+      report->skipped.push_back(*skip);
+      continue;
+    }
+    const IngestedImage& image = std::get<IngestedImage>(result);
+    if (!names.insert(image.name).second) {
+      throw UserError(
+          format("two photos in '{}' map to the image name {}; rename one of them", input.string(), image.name));
+    }
+    // A copy adds nothing to the reconstruction, and one copy held out while another is trained on would make
+    // the held-out error a lie: only the first (by name; a video's frames after the photos) is kept.
+    const std::string file = image.frame ? image.name : image.source;
+    const auto [it, first] = first_with_fingerprint.emplace(image.fingerprint, file);
+    if (!first) {
+      fs::remove(images_dir / image.name);
+      const std::string reason = kDuplicateReason + it->second;
+      LogWarning(format("ingest: skipped {}: {}", file, reason));
+      report->skipped.push_back({file, reason});
+      continue;
+    }
+    sizes.insert({image.width, image.height});
+    report->images.push_back(image);
+  }
+  if (sizes.size() > 1) {
+    LogWarning(format("ingest: the images have {} different sizes; sfm will give each size a camera of its own",
+                      sizes.size()));
+  }
+}
+
 }  // namespace
 
 void IngestOptions::Check() const {
   CheckOption(*this, max_image_size, max_image_size == 0 || max_image_size >= 16,
               format("must be 0 (keep the size) or at least 16 pixels, not {}", max_image_size));
   CheckOption(*this, min_images, min_images >= 1, format("must be at least 1, not {}", min_images));
+  const std::optional<double> frames = video_frames.value;
+  CheckOption(
+      *this, video_frames, !frames || (*frames >= 1 && *frames <= 100000 && *frames == std::floor(*frames)),
+      format("must be auto or a whole number of frames from 1 to 100000, not {}", AutoOrNumberText(video_frames)));
 }
 
-std::vector<fs::path> ListPhotos(const fs::path& folder) {
+InputFiles ListInputs(const fs::path& input) {
   std::error_code error;
-  const fs::file_status status = fs::status(folder, error);
+  const fs::file_status status = fs::status(input, error);
   if (!fs::exists(status)) {
-    throw UserError(
-        format("photo folder '{}' does not exist; give the folder that holds your photos", folder.string()));
+    throw UserError(format("photo folder '{}' does not exist; give the folder that holds your photos", input.string()));
   }
+  InputFiles files;
   if (!fs::is_directory(status)) {
-    throw UserError(format("'{}' is a file, not a folder; give the folder that holds your photos", folder.string()));
+    if (IsVideoFile(input)) {
+      files.videos.push_back(input);
+      return files;
+    }
+    throw UserError(
+        format("'{}' is a file, not a folder or a video; give the folder that holds your photos", input.string()));
   }
-  std::vector<fs::path> photos;
   size_t other_files = 0;
-  for (const fs::directory_entry& entry : fs::directory_iterator(folder, error)) {
+  for (const fs::directory_entry& entry : fs::directory_iterator(input, error)) {
     const std::string name = entry.path().filename().string();
     if (name.empty() || name[0] == '.' || !entry.is_regular_file()) continue;
     if (kImageExtensions.count(LowerExtension(entry.path()))) {
-      photos.push_back(entry.path());
+      files.photos.push_back(entry.path());
+    } else if (IsVideoFile(entry.path())) {
+      files.videos.push_back(entry.path());
     } else {
       ++other_files;
     }
   }
-  if (error) throw UserError(format("cannot list the photo folder '{}': {}", folder.string(), error.message()));
-  if (photos.empty()) {
-    throw UserError(format("no photos in '{}' (looked for .jpg, .jpeg, .png, .tif, .tiff, .exr{})", folder.string(),
-                           other_files ? format("; {} other files were ignored", other_files) : ""));
+  if (error) throw UserError(format("cannot list the photo folder '{}': {}", input.string(), error.message()));
+  if (files.photos.empty() && files.videos.empty()) {
+    throw UserError(
+        format("no photos or videos in '{}' (looked for .jpg, .jpeg, .png, .tif, .tiff, .exr, .mp4, "
+               ".mov, .m4v, .avi, .mkv, .webm{})",
+               input.string(), other_files ? format("; {} other files were ignored", other_files) : ""));
   }
-  std::sort(photos.begin(), photos.end());
-  return photos;
+  std::sort(files.photos.begin(), files.photos.end());
+  std::sort(files.videos.begin(), files.videos.end());
+  return files;
 }
 
 std::map<std::string, std::string> IngestStage::ExternalInputs(const Workspace& workspace, const Config&) const {
-  const fs::path folder = InputFolder(workspace);
-  std::vector<fs::path> photos;
+  const fs::path input = InputFolder(workspace);
+  InputFiles files;
   try {
-    photos = ListPhotos(folder);
+    files = ListInputs(input);
   } catch (const UserError&) {
-    return {{"folder " + folder.string(), "unreadable or without photos"}};  // Run() says why
+    return {{"folder " + input.string(), "unreadable or without photos"}};  // Run() says why
   }
-  const std::vector<std::string> digests = Sha1OfFiles(photos);
   std::map<std::string, std::string> inputs;
-  for (size_t i = 0; i < photos.size(); ++i) inputs["image " + photos[i].filename().string()] = digests[i];
+  for (const auto& [kind, paths] : {std::pair{"image ", &files.photos}, std::pair{"video ", &files.videos}}) {
+    const std::vector<std::string> digests = Sha1OfFiles(*paths);
+    for (size_t i = 0; i < paths->size(); ++i) inputs[kind + (*paths)[i].filename().string()] = digests[i];
+  }
   return inputs;
 }
 
@@ -150,56 +219,28 @@ void IngestStage::CheckResult(const fs::path& result_dir, const Config& config) 
 
 void IngestStage::Run(StageContext& context) const {
   const IngestOptions options = ReadOptions<IngestOptions>(context.config);
-  const fs::path folder = InputFolder(context.workspace);
-  const std::vector<fs::path> photos = ListPhotos(folder);
+  const fs::path input = InputFolder(context.workspace);
+  const InputFiles files = ListInputs(input);
   const IngestResult out{context.output_dir};
-  const fs::path images_dir = out.images();
-  fs::create_directories(images_dir);
+  fs::create_directories(out.images());
 
-  std::vector<std::variant<IngestedImage, SkippedPhoto>> results(photos.size());
-  {
-    Progress progress("ingest: decoding", static_cast<int64_t>(photos.size()), "images");
-    tbb::parallel_for(size_t{0}, photos.size(), [&](size_t i) {
-      if (CancelRequested()) return;
-      results[i] = IngestOne(photos[i], images_dir, options);
-      progress.Add();
-    });
-  }
-  ThrowIfCancelled();
-
+  std::vector<std::variant<IngestedImage, SkippedPhoto>> results = IngestPhotos(files.photos, out.images(), options);
   IngestReport report;
-  report.input_folder = folder.string();
-  std::set<std::string> names;
-  std::map<std::string, std::string> first_with_fingerprint;
-  std::set<std::pair<int, int>> sizes;
-  for (const auto& result : results) {
-    if (const SkippedPhoto* skip = std::get_if<SkippedPhoto>(&result)) {
-      LogWarning(format("ingest: skipped {}: {}", skip->file, skip->reason));
-      report.skipped.push_back(*skip);
-      continue;
-    }
-    const IngestedImage& image = std::get<IngestedImage>(result);
-    if (!names.insert(image.name).second) {
-      throw UserError(
-          format("two photos in '{}' map to the image name {}; rename one of them", folder.string(), image.name));
-    }
-    // A copy adds nothing to the reconstruction, and one copy held out while another is trained on would make
-    // the held-out error a lie: only the first (by name) is kept.
-    const auto [it, first] = first_with_fingerprint.emplace(image.fingerprint, image.source);
-    if (!first) {
-      fs::remove(images_dir / image.name);
-      const std::string reason = kDuplicateReason + it->second;
-      LogWarning(format("ingest: skipped {}: {}", image.source, reason));
-      report.skipped.push_back({image.source, reason});
-      continue;
-    }
-    sizes.insert({image.width, image.height});
-    report.images.push_back(image);
+  report.input_folder = input.string();
+  for (const fs::path& file : files.videos) {
+    const std::optional<double> count = options.video_frames.value;
+    VideoIngest video =
+        IngestVideo(file, out.images(), count ? std::optional<int>(*count) : std::nullopt, options.max_image_size);
+    LogInfo(
+        format("ingest: {}: {} frames in {:.1f} s; took {}, left {} nearly repeating the frame before and the "
+               "rest for a sharper frame near them",
+               video.video.file, video.video.frames, video.video.seconds, video.video.taken.size(),
+               video.video.repeats.size()));
+    results.insert(results.end(), video.images.begin(), video.images.end());
+    report.videos.push_back(std::move(video.video));
+    ThrowIfCancelled();
   }
-  if (sizes.size() > 1) {
-    LogWarning(format("ingest: the photos have {} different sizes; sfm will give each size a camera of its own",
-                      sizes.size()));
-  }
+  AddImages(results, input, out.images(), &report);
   WriteJsonAtomic(out.report(), report.ToJson());
   CheckImageCount(report, options.min_images);
   context.summary = {{"images", report.images.size()}, {"skipped", report.skipped.size()}};

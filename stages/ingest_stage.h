@@ -1,7 +1,8 @@
 #pragma once
 // The ingest stage: validates every photo by decoding it, applies EXIF orientation, optionally downsizes, and
 // writes the images the later stages use plus ingest_report.json. Bad files, and copies of a photo already taken,
-// are skipped with a named reason.
+// are skipped with a named reason. A video (given alone, or in the folder beside others and photos) gives the
+// frames ingest_video.h chooses; a video that cannot be decoded whole is an error.
 
 #include <filesystem>
 #include <string>
@@ -14,25 +15,35 @@ namespace p2n {
 struct IngestOptions {
   static constexpr const char* kSection = "ingest";  // its options are ingest.NAME
 
-  int max_image_size = 0;  // Longest image side after downsizing (area filter), in pixels; 0 keeps the size.
-  int min_images = 3;      // Fewer usable images than this is an error.
+  int max_image_size = 0;     // Longest image side after downsizing (area filter), in pixels; 0 keeps the size.
+  int min_images = 3;         // Fewer usable images than this is an error.
+  AutoOrNumber video_frames;  // frames taken from each video; auto: AutoFrameCount
 
   template <class V>
   void Visit(V& v) {
     v("max_image_size", max_image_size, "longest image side after downsizing (area filter); 0 keeps the size", "px");
+    v("video_frames", video_frames,
+      "frames taken from each video, the sharpest of each stretch of equal camera motion; auto: five a second of "
+      "video, at least 100 and at most 300",
+      "frames");
     v("min_images", min_images, "fewer usable images than this is an error", "images", OptionKind::kCheck);
   }
   void Check() const;
 };
 
-// Image files of the folder that ingest reads (jpg, jpeg, png, tif, tiff, exr; any case; not hidden), sorted.
-// UserError when the folder is missing, is a file, or has none.
-std::vector<std::filesystem::path> ListPhotos(const std::filesystem::path& folder);
+struct InputFiles {
+  std::vector<std::filesystem::path> photos, videos;  // each sorted
+};
+
+// What ingest reads from the input: the image files of a folder (jpg, jpeg, png, tif, tiff, exr; any case; not
+// hidden) and its videos (IsVideoFile), or the one video given. UserError when the input is missing, is a file
+// other than a video, or a folder with neither.
+InputFiles ListInputs(const std::filesystem::path& input);
 
 class IngestStage : public StageOf<IngestResult> {
  public:
   int format_version() const override { return 2; }  // 2: 8-bit output, copies skipped, CMYK re-encoded
-  // "image NAME" -> SHA-1 of the file's bytes, for every photo of the input folder.
+  // "image NAME" or "video NAME" -> SHA-1 of the file's bytes, for every photo and video of the input.
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
   void Run(StageContext& context) const override;
   void CheckResult(const std::filesystem::path& result_dir, const Config& config) const override;

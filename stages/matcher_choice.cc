@@ -64,9 +64,10 @@ Matcher Unordered(size_t photos) {
 
 }  // namespace
 
-Matcher AutoMatcher(const std::vector<std::string>& names, int exhaustive_max_images) {
-  if (static_cast<int>(names.size()) <= exhaustive_max_images) return Matcher::kExhaustive;
-  return LooksLikeFrameSequence(names) ? Matcher::kSequential : Unordered(names.size());
+Matcher AutoMatcher(const std::vector<std::string>& names, int exhaustive_max_images, bool one_video) {
+  const int exhaustive_limit = one_video ? kVideoExhaustiveFactor * exhaustive_max_images : exhaustive_max_images;
+  if (static_cast<int>(names.size()) <= exhaustive_limit) return Matcher::kExhaustive;
+  return one_video || LooksLikeFrameSequence(names) ? Matcher::kSequential : Unordered(names.size());
 }
 
 std::optional<Matcher> RetryMatcher(Matcher first, size_t photos) {

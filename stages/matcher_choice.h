@@ -38,9 +38,15 @@ bool LooksLikeFrameSequence(const std::vector<std::string>& names);
 // margin. Beyond, exhaustive grows with the square of the photos and retrieval linearly.
 inline constexpr int kRetrievalMinImages = 100;
 
-// sfm.matcher auto: exhaustive up to `exhaustive_max_images` photos; above, sequential for a numbered sequence,
-// and for other names exhaustive up to kRetrievalMinImages and vocab_tree (retrieval) beyond.
-Matcher AutoMatcher(const std::vector<std::string>& names, int exhaustive_max_images);
+// The frames of one video are matched exhaustively up to this many times `exhaustive_max_images`: a frame carries
+// fewer features than a photo (a video's 720 or 1080 lines against a photo's 3000 or more), so a pair costs less, and
+// sequential pairs alone leave a walk's far ends unconstrained (docs/benchmarks.md, videos).
+inline constexpr int kVideoExhaustiveFactor = 2;
+
+// sfm.matcher auto: exhaustive up to `exhaustive_max_images` photos (or kVideoExhaustiveFactor times as many frames
+// of one video, `one_video`: ingest chose them, at uneven steps); above, sequential for one video's frames and for a
+// numbered sequence, and for other names exhaustive up to kRetrievalMinImages and vocab_tree (retrieval) beyond.
+Matcher AutoMatcher(const std::vector<std::string>& names, int exhaustive_max_images, bool one_video = false);
 
 // The matcher to add when `first` registered too few photos: one that does not assume their order (exhaustive up
 // to kRetrievalMinImages, else retrieval) after sequential, sequential after retrieval; none after exhaustive,

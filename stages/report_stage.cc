@@ -170,6 +170,30 @@ std::string StagesSection(const StageContext& context) {
   return html + "</table>\n";
 }
 
+// For each video ingest took frames from: the sharpness of every frame against its time, and of those taken.
+std::string VideosSection(const StageContext& context) {
+  const fs::path file = InWorkspace<IngestResult>(context.workspace).report();
+  if (!context.runner->Find(IngestResult::kId.name) || !fs::exists(file)) return "";
+  std::string html;
+  for (const IngestedVideo& video : IngestReport::Read(file).videos) {
+    PlotSeries every{"every frame", {}, video.sharpness}, taken{"taken", {}, {}};
+    for (size_t i = 0; i < video.frames; ++i) every.x.push_back(video.fps > 0 ? i / video.fps : double(i));
+    for (const IngestedVideo::Frame& frame : video.taken) {
+      taken.x.push_back(frame.time);
+      taken.y.push_back(video.sharpness.at(frame.index));
+    }
+    html += format(
+        "<h2>Video {}</h2>\n<p>{} frames in {:.1f} s ({}x{}, {:.3g} frames a second): {} taken, the sharpest of each "
+        "stretch of equal camera motion; {} left as near repeats of the frame before, the other {} for a sharper "
+        "frame near them.</p>\n",
+        HtmlEscape(video.file), video.frames, video.seconds, video.width, video.height, video.fps, video.taken.size(),
+        video.repeats.size(), video.frames - video.taken.size() - video.repeats.size());
+    html += SvgLinePlot({"frames taken on the time line", "time (s)", "sharpness (variance of the Laplacian)"},
+                        {every, taken}, 960, 300);
+  }
+  return html;
+}
+
 std::string CamerasSection(const StageContext& context, const ImportedDataset& dataset,
                            const std::string& heldout_split) {
   std::string html = "<h2>Cameras</h2>\n";
@@ -294,6 +318,7 @@ void ReportStage::Run(StageContext& context) const {
   body += TrainingSection(train_result, train);
   body += SplatSection(splat, splat_report, train);
   body += StagesSection(context);
+  body += VideosSection(context);
   body += CamerasSection(context, dataset, heldout_split);
   body += HeldoutSection(render, eval, train, background, options.image_width);
   if (const std::optional<PathReport> path = ReadReportIfExists<PathReport>(render.report())) {

@@ -100,13 +100,17 @@ std::vector<std::string> ImageNames(const fs::path& folder) {
   return names;
 }
 
-// The ingested images' names by image size (ingest's report lists each image's size).
-std::map<std::pair<int, int>, std::vector<std::string>> ImagesBySize(const IngestResult& ingest) {
+// The ingested images' names by image size.
+std::map<std::pair<int, int>, std::vector<std::string>> ImagesBySize(const IngestReport& ingest) {
   std::map<std::pair<int, int>, std::vector<std::string>> groups;
-  for (const IngestedImage& image : IngestReport::Read(ingest.report()).images) {
-    groups[{image.width, image.height}].push_back(image.name);
-  }
+  for (const IngestedImage& image : ingest.images) groups[{image.width, image.height}].push_back(image.name);
   return groups;
+}
+
+// Whether every image is a frame of one video (their names then sort in the video's order).
+bool OneVideo(const IngestReport& ingest) {
+  return ingest.videos.size() == 1 && std::all_of(ingest.images.begin(), ingest.images.end(),
+                                                  [](const IngestedImage& image) { return image.frame.has_value(); });
 }
 
 // One COLMAP reconstruction in the staging folder `out`: each step a subprocess through `steps`.
@@ -387,11 +391,13 @@ void SfmStage::Run(StageContext& context) const {
   const std::vector<std::string> names = ImageNames(images);
   // COLMAP's shared camera would skip every photo of another size: with several sizes, features are extracted
   // once per size, each run making one camera for its photos.
-  const auto groups = ImagesBySize(ingest);
+  const IngestReport ingested = IngestReport::Read(ingest.report());
+  const auto groups = ImagesBySize(ingested);
   const bool camera_per_size = options.single_camera && groups.size() > 1;
   if (camera_per_size) LogInfo(format("sfm: the photos have {} sizes: one camera for each size", groups.size()));
-  const Matcher matcher =
-      options.matcher != Matcher::kAuto ? options.matcher : AutoMatcher(names, options.exhaustive_max_images);
+  const Matcher matcher = options.matcher != Matcher::kAuto
+                              ? options.matcher
+                              : AutoMatcher(names, options.exhaustive_max_images, OneVideo(ingested));
   LogInfo(format("sfm: COLMAP {}, {} photos, {} matching, features at {} px", version.ToString(), names.size(),
                  EnumName(matcher), options.max_image_size));
   // Extraction (one per image size), the vocabulary tree or our matching, COLMAP's matching, mapping, the

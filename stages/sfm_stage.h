@@ -36,11 +36,13 @@ struct SfmOptions {
     v("matcher", matcher,
       "feature matching: exhaustive (every pair), sequential (neighbours in file-name order, as video frames or a "
       "camera's counter), vocab_tree (the most similar photos, by a vocabulary tree built from them: any order), or "
-      "auto: exhaustive up to exhaustive_max_images photos; above, sequential when the names are a numbered "
-      "sequence, else vocab_tree; when too few photos register, the other kind of matching is added once and the "
+      "auto: exhaustive up to exhaustive_max_images photos (twice as many frames of one video); above, sequential "
+      "for the frames of one video or numbered names, else vocab_tree; when too few photos register, the other kind of "
+      "matching is added once and the "
       "mapping rerun");
     v("exhaustive_max_images", exhaustive_max_images,
-      "photos above which auto matching is sequential (numbered names) or by retrieval (others)", "images");
+      "photos above which auto matching is sequential (one video's frames, numbered names) or by retrieval (others)",
+      "images");
     v("sequential_overlap", sequential_overlap, "neighbours each photo is matched with (sequential)", "images");
     v("retrieval_neighbours", retrieval_neighbours, "most similar photos each photo is matched with (vocab_tree)",
       "images");

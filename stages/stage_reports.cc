@@ -255,6 +255,8 @@ void Describe(S& s, IngestedImage& image) {
   s("exif_orientation", image.orientation);
   s("from_cmyk", image.from_cmyk);
   s("fingerprint", image.fingerprint);
+  s.Optional("frame", image.frame);
+  s.Optional("time", image.time);
   s.Check("width", "and height must be positive", [&] { return image.width >= 1 && image.height >= 1; });
 }
 
@@ -265,10 +267,39 @@ void Describe(S& s, SkippedPhoto& skip) {
 }
 
 template <class S>
+void Describe(S& s, IngestedVideo::Frame& frame) {
+  s("index", frame.index);
+  s("time", frame.time);
+  s("image", frame.image);
+}
+
+template <class S>
+void Describe(S& s, IngestedVideo::Repeat& repeat) {
+  s("index", repeat.index);
+  s("of", repeat.of);
+}
+
+template <class S>
+void Describe(S& s, IngestedVideo& video) {
+  s("file", video.file);
+  s("frames", video.frames);
+  s("fps", video.fps);
+  s("seconds", video.seconds);
+  s("width", video.width);
+  s("height", video.height);
+  s("sharpness", video.sharpness);
+  s("taken", video.taken);
+  s("repeats", video.repeats);
+  s.Written("left_for_a_sharper_frame", video.frames - video.taken.size() - video.repeats.size());
+  s.Check("sharpness", "must have one value a frame", [&] { return video.sharpness.size() == video.frames; });
+}
+
+template <class S>
 void Describe(S& s, IngestReport& report) {
   s("input_folder", report.input_folder);
   s("images", report.images);
   s("skipped", report.skipped);
+  s.Optional("videos", report.videos);
 }
 
 template <class S>

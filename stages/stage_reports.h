@@ -33,7 +33,9 @@ struct IngestedImage {
   int source_width = 0, source_height = 0;
   int orientation = 1;  // EXIF (written "exif_orientation")
   bool from_cmyk = false;
-  std::string fingerprint;  // of the decoded pixels: copies of one photo share it
+  std::string fingerprint;      // of the decoded pixels: copies of one photo share it
+  std::optional<size_t> frame;  // a video's frame: its index in the video named by `source`
+  std::optional<double> time;   // and its time stamp, in seconds
 };
 
 // A file ingest left out, and why.
@@ -41,10 +43,31 @@ struct SkippedPhoto {
   std::string file, reason;
 };
 
+// A video ingest took frames from (frame_choice.h): every frame's sharpness, the frames taken, the repeats left
+// out; every other frame was left out for a sharper one of its window.
+struct IngestedVideo {
+  std::string file;
+  size_t frames = 0;  // decoded
+  double fps = 0, seconds = 0;
+  int width = 0, height = 0;      // of the decoded frames, turned as the video says
+  std::vector<double> sharpness;  // each frame's, as frame_choice.h measures it
+  struct Frame {
+    size_t index = 0;
+    double time = 0;    // seconds
+    std::string image;  // its name in images/ (a copy of an earlier image is then skipped under this name)
+  };
+  std::vector<Frame> taken;
+  struct Repeat {
+    size_t index = 0, of = 0;  // a frame left out, and the taken frame it nearly repeats
+  };
+  std::vector<Repeat> repeats;
+};
+
 struct IngestReport {
-  std::string input_folder;
+  std::string input_folder;  // or the one video given
   std::vector<IngestedImage> images;
   std::vector<SkippedPhoto> skipped;
+  std::vector<IngestedVideo> videos;
 
   nlohmann::json ToJson() const;
   static IngestReport Read(const std::filesystem::path& file);

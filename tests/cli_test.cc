@@ -90,9 +90,9 @@ TEST_CASE("cli: user errors exit 1 with a message naming what is wrong", "[cli]"
   expect(Photo2Nerf({"run", (dir / "missing").string(), "-w", ws}), "does not exist");
   CHECK_FALSE(fs::exists(ws));
   WriteText(dir / "file.txt", "x");
-  expect(Photo2Nerf({"run", (dir / "file.txt").string(), "-w", ws}), "is a file, not a folder");
+  expect(Photo2Nerf({"run", (dir / "file.txt").string(), "-w", ws}), "is a file, not a folder or a video");
   fs::create_directories(dir / "empty");
-  expect(Photo2Nerf({"run", (dir / "empty").string(), "-w", ws}), "no photos in");
+  expect(Photo2Nerf({"run", (dir / "empty").string(), "-w", ws}), "no photos or videos in");
   expect(Photo2Nerf({"run", photos, "-w", (dir / "file.txt" / "ws").string()}), "cannot create the workspace");
   fs::create_directories(dir / "mine");
   WriteText(dir / "mine" / "thesis.tex", "precious");

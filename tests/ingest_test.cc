@@ -18,6 +18,7 @@
 #include "stages/ingest_stage.h"
 #include "stages/stages.h"
 #include "stages/training_data.h"
+#include "tests/stage_fixtures.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {
@@ -39,27 +40,6 @@ void Write(const OIIO::ImageBuf& image, const fs::path& path, int orientation = 
   if (orientation != 1) copy.specmod().attribute("Orientation", orientation);
   REQUIRE(copy.write(path.string()));
 }
-
-struct IngestFixture {
-  TempDir dir;
-  fs::path photos = dir / "photos";
-  OptionRegistry registry = AllOptions();
-  Config config{registry};
-  Workspace workspace = Workspace::Open(dir / "ws", true);
-  Runner runner = MakeRunner();
-
-  IngestFixture() {
-    fs::create_directories(photos);
-    workspace.SetInput(photos);
-  }
-  nlohmann::json Run() {
-    RunRequest request;
-    request.until = "ingest";
-    runner.Run(workspace, config, request);
-    return ReadJsonFile(workspace.StageDir("00_ingest") / "ingest_report.json");
-  }
-  StageStatus Status() { return runner.Status(workspace, config).at(0); }
-};
 
 // A PNG that declares 100000 x 100000 pixels (IHDR) and has an empty IDAT.
 void WriteHugePng(const fs::path& path) {
@@ -302,7 +282,7 @@ TEST_CASE("ingest downsizes to ingest.max_image_size with an area filter", "[ing
 TEST_CASE("ingest: too few photos, all photos the same, a missing or empty folder are user errors naming it",
           "[ingest][bad_input]") {
   IngestFixture f;
-  CHECK_THROWS_WITH(f.Run(), Catch::Contains("no photos in") && Catch::Contains(f.photos.string()));
+  CHECK_THROWS_WITH(f.Run(), Catch::Contains("no photos or videos in") && Catch::Contains(f.photos.string()));
   Write(MakeImage(16, 16, 0), f.photos / "a.png");
   CHECK_THROWS_WITH(f.Run(), Catch::Contains("only 1 usable images") && Catch::Contains("ingest.min_images"));
   CHECK(f.Status().state == StageState::kIncomplete);
@@ -313,7 +293,7 @@ TEST_CASE("ingest: too few photos, all photos the same, a missing or empty folde
                                  Catch::Contains("3 skipped, 3 of them copies of another photo"));
   fs::remove_all(f.photos);
   CHECK_THROWS_WITH(f.Run(), Catch::Contains("does not exist"));
-  CHECK_THROWS_WITH(ListPhotos(f.dir / "ws" / "workspace.json"), Catch::Contains("is a file, not a folder"));
+  CHECK_THROWS_WITH(ListInputs(f.dir / "ws" / "workspace.json"), Catch::Contains("is a file, not a folder or a video"));
 }
 
 }  // namespace p2n::testing

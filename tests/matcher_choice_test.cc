@@ -53,6 +53,16 @@ TEST_CASE("matcher choice: numbered sequences are sequential, unordered names ar
   std::vector<std::string> many = hex;
   for (int i = 0; i < 60; ++i) many.push_back(format("{:08x}.png", random()));
   CHECK(AutoMatcher(many, 40) == Matcher::kVocabTree);
+
+  // A video's frames as ingest takes them, the sharpest of each stretch of motion: steps of 2 to 9 frames, the
+  // commonest 2.
+  const int steps[] = {2, 2, 6, 8, 7, 9};
+  std::vector<std::string> frames;
+  for (int i = 0, frame = 0; i < 120; frame += steps[i % 6], ++i) frames.push_back(format("clip_{:05d}.jpg", frame));
+  CHECK_FALSE(LooksLikeFrameSequence(frames));
+  CHECK(AutoMatcher(frames, 100) == Matcher::kVocabTree);
+  CHECK(AutoMatcher(frames, 100, /*one_video=*/true) == Matcher::kExhaustive);  // 120 frames: pairs cost less
+  CHECK(AutoMatcher(frames, 50, /*one_video=*/true) == Matcher::kSequential);
 }
 
 TEST_CASE("matcher choice: a failed first matching adds the other kind once", "[sfm]") {

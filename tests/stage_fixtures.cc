@@ -1,5 +1,6 @@
 #include "stage_fixtures.h"
 
+#include "base/file_util.h"
 #include "nerf/synthetic_scene.h"
 #include "stages/stages.h"
 
@@ -50,5 +51,18 @@ RunRequest Until(const std::string& stage) {
   request.until = stage;
   return request;
 }
+
+IngestFixture::IngestFixture()
+    : registry(AllOptions()), config(registry), workspace(Workspace::Open(dir / "ws", true)), runner(MakeRunner()) {
+  fs::create_directories(photos);
+  workspace.SetInput(photos);
+}
+
+nlohmann::json IngestFixture::Run() {
+  runner.Run(workspace, config, Until("ingest"));
+  return ReadJsonFile(workspace.StageDir("00_ingest") / "ingest_report.json");
+}
+
+StageStatus IngestFixture::Status() { return runner.Status(workspace, config).at(0); }
 
 }  // namespace p2n::testing

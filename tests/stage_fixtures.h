@@ -30,4 +30,18 @@ struct StageWorkspace {
 // A request that runs the stages up to `stage`.
 RunRequest Until(const std::string& stage);
 
+// A workspace whose input is the empty folder `photos`, for the ingest stage alone.
+struct IngestFixture {
+  IngestFixture();
+  TempDir dir;
+  std::filesystem::path photos = dir / "photos";
+  OptionRegistry registry;
+  Config config;
+  Workspace workspace;
+  Runner runner;
+  // Runs ingest; its report.
+  nlohmann::json Run();
+  StageStatus Status();
+};
+
 }  // namespace p2n::testing

@@ -15,9 +15,12 @@ namespace {
 IngestReport SomeIngestReport() {
   IngestReport report;
   report.input_folder = "/photos";
-  report.images = {{"a.png", "a.jpg", 800, 600, 3, 4000, 3000, 6, false, "f1"},
-                   {"b.png", "b.tif", 800, 600, 3, 800, 600, 1, true, "f2"}};
+  report.images = {{"a.png", "a.jpg", 800, 600, 3, 4000, 3000, 6, false, "f1", {}, {}},
+                   {"b.png", "b.tif", 800, 600, 3, 800, 600, 1, true, "f2", {}, {}},
+                   {"clip_00004.jpg", "clip.mp4", 360, 640, 3, 720, 1280, 1, false, "f3", 4, 0.133}};
   report.skipped = {{"c.jpg", "not an image"}};
+  report.videos = {
+      {"clip.mp4", 6, 30, 0.2, 720, 1280, {10, 12.5, 3, 14, 11, 2}, {{4, 0.133, "clip_00004.jpg"}}, {{5, 4}}}};
   return report;
 }
 
@@ -165,6 +168,10 @@ TEST_CASE("Reports between stages read back exactly what was written", "[reports
   CHECK(ingest_read.ToJson() == ingest.ToJson());
   CHECK(ingest_read.images.at(0).orientation == 6);
   CHECK(ingest_read.images.at(1).from_cmyk);
+  CHECK_FALSE(ingest_read.images.at(1).frame.has_value());
+  CHECK(ingest_read.images.at(2).frame == 4u);
+  CHECK(ingest_read.videos.at(0).taken.at(0).image == "clip_00004.jpg");
+  CHECK(ingest.ToJson()["videos"][0]["left_for_a_sharper_frame"] == 4);
 
   const SfmReport sfm = SomeSfmReport();
   WriteJsonAtomic(dir.path() / "sfm_report.json", sfm.ToJson());
@@ -251,6 +258,8 @@ TEST_CASE("A damaged report names its file, the field and the stage to rerun", "
       Catch::Contains("\"images[1].width\" and height must be positive") && Catch::Contains("photo2nerf ingest"));
   CHECK_THAT(ErrorAfterEdit<IngestReport>(ingest, ingest_json, "/skipped/0/reason", 7),
              Catch::Contains("\"skipped[0].reason\" has the wrong type (number)"));
+  CHECK_THAT(ErrorAfterEdit<IngestReport>(ingest, ingest_json, "/videos/0/frames", 7),
+             Catch::Contains("\"videos[0].sharpness\" must have one value a frame"));
 
   const fs::path sfm = dir.path() / "sfm_report.json";
   const nlohmann::json sfm_json = SomeSfmReport().ToJson();
