@@ -3,12 +3,16 @@
 #include <OpenImageIO/hash.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cctype>
 #include <cstring>
 #include <fstream>
+#include <vector>
+
+#include "base/format.h"
 
 namespace p2n {
 namespace {
@@ -77,6 +81,17 @@ std::string CheckPngChunks(const std::filesystem::path& path) {
 
 }  // namespace
 
+std::string CameraIdentity(const OIIO::ImageSpec& spec) {
+  std::vector<std::string> parts;
+  for (const char* key : {"Make", "Model", "Exif:LensModel"}) {
+    const std::string value = OIIO::Strutil::strip(spec.get_string_attribute(key));
+    if (!value.empty()) parts.push_back(value);
+  }
+  const float focal = spec.get_float_attribute("Exif:FocalLength", 0.0f);
+  if (focal > 0) parts.push_back(format("{:.3g} mm", focal));
+  return OIIO::Strutil::join(parts, ", ");
+}
+
 ReadImageResult ReadImage(const std::filesystem::path& path) {
   ReadImageResult result;
   std::error_code error;
@@ -123,6 +138,7 @@ ReadImageResult ReadImage(const std::filesystem::path& path) {
     return result;
   }
   result.orientation = spec.get_int_attribute("Orientation", 1);
+  result.camera = CameraIdentity(spec);
   for (const char* key : {"jpeg:ColorSpace", "tiff:ColorSpace"}) {
     const std::string space = spec.get_string_attribute(key);
     result.from_cmyk |= space == "CMYK" || space == "YCCK";

@@ -17,9 +17,14 @@ struct ReadImageResult {
   OIIO::ImageBuf image;    // upright (EXIF orientation applied), in the file's pixel type, straight alpha
   int orientation = 1;     // the EXIF orientation that was applied (1: none)
   bool from_cmyk = false;  // the file stores CMYK (or YCCK) that the decoder turned into RGB
+  std::string camera;      // CameraIdentity of its EXIF
   std::string error;       // empty on success; otherwise why the file is not a usable image
   bool ok() const { return error.empty(); }
 };
+
+// The camera an image's EXIF names: make, model, lens and focal length ("Apple iPhone 12, iPhone 12 back camera
+// 4.2mm f/1.6, 4.2 mm"), empty when it names none of them.
+std::string CameraIdentity(const OIIO::ImageSpec& spec);
 
 // Decodes the whole file. Any decoder complaint (a truncated JPEG decodes partly and only warns) is an error.
 ReadImageResult ReadImage(const std::filesystem::path& path);

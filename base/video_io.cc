@@ -17,8 +17,7 @@ namespace p2n {
 namespace fs = std::filesystem;
 namespace {
 
-// A video whose frames stop before this share of the count its header gives is taken to be cut short (headers
-// that estimate the count from the duration are off by a frame or two, never by a tenth).
+// A video whose frames stop before this share of the duration its header gives is taken to be cut short.
 constexpr double kTruncatedShare = 0.9;
 
 // A video opened for reading, and how far its frames must be turned clockwise to stand as recorded.
@@ -126,11 +125,14 @@ VideoScan ScanVideo(const fs::path& path) {
                "of the folder",
                path.string()));
   }
-  if (scan.size() < kTruncatedShare * scan.frames_claimed) {
+  // By time, not by frame count: a variable frame rate makes a count estimated from the duration too high.
+  const double seconds = scan.fps > 0 ? scan.times.back() + 1 / scan.fps : scan.times.back();
+  const double claimed_seconds = scan.fps > 0 ? scan.frames_claimed / scan.fps : 0;
+  if (seconds < kTruncatedShare * claimed_seconds) {
     throw UserError(
-        format("'{}' ends after {} of the {} frames its header counts: the file is cut short (an "
-               "interrupted copy or download?); copy it again from the camera",
-               path.string(), scan.size(), scan.frames_claimed));
+        format("'{}' ends after {:.1f} s ({} frames) of the {:.1f} s its header gives: the file is cut "
+               "short (an interrupted copy or download?); copy it again from the camera",
+               path.string(), seconds, scan.size(), claimed_seconds));
   }
   return scan;
 }

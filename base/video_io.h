@@ -36,7 +36,7 @@ struct VideoScan {
 double ThumbnailDifference(const VideoScan& scan, size_t a, size_t b);
 
 // Decodes the whole video once. UserError naming the file when it cannot be opened as a video (damaged, only
-// sound, a format FFmpeg does not read), holds no frames, or ends well before the frames its header counts.
+// sound, a format FFmpeg does not read), holds no frames, or ends well before the duration its header gives.
 VideoScan ScanVideo(const std::filesystem::path& path);
 
 // Decodes the video again and calls `take(index, frame)` with each frame whose index is in `indices` (ascending),

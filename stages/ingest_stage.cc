@@ -44,6 +44,7 @@ std::variant<IngestedImage, SkippedPhoto> IngestOne(const fs::path& source, cons
   IngestedImage out;
   out.source = file;
   out.orientation = read.orientation;
+  out.camera = read.camera;
   out.fingerprint = PixelFingerprint(read.image);
   out.source_width = read.image.spec().width;
   out.source_height = read.image.spec().height;

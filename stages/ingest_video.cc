@@ -19,6 +19,7 @@ IngestedImage WriteFrame(const fs::path& file, size_t index, double time, const 
   IngestedImage out;
   out.source = file.filename().string();
   out.name = format("{}_{:05d}.jpg", file.stem().string(), index);
+  out.camera = "video " + out.source;
   out.frame = index;
   out.time = time;
   out.fingerprint = PixelFingerprint(frame);

@@ -100,13 +100,6 @@ std::vector<std::string> ImageNames(const fs::path& folder) {
   return names;
 }
 
-// The ingested images' names by image size.
-std::map<std::pair<int, int>, std::vector<std::string>> ImagesBySize(const IngestReport& ingest) {
-  std::map<std::pair<int, int>, std::vector<std::string>> groups;
-  for (const IngestedImage& image : ingest.images) groups[{image.width, image.height}].push_back(image.name);
-  return groups;
-}
-
 // Whether every image is a frame of one video (their names then sort in the video's order).
 bool OneVideo(const IngestReport& ingest) {
   return ingest.videos.size() == 1 && std::all_of(ingest.images.begin(), ingest.images.end(),
@@ -124,8 +117,8 @@ struct ColmapRun {
 
   fs::path database() const { return out.database(); }  // always new: the staging folder starts empty
 
-  // One extraction for every photo, or one per image size when `groups` (size -> names) is not empty.
-  void ExtractFeatures(const std::map<std::pair<int, int>, std::vector<std::string>>& groups) const {
+  // One extraction for every photo, or one per camera group when `groups` is not empty.
+  void ExtractFeatures(const std::vector<CameraGroup>& groups) const {
     const std::vector<std::string> extract = {options.colmap,
                                               "feature_extractor",
                                               "--database_path",
@@ -150,14 +143,14 @@ struct ColmapRun {
       steps->Run("feature extraction", extract);
       return;
     }
-    for (const auto& [size, group] : groups) {
-      const fs::path list = out.logs() / (format("images_{}x{}", size.first, size.second) + ".txt");
+    for (size_t i = 0; i < groups.size(); ++i) {
+      const fs::path list = out.logs() / format("images_camera_{}.txt", i + 1);
       std::string lines;
-      for (const std::string& name : group) lines += name + "\n";
+      for (const std::string& name : groups[i].images) lines += name + "\n";
       WriteFileAtomic(list, lines);
       std::vector<std::string> argv = extract;
       argv.insert(argv.end(), {"--image_list_path", list.string()});
-      steps->Run(format("feature extraction {}x{}", size.first, size.second), argv);
+      steps->Run(format("feature extraction camera {} of {}", i + 1, groups.size()), argv);
     }
   }
 
@@ -379,6 +372,19 @@ void SfmStage::CheckResult(const fs::path& result_dir, const Config& config) con
   CheckRegistered(SfmReport::Read(SfmResult{result_dir}.report()), ReadOptions<SfmOptions>(config).min_registered);
 }
 
+std::vector<CameraGroup> CameraGroups(const IngestReport& ingest) {
+  std::map<std::tuple<std::string, int, int>, std::vector<std::string>> by_camera;
+  for (const IngestedImage& image : ingest.images)
+    by_camera[{image.camera, image.width, image.height}].push_back(image.name);
+  std::vector<CameraGroup> groups;
+  for (const auto& [key, images] : by_camera) {
+    const auto& [camera, width, height] = key;
+    groups.push_back(
+        {camera.empty() ? format("{}x{}", width, height) : format("{}, {}x{}", camera, width, height), images});
+  }
+  return groups;
+}
+
 void SfmStage::Run(StageContext& context) const {
   const SfmOptions options = ReadOptions<SfmOptions>(context.config);
   const int run_threads = ReadOptions<RunOptions>(context.config).threads;
@@ -392,9 +398,14 @@ void SfmStage::Run(StageContext& context) const {
   // COLMAP's shared camera would skip every photo of another size: with several sizes, features are extracted
   // once per size, each run making one camera for its photos.
   const IngestReport ingested = IngestReport::Read(ingest.report());
-  const auto groups = ImagesBySize(ingested);
-  const bool camera_per_size = options.single_camera && groups.size() > 1;
-  if (camera_per_size) LogInfo(format("sfm: the photos have {} sizes: one camera for each size", groups.size()));
+  const std::vector<CameraGroup> groups = CameraGroups(ingested);
+  const bool camera_per_group = options.single_camera && groups.size() > 1;
+  if (camera_per_group) {
+    std::string list;
+    for (size_t i = 0; i < groups.size(); ++i)
+      list += format("{}{}: {} ({} images)", i ? "; " : "", i + 1, groups[i].label, groups[i].images.size());
+    LogInfo(format("sfm: the photos come from {} cameras, each solved on its own: {}", groups.size(), list));
+  }
   const Matcher matcher = options.matcher != Matcher::kAuto
                               ? options.matcher
                               : AutoMatcher(names, options.exhaustive_max_images, OneVideo(ingested));
@@ -402,11 +413,11 @@ void SfmStage::Run(StageContext& context) const {
                  EnumName(matcher), options.max_image_size));
   // Extraction (one per image size), the vocabulary tree or our matching, COLMAP's matching, mapping, the
   // principal point's adjustment, undistortion.
-  StepRunner steps(out.logs(), (options.refine_principal_point ? 6 : 5) + (camera_per_size ? groups.size() - 1 : 0));
+  StepRunner steps(out.logs(), (options.refine_principal_point ? 6 : 5) + (camera_per_group ? groups.size() - 1 : 0));
   const ColmapRun colmap{
       options, ColmapFlagsFor(version), images, out, std::to_string(options.seed), std::to_string(threads), &steps};
 
-  colmap.ExtractFeatures(camera_per_size ? groups : decltype(groups){});
+  colmap.ExtractFeatures(camera_per_group ? groups : std::vector<CameraGroup>{});
   std::vector<SfmReport::Model> models;
   std::string matching;
   const fs::path chosen = MatchAndMap(colmap, options, names.size(), matcher, &matching, &models);

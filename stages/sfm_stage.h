@@ -4,9 +4,11 @@
 // most registered images and writes sfm_report.json.
 
 #include <string>
+#include <vector>
 
 #include "pipeline/options.h"
 #include "stages/matcher_choice.h"
+#include "stages/stage_reports.h"
 #include "stages/stage_results.h"
 
 namespace p2n {
@@ -15,7 +17,7 @@ struct SfmOptions {
   static constexpr const char* kSection = "sfm";  // its options are sfm.NAME
 
   std::string camera_model = "RADIAL";  // COLMAP camera model of the photos
-  bool single_camera = true;            // one camera shared by every photo
+  bool single_camera = true;            // one camera shared by the photos of one camera group (CameraGroups)
   Matcher matcher = Matcher::kAuto;     // auto: AutoMatcher (matcher_choice.h)
   int exhaustive_max_images = 100;      // photos above which auto matching is sequential or by retrieval
   int sequential_overlap = 12;          // neighbours each photo is matched with (sequential)
@@ -32,7 +34,8 @@ struct SfmOptions {
     v("camera_model", camera_model, "COLMAP camera model", "", OptionKind::kResult,
       {"SIMPLE_PINHOLE", "PINHOLE", "SIMPLE_RADIAL", "RADIAL", "OPENCV", "OPENCV_FISHEYE", "FULL_OPENCV"});
     v("single_camera", single_camera,
-      "one camera shared by every photo (by every photo of one size, when they have several)");
+      "one camera shared by the photos one camera took (by their EXIF make, model, lens and focal length, a video's "
+      "frames, and size); false: one for every photo");
     v("matcher", matcher,
       "feature matching: exhaustive (every pair), sequential (neighbours in file-name order, as video frames or a "
       "camera's counter), vocab_tree (the most similar photos, by a vocabulary tree built from them: any order), or "
@@ -59,6 +62,15 @@ struct SfmOptions {
   }
   void Check() const;
 };
+
+// The photos by the camera that took them, as the sfm stage solves them: one group per camera their EXIF names
+// (make, model, lens, focal length; a video's frames: the video) and image size; photos without EXIF by size
+// alone. With sfm.single_camera each group shares one COLMAP camera.
+struct CameraGroup {
+  std::string label;                // "Apple, iPhone 12, 4.2 mm, 4032x3024", or "4032x3024" without EXIF
+  std::vector<std::string> images;  // names in images/
+};
+std::vector<CameraGroup> CameraGroups(const IngestReport& ingest);
 
 class SfmStage : public StageOf<SfmResult> {
  public:

@@ -255,6 +255,7 @@ void Describe(S& s, IngestedImage& image) {
   s("exif_orientation", image.orientation);
   s("from_cmyk", image.from_cmyk);
   s("fingerprint", image.fingerprint);
+  s.Optional("camera", image.camera);
   s.Optional("frame", image.frame);
   s.Optional("time", image.time);
   s.Check("width", "and height must be positive", [&] { return image.width >= 1 && image.height >= 1; });

@@ -4,7 +4,7 @@
 // (Describe in stage_reports.cc), so a field has one name and one type. A reader
 // meets a missing or mistyped field as a UserError that names the file and the field and says which stage to
 // rerun, never as an internal error at a distance.
-//   00_ingest/ingest_report.json IngestReport (its image-count check, the sfm stage's cameras by image size)
+//   00_ingest/ingest_report.json IngestReport (its image-count check, the sfm stage's camera groups)
 //   10_sfm/sfm_report.json       SfmReport   (the sfm stage's registration check, report)
 //   30_train/train_report.json   TrainReport (splat, render and export through ReadTrainedField, report)
 //   35_splat/splat_report.json   SplatReport (render, its view renderer, report, splat_bench)
@@ -34,6 +34,7 @@ struct IngestedImage {
   int orientation = 1;  // EXIF (written "exif_orientation")
   bool from_cmyk = false;
   std::string fingerprint;      // of the decoded pixels: copies of one photo share it
+  std::string camera;           // CameraIdentity of its EXIF, or "video FILE" for a video's frames; may be empty
   std::optional<size_t> frame;  // a video's frame: its index in the video named by `source`
   std::optional<double> time;   // and its time stamp, in seconds
 };

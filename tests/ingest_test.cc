@@ -16,6 +16,7 @@
 #include "base/image_io.h"
 #include "formats/dataset_import.h"
 #include "stages/ingest_stage.h"
+#include "stages/sfm_stage.h"
 #include "stages/stages.h"
 #include "stages/training_data.h"
 #include "tests/stage_fixtures.h"
@@ -294,6 +295,42 @@ TEST_CASE("ingest: too few photos, all photos the same, a missing or empty folde
   fs::remove_all(f.photos);
   CHECK_THROWS_WITH(f.Run(), Catch::Contains("does not exist"));
   CHECK_THROWS_WITH(ListInputs(f.dir / "ws" / "workspace.json"), Catch::Contains("is a file, not a folder or a video"));
+}
+
+TEST_CASE("ingest reads the camera each photo's EXIF names, and sfm groups the photos by it and by size",
+          "[ingest][sfm]") {
+  IngestFixture f;
+  auto write = [&](const std::string& name, int seed, const std::string& make, const std::string& model, float focal) {
+    OIIO::ImageBuf image = MakeImage(32, 24, seed);
+    OIIO::ImageBufAlgo::fill(image, {0.2f, 0.9f, 0.1f}, OIIO::ROI(4 * seed, 4 * seed + 3, 10, 13));  // distinct
+    if (!make.empty()) image.specmod().attribute("Make", make);
+    if (!model.empty()) image.specmod().attribute("Model", model);
+    if (focal > 0) image.specmod().attribute("Exif:FocalLength", focal);
+    REQUIRE(image.write((f.photos / name).string()));
+  };
+  write("a.jpg", 0, "Apple", "iPhone 12", 4.2f);
+  write("b.jpg", 1, "Apple", "iPhone 12", 4.2f);
+  write("c.jpg", 2, "Apple", "iPhone 12", 6.0f);  // the same phone zoomed: another camera
+  write("d.jpg", 3, "Google", "Pixel 7", 0);
+  write("e.jpg", 4, "", "", 0);
+  write("f.jpg", 5, "", "", 0);
+  const nlohmann::json report = f.Run();
+  std::map<std::string, std::string> camera;
+  for (const nlohmann::json& image : report["images"]) camera[image["name"]] = image["camera"];
+  CHECK(camera["a.jpg"] == "Apple, iPhone 12, 4.2 mm");
+  CHECK(camera["c.jpg"] == "Apple, iPhone 12, 6 mm");
+  CHECK(camera["d.jpg"] == "Google, Pixel 7");
+  CHECK(camera["e.jpg"].empty());
+
+  const std::vector<CameraGroup> groups =
+      CameraGroups(IngestReport::Read(f.workspace.StageDir("00_ingest") / "ingest_report.json"));
+  std::map<std::string, std::vector<std::string>> by_label;
+  for (const CameraGroup& group : groups) by_label[group.label] = group.images;
+  CHECK(by_label.size() == 4);
+  CHECK(by_label["Apple, iPhone 12, 4.2 mm, 32x24"] == std::vector<std::string>{"a.jpg", "b.jpg"});
+  CHECK(by_label["Apple, iPhone 12, 6 mm, 32x24"] == std::vector<std::string>{"c.jpg"});
+  CHECK(by_label["Google, Pixel 7, 32x24"] == std::vector<std::string>{"d.jpg"});
+  CHECK(by_label["32x24"] == std::vector<std::string>{"e.jpg", "f.jpg"});
 }
 
 }  // namespace p2n::testing

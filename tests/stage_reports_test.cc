@@ -15,9 +15,9 @@ namespace {
 IngestReport SomeIngestReport() {
   IngestReport report;
   report.input_folder = "/photos";
-  report.images = {{"a.png", "a.jpg", 800, 600, 3, 4000, 3000, 6, false, "f1", {}, {}},
-                   {"b.png", "b.tif", 800, 600, 3, 800, 600, 1, true, "f2", {}, {}},
-                   {"clip_00004.jpg", "clip.mp4", 360, 640, 3, 720, 1280, 1, false, "f3", 4, 0.133}};
+  report.images = {{"a.png", "a.jpg", 800, 600, 3, 4000, 3000, 6, false, "f1", "Apple iPhone 12, 4.2 mm", {}, {}},
+                   {"b.png", "b.tif", 800, 600, 3, 800, 600, 1, true, "f2", "", {}, {}},
+                   {"clip_00004.jpg", "clip.mp4", 360, 640, 3, 720, 1280, 1, false, "f3", "video clip.mp4", 4, 0.133}};
   report.skipped = {{"c.jpg", "not an image"}};
   report.videos = {
       {"clip.mp4", 6, 30, 0.2, 720, 1280, {10, 12.5, 3, 14, 11, 2}, {{4, 0.133, "clip_00004.jpg"}}, {{5, 4}}}};
