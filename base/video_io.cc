@@ -111,7 +111,8 @@ VideoScan ScanVideo(const fs::path& path) {
   cv::VideoCapture& capture = video.capture;
   VideoScan scan;
   scan.fps = capture.get(cv::CAP_PROP_FPS);
-  scan.frames_claimed = static_cast<int64_t>(capture.get(cv::CAP_PROP_FRAME_COUNT));
+  // The header's frame count (estimated from its duration in some containers) over the rate: its duration.
+  const double claimed_seconds = scan.fps > 0 ? capture.get(cv::CAP_PROP_FRAME_COUNT) / scan.fps : 0;
   cv::Mat frame;
   while (capture.read(frame) && !frame.empty()) {
     const double stamp = capture.get(cv::CAP_PROP_POS_MSEC) / 1000.0;
@@ -126,13 +127,11 @@ VideoScan ScanVideo(const fs::path& path) {
                path.string()));
   }
   // By time, not by frame count: a variable frame rate makes a count estimated from the duration too high.
-  const double seconds = scan.fps > 0 ? scan.times.back() + 1 / scan.fps : scan.times.back();
-  const double claimed_seconds = scan.fps > 0 ? scan.frames_claimed / scan.fps : 0;
-  if (seconds < kTruncatedShare * claimed_seconds) {
+  if (scan.seconds() < kTruncatedShare * claimed_seconds) {
     throw UserError(
         format("'{}' ends after {:.1f} s ({} frames) of the {:.1f} s its header gives: the file is cut "
                "short (an interrupted copy or download?); copy it again from the camera",
-               path.string(), seconds, scan.size(), claimed_seconds));
+               path.string(), scan.seconds(), scan.size(), claimed_seconds));
   }
   return scan;
 }

@@ -22,7 +22,6 @@ inline constexpr int kThumbnailWidth = 64;
 struct VideoScan {
   double fps = 0;
   int width = 0, height = 0;      // of the decoded (turned) frames
-  int64_t frames_claimed = 0;     // the container's frame count (an estimate in some containers)
   std::vector<double> times;      // each decoded frame's time stamp, in seconds
   std::vector<double> sharpness;  // variance of the Laplacian of the frame's grey values: low when blurred
   std::vector<double> motion;     // ThumbnailDifference from the frame before (0 for the first)
@@ -30,6 +29,8 @@ struct VideoScan {
   std::vector<std::vector<uint8_t>> thumbnails;  // grey, kThumbnailWidth x thumbnail_height, one a frame
 
   size_t size() const { return times.size(); }
+  // How long the decoded frames last: the last one's time stamp and its own length.
+  double seconds() const { return times.empty() ? 0.0 : times.back() + (fps > 0 ? 1 / fps : 0.0); }
 };
 
 // Mean absolute difference of two frames' thumbnails, in grey levels (0 to 255).

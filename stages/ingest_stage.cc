@@ -45,18 +45,12 @@ std::variant<IngestedImage, SkippedPhoto> IngestOne(const fs::path& source, cons
   out.source = file;
   out.orientation = read.orientation;
   out.camera = read.camera;
-  out.fingerprint = PixelFingerprint(read.image);
-  out.source_width = read.image.spec().width;
-  out.source_height = read.image.spec().height;
-  OIIO::ImageBuf image = DownsizeToFit(read.image, options.max_image_size);
+  OIIO::ImageBuf image = DownsizeAndDescribe(read.image, options.max_image_size, &out);
   const std::string extension = LowerExtension(source);
   out.from_cmyk = read.from_cmyk;
   const bool eight_bit = image.spec().format == OIIO::TypeDesc::UINT8;
   const bool unchanged = read.orientation == 1 && image.spec().width == out.source_width && eight_bit &&
                          !read.from_cmyk && (extension == "jpg" || extension == "jpeg" || extension == "png");
-  out.width = image.spec().width;
-  out.height = image.spec().height;
-  out.channels = image.spec().nchannels;
   if (unchanged) {
     out.name = file;
     std::error_code error;

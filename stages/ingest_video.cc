@@ -22,19 +22,24 @@ IngestedImage WriteFrame(const fs::path& file, size_t index, double time, const 
   out.camera = "video " + out.source;
   out.frame = index;
   out.time = time;
-  out.fingerprint = PixelFingerprint(frame);
-  out.source_width = frame.spec().width;
-  out.source_height = frame.spec().height;
-  const OIIO::ImageBuf image = DownsizeToFit(frame, max_image_size);
-  out.width = image.spec().width;
-  out.height = image.spec().height;
-  out.channels = image.spec().nchannels;
+  const OIIO::ImageBuf image = DownsizeAndDescribe(frame, max_image_size, &out);
   const std::string error = WriteImage(image, images_dir / out.name);
   if (!error.empty()) throw UserError(error);
   return out;
 }
 
 }  // namespace
+
+OIIO::ImageBuf DownsizeAndDescribe(const OIIO::ImageBuf& decoded, int max_image_size, IngestedImage* out) {
+  out->fingerprint = PixelFingerprint(decoded);
+  out->source_width = decoded.spec().width;
+  out->source_height = decoded.spec().height;
+  OIIO::ImageBuf image = DownsizeToFit(decoded, max_image_size);
+  out->width = image.spec().width;
+  out->height = image.spec().height;
+  out->channels = image.spec().nchannels;
+  return image;
+}
 
 VideoIngest IngestVideo(const fs::path& file, const fs::path& images_dir, std::optional<int> frames,
                         int max_image_size) {
@@ -44,7 +49,7 @@ VideoIngest IngestVideo(const fs::path& file, const fs::path& images_dir, std::o
   video.file = file.filename().string();
   video.frames = scan.size();
   video.fps = scan.fps;
-  video.seconds = scan.fps > 0 ? scan.size() / scan.fps : scan.times.back();
+  video.seconds = scan.seconds();
   video.width = scan.width;
   video.height = scan.height;
   for (double sharpness : scan.sharpness) video.sharpness.push_back(Rounded(sharpness, 0.01));
