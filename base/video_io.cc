@@ -36,6 +36,13 @@ struct OpenVideo {
   }
 };
 
+// The multiple of 90 degrees in [0, 360) nearest to a rotation the file states (any number a damaged file holds).
+int NearestQuarterTurn(double degrees) {
+  if (!std::isfinite(degrees)) return 0;
+  const double quarters = std::round(std::fmod(degrees, 360.0) / 90.0);
+  return static_cast<int>((static_cast<long>(quarters) % 4 + 4) % 4) * 90;
+}
+
 OpenVideo Open(const fs::path& path) {
   OpenVideo video;
   try {
@@ -52,11 +59,11 @@ OpenVideo Open(const fs::path& path) {
   // We turn the frames ourselves: OpenCV 4.6.0 (Debian 12's) reads a phone's rotation with its sign turned and
   // would stand a portrait video on its head (opencv/opencv issue 22088, fixed in 4.7).
   video.capture.set(cv::CAP_PROP_ORIENTATION_AUTO, 0);
-  int turn = static_cast<int>(std::lround(video.capture.get(cv::CAP_PROP_ORIENTATION_META)));
+  double turn = video.capture.get(cv::CAP_PROP_ORIENTATION_META);
 #if CV_VERSION_MAJOR == 4 && CV_VERSION_MINOR == 6
-  turn = 360 - turn;
+  turn = -turn;
 #endif
-  video.clockwise_turn = ((turn % 360) + 360) % 360;
+  video.clockwise_turn = NearestQuarterTurn(turn);
   return video;
 }
 
