@@ -134,6 +134,19 @@ std::vector<std::pair<size_t, size_t>> SequentialPairs(size_t images, int overla
   return pairs;
 }
 
+std::vector<std::pair<size_t, size_t>> LoopPairs(size_t images, int overlap, size_t stride) {
+  const std::vector<std::pair<size_t, size_t>> sequential = SequentialPairs(images, overlap);
+  const std::set<std::pair<size_t, size_t>> paired(sequential.begin(), sequential.end());
+  stride = std::max<size_t>(stride, 1);
+  std::vector<std::pair<size_t, size_t>> pairs;
+  for (size_t i = 0; i < images; i += stride) {
+    for (size_t j = i + stride; j < images; j += stride) {
+      if (!paired.count({i, j})) pairs.emplace_back(i, j);
+    }
+  }
+  return pairs;
+}
+
 size_t MatchIntoDatabase(const std::filesystem::path& database, const std::vector<std::pair<size_t, size_t>>& pairs) {
   ColmapDatabase db(database);
   const std::vector<ColmapDatabaseImage> images = db.Images();

@@ -33,6 +33,11 @@ std::vector<std::pair<size_t, size_t>> ExhaustivePairs(size_t images);
 // ... and its sequential matcher with `overlap` and quadratic overlap (its default): each photo with the next
 // overlap - 1 and with those 2^k after it for k < overlap.
 std::vector<std::pair<size_t, size_t>> SequentialPairs(size_t images, int overlap);
+// The pairs that close a walk's loops, which sequential pairs miss (a full orbit comes back to its first frames
+// hundreds of frames later): every two keyframes, every `stride`-th photo, that SequentialPairs(images, overlap)
+// does not pair. Any photo is within stride / 2 of a keyframe, so wherever the walk passes a place again, two
+// keyframes about as far apart as sequential neighbours see it.
+std::vector<std::pair<size_t, size_t>> LoopPairs(size_t images, int overlap, size_t stride);
 
 // Matches the pairs (indices into the database's images in name order) that have no raw matches yet and writes
 // their matches; returns how many pairs it matched. Progress as "sfm: matching descriptors"; Ctrl-C stops it.

@@ -58,9 +58,7 @@ class StepRunner {
   // Runs one step; returns its log. Failures throw ExternalToolError, unless `allow_failure`.
   fs::path Run(const std::string& step, const std::vector<std::string>& argv, bool allow_failure = false) {
     Announce(step);
-    std::string file = step;
-    std::replace(file.begin(), file.end(), ' ', '_');
-    const fs::path log = log_dir_ / (file + ".log");
+    const fs::path log = log_dir_ / (FileStem(step) + ".log");
     const SubprocessResult result = allow_failure ? RunSubprocess(argv, log, step) : CheckSubprocess(argv, log, step);
     last_ok_ = result.signal == 0 && result.exit_code == 0;
     timings_.push_back({step, fs::relative(log, log_dir_.parent_path()).string(), result.wall_seconds});
@@ -76,6 +74,11 @@ class StepRunner {
                         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()});
   }
   bool last_ok() const { return last_ok_; }
+  // A step's name as the stem of its files in the log folder.
+  static std::string FileStem(std::string step) {
+    std::replace(step.begin(), step.end(), ' ', '_');
+    return step;
+  }
   const std::vector<SfmReport::Step>& timings() const { return timings_; }
 
  private:
@@ -170,14 +173,22 @@ struct ColmapRun {
   // COLMAP's matcher finds the raw matches of exhaustive and sequential matching in the database (ours, see
   // feature_matching.h) and only verifies them; it matches by retrieval itself, and every pair we could not (a
   // database we cannot read, as another COLMAP version might write it).
+  // Sequential matching adds the pairs that close a walk's loops (LoopPairs), which COLMAP verifies from a list.
   void Match(Matcher matcher, size_t photos) const {
     const std::string name = EnumName(matcher);
+    const std::vector<std::pair<size_t, size_t>> loops =
+        matcher == Matcher::kSequential
+            ? LoopPairs(photos, options.sequential_overlap, std::max(1, options.sequential_overlap / 2))
+            : std::vector<std::pair<size_t, size_t>>{};
+    if (!loops.empty()) steps->AddSteps(1);
     if (matcher != Matcher::kVocabTree) {
       steps->RunHere("descriptor matching", [&] {
         try {
-          MatchIntoDatabase(database(), matcher == Matcher::kExhaustive
-                                            ? ExhaustivePairs(photos)
-                                            : SequentialPairs(photos, options.sequential_overlap));
+          std::vector<std::pair<size_t, size_t>> pairs = matcher == Matcher::kExhaustive
+                                                             ? ExhaustivePairs(photos)
+                                                             : SequentialPairs(photos, options.sequential_overlap);
+          pairs.insert(pairs.end(), loops.begin(), loops.end());
+          MatchIntoDatabase(database(), pairs);
         } catch (const ExternalToolError& e) {
           LogWarning(format("sfm: COLMAP matches the photos itself (slower): {}", e.what()));
         }
@@ -203,6 +214,20 @@ struct ColmapRun {
                                  std::to_string(options.retrieval_neighbours + 1)});  // the photo itself comes first
     }
     steps->Run(name + " matching", match);
+    if (!loops.empty()) VerifyPairs("loop matching", loops);
+  }
+
+  // COLMAP's verification of `pairs` (indices into the photos in name order), listed in logs/STEP.txt; it matches
+  // any pair whose raw matches the database lacks.
+  void VerifyPairs(const std::string& step, const std::vector<std::pair<size_t, size_t>>& pairs) const {
+    const std::vector<std::string> names = ImageNames(images);
+    std::string lines;
+    for (const auto& [i, j] : pairs) lines += names.at(i) + " " + names.at(j) + "\n";
+    const fs::path list = out.logs() / (StepRunner::FileStem(step) + ".txt");
+    WriteFileAtomic(list, lines);
+    steps->Run(step, {options.colmap, "matches_importer", "--database_path", database().string(), "--match_list_path",
+                      list.string(), "--match_type", "pairs", flags.matching_use_gpu, "0", flags.matching_num_threads,
+                      threads});
   }
 
   // Runs the mapper (the step `step`) into out/`folder`; returns the folder of the model with the most registered

@@ -38,11 +38,11 @@ struct SfmOptions {
       "frames, and size); false: one for every photo");
     v("matcher", matcher,
       "feature matching: exhaustive (every pair), sequential (neighbours in file-name order, as video frames or a "
-      "camera's counter), vocab_tree (the most similar photos, by a vocabulary tree built from them: any order), or "
+      "camera's counter, and keyframes every sequential_overlap / 2 photos with each other, closing loops), vocab_tree "
+      "(the most similar photos, by a vocabulary tree built from them: any order), or "
       "auto: exhaustive up to exhaustive_max_images photos (twice as many frames of one video); above, sequential "
       "for the frames of one video or numbered names, else vocab_tree; when too few photos register, the other kind of "
-      "matching is added once and the "
-      "mapping rerun");
+      "matching is added once and the mapping rerun");
     v("exhaustive_max_images", exhaustive_max_images,
       "photos above which auto matching is sequential (one video's frames, numbered names) or by retrieval (others)",
       "images");

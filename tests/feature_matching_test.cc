@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -207,6 +208,19 @@ TEST_CASE("pairs as COLMAP's exhaustive and sequential (quadratic overlap) match
   CHECK(SequentialPairs(6, 3) ==
         Pairs{{0, 1}, {0, 2}, {0, 4}, {1, 2}, {1, 3}, {1, 5}, {2, 3}, {2, 4}, {3, 4}, {3, 5}, {4, 5}});
   CHECK(SequentialPairs(3, 1) == Pairs{{0, 1}, {1, 2}});
+}
+
+TEST_CASE("loop pairs: every two keyframes the sequential pairs leave apart", "[feature_matching]") {
+  using Pairs = std::vector<std::pair<size_t, size_t>>;
+  // Keyframes 0, 3, 6, 9; sequential overlap 2 pairs photos 1 and 2 apart only.
+  CHECK(LoopPairs(10, 2, 3) == Pairs{{0, 3}, {0, 6}, {0, 9}, {3, 6}, {3, 9}, {6, 9}});
+  // Keyframes 0, 2, 4, 6, 8; overlap 3 pairs photos 1, 2 and 4 apart, so 6 and 8 apart are left.
+  CHECK(LoopPairs(9, 3, 2) == Pairs{{0, 6}, {0, 8}, {2, 8}});
+  // A 300-frame orbit: its first frame meets its last keyframe, and the pairs grow with the keyframes' square.
+  const Pairs orbit = LoopPairs(300, 12, 6);
+  CHECK(std::find(orbit.begin(), orbit.end(), std::pair<size_t, size_t>{0, 294}) != orbit.end());
+  CHECK(orbit.size() == 50 * 49 / 2 - 49);  // less the pairs 6 apart, which are sequential
+  CHECK(LoopPairs(5, 1, 0) == Pairs{{0, 2}, {0, 3}, {0, 4}, {1, 3}, {1, 4}, {2, 4}});  // stride 0 read as 1
 }
 
 TEST_CASE("COLMAP's database: descriptors read, matches written in its pair order, damage named",

@@ -10,9 +10,11 @@
 #include <OpenImageIO/imagebufalgo.h>
 
 #include <cstdlib>
+#include <set>
 
 #include "base/file_util.h"
 #include "base/format.h"
+#include "formats/colmap_model.h"
 #include "nerf/synthetic_scene.h"
 #include "stages/stages.h"
 #include "tests/test_util.h"
@@ -134,6 +136,44 @@ TEST_CASE("sfm + poses recover the synthetic scene's cameras", "[colmap][e2e]") 
     CHECK(image.parent_path().filename() == "images");
     CHECK(OIIO::ImageBuf(image.string()).spec().width == 160);
   }
+}
+
+// A full orbit matched sequentially with 4 neighbours (and 2, 4 and 8 after): nothing pairs its last views with its
+// first, which sit beside them. The loop pairs (keyframes every 2 views) must: points seen from view 0 and view 22,
+// and the cameras as exact as exhaustive matching makes them.
+TEST_CASE("sequential matching closes an orbit's loop", "[colmap][e2e]") {
+  if (!HaveColmap()) {
+    WARN("COLMAP is not installed (scripts/install_deps.sh installs it): skipping the real-COLMAP test");
+    return;
+  }
+  TempDir dir;
+  SyntheticSceneOptions scene;
+  scene.num_views = 24;
+  WriteSyntheticScene(scene, dir / "photos");
+  Config config = QuietConfig();
+  config.Set("sfm.matcher", "sequential", "test");
+  config.Set("sfm.sequential_overlap", 4, "test");
+  RunUntilPoses(dir / "photos", dir / "ws", config);
+
+  const fs::path sfm = dir / "ws" / "10_sfm";
+  const nlohmann::json report = ReadJsonFile(sfm / "sfm_report.json");
+  CHECK(report["matcher"] == "sequential");
+  const ColmapModel model = ReadColmapModel(sfm / report["chosen_model"].get<std::string>());
+  std::map<std::string, uint32_t> ids;
+  for (const auto& [id, image] : model.images) ids[image.name] = id;
+  REQUIRE(ids.size() == 24);
+  size_t shared = 0;
+  for (const auto& [id, point] : model.points) {
+    std::set<uint32_t> seen;
+    for (const auto& [image, index] : point.track) seen.insert(image);
+    shared += seen.count(ids.at("view_000.png")) && seen.count(ids.at("view_022.png"));
+  }
+  INFO(shared << " points seen from view 0 and view 22");
+  CHECK(shared >= 20);
+  std::map<std::string, Eigen::Matrix4d> true_poses;
+  const nlohmann::json truth = ReadJsonFile(dir / "photos" / "ground_truth_cameras.json");
+  for (const auto& frame : truth["frames"]) true_poses[frame["file_path"]] = ReadMatrix(frame["transform_matrix"]);
+  CheckPoses(ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json"), true_poses, 0.5, 0.01);
 }
 
 // A messy photo folder (issue 7): the synthetic scene's views stored every way a folder of real photos may hold
