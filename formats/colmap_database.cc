@@ -93,6 +93,27 @@ SiftDescriptors ColmapDatabase::Descriptors(uint32_t image_id) const {
   return descriptors;
 }
 
+std::map<uint32_t, size_t> ColmapDatabase::FeatureCounts() const {
+  Statement statement(db_, path_, "SELECT image_id, rows FROM keypoints");
+  std::map<uint32_t, size_t> counts;
+  while (statement.Step() == SQLITE_ROW) {
+    counts[static_cast<uint32_t>(sqlite3_column_int64(statement.get(), 0))] =
+        static_cast<size_t>(std::max<sqlite3_int64>(sqlite3_column_int64(statement.get(), 1), 0));
+  }
+  return counts;
+}
+
+std::vector<VerifiedPair> ColmapDatabase::VerifiedPairs() const {
+  Statement statement(db_, path_, "SELECT pair_id, rows FROM two_view_geometries WHERE rows > 0");
+  std::vector<VerifiedPair> pairs;
+  while (statement.Step() == SQLITE_ROW) {
+    const auto pair_id = static_cast<uint64_t>(sqlite3_column_int64(statement.get(), 0));
+    pairs.push_back({static_cast<uint32_t>(pair_id / kMaxNumImages), static_cast<uint32_t>(pair_id % kMaxNumImages),
+                     static_cast<size_t>(sqlite3_column_int64(statement.get(), 1))});
+  }
+  return pairs;
+}
+
 bool ColmapDatabase::HasMatches(uint32_t image_id1, uint32_t image_id2) const {
   Statement statement(db_, path_, "SELECT 1 FROM matches WHERE pair_id = ?");
   sqlite3_bind_int64(statement.get(), 1, static_cast<sqlite3_int64>(ColmapPairId(image_id1, image_id2)));

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -26,6 +27,12 @@ struct ColmapDatabaseImage {
   std::string name;
 };
 
+// A pair COLMAP's geometric verification kept, with its number of inlier matches.
+struct VerifiedPair {
+  uint32_t image_id1 = 0, image_id2 = 0;
+  size_t inliers = 0;
+};
+
 class ColmapDatabase {
  public:
   // Opens an existing database for reading and writing; ExternalToolError when it cannot.
@@ -38,6 +45,10 @@ class ColmapDatabase {
   std::vector<ColmapDatabaseImage> Images() const;
   // An image's descriptors (none when it has no row); ExternalToolError when the row is not rows x 128 bytes.
   SiftDescriptors Descriptors(uint32_t image_id) const;
+  // Each image's number of features, by image id (none for an image without a row).
+  std::map<uint32_t, size_t> FeatureCounts() const;
+  // The pairs with inlier matches after geometric verification.
+  std::vector<VerifiedPair> VerifiedPairs() const;
   // Whether the pair has a row of raw matches (in either order).
   bool HasMatches(uint32_t image_id1, uint32_t image_id2) const;
   // Writes the pairs' raw matches (COLMAP's pair id and order: the smaller image id first) in one transaction.

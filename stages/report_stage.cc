@@ -194,6 +194,26 @@ std::string VideosSection(const StageContext& context) {
   return html;
 }
 
+// The photos the chosen model left out, each with its reason, and the models COLMAP made when it made several.
+std::string LeftOutHtml(const SfmReport& sfm) {
+  std::string html;
+  if (sfm.models.size() > 1) {
+    html += format("<p>COLMAP's mapper made {} models; the largest is used:", sfm.models.size());
+    for (const SfmReport::Model& model : sfm.models)
+      html += format(" {} ({} photos{})", HtmlEscape(model.path), model.registered,
+                     model.path == sfm.chosen_model ? ", used" : "");
+    html += ".</p>\n";
+  }
+  if (sfm.left_out.empty()) return html;
+  html +=
+      format("<p>Photos left out of the model: {}.</p>\n<table><tr><th>photo</th><th>reason</th><th>why</th></tr>\n",
+             sfm.left_out.size());
+  for (const SfmReport::LeftOut& photo : sfm.left_out)
+    html += format("<tr><td>{}</td><td>{}</td><td>{}</td></tr>\n", HtmlEscape(photo.image), EnumName(photo.reason),
+                   HtmlEscape(photo.detail));
+  return html + "</table>\n";
+}
+
 std::string CamerasSection(const StageContext& context, const ImportedDataset& dataset,
                            const std::string& heldout_split) {
   std::string html = "<h2>Cameras</h2>\n";
@@ -210,7 +230,7 @@ std::string CamerasSection(const StageContext& context, const ImportedDataset& d
     html += "<table><tr><th>COLMAP step</th><th>wall time</th></tr>\n";
     for (const SfmReport::Step& step : sfm->steps)
       html += format("<tr><td>{}</td><td>{:.1f} s</td></tr>\n", HtmlEscape(step.step), step.wall_seconds);
-    html += "</table>\n";
+    html += "</table>\n" + LeftOutHtml(*sfm);
   } else {
     html += format("<p>Cameras imported from a {} dataset (no structure from motion needed).</p>\n",
                    dataset.meta.dataset_kind ? EnumName(*dataset.meta.dataset_kind) : "given");

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <functional>
+#include <iterator>
 #include <set>
 
 #include "base/errors.h"
@@ -17,6 +18,7 @@
 #include "pipeline/subprocess.h"
 #include "stages/colmap_flags.h"
 #include "stages/feature_matching.h"
+#include "stages/left_out.h"
 #include "stages/matcher_choice.h"
 #include "stages/stage_reports.h"
 #include "stages/stages.h"
@@ -294,21 +296,26 @@ struct ColmapRun {
   }
 };
 
+// The photos of `names` that `model` does not hold.
+std::vector<std::string> LeftOutNames(const ColmapModel& model, const std::vector<std::string>& names) {
+  std::set<std::string> registered;
+  for (const auto& [id, image] : model.images) registered.insert(image.name);
+  std::vector<std::string> left_out;
+  std::copy_if(names.begin(), names.end(), std::back_inserter(left_out),
+               [&](const std::string& name) { return !registered.count(name); });
+  return left_out;
+}
+
 // What sfm_report.json says of a model: registration, points, errors, and whether the cameras look at a common
-// point (a warning when not).
+// point (a warning when not); not which photos it left out.
 SfmReport ModelReport(const ColmapModel& model, const std::vector<std::string>& names) {
-  std::set<std::string> registered_names;
   std::vector<Eigen::Vector3d> centres, axes;
   for (const auto& [id, image] : model.images) {
-    registered_names.insert(image.name);
     const Eigen::Matrix3d world_from_cam = image.cam_from_world_rotation.toRotationMatrix().transpose();
     centres.push_back(-world_from_cam * image.cam_from_world_translation);
     axes.push_back(world_from_cam.col(2));  // COLMAP cameras look along +z
   }
   SfmReport report;
-  for (const std::string& name : names) {
-    if (!registered_names.count(name)) report.left_out.push_back(name);
-  }
   double error_sum = 0, observations = 0;
   for (const auto& [id, point] : model.points) {
     error_sum += point.error * point.track.size();
@@ -338,7 +345,7 @@ void CheckRegistered(const SfmReport& report, double min_registered) {
   if (fraction >= min_registered) return;
   std::string listed;
   for (size_t i = 0; i < report.left_out.size() && i < kMaxNamesListed; ++i)
-    listed += (i ? ", " : "") + report.left_out[i];
+    listed += format("{}{} ({})", i ? ", " : "", report.left_out[i].image, EnumName(report.left_out[i].reason));
   if (report.left_out.size() > kMaxNamesListed)
     listed += format(" and {} more", report.left_out.size() - kMaxNamesListed);
   throw UserError(format("COLMAP registered only {} of {} photos ({:.0f}%, {} is {:.0f}%); left out: {}; {}",
@@ -453,6 +460,7 @@ void SfmStage::Run(StageContext& context) const {
   report.matcher = matching;
   report.models = models;
   report.chosen_model = fs::relative(chosen, out.dir).string();
+  report.left_out = ExplainLeftOut(LeftOutNames(model, names), out.database(), out.dir, models, report.chosen_model);
   report.steps = steps.timings();
   WriteJsonAtomic(out.report(), report.ToJson());  // also for a run that fails the check below
   context.summary = {{"registered", model.images.size()}, {"images", names.size()}, {"points", model.points.size()}};

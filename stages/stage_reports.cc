@@ -304,6 +304,13 @@ void Describe(S& s, IngestReport& report) {
 }
 
 template <class S>
+void Describe(S& s, SfmReport::LeftOut& left_out) {
+  s("image", left_out.image);
+  s("reason", left_out.reason);
+  s("detail", left_out.detail);
+}
+
+template <class S>
 void Describe(S& s, SfmReport::Model& model) {
   s("path", model.path);
   s("registered", model.registered);

@@ -20,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "base/enum_names.h"
 #include "formats/output_frame.h"
 #include "nerf/mesh.h"
 
@@ -74,10 +75,29 @@ struct IngestReport {
   static IngestReport Read(const std::filesystem::path& file);
 };
 
+// Why the mapper left a photo out of the chosen model (left_out.h says how each is decided).
+enum class LeftOutReason { kNoFeatures, kNoMatches, kApart, kTooFewInliers, kOtherModel, kNotPlaced, kUnknown };
+template <>
+struct EnumNames<LeftOutReason> {
+  static constexpr std::pair<LeftOutReason, const char*> kValues[] = {
+      {LeftOutReason::kNoFeatures, "no_features"},
+      {LeftOutReason::kNoMatches, "no_matches"},
+      {LeftOutReason::kApart, "apart"},
+      {LeftOutReason::kTooFewInliers, "too_few_inliers"},
+      {LeftOutReason::kOtherModel, "other_model"},
+      {LeftOutReason::kNotPlaced, "not_placed"},
+      {LeftOutReason::kUnknown, "unknown"}};
+};
+
 struct SfmReport {
   size_t images_given = 0, registered = 0, points = 0;
   double registered_percent = 0;
-  std::vector<std::string> left_out;  // photos COLMAP did not register
+  struct LeftOut {
+    std::string image;
+    LeftOutReason reason = LeftOutReason::kNotPlaced;
+    std::string detail;  // the figures behind the reason, as a sentence
+  };
+  std::vector<LeftOut> left_out;  // photos COLMAP did not register in the chosen model
   double mean_reprojection_error_px = 0, mean_track_length = 0;
   std::optional<double> median_axis_to_focus_angle_deg;  // none when the cameras have no common focus point
   std::string colmap_version, matcher, chosen_model;

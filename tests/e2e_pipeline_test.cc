@@ -1,11 +1,14 @@
 // The whole product with real COLMAP: `photo2nerf run PHOTOS -w WS` on the synthetic scene goes from photos to
-// the report; the held-out PSNR is above a bound, the mesh opens and is finite, the report lists every stage.
-// A second run finds every stage fresh and recomputes nothing.
+// the report; the held-out PSNR is above a bound, the mesh opens and is finite, the report lists every stage and
+// the grey photo it left out with its reason. A second run finds every stage fresh and recomputes nothing.
 
 #include <catch2/catch.hpp>
 
 #include <assimp/scene.h>
 #include <assimp/Importer.hpp>
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
 
 #include <cstdlib>
 
@@ -25,6 +28,9 @@ TEST_CASE("photo2nerf run: photos to report with real COLMAP, then everything fr
   TempDir dir;
   SyntheticSceneOptions scene;  // 24 views of 320 x 240
   WriteSyntheticScene(scene, dir / "photos");
+  OIIO::ImageBuf blank(OIIO::ImageSpec(320, 240, 3, OIIO::TypeDesc::UINT8));  // a photo of nothing: left out
+  OIIO::ImageBufAlgo::fill(blank, {0.5f, 0.5f, 0.5f});
+  REQUIRE(blank.write((dir / "photos" / "zz_blank.png").string()));
   const std::vector<std::string> command = {P2N_BINARY,
                                             "run",
                                             (dir / "photos").string(),
@@ -88,7 +94,9 @@ TEST_CASE("photo2nerf run: photos to report with real COLMAP, then everything fr
     }
   }
   CHECK(finished.size() == 8);
-  CHECK_THAT(report, Catch::Contains("COLMAP 3."));
+  CHECK_THAT(report, Catch::Contains("COLMAP 3.") && Catch::Contains("24 of 25 images registered"));
+  CHECK_THAT(report, Catch::Contains("Photos left out of the model: 1.") &&
+                         Catch::Contains("<td>zz_blank.png</td><td>no_features</td>"));
 
   // Again: nothing to do, nothing rewritten.
   REQUIRE(RunCommand(command, &output) == 0);

@@ -179,7 +179,8 @@ TEST_CASE("sequential matching closes an orbit's loop", "[colmap][e2e]") {
 // A messy photo folder (issue 7): the synthetic scene's views stored every way a folder of real photos may hold
 // them (16-bit, grey, alpha, CMYK, EXIF-rotated, another size, non-ASCII names with spaces), a copy of one photo
 // and three photos of an unrelated scene (LLFF fern, when ../shared/data has it). Every view of the scene is
-// registered with its true pose, the copy is skipped by ingest and the unrelated photos are left out by name.
+// registered with its true pose, the copy is skipped by ingest, and the unrelated photos and a grey one are left out
+// by name, each with its reason.
 TEST_CASE("sfm + poses on a messy folder: every encoding registered, the copy skipped, another scene left out",
           "[colmap][e2e][bad_input]") {
   if (!HaveColmap()) {
@@ -246,6 +247,10 @@ TEST_CASE("sfm + poses on a messy folder: every encoding registered, the copy sk
                 .write((photos / unrelated.back()).string()));
   }
   if (unrelated.empty()) WARN("../shared/data/fern is absent: the unrelated photos are left out of this test");
+  // A photo of nothing: one grey.
+  OIIO::ImageBuf blank(OIIO::ImageSpec(320, 240, 3, OIIO::TypeDesc::UINT8));
+  OIIO::ImageBufAlgo::fill(blank, {0.5f, 0.5f, 0.5f});
+  REQUIRE(blank.write((photos / "zz_blank.png").string()));
 
   RunUntilPoses(photos, dir / "ws", QuietConfig());
   const nlohmann::json ingest = ReadJsonFile(dir / "ws" / "00_ingest" / "ingest_report.json");
@@ -259,7 +264,17 @@ TEST_CASE("sfm + poses on a messy folder: every encoding registered, the copy sk
   REQUIRE(true_poses.size() == 24);
   const nlohmann::json report = ReadJsonFile(dir / "ws" / "10_sfm" / "sfm_report.json");
   CHECK(report["registered"] == 24);
-  CHECK(report["left_out"].get<std::vector<std::string>>() == unrelated);
+  // Each left out with its reason: the grey photo has no features, fern's photos none with the
+  // scene's (they match each other).
+  REQUIRE(report["left_out"].size() == unrelated.size() + 1);
+  for (size_t i = 0; i < unrelated.size(); ++i) {
+    const nlohmann::json& left_out = report["left_out"][i];
+    INFO(left_out.dump());
+    CHECK(left_out["image"] == unrelated[i]);
+    CHECK((left_out["reason"] == "apart" || left_out["reason"] == "no_matches"));
+  }
+  CHECK(report["left_out"].back()["image"] == "zz_blank.png");
+  CHECK(report["left_out"].back()["reason"] == "no_features");
   const nlohmann::json transforms = ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json");
   CheckPoses(transforms, true_poses, 1.0, 0.02);
 }

@@ -29,7 +29,7 @@ SfmReport SomeSfmReport() {
   report.images_given = 12;
   report.registered = 11;
   report.registered_percent = 100.0 * 11 / 12;
-  report.left_out = {"blurred.jpg"};
+  report.left_out = {{"blurred.jpg", LeftOutReason::kNoMatches, "none of its 12 features has a verified match"}};
   report.points = 4000;
   report.mean_reprojection_error_px = 0.75;
   report.mean_track_length = 4.5;
@@ -177,7 +177,9 @@ TEST_CASE("Reports between stages read back exactly what was written", "[reports
   WriteJsonAtomic(dir.path() / "sfm_report.json", sfm.ToJson());
   const SfmReport sfm_read = SfmReport::Read(dir.path() / "sfm_report.json");
   CHECK(sfm_read.ToJson() == sfm.ToJson());
-  CHECK(sfm_read.left_out == std::vector<std::string>{"blurred.jpg"});
+  REQUIRE(sfm_read.left_out.size() == 1);
+  CHECK(sfm_read.left_out[0].image == "blurred.jpg");
+  CHECK(sfm_read.left_out[0].reason == LeftOutReason::kNoMatches);
   SfmReport unfocused = sfm;
   unfocused.median_axis_to_focus_angle_deg.reset();
   WriteJsonAtomic(dir.path() / "sfm_report.json", unfocused.ToJson());
@@ -266,7 +268,9 @@ TEST_CASE("A damaged report names its file, the field and the stage to rerun", "
   CHECK_THAT(ErrorAfterEdit<SfmReport>(sfm, sfm_json, "/registered", 13),
              Catch::Contains("\"registered\" must be at most images_given") && Catch::Contains("photo2nerf sfm"));
   CHECK_THAT(ErrorAfterEdit<SfmReport>(sfm, sfm_json, "/left_out", "none"),
-             Catch::Contains("\"left_out\" has the wrong type (string)"));
+             Catch::Contains("\"left_out\" must be an array"));
+  CHECK_THAT(ErrorAfterEdit<SfmReport>(sfm, sfm_json, "/left_out/0/reason", "blurry"),
+             Catch::Contains("\"left_out[0].reason\" must be") && Catch::Contains("not 'blurry'"));
   CHECK_THAT(ErrorAfterEdit<SfmReport>(sfm, sfm_json, "/steps/1/wall_seconds", "long"),
              Catch::Contains("\"steps[1].wall_seconds\" must be a number, not string"));
 
