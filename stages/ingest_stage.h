@@ -42,9 +42,8 @@ InputFiles ListInputs(const std::filesystem::path& input);
 
 class IngestStage : public StageOf<IngestResult> {
  public:
-  int format_version() const override {
-    return 3;
-  }  // 2: 8-bit output, copies skipped, CMYK re-encoded; 3: cameras, videos
+  // 2: 8-bit output, copies skipped, CMYK re-encoded; 3: cameras, videos.
+  int format_version() const override { return 3; }
   // "image NAME" or "video NAME" -> SHA-1 of the file's bytes, for every photo and video of the input.
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
   void Run(StageContext& context) const override;
