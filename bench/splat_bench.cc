@@ -1,8 +1,9 @@
 // Rendering from splats: renders a workspace's held-out views from 35_splat/splats.ply on the CPU and prints the
 // seconds per view (median of REPEATS renders of each view), frames per second and PSNR against the photos;
 // with SAVE_DIR, writes the renders and the photos there as PNGs.
-// With SPLIT train, the training views instead of the held-out ones.
-// Usage: splat_bench WORKSPACE [VIEWS (0: all)] [REPEATS] [SAVE_DIR] [SPLIT]
+// With SPLIT train, the training views instead of the held-out ones. With FORMAT spz, the splats as they read back
+// from SPZ (splat/spz.h), and the sizes of both files.
+// Usage: splat_bench WORKSPACE [VIEWS (0: all)] [REPEATS] [SAVE_DIR (- for none)] [SPLIT] [FORMAT]
 
 #include <algorithm>
 #include <chrono>
@@ -14,13 +15,14 @@
 #include "nerf/heap.h"
 #include "splat/rasterizer.h"
 #include "splat/splat_ply.h"
+#include "splat/spz.h"
 #include "stages/stage_reports.h"
 #include "stages/training_data.h"
 
 int main(int argc, char** argv) {
   p2n::KeepFreedBlocksInHeap();  // as photo2nerf does
   if (argc < 2) {
-    std::fprintf(stderr, "usage: splat_bench WORKSPACE [VIEWS] [REPEATS] [SAVE_DIR] [SPLIT]\n");
+    std::fprintf(stderr, "usage: splat_bench WORKSPACE [VIEWS] [REPEATS] [SAVE_DIR] [SPLIT] [FORMAT]\n");
     return 1;
   }
   const std::filesystem::path ws = argv[1];
@@ -33,7 +35,15 @@ int main(int argc, char** argv) {
   if (max_views > 0 && data.heldout.size() > max_views) data.heldout.resize(max_views);
   const p2n::SplatReport report = p2n::SplatReport::Read(ws / "35_splat" / "splat_report.json");
   const p2n::OutputFrame frame = p2n::MakeOutputFrame(report.frame, poses);
-  const p2n::Gaussians<float> gaussians = p2n::ReadSplatPly(ws / "35_splat" / "splats.ply");
+  p2n::Gaussians<float> gaussians = p2n::ReadSplatPly(ws / "35_splat" / "splats.ply");
+  if (argc > 6 && std::string(argv[6]) == "spz") {
+    const std::vector<char> spz = p2n::SpzBytes(gaussians);
+    const size_t ply = std::filesystem::file_size(ws / "35_splat" / "splats.ply");
+    std::printf("splats.ply %.2f MB (%.1f bytes a splat), SPZ %.2f MB (%.1f bytes a splat, %.3f of the PLY)\n",
+                ply / 1e6, double(ply) / gaussians.size(), spz.size() / 1e6, double(spz.size()) / gaussians.size(),
+                double(spz.size()) / ply);
+    gaussians = p2n::ParseSpz(std::string(spz.begin(), spz.end()), "splats.spz");
+  }
   const std::array<float, 3> background = report.background;  // the learnt one behind photos without alpha
   const double near = report.near;
 
@@ -57,7 +67,7 @@ int main(int argc, char** argv) {
     const p2n::FloatImage image{view.camera.width, view.camera.height, 3, rasterizer.rgb()};
     const p2n::FloatImage photo = p2n::PhotoOnBackground(view, background);
     psnr += p2n::Psnr(image, photo) / data.heldout.size();
-    if (argc > 4) {
+    if (argc > 4 && std::string(argv[4]) != "-") {
       const std::filesystem::path dir = argv[4];
       p2n::SaveFloatImage(image, dir / (std::to_string(v) + ".png"));
       p2n::SaveFloatImage(photo, dir / (std::to_string(v) + "_photo.png"));

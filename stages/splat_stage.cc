@@ -17,6 +17,7 @@
 #include "splat/field_init.h"
 #include "splat/splat_ply.h"
 #include "splat/splat_trainer.h"
+#include "splat/spz.h"
 #include "stages/camera_corrections.h"
 #include "stages/fit_checks.h"
 #include "stages/splat_viewer.h"
@@ -269,6 +270,10 @@ void SplatStage::Run(StageContext& context) const {
                   {setup.frame.description,
                    format("{} splats of SH degree {}", trainer.gaussians().size(), trainer.gaussians().sh_degree)});
   });
+  WriteOrExplain([&] {
+    const std::vector<char> spz = SpzBytes(trainer.gaussians());
+    WriteFileAtomic(out.spz(), std::string_view(spz.data(), spz.size()));
+  });
   size_t viewer_bytes = 0;
   WriteOrExplain([&] {
     fs::path root = context.workspace.root().lexically_normal();
@@ -288,6 +293,7 @@ void SplatStage::Run(StageContext& context) const {
   }
   SplatReport report = MakeSplatReport(trainer, setup, options, scores, state.seconds, resumed_from, near);
   report.file_bytes = fs::file_size(out.splats());
+  report.spz_bytes = fs::file_size(out.spz());
   report.viewer_bytes = viewer_bytes;
   WriteJsonAtomic(out.report(), report.ToJson());
   context.summary["splats"] = trainer.gaussians().size();

@@ -468,6 +468,8 @@ void Describe(S& s, SplatReport& report) {
   s("background", report.background);
   s.Written("file", SplatResult{}.splats().string());
   s("file_bytes", report.file_bytes);
+  s.Written("spz", SplatResult{}.spz().string());
+  s("spz_bytes", report.spz_bytes);
   s.Written("viewer", SplatResult{}.viewer().string());
   s("viewer_bytes", report.viewer_bytes);
   s.Optional("warnings", report.warnings);

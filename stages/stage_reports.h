@@ -208,8 +208,8 @@ struct SplatReport {
   std::string frame_description;
   double near = 0.01;
   std::array<float, 3> background{1, 1, 1};
-  size_t file_bytes = 0, viewer_bytes = 0;  // splats.ply, viewer.html
-  std::vector<FitWarning> warnings;         // signs of a failed fit (none in older reports)
+  size_t file_bytes = 0, spz_bytes = 0, viewer_bytes = 0;  // splats.ply, splats.spz, viewer.html
+  std::vector<FitWarning> warnings;                        // signs of a failed fit (none in older reports)
 
   nlohmann::json ToJson() const;
   static SplatReport Read(const std::filesystem::path& file);

@@ -62,6 +62,7 @@ struct SplatResult {
   static constexpr StageId kId{"splat", "35_splat"};
   std::filesystem::path dir;
   std::filesystem::path splats() const { return dir / "splats.ply"; }
+  std::filesystem::path spz() const { return dir / "splats.spz"; }  // the same splats in Niantic's SPZ
   std::filesystem::path report() const { return dir / "splat_report.json"; }
   std::filesystem::path viewer() const { return dir / "viewer.html"; }
   std::filesystem::path metrics() const { return dir / "metrics.csv"; }

@@ -52,6 +52,7 @@ TEST_CASE("report stage: a self-contained page with every section, drawn by head
   CHECK_THAT(html, Catch::Contains("training loss against training time"));
   CHECK_THAT(html, Catch::Contains("splats: held-out PSNR against optimisation time") &&
                        Catch::Contains("href=\"../35_splat/splats.ply\"") &&
+                       Catch::Contains("href=\"../35_splat/splats.spz\"") &&
                        Catch::Contains("href=\"../35_splat/viewer.html\""));
   for (const char* stage : {"poses", "train", "splat", "render", "export"})
     CHECK_THAT(html, Catch::Contains(format("<td>{}</td>", stage)));

@@ -1,5 +1,5 @@
-// The splat stage: splats.ply in the standard layout, placed where the scene is, with their held-out scores; off
-// when asked.
+// The splat stage: splats.ply in the standard layout and splats.spz, placed where the scene is, with their held-out
+// scores; off when asked.
 
 #include <catch2/catch.hpp>
 
@@ -10,6 +10,7 @@
 #include "base/file_util.h"
 #include "formats/output_frame.h"
 #include "splat/splat_ply.h"
+#include "splat/spz.h"
 #include "stage_fixtures.h"
 
 namespace p2n::testing {
@@ -27,6 +28,11 @@ TEST_CASE("splat stage: splats where the scene is, scored on the held-out views,
   const Gaussians<float> splats = ReadSplatPly(out / "splats.ply");
   CHECK(splats.size() == report["splats"].get<size_t>());
   CHECK(splats.sh_degree == 3);
+  // The same splats in SPZ, a fraction of the PLY's size.
+  const Gaussians<float> compact = ParseSpz(ReadTextFile(out / "splats.spz"), "splats.spz");
+  CHECK(compact.size() == splats.size());
+  CHECK(report["spz_bytes"].get<size_t>() == fs::file_size(out / "splats.spz"));
+  CHECK(report["spz_bytes"].get<size_t>() < report["file_bytes"].get<size_t>() / 3);
   CHECK(report["steps"] == 30);
   CHECK(report["heldout_psnr"].get<double>() > 15);
   CHECK(report["heldout_psnr_per_view"].size() == report["heldout_views"].get<size_t>());

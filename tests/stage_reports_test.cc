@@ -94,6 +94,7 @@ SplatReport SomeSplatReport() {
   report.near = 0.02;
   report.background = {0.0f, 0.5f, 1.0f};
   report.file_bytes = 1000;
+  report.spz_bytes = 90;
   report.viewer_bytes = 2000;
   return report;
 }

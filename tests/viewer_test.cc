@@ -1,7 +1,7 @@
 // The splat files and the viewer page against independent readers: splat-transform (PlayCanvas's splat tool, from
-// npm) reads our standard and compressed PLYs to the values we wrote, and headless Chromium shows viewer.html
-// with Spark: the frame it draws from a camera matches our CPU rasterizer's render of that camera, a drag moves
-// the view, and the page asks the network for nothing.
+// npm) reads our standard and compressed PLYs and our SPZ to the values we wrote, and headless Chromium shows
+// viewer.html with Spark: the frame it draws from a camera matches our CPU rasterizer's render of that camera, a
+// drag moves the view, and the page asks the network for nothing.
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -16,6 +16,7 @@
 #include "splat/compressed_ply.h"
 #include "splat/splat_ply.h"
 #include "splat/splat_trainer.h"
+#include "splat/spz.h"
 #include "stage_fixtures.h"
 #include "viewer/viewer_page.h"
 
@@ -128,6 +129,36 @@ TEST_CASE("splat-transform reads our compressed splat PLY to within its quantisa
   CHECK(alpha < 0.6f / 255);
   CHECK(colour < 1.7f / 255);
   CHECK(sh < 8.0f / 256);
+}
+
+TEST_CASE("splat-transform reads our SPZ to within its quantisation, in the splat PLY's axes", "[viewer]") {
+  TempDir dir;
+  const Gaussians<float> g = RandomSplats(500, 3);
+  const std::vector<char> bytes = SpzBytes(g);
+  WriteFileAtomic(dir / "splats.spz", std::string_view(bytes.data(), bytes.size()));
+  const Gaussians<float> read = ThroughSplatTransform(dir / "splats.spz", dir);
+  REQUIRE(read.size() == g.size());
+  REQUIRE(read.sh_degree == 3);
+  float position = 0, scale = 0, rotation = 0, alpha = 0, colour = 0, sh = 0;
+  for (size_t i = 0; i < read.size(); ++i) {  // SPZ keeps the order
+    for (int a = 0; a < 3; ++a) {
+      position = std::max(position, std::abs(read.positions[3 * i + a] - g.positions[3 * i + a]));
+      scale = std::max(scale, std::abs(read.log_scales[3 * i + a] - g.log_scales[3 * i + a]));
+      colour = std::max(colour, std::abs(read.sh_dc[3 * i + a] - g.sh_dc[3 * i + a]));
+    }
+    rotation = std::max(rotation, QuaternionError(&read.rotations[4 * i], &g.rotations[4 * i]));
+    const auto sigmoid = [](float x) { return 1 / (1 + std::exp(-x)); };
+    alpha = std::max(alpha, std::abs(sigmoid(read.opacity_logits[i]) - sigmoid(g.opacity_logits[i])));
+    for (int k = 0; k < 45; ++k) sh = std::max(sh, std::abs(read.sh_rest[45 * i + k] - g.sh_rest[45 * i + k]));
+  }
+  // Positions in a box of 4 at 20 fractional bits, scales in steps of 1/16, opacity and colour of 1/255 (colour as
+  // 0.15 f_dc), rotations in 9 bits, SH in steps of 1/128: a sign or axis wrong would be off by far more.
+  CHECK(position < 1e-5f);
+  CHECK(scale <= 0.5f / 16 + 1e-4f);
+  CHECK(rotation < 0.002f);
+  CHECK(alpha < 0.6f / 255);
+  CHECK(colour < 0.6f / 255 / 0.15f);
+  CHECK(sh < 0.6f / 128);
 }
 
 TEST_CASE("viewer.html in headless Chromium draws what our rasterizer renders, moves with a drag, stays offline",
