@@ -13,25 +13,11 @@
 
 #include "splat/splat_ply.h"
 #include "splat/spz.h"
+#include "tests/random_splats.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {
 namespace {
-
-// Every parameter random, SH degree 3, positions in a box of 6.
-Gaussians<float> RandomSplats(int count, uint64_t seed) {
-  std::mt19937_64 random(seed);
-  std::uniform_real_distribution<float> uniform(-1, 1);
-  Gaussians<float> g;
-  g.Resize(count);
-  for (float& v : g.positions) v = 3 * uniform(random);
-  for (float& v : g.log_scales) v = -4 + 2 * uniform(random);
-  for (float& v : g.rotations) v = uniform(random);
-  for (float& v : g.opacity_logits) v = 3 * uniform(random);
-  for (float& v : g.sh_dc) v = 1.5f * uniform(random);
-  for (float& v : g.sh_rest) v = 0.5f * uniform(random);
-  return g;
-}
 
 // `raw` as one gzip stream.
 std::string Gzip(const std::string& raw, const TempDir& dir) {
@@ -51,16 +37,6 @@ std::string Header(uint32_t version, uint32_t count, uint8_t sh_degree, uint8_t 
   header[12] = static_cast<char>(sh_degree);
   header[13] = static_cast<char>(fractional_bits);
   return header;
-}
-
-float QuaternionError(const float* a, const float* b) {
-  const float na = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + a[3] * a[3]);
-  float same = 0, opposite = 0;
-  for (int k = 0; k < 4; ++k) {
-    same = std::max(same, std::abs(a[k] / na - b[k]));
-    opposite = std::max(opposite, std::abs(a[k] / na + b[k]));
-  }
-  return std::min(same, opposite);
 }
 
 }  // namespace
@@ -84,7 +60,7 @@ TEST_CASE("SPZ: our files read back within each attribute's quantisation", "[spl
     rotation = std::max(rotation, QuaternionError(&g.rotations[4 * i], &read.rotations[4 * i]));
     for (int k = 0; k < 45; ++k) sh = std::max(sh, std::abs(read.sh_rest[45 * i + k] - g.sh_rest[45 * i + k]));
   }
-  // Positions below 3 get 20 fractional bits; scales steps of 1/16, opacity and colour of 1/255 (colour as
+  // Positions below 2 get 20 fractional bits; scales steps of 1/16, opacity and colour of 1/255 (colour as
   // 0.15 f_dc), the rotation's three smallest components 9 bits of 1/sqrt(2); SH steps of 1/128.
   CHECK(position <= 0.5f / (1 << 20) + 1e-6f);
   CHECK(scale <= 0.5f / 16 + 1e-5f);

@@ -18,25 +18,12 @@
 #include "splat/splat_trainer.h"
 #include "splat/spz.h"
 #include "stage_fixtures.h"
+#include "tests/random_splats.h"
 #include "viewer/viewer_page.h"
 
 namespace p2n::testing {
 namespace fs = std::filesystem;
 namespace {
-
-// Splats spread over a box of 4, every parameter random, SH degree 3.
-Gaussians<float> RandomSplats(int count, uint64_t seed) {
-  std::mt19937_64 random(seed);
-  std::uniform_real_distribution<float> uniform(-1, 1);
-  Gaussians<float> g;
-  g.Resize(count);
-  for (std::vector<float>* values : {&g.positions, &g.rotations, &g.opacity_logits, &g.sh_dc}) {
-    for (float& v : *values) v = 2 * uniform(random);
-  }
-  for (float& v : g.log_scales) v = -4 + 2 * uniform(random);
-  for (float& v : g.sh_rest) v = 0.5f * uniform(random);
-  return g;
-}
 
 // `input` converted by splat-transform into a standard PLY, read back.
 Gaussians<float> ThroughSplatTransform(const fs::path& input, const TempDir& dir) {
@@ -48,18 +35,6 @@ Gaussians<float> ThroughSplatTransform(const fs::path& input, const TempDir& dir
   INFO(log);
   REQUIRE(status == 0);
   return ReadSplatPly(output);
-}
-
-// The largest difference between the unit quaternions a and b (w, x, y, z), either sign.
-float QuaternionError(const float* a, const float* b) {
-  const float na = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + a[3] * a[3]);
-  const float nb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2] + b[3] * b[3]);
-  float same = 0, opposite = 0;
-  for (int k = 0; k < 4; ++k) {
-    same = std::max(same, std::abs(a[k] / na - b[k] / nb));
-    opposite = std::max(opposite, std::abs(a[k] / na + b[k] / nb));
-  }
-  return std::min(same, opposite);
 }
 
 // The index in `g` of each splat of `h` (the compressed file reorders them), by nearest position.
