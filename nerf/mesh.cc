@@ -106,33 +106,39 @@ void Shade(const NerfModel& model, double h, Mesh* mesh) {
   }
   const std::vector<float> probe_density = DensitiesAt(model, probes);
   mesh->normals.resize(mesh->positions.size());
-  mesh->colours.resize(mesh->positions.size());
-  tbb::parallel_for(size_t{0}, (mesh->positions.size() + kBatch - 1) / kBatch, [&](size_t batch) {
+  for (size_t v = 0; v < mesh->positions.size(); ++v) {
+    Eigen::Vector3f gradient;
+    for (int axis = 0; axis < 3; ++axis)
+      gradient[axis] = probe_density[6 * v + 2 * axis] - probe_density[6 * v + 2 * axis + 1];
+    const Eigen::Vector3f normal = -gradient;
+    mesh->normals[v] = normal.norm() > 0 && normal.allFinite() ? normal.normalized() : Eigen::Vector3f::UnitZ();
+  }
+  mesh->colours = SurfaceColours(model, mesh->positions, mesh->normals);
+}
+
+}  // namespace
+
+std::vector<std::array<uint8_t, 3>> SurfaceColours(const NerfModel& model, const std::vector<Eigen::Vector3f>& points,
+                                                   const std::vector<Eigen::Vector3f>& normals) {
+  std::vector<std::array<uint8_t, 3>> colours(points.size());
+  tbb::parallel_for(size_t{0}, (points.size() + kBatch - 1) / kBatch, [&](size_t batch) {
     FlushDenormalsOnThisThread();
-    const size_t first = batch * kBatch, count = std::min(mesh->positions.size(), first + kBatch) - first;
+    const size_t first = batch * kBatch, count = std::min(points.size(), first + kBatch) - first;
     Matrix positions(3, count), directions(3, count), density, rgb;
     RadianceField<float>::Cache cache;
     for (size_t i = 0; i < count; ++i) {
-      const size_t v = first + i;
-      Eigen::Vector3f gradient;
-      for (int axis = 0; axis < 3; ++axis)
-        gradient[axis] = probe_density[6 * v + 2 * axis] - probe_density[6 * v + 2 * axis + 1];
-      Eigen::Vector3f normal = -gradient;
-      normal = normal.norm() > 0 && normal.allFinite() ? normal.normalized() : Eigen::Vector3f::UnitZ();
-      mesh->normals[v] = normal;
-      positions.col(i) = FieldPoint(model, mesh->positions[v].cast<double>()).cast<float>();
-      directions.col(i) = -normal;
+      positions.col(i) = FieldPoint(model, points[first + i].cast<double>()).cast<float>();
+      directions.col(i) = -normals[first + i];
     }
     model.field->Forward(positions, directions, &density, &rgb, &cache);
     for (size_t i = 0; i < count; ++i) {
       for (int c = 0; c < 3; ++c) {
-        mesh->colours[first + i][c] = static_cast<uint8_t>(std::lround(255 * std::clamp(rgb(c, i), 0.0f, 1.0f)));
+        colours[first + i][c] = static_cast<uint8_t>(std::lround(255 * std::clamp(rgb(c, i), 0.0f, 1.0f)));
       }
     }
   });
+  return colours;
 }
-
-}  // namespace
 
 void FitCube(const std::vector<Eigen::Vector3d>& points, MeshOptions* options) {
   if (points.size() < kMinCubePoints) return;

@@ -56,6 +56,10 @@ float SurfaceThreshold(const NerfModel& model, const std::vector<Eigen::Vector3d
 Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options,
                  const std::function<void(size_t)>& on_slices_done = {});
 
+// The field's colour at surface points (normalised frame) seen from outside, along minus their unit normals.
+std::vector<std::array<uint8_t, 3>> SurfaceColours(const NerfModel& model, const std::vector<Eigen::Vector3f>& points,
+                                                   const std::vector<Eigen::Vector3f>& normals);
+
 // How closed a mesh is, by its undirected edges (vertices compared by index): an edge of one triangle is on a
 // hole's border, an edge of three or more is non-manifold, and a pair of triangles that runs an edge the same
 // way round is inconsistently oriented.

@@ -11,42 +11,9 @@
 #include "nerf/rays.h"
 #include "nerf/renderer.h"
 #include "nerf/synthetic_scene.h"
+#include "tests/sphere_field.h"
 
 namespace p2n::testing {
-namespace {
-
-constexpr float kRadius = 0.6f, kThreshold = 25;
-
-// Density threshold + 400 (radius - |x|) (clamped at 0), colour (1 - d) / 2 for view direction d.
-class SphereField : public RadianceField<float> {
- public:
-  explicit SphereField(float radius) : radius_(radius) {}
-  nlohmann::json Config() const override { return {{"otype", "SphereField"}}; }
-  void Forward(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb, Cache*) const override {
-    Density(positions, density);
-    *rgb = (1.0f - directions.array()) * 0.5f;
-  }
-  void Density(const Matrix& positions, Matrix* density) const override {
-    density->resize(1, positions.cols());
-    for (Eigen::Index i = 0; i < positions.cols(); ++i) {
-      const float r = (2 * positions.col(i).array() - 1).matrix().norm();  // the bounded box's world point
-      (*density)(0, i) = std::max(0.0f, kThreshold + 400 * (radius_ - r));
-    }
-  }
-  void Backward(const Cache&, const Matrix&, const Matrix&, float*, Matrix*) const override {}
-  std::vector<ParamBlock<float>> DenseParams() override { return {}; }
-
- private:
-  float radius_;
-};
-
-NerfModel SphereModel(float radius = kRadius) {
-  NerfModel model;
-  model.field = std::make_unique<SphereField>(radius);
-  return model;  // the occupancy grid's cells are unknown: all count as occupied
-}
-
-}  // namespace
 
 TEST_CASE("mesh: a sphere's surface is closed, on the sphere, oriented outwards and coloured from outside", "[mesh]") {
   const NerfModel model = SphereModel();
