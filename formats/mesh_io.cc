@@ -38,19 +38,23 @@ void WriteMeshPly(const std::filesystem::path& path, const Mesh& mesh, const std
   WriteFileAtomic(path, data);
 }
 
-void WriteMeshObj(const std::filesystem::path& path, const Mesh& mesh, const std::vector<std::string>& comments) {
+void WriteTexturedObj(const std::filesystem::path& path, const TexturedMesh& mesh, const std::string& texture_file,
+                      const std::vector<std::string>& comments) {
+  std::filesystem::path mtl = path;
+  mtl.replace_extension(".mtl");
+  WriteFileAtomic(mtl, format("# written by photo2nerf\nnewmtl surface\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nillum 1\n"
+                              "map_Kd {}\n",
+                              texture_file));
   std::string text = "# written by photo2nerf\n";
   for (const std::string& comment : comments) text += "# " + comment + "\n";
-  text.reserve(text.size() + mesh.positions.size() * 96 + mesh.triangles.size() * 40);
-  for (size_t v = 0; v < mesh.positions.size(); ++v) {
-    const Eigen::Vector3f& p = mesh.positions[v];
-    const auto& c = mesh.colours[v];
-    text += format("v {:.7g} {:.7g} {:.7g} {:.4g} {:.4g} {:.4g}\n", p.x(), p.y(), p.z(), c[0] / 255.0, c[1] / 255.0,
-                   c[2] / 255.0);
-  }
+  text += format("mtllib {}\nusemtl surface\n", mtl.filename().string());
+  text.reserve(text.size() + mesh.positions.size() * 100 + mesh.triangles.size() * 40);
+  for (const Eigen::Vector3f& p : mesh.positions) text += format("v {:.7g} {:.7g} {:.7g}\n", p.x(), p.y(), p.z());
+  // OBJ's texture coordinates run up from the image's bottom-left corner.
+  for (const Eigen::Vector2f& uv : mesh.uvs) text += format("vt {:.7g} {:.7g}\n", uv.x(), 1 - uv.y());
   for (const Eigen::Vector3f& n : mesh.normals) text += format("vn {:.6g} {:.6g} {:.6g}\n", n.x(), n.y(), n.z());
   for (const auto& t : mesh.triangles) {
-    text += format("f {0}//{0} {1}//{1} {2}//{2}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    text += format("f {0}/{0}/{0} {1}/{1}/{1} {2}/{2}/{2}\n", t[0] + 1, t[1] + 1, t[2] + 1);
   }
   WriteFileAtomic(path, text);
 }

@@ -8,14 +8,19 @@
 #include "base/errors.h"
 #include "base/file_util.h"
 #include "base/format.h"
+#include "base/image_io.h"
 #include "formats/dataset_import.h"
+#include "formats/gltf_io.h"
 #include "formats/mesh_io.h"
 #include "formats/output_frame.h"
 #include "formats/ply.h"
 #include "formats/transforms_json.h"
 #include "nerf/mesh.h"
+#include "nerf/mesh_simplify.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
+#include "nerf/texture_atlas.h"
+#include "photo2nerf/version.h"
 #include "pipeline/cancel.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
@@ -122,44 +127,99 @@ MeshOptions ChooseMeshOptions(const NerfModel& model, const ExportOptions& optio
   return mesh;
 }
 
-// Extracts the mesh (ChooseMeshOptions), writes mesh.ply (and mesh.obj) in `frame`; returns what the report says of
-// it.
-ExportReport::Mesh WriteMesh(const NerfModel& model, const ExportOptions& options, const DepthSamples& depths,
-                             const OutputFrame& frame, const ExportResult& out) {
-  const MeshOptions mesh_options = ChooseMeshOptions(model, options, depths);
-  Mesh mesh;
-  {
-    Progress progress("export: density", options.resolution, "slices");
-    mesh = ExtractMesh(model, mesh_options, [&](size_t n) {
-      progress.Add(static_cast<int64_t>(n));
-      ThrowIfCancelled();
-    });
-  }
-  const MeshEdges edges = CountEdges(mesh);
+// The surface in the files' frame: points mapped, normals turned, triangles turned over where the frame mirrors.
+Mesh InFrame(Mesh mesh, const OutputFrame& frame) {
   for (Eigen::Vector3f& p : mesh.positions) p = frame.Point(p);
   for (Eigen::Vector3f& n : mesh.normals) n = frame.Direction(n);
   if (frame.rotation.determinant() < 0) {
     for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
   }
+  return mesh;
+}
+
+// glTF's frame: the normalised one (+Z up) turned so that +Y is up, in the units of `frame` (COLMAP's or the
+// dataset's; metres where they are), centred on the scene.
+TexturedMesh Upright(TexturedMesh mesh, const OutputFrame& frame) {
+  Eigen::Matrix3f turn;
+  turn << 1, 0, 0, 0, 0, 1, 0, -1, 0;
+  const float scale = static_cast<float>(frame.Scale());
+  for (Eigen::Vector3f& p : mesh.positions) p = scale * (turn * p);
+  for (Eigen::Vector3f& n : mesh.normals) n = turn * n;
+  return mesh;
+}
+
+// The simplified surface textured with the field's colour: mesh_texture.jpg, mesh.glb, and mesh.obj with mesh.mtl
+// when asked.
+ExportReport::Textured WriteTextured(const NerfModel& model, const ExportOptions& options, const Mesh& mesh,
+                                     const OutputFrame& frame, const std::vector<std::string>& comments,
+                                     const ExportResult& out) {
+  Progress progress("export: texture", 1, "textures");
+  const TexturedMesh textured = BakeTexture(mesh, options.texture_size, [&](const auto& points, const auto& normals) {
+    return SurfaceColours(model, points, normals);
+  });
+  progress.Add(1);
+  OIIO::ImageSpec spec(textured.texture_size, textured.texture_size, 3, OIIO::TypeDesc::UINT8);
+  spec.attribute("Compression", "jpeg:95");
+  OIIO::ImageBuf texture(spec, const_cast<uint8_t*>(textured.texture.data()));
+  if (const std::string error = WriteImage(texture, out.texture()); !error.empty()) {
+    throw UserError(format("{}: {}", out.texture().string(), error));
+  }
+  WriteMeshGlb(out.mesh_glb(), Upright(textured, frame), ReadTextFile(out.texture()),
+               "photo2nerf " + std::string(kVersion));
+  ExportReport::Textured report{ExportResult{}.mesh_glb().string(), fs::file_size(out.mesh_glb()),
+                                ExportResult{}.texture().string(), options.texture_size, ""};
+  if (options.obj) {
+    TexturedMesh in_frame = textured;
+    Mesh geometry = InFrame({textured.positions, textured.normals, {}, textured.triangles}, frame);
+    in_frame.positions = geometry.positions;
+    in_frame.normals = geometry.normals;
+    in_frame.triangles = geometry.triangles;
+    WriteTexturedObj(out.mesh_obj(), in_frame, out.texture().filename().string(), comments);
+    report.obj = ExportResult{}.mesh_obj().string();
+  }
+  return report;
+}
+
+// Extracts the mesh (ChooseMeshOptions) and simplifies it to export.max_triangles; writes mesh.ply in `frame` and
+// the textured files (WriteTextured); returns what the report says of them.
+ExportReport::Mesh WriteMesh(const NerfModel& model, const ExportOptions& options, const DepthSamples& depths,
+                             const OutputFrame& frame, const ExportResult& out, ExportReport::Textured* textured) {
+  const MeshOptions mesh_options = ChooseMeshOptions(model, options, depths);
+  Mesh marched;
+  {
+    Progress progress("export: density", options.resolution, "slices");
+    marched = ExtractMesh(model, mesh_options, [&](size_t n) {
+      progress.Add(static_cast<int64_t>(n));
+      ThrowIfCancelled();
+    });
+  }
+  const SimplifiedMesh simplified =
+      SimplifyMesh(marched, options.max_triangles > 0 ? size_t(options.max_triangles) : marched.triangles.size());
+  const Mesh& mesh = simplified.mesh;
+  const MeshEdges edges = CountEdges(mesh);
   const MeshRegion region = RegionKind(model, options);
   const bool auto_threshold = options.threshold == 0;
   const std::vector<std::string> comments = {
       frame.description,
       format("marching cubes at {}^3 samples of the cube of half size {:.4g} around ({:.4g}, {:.4g}, {:.4g}) "
-             "(normalised; the {}), density threshold {:.4g}{}",
+             "(normalised; the {}), density threshold {:.4g}{}; {} of its {} triangles kept",
              options.resolution, mesh_options.half_size, mesh_options.centre.x(), mesh_options.centre.y(),
              mesh_options.centre.z(), region == MeshRegion::kBox ? "scene box" : "focus region",
-             mesh_options.density_threshold, auto_threshold ? " (from the field)" : "")};
-  WriteMeshPly(out.mesh(), mesh, comments);
-  if (options.obj) WriteMeshObj(out.mesh_obj(), mesh, comments);
+             mesh_options.density_threshold, auto_threshold ? " (from the field)" : "", mesh.triangles.size(),
+             marched.triangles.size())};
+  WriteMeshPly(out.mesh(), InFrame(mesh, frame), comments);
   if (mesh.triangles.empty()) {
     LogWarning(
         format("export: the density never reaches {:.4g} inside the region meshed: the mesh is empty; lower --{}",
                mesh_options.density_threshold, OptionKey(&ExportOptions::threshold)));
+  } else {
+    *textured = WriteTextured(model, options, mesh, frame, comments, out);
   }
   return {ExportResult{}.mesh().string(),
           mesh.positions.size(),
           mesh.triangles.size(),
+          marched.triangles.size(),
+          simplified.error * frame.Scale(),
           edges.watertight(),
           edges.border,
           edges.non_manifold,
@@ -178,6 +238,8 @@ void ExportOptions::Check() const {
   CheckOption(*this, resolution, resolution >= 8 && resolution <= 1024, "must be 8..1024");
   CheckOption(*this, threshold, threshold >= 0 && std::isfinite(threshold), "must be 0 (from the field) or positive");
   CheckOption(*this, points_width, points_width >= 8 && points_width <= 8192, "must be 8..8192");
+  CheckOption(*this, max_triangles, max_triangles >= 0, "must be 0 (all) or positive");
+  CheckOption(*this, texture_size, texture_size >= 64 && texture_size <= 16384, "must be 64..16384");
   CheckOption(*this, points_opacity, points_opacity > 0 && points_opacity <= 1, "must be in (0, 1]");
 }
 
@@ -197,7 +259,7 @@ void ExportStage::Run(StageContext& context) const {
 
   const ExportResult out{context.output_dir};
   ExportReport report;
-  report.mesh = WriteMesh(model, options, depths, frame, out);
+  report.mesh = WriteMesh(model, options, depths, frame, out, &report.textured);
   report.frame = options.frame;
   WriteCameras(out.cameras(), dataset, frame, !corrections.empty());
   report.cameras = {ExportResult{}.cameras().string(), dataset.views.size(), !corrections.empty()};

@@ -20,7 +20,9 @@ struct ExportOptions {
   int resolution = 256;                  // density samples along each side of the scene box
   double threshold = 0;                  // surface density (1 / normalised unit); 0: from the field (SurfaceThreshold)
   FrameKind frame = FrameKind::kSource;  // the files' coordinates
-  bool obj = false;                      // also write mesh.obj
+  bool obj = false;                      // also write mesh.obj (textured, with mesh.mtl)
+  int max_triangles = 200000;            // the mesh simplified to at most this many; 0: as marching cubes made it
+  int texture_size = 2048;               // the side of the textured mesh's texture
   bool points = true;                    // write points.ply
   int points_width = 128;        // the training views are rendered this wide for the point cloud (at most 2 M pixels)
   double points_opacity = 0.95;  // pixels at least this opaque give points
@@ -37,7 +39,10 @@ struct ExportOptions {
     v("frame", frame,
       "coordinates of the files: source (COLMAP's world, or the dataset's) or normalized (the "
       "training frame)");
-    v("obj", obj, "also write the mesh as mesh.obj");
+    v("obj", obj, "also write the textured mesh as mesh.obj (with mesh.mtl and mesh_texture.jpg)");
+    v("max_triangles", max_triangles,
+      "the mesh is simplified (edge collapses) to at most this many triangles; 0: keep every one", "triangles");
+    v("texture_size", texture_size, "side of the square texture of mesh.glb (and mesh.obj)", "pixels");
     v("points", points, "write points.ply, a coloured point cloud from the rendered depth of the training views");
     v("points_width", points_width,
       "width the training views are rendered at for the point cloud (narrower beyond 2 M pixels in all)", "pixels");
@@ -52,8 +57,9 @@ struct ExportOptions {
 
 class ExportStage : public StageOf<ExportResult> {
  public:
-  // 5: the point cloud rendered at most 2 M pixels; 6: at the median depth (the splat stage's renders)
-  int format_version() const override { return 6; }
+  // 5: the point cloud rendered at most 2 M pixels; 6: at the median depth (the splat stage's renders); 7: the mesh
+  // simplified, mesh.glb and its texture
+  int format_version() const override { return 7; }
   std::vector<std::string> upstream() const override { return {PosesResult::kId.name, TrainResult::kId.name}; }
   void Run(StageContext& context) const override;
 };

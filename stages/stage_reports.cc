@@ -529,6 +529,8 @@ void Describe(S& s, ExportReport::Mesh& mesh) {
   s("file", mesh.file);
   s("vertices", mesh.vertices);
   s("triangles", mesh.triangles);
+  s("marched_triangles", mesh.marched_triangles);
+  s("simplification_error", mesh.simplification_error);
   s("watertight", mesh.watertight);
   s("border_edges", mesh.border_edges);
   s("non_manifold_edges", mesh.non_manifold_edges);
@@ -541,6 +543,15 @@ void Describe(S& s, ExportReport::Mesh& mesh) {
     region("centre", mesh.centre);
     region("half_size", mesh.half_size);
   });
+}
+
+template <class S>
+void Describe(S& s, ExportReport::Textured& textured) {
+  s("file", textured.file);
+  s("bytes", textured.bytes);
+  s("texture", textured.texture);
+  s("texture_size", textured.texture_size);
+  s("obj", textured.obj);
 }
 
 template <class S>
@@ -559,6 +570,7 @@ void Describe(S& s, ExportedPoints& points) {
 template <class S>
 void Describe(S& s, ExportReport& report) {
   s("mesh", report.mesh);
+  s("textured", report.textured);
   s("frame", report.frame);
   s("cameras", report.cameras);
   s("points", report.points);

@@ -266,6 +266,8 @@ struct ExportReport {
   struct Mesh {
     std::string file;
     size_t vertices = 0, triangles = 0;
+    size_t marched_triangles = 0;     // before the simplification to export.max_triangles
+    double simplification_error = 0;  // the farthest the simplification moved the surface (the file's units)
     bool watertight = false;
     size_t border_edges = 0, non_manifold_edges = 0, misoriented_edges = 0;
     int resolution = 0;
@@ -275,6 +277,14 @@ struct ExportReport {
     std::array<double, 3> centre{};
     double half_size = 1;
   } mesh;
+  // The same surface textured: mesh.glb (upright, glTF's +Y up), and mesh.obj with its .mtl when asked.
+  struct Textured {
+    std::string file;
+    size_t bytes = 0;
+    std::string texture;  // the texture image (JPEG)
+    int texture_size = 0;
+    std::string obj;  // empty without export.obj
+  } textured;
   FrameKind frame = FrameKind::kSource;
   struct Cameras {
     std::string file;

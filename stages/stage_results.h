@@ -89,6 +89,9 @@ struct ExportResult {
   std::filesystem::path dir;
   std::filesystem::path mesh() const { return dir / "mesh.ply"; }
   std::filesystem::path mesh_obj() const { return dir / "mesh.obj"; }
+  std::filesystem::path mesh_mtl() const { return dir / "mesh.mtl"; }
+  std::filesystem::path mesh_glb() const { return dir / "mesh.glb"; }
+  std::filesystem::path texture() const { return dir / "mesh_texture.jpg"; }
   std::filesystem::path points() const { return dir / "points.ply"; }
   std::filesystem::path cameras() const { return dir / "transforms.json"; }
   std::filesystem::path report() const { return dir / "export_report.json"; }

@@ -18,6 +18,7 @@
 #include "base/file_util.h"
 #include "base/float_image.h"
 #include "base/format.h"
+#include "base/image_io.h"
 #include "formats/dataset_import.h"
 #include "formats/mesh_io.h"
 #include "formats/ply.h"
@@ -264,6 +265,20 @@ TEST_CASE("export stage: mesh and point cloud open in Assimp, finite, in the sou
     }
     for (unsigned f = 0; f < mesh->mNumFaces; ++f) REQUIRE(mesh->mFaces[f].mNumIndices == 3);
     if (normalized.empty()) normalized.assign(mesh->mVertices, mesh->mVertices + mesh->mNumVertices);
+  }
+  {
+    // The textured mesh: mesh.glb with its texture inside, mesh.obj with mesh.mtl naming the texture beside it.
+    CHECK(report["mesh"]["marched_triangles"].get<size_t>() >= report["mesh"]["triangles"].get<size_t>());
+    CHECK(report["textured"]["bytes"].get<size_t>() == fs::file_size(out / "mesh.glb"));
+    Assimp::Importer importer;
+    const aiScene* scene = ReadWithAssimp(importer, out / "mesh.glb");
+    REQUIRE(scene->mNumMeshes == 1);
+    CHECK(scene->mMeshes[0]->mNumFaces == report["mesh"]["triangles"].get<size_t>());
+    CHECK(scene->mMeshes[0]->HasTextureCoords(0));
+    CHECK(scene->mNumTextures == 1);
+    CHECK(ReadText(out / "mesh.obj").find("mtllib mesh.mtl") != std::string::npos);
+    CHECK(ReadText(out / "mesh.mtl").find("map_Kd mesh_texture.jpg") != std::string::npos);
+    CHECK(ReadImage(out / "mesh_texture.jpg").ok());
   }
   {
     Assimp::Importer importer;

@@ -132,8 +132,9 @@ PathReport SomePathReport() {
 
 ExportReport SomeExportReport() {
   ExportReport report;
-  report.mesh = {"mesh.ply",          1000, 1990, false, 4, 1, 0, 256, 21.5, true, MeshRegion::kFocus,
+  report.mesh = {"mesh.ply",          1000, 1990, 40000, 0.0125, false, 4, 1, 0, 256, 21.5, true, MeshRegion::kFocus,
                  {0.125, -0.25, 0.5}, 0.375};
+  report.textured = {"mesh.glb", 123456, "mesh_texture.jpg", 1024, ""};
   report.frame = FrameKind::kSource;
   report.cameras = {"transforms.json", 50, true};
   report.points = ExportedPoints{"points.ply", 12345};

@@ -1,5 +1,6 @@
-// The splat files and the viewer page against independent readers: splat-transform (PlayCanvas's splat tool, from
-// npm) reads our standard and compressed PLYs and our SPZ to the values we wrote, and headless Chromium shows
+// The splat files, the textured mesh and the viewer page against independent readers: splat-transform (PlayCanvas's
+// splat tool, from npm) reads our standard and compressed PLYs and our SPZ to the values we wrote, Khronos's
+// glTF-Validator finds nothing wrong in the export's mesh.glb, and headless Chromium shows
 // viewer.html with Spark: the frame it draws from a camera matches our CPU rasterizer's render of that camera, a
 // drag moves the view, and the page asks the network for nothing.
 
@@ -182,6 +183,28 @@ TEST_CASE("viewer.html in headless Chromium draws what our rasterizer renders, m
     CHECK(result["psnr"].get<double>() >= 25);
     CHECK(result["drag_changed_picture"] == true);
   }
+}
+
+TEST_CASE("glTF-Validator finds no error and no warning in the export's mesh.glb", "[viewer]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(150);
+  config.Set("export.threshold", 2.0, "test");  // a young field's densities are low
+  config.Set("export.max_triangles", 3000, "test");
+  config.Set("export.texture_size", 512, "test");
+  setup.runner.Run(setup.workspace, config, Until("export"));
+  const fs::path glb = setup.dir / "ws" / "50_export" / "mesh.glb";
+  std::string output;
+  const int status = RunCommand({P2N_NODE, P2N_NODE_DIR "/gltf_check.mjs", glb.string()}, &output);
+  INFO(output);
+  REQUIRE(status == 0);
+  const nlohmann::json result = nlohmann::json::parse(output.substr(output.find('{')));
+  CHECK(result["errors"] == 0);
+  CHECK(result["warnings"] == 0);
+  const nlohmann::json& info = result["info"];
+  const size_t triangles = info["totalTriangleCount"];
+  CHECK((triangles > 100 && triangles <= 3000));
+  CHECK(info["hasTextures"] == true);
+  CHECK(info["resources"][1]["image"]["width"] == 512);
 }
 
 }  // namespace p2n::testing
