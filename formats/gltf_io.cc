@@ -8,6 +8,7 @@
 #include "base/errors.h"
 #include "base/file_util.h"
 #include "base/format.h"
+#include "base/image_io.h"
 
 namespace p2n {
 namespace {
@@ -84,6 +85,16 @@ int AddMaterial(tinygltf::Model* model, const std::string& texture_jpeg) {
 }
 
 }  // namespace
+
+void WriteTextureJpeg(const TexturedMesh& mesh, const std::filesystem::path& path) {
+  OIIO::ImageSpec spec(mesh.texture_size, mesh.texture_size, 3, OIIO::TypeDesc::UINT8);
+  spec.attribute("Compression", "jpeg:95");
+  spec.attribute("jpeg:subsampling", "4:4:4");
+  const OIIO::ImageBuf image(spec, const_cast<uint8_t*>(mesh.texture.data()));
+  if (const std::string error = WriteImage(image, path); !error.empty()) {
+    throw UserError(format("{}: {}", path.string(), error));
+  }
+}
 
 void WriteMeshGlb(const std::filesystem::path& path, const TexturedMesh& mesh, const std::string& texture_jpeg,
                   const std::string& generator) {

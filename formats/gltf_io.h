@@ -11,6 +11,10 @@
 
 namespace p2n {
 
+// The mesh's texture as a JPEG file (quality 95, colour at full resolution: the charts' edges stay apart); UserError
+// naming the file when it cannot be written.
+void WriteTextureJpeg(const TexturedMesh& mesh, const std::filesystem::path& path);
+
 // `texture_jpeg`: the texture as a JPEG file's bytes. `generator` names what wrote it (the asset's generator).
 // UserError naming the file when it cannot be written.
 void WriteMeshGlb(const std::filesystem::path& path, const TexturedMesh& mesh, const std::string& texture_jpeg,

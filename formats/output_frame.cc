@@ -55,4 +55,14 @@ OutputFrame MakeOutputFrame(FrameKind kind, const ImportedDataset& poses) {
   return out;
 }
 
+OutputFrame UprightFrame(const OutputFrame& frame) {
+  OutputFrame out;
+  out.kind = frame.kind;
+  out.rotation << 1, 0, 0, 0, 0, 1, 0, -1, 0;
+  out.rotation *= frame.Scale();
+  out.description = "frame: upright (glTF's: +Y up, the normalised frame turned, at the scale of the " +
+                    std::string(EnumName(frame.kind)) + " frame, centred on the scene)";
+  return out;
+}
+
 }  // namespace p2n

@@ -42,4 +42,8 @@ struct OutputFrame {
 // LoadTransformsJson); UserError naming the file when that cannot be inverted.
 OutputFrame MakeOutputFrame(FrameKind kind, const ImportedDataset& poses);
 
+// glTF's frame for the same scene: the normalised frame (+Z up) turned so that +Y is up, at the scale of `frame`
+// (metres where that is in metres), its origin the scene's centre.
+OutputFrame UprightFrame(const OutputFrame& frame);
+
 }  // namespace p2n

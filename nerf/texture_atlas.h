@@ -1,9 +1,9 @@
 #pragma once
-// A texture for a mesh: each pair of triangles that share an edge gets a square of the texture (they meet along its
-// diagonal; a triangle without a partner takes half a square), squares sized by the area they cover and packed in
-// rows; each texel is coloured by what a function says of the surface point it stands for. Every triangle's
-// corners sit on texel centres, so that bilinear filtering never reads another square's texels (the texture is
-// meant to be sampled without mipmaps).
+// A texture for a mesh: the surface cut into charts (connected triangles facing within 45 degrees of the first one),
+// each laid flat by projecting it along that direction, the charts packed in rows at the one scale (texels per
+// unit) that fills the texture; each texel a triangle covers is coloured by what a function says of the surface
+// point it stands for, and the texels round each chart repeat its edge (a gutter of kGutter texels) so that
+// filtering and multisampling near the edges read the chart's own colours.
 
 #include <array>
 #include <cstdint>
@@ -18,8 +18,7 @@ namespace p2n {
 using SurfaceColourFunction = std::function<std::vector<std::array<uint8_t, 3>>(
     const std::vector<Eigen::Vector3f>& points, const std::vector<Eigen::Vector3f>& normals)>;
 
-// `mesh` (with normals) textured in a `texture_size` square, the largest squares that fit. UserError when the mesh
-// has too many triangles for the texture (more than about texture_size^2 / 8).
+// `mesh` (with normals) textured in a `texture_size` square. UserError when its charts cannot all fit.
 TexturedMesh BakeTexture(const Mesh& mesh, int texture_size, const SurfaceColourFunction& colour);
 
 }  // namespace p2n

@@ -8,7 +8,6 @@
 #include "base/errors.h"
 #include "base/file_util.h"
 #include "base/format.h"
-#include "base/image_io.h"
 #include "formats/dataset_import.h"
 #include "formats/gltf_io.h"
 #include "formats/mesh_io.h"
@@ -137,14 +136,11 @@ Mesh InFrame(Mesh mesh, const OutputFrame& frame) {
   return mesh;
 }
 
-// glTF's frame: the normalised one (+Z up) turned so that +Y is up, in the units of `frame` (COLMAP's or the
-// dataset's; metres where they are), centred on the scene.
+// The textured mesh in glTF's frame (UprightFrame).
 TexturedMesh Upright(TexturedMesh mesh, const OutputFrame& frame) {
-  Eigen::Matrix3f turn;
-  turn << 1, 0, 0, 0, 0, 1, 0, -1, 0;
-  const float scale = static_cast<float>(frame.Scale());
-  for (Eigen::Vector3f& p : mesh.positions) p = scale * (turn * p);
-  for (Eigen::Vector3f& n : mesh.normals) n = turn * n;
+  const OutputFrame upright = UprightFrame(frame);
+  for (Eigen::Vector3f& p : mesh.positions) p = upright.Point(p);
+  for (Eigen::Vector3f& n : mesh.normals) n = upright.Direction(n);
   return mesh;
 }
 
@@ -158,12 +154,7 @@ ExportReport::Textured WriteTextured(const NerfModel& model, const ExportOptions
     return SurfaceColours(model, points, normals);
   });
   progress.Add(1);
-  OIIO::ImageSpec spec(textured.texture_size, textured.texture_size, 3, OIIO::TypeDesc::UINT8);
-  spec.attribute("Compression", "jpeg:95");
-  OIIO::ImageBuf texture(spec, const_cast<uint8_t*>(textured.texture.data()));
-  if (const std::string error = WriteImage(texture, out.texture()); !error.empty()) {
-    throw UserError(format("{}: {}", out.texture().string(), error));
-  }
+  WriteTextureJpeg(textured, out.texture());
   WriteMeshGlb(out.mesh_glb(), Upright(textured, frame), ReadTextFile(out.texture()),
                "photo2nerf " + std::string(kVersion));
   ExportReport::Textured report{ExportResult{}.mesh_glb().string(), fs::file_size(out.mesh_glb()),

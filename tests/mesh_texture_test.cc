@@ -1,6 +1,7 @@
 // The mesh made ready for other tools, on a sphere whose surface and colour are known: simplified to a triangle
-// budget it stays closed and on the sphere; textured, every texel belongs to one triangle (or the diagonal two of a
-// square share) and the texture seen through the texture coordinates gives the colour the field gives there.
+// budget it stays closed and on the sphere; textured, no two charts share a texel (only neighbouring triangles of
+// one chart do, along their edge) and the texture seen through the texture coordinates gives the colour the field
+// gives there.
 
 #include <catch2/catch.hpp>
 
@@ -73,8 +74,7 @@ TEST_CASE("simplified mesh: within the budget, still closed, on the sphere, its 
   CHECK(SimplifyMesh(mesh, 5000).mesh.triangles.size() == mesh.triangles.size());  // under the budget: as it is
 }
 
-TEST_CASE("texture: squares apart, each texel the colour of its surface point, seen through the coordinates",
-          "[mesh]") {
+TEST_CASE("texture: charts apart, each texel the colour of its surface point, seen through the coordinates", "[mesh]") {
   const NerfModel model = SphereModel();
   const Mesh mesh = SimplifyMesh(MarchedSphere(64), 3000).mesh;
   const TexturedMesh textured = BakeTexture(
@@ -83,8 +83,8 @@ TEST_CASE("texture: squares apart, each texel the colour of its surface point, s
   REQUIRE(textured.uvs.size() == textured.positions.size());
   CHECK(SignedVolume(textured.positions, textured.triangles) == Approx(SignedVolume(mesh.positions, mesh.triangles)));
 
-  // Texel centres inside each triangle's texture coordinates: one triangle's, or the two of a square's diagonal
-  // (which share two corners' positions).
+  // Texel centres inside each triangle's texture coordinates: one triangle's, or those on the edge two neighbours
+  // of a chart share (two corners' positions in common).
   const int n = textured.texture_size;
   std::map<size_t, size_t> owner;
   size_t shared = 0;
@@ -100,12 +100,13 @@ TEST_CASE("texture: squares apart, each texel the colour of its surface point, s
     };
     const float area = edge(uv[0], uv[1], uv[2]);
     REQUIRE(area != 0);
-    for (int y = int(uv[0].y()) - 8; y < int(uv[0].y()) + 8; ++y) {
-      for (int x = int(uv[0].x()) - 8; x < int(uv[0].x()) + 8; ++x) {
+    const Eigen::Vector2f low = uv[0].cwiseMin(uv[1]).cwiseMin(uv[2]), high = uv[0].cwiseMax(uv[1]).cwiseMax(uv[2]);
+    for (int y = int(low.y()); y <= int(high.y()); ++y) {
+      for (int x = int(low.x()); x <= int(high.x()); ++x) {
         const Eigen::Vector2f p(x + 0.5f, y + 0.5f);
         bool inside = true;
         for (int e = 0; e < 3; ++e) inside &= edge(uv[e], uv[(e + 1) % 3], p) * area >= -1e-3f * std::abs(area);
-        if (!inside || x < 0 || y < 0) continue;
+        if (!inside) continue;
         const auto [it, first] = owner.emplace(size_t(y) * n + x, t);
         if (first) continue;
         int common = 0;
@@ -134,11 +135,11 @@ TEST_CASE("texture: squares apart, each texel the colour of its surface point, s
 TEST_CASE("texture: too many triangles for the texture is an error that says what to change", "[mesh]") {
   const Mesh mesh = SimplifyMesh(MarchedSphere(48), 3000).mesh;
   CHECK_THROWS_AS(
-      BakeTexture(mesh, 64,
+      BakeTexture(mesh, 16,
                   [](const auto& points, const auto&) { return std::vector<std::array<uint8_t, 3>>(points.size()); }),
       UserError);
   CHECK_THROWS_WITH(
-      BakeTexture(mesh, 64,
+      BakeTexture(mesh, 16,
                   [](const auto& points, const auto&) { return std::vector<std::array<uint8_t, 3>>(points.size()); }),
       Catch::Contains("export.texture_size") && Catch::Contains("export.max_triangles"));
 }

@@ -1,6 +1,7 @@
 // The splat files, the textured mesh and the viewer page against independent readers: splat-transform (PlayCanvas's
 // splat tool, from npm) reads our standard and compressed PLYs and our SPZ to the values we wrote, Khronos's
-// glTF-Validator finds nothing wrong in the export's mesh.glb, and headless Chromium shows
+// glTF-Validator finds nothing wrong in the export's mesh.glb, three.js draws a textured sphere as it is, and
+// headless Chromium shows
 // viewer.html with Spark: the frame it draws from a camera matches our CPU rasterizer's render of that camera, a
 // drag moves the view, and the page asks the network for nothing.
 
@@ -14,12 +15,18 @@
 
 #include "base/file_util.h"
 #include "base/float_image.h"
+#include "base/image_io.h"
+#include "formats/gltf_io.h"
+#include "nerf/mesh.h"
+#include "nerf/mesh_simplify.h"
+#include "nerf/texture_atlas.h"
 #include "splat/compressed_ply.h"
 #include "splat/splat_ply.h"
 #include "splat/splat_trainer.h"
 #include "splat/spz.h"
 #include "stage_fixtures.h"
 #include "tests/random_splats.h"
+#include "tests/sphere_field.h"
 #include "viewer/viewer_page.h"
 
 namespace p2n::testing {
@@ -50,6 +57,17 @@ std::vector<size_t> Match(const Gaussians<float>& g, const Gaussians<float>& h) 
     }
   }
   return match;
+}
+
+// An 8-bit RGB file as floats.
+FloatImage LoadRgb(const fs::path& path) {
+  const ReadImageResult read = ReadImage(path);
+  REQUIRE(read.ok());
+  FloatImage image{read.image.spec().width, read.image.spec().height, 3, {}};
+  image.pixels.resize(size_t(3) * image.width * image.height);
+  read.image.get_pixels(OIIO::ROI(0, image.width, 0, image.height, 0, 1, 0, 3), OIIO::TypeDesc::FLOAT,
+                        image.pixels.data());
+  return image;
 }
 
 }  // namespace
@@ -205,6 +223,79 @@ TEST_CASE("glTF-Validator finds no error and no warning in the export's mesh.glb
   CHECK((triangles > 100 && triangles <= 3000));
   CHECK(info["hasTextures"] == true);
   CHECK(info["resources"][1]["image"]["width"] == 512);
+}
+
+TEST_CASE("three.js draws our textured sphere from a camera as the sphere looks from there", "[viewer]") {
+  // The sphere of radius 0.6 whose colour seen along direction d is (1 - d) / 2, meshed, simplified and textured.
+  const NerfModel model = SphereModel();
+  MeshOptions options;
+  options.resolution = 96;
+  options.density_threshold = kThreshold;
+  const Mesh mesh = SimplifyMesh(ExtractMesh(model, options), 20000).mesh;
+  const TempDir dir;
+  const TexturedMesh textured = BakeTexture(
+      mesh, 1024, [&](const auto& points, const auto& normals) { return SurfaceColours(model, points, normals); });
+  WriteTextureJpeg(textured, dir / "t.jpg");
+  WriteMeshGlb(dir / "sphere.glb", textured, ReadText(dir / "t.jpg"), "test");
+
+  // A camera 2 units off, looking at the centre from below, its principal point off the image's centre.
+  PinholeCamera camera;
+  camera.width = 160, camera.height = 120, camera.fx = camera.fy = 150, camera.cx = 84, camera.cy = 57;
+  const Eigen::Vector3d eye(0.3, -1.9, -0.6), forward = -eye.normalized();
+  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized(), up = right.cross(forward);
+  camera.world_from_cam.setIdentity();
+  camera.world_from_cam.block<3, 3>(0, 0) << right, up, -forward;  // OpenGL axes: looking down -z
+  camera.world_from_cam.block<3, 1>(0, 3) = eye;
+  const Eigen::Matrix4d& pose = camera.world_from_cam;
+  const nlohmann::json setup = {{"background", {0.2, 0.3, 0.4}},
+                                {"near", 0.1},
+                                {"far", 10},
+                                {"cameras",
+                                 {{{"width", camera.width},
+                                   {"height", camera.height},
+                                   {"fx", camera.fx},
+                                   {"fy", camera.fy},
+                                   {"cx", camera.cx},
+                                   {"cy", camera.cy},
+                                   {"pose", std::vector<double>(pose.data(), pose.data() + 16)}}}}};
+  WriteJsonAtomic(dir / "cameras.json", setup);
+  std::string output;
+  const int status = RunCommand({P2N_NODE, P2N_NODE_DIR "/mesh_check.mjs", (dir / "sphere.glb").string(),
+                                 (dir / "cameras.json").string(), dir.path().string()},
+                                &output);
+  INFO(output);
+  REQUIRE(status == 0);
+  const nlohmann::json result = nlohmann::json::parse(output.substr(output.rfind('{')));
+  CHECK(result["errors"].empty());
+  const FloatImage drawn = LoadRgb(dir / "0.png");
+  REQUIRE((drawn.width == camera.width && drawn.height == camera.height));
+
+  // The analytic picture: each pixel's ray meets the sphere or shows the background. Where the sphere is seen
+  // squarely (away from its outline, which the mesh's chords and antialiasing blur), within a level or two.
+  FloatImage expected{camera.width, camera.height, 3, std::vector<float>(size_t(3) * camera.width * camera.height)};
+  double error = 0;
+  size_t inside = 0;
+  for (int y = 0; y < camera.height; ++y) {
+    for (int x = 0; x < camera.width; ++x) {
+      const Ray ray = CameraRay(camera, x + 0.5, y + 0.5);
+      const double b = ray.origin.dot(ray.direction), c = ray.origin.squaredNorm() - kRadius * kRadius;
+      const double disc = b * b - c;
+      const size_t i = 3 * (size_t(y) * camera.width + x);
+      Eigen::Vector3d colour(0.2, 0.3, 0.4);
+      if (disc > 0) {
+        const Eigen::Vector3d normal = (ray.origin + (-b - std::sqrt(disc)) * ray.direction).normalized();
+        colour = (Eigen::Vector3d::Ones() + normal) / 2;
+        if (-normal.dot(ray.direction) > 0.4) {
+          for (int k = 0; k < 3; ++k) error += std::abs(drawn.pixels[i + k] - colour[k]) / 3;
+          ++inside;
+        }
+      }
+      for (int k = 0; k < 3; ++k) expected.pixels[i + k] = static_cast<float>(colour[k]);
+    }
+  }
+  REQUIRE(inside > 3000);
+  CHECK(error / inside * 255 <= 2);  // levels, on average
+  CHECK(Psnr(drawn, expected) >= 33);
 }
 
 }  // namespace p2n::testing
