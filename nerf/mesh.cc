@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <stdexcept>
@@ -24,13 +25,6 @@ constexpr size_t kBatch = 4096;
 constexpr size_t kMinCubePoints = 100;  // FitCube: fewer points leave the cube as it is
 constexpr double kCubeQuantile = 0.05;  // the cube spans these quantiles of the points along each axis ...
 constexpr double kCubeMargin = 1.2;     // ... its longest side widened by this factor
-
-// The centre of lattice cell (i, j, k) of n per side of the options' box (fractional indices interpolate).
-Eigen::Vector3d LatticePoint(const MeshOptions& options, double i, double j, double k) {
-  const double spacing = 2.0 / options.resolution;
-  const Eigen::Vector3d unit(-1 + (i + 0.5) * spacing, -1 + (j + 0.5) * spacing, -1 + (k + 0.5) * spacing);
-  return options.centre + options.half_size * unit;
-}
 
 // The level set threshold - density (negative inside) on the lattice, sampled slice by slice; empty space is
 // left to the grid's background value (density 0).
@@ -116,7 +110,24 @@ void Shade(const NerfModel& model, double h, Mesh* mesh) {
   mesh->colours = SurfaceColours(model, mesh->positions, mesh->normals);
 }
 
+// Vertex normals from the triangles around each vertex (weighted by their area), pointing out.
+void NormalsFromTriangles(Mesh* mesh) {
+  mesh->normals.assign(mesh->positions.size(), Eigen::Vector3f::Zero());
+  for (const auto& t : mesh->triangles) {
+    const Eigen::Vector3f& a = mesh->positions[t[0]];
+    const Eigen::Vector3f area = (mesh->positions[t[1]] - a).cross(mesh->positions[t[2]] - a);
+    for (const uint32_t v : t) mesh->normals[v] += area;
+  }
+  for (Eigen::Vector3f& n : mesh->normals) n = n.norm() > 0 ? n.normalized() : Eigen::Vector3f::UnitZ();
+}
+
 }  // namespace
+
+Eigen::Vector3d LatticePoint(const MeshOptions& options, double i, double j, double k) {
+  const double spacing = 2.0 / options.resolution;
+  const Eigen::Vector3d unit(-1 + (i + 0.5) * spacing, -1 + (j + 0.5) * spacing, -1 + (k + 0.5) * spacing);
+  return options.centre + options.half_size * unit;
+}
 
 std::vector<std::array<uint8_t, 3>> SurfaceColours(const NerfModel& model, const std::vector<Eigen::Vector3f>& points,
                                                    const std::vector<Eigen::Vector3f>& normals) {
@@ -190,6 +201,63 @@ Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options,
   const openvdb::FloatGrid::Ptr grid = SampleLevelSet(model, options, on_slices_done);
   Mesh mesh = Polygonize(*grid, options);
   Shade(model, 0.1 * 2.0 * options.half_size / options.resolution, &mesh);  // a tenth of a cell
+  return mesh;
+}
+
+Mesh WithTriangles(const Mesh& mesh, const std::vector<std::array<uint32_t, 3>>& triangles) {
+  std::vector<uint32_t> renumbered(mesh.positions.size(), std::numeric_limits<uint32_t>::max());
+  Mesh out;
+  for (const auto& triangle : triangles) {
+    std::array<uint32_t, 3>& corners = out.triangles.emplace_back();
+    for (int c = 0; c < 3; ++c) {
+      uint32_t& to = renumbered[triangle[c]];
+      if (to == std::numeric_limits<uint32_t>::max()) {
+        to = static_cast<uint32_t>(out.positions.size());
+        out.positions.push_back(mesh.positions[triangle[c]]);
+        if (!mesh.normals.empty()) out.normals.push_back(mesh.normals[triangle[c]]);
+        if (!mesh.colours.empty()) out.colours.push_back(mesh.colours[triangle[c]]);
+      }
+      corners[c] = to;
+    }
+  }
+  return out;
+}
+
+Mesh ExtractFusedSurface(const NerfModel& model, const MeshOptions& options, const std::vector<float>& level_set) {
+  const int n = options.resolution;
+  openvdb::initialize();
+  openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(1.0f);
+  openvdb::FloatGrid::Accessor accessor = grid->getAccessor();
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      for (int k = 0; k < n; ++k) {
+        const float value = level_set[(size_t(i) * n + j) * n + k];
+        if (value != 1.0f) accessor.setValue(openvdb::Coord(i, j, k), value);
+      }
+    }
+  }
+  Mesh mesh = Polygonize(*grid, options);
+  // A triangle is of the surface where its cell lies inside the lattice (not a cap on the cube's faces) and one of
+  // the cell's corners is near a surface some view saw (not a step between saturated values).
+  std::vector<std::array<uint32_t, 3>> kept;
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3f centroid = (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3;
+    // The lattice cell it lies in: LatticePoint inverted.
+    const Eigen::Vector3d cell =
+        ((centroid.cast<double>() - options.centre) / options.half_size + Eigen::Vector3d::Ones()) * n / 2.0 -
+        Eigen::Vector3d::Constant(0.5);
+    const int i = int(std::floor(cell.x())), j = int(std::floor(cell.y())), k = int(std::floor(cell.z()));
+    if (i < 0 || j < 0 || k < 0 || i + 1 >= n || j + 1 >= n || k + 1 >= n) continue;
+    bool near = false;
+    for (int corner = 0; corner < 8 && !near; ++corner) {
+      near = std::abs(level_set[(size_t(i + (corner & 1)) * n + j + (corner >> 1 & 1)) * n + k + (corner >> 2 & 1)]) <
+             1.0f;
+    }
+    if (near) kept.push_back(t);
+  }
+  mesh = WithTriangles(mesh, kept);
+  NormalsFromTriangles(&mesh);
+  mesh.colours = SurfaceColours(model, mesh.positions, mesh.normals);
   return mesh;
 }
 

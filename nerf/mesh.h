@@ -23,6 +23,16 @@ struct EnumNames<MeshRegion> {
       {MeshRegion::kAuto, "auto"}, {MeshRegion::kBox, "box"}, {MeshRegion::kFocus, "focus"}};
 };
 
+// Where the mesh's surface is (export.surface): where the density crosses a threshold, or where the training views'
+// rendered depths agree (nerf/depth_fusion.h); auto: by the scene's kind (the export stage's
+// SurfaceKind).
+enum class MeshSurface { kAuto, kDensity, kDepths };
+template <>
+struct EnumNames<MeshSurface> {
+  static constexpr std::pair<MeshSurface, const char*> kValues[] = {
+      {MeshSurface::kAuto, "auto"}, {MeshSurface::kDensity, "density"}, {MeshSurface::kDepths, "depths"}};
+};
+
 struct MeshOptions {
   int resolution = 256;          // density samples along each side of the box
   float density_threshold = 25;  // the surface: where the density (1 / world unit) crosses this
@@ -55,6 +65,20 @@ float SurfaceThreshold(const NerfModel& model, const std::vector<Eigen::Vector3d
 // sampled (resolution in all), from TBB's threads but never two calls at once.
 Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options,
                  const std::function<void(size_t)>& on_slices_done = {});
+
+// The centre of lattice cell (i, j, k) of the options' cube, `resolution` cells a side (fractional indices
+// interpolate).
+Eigen::Vector3d LatticePoint(const MeshOptions& options, double i, double j, double k);
+
+// The zero crossing of a level set sampled on the options' lattice (value (i * n + j) * n + k at LatticePoint(i, j,
+// k), in [-1, 1], negative inside; FuseDepths's), where every corner of the cell it crosses is below 1 in magnitude:
+// a step between saturated values (behind a surface and seen through or never seen; the cube's edge) is no surface.
+// Normals from the triangles, colours from the field seen from outside.
+Mesh ExtractFusedSurface(const NerfModel& model, const MeshOptions& options, const std::vector<float>& level_set);
+
+// `triangles` (of `mesh`'s vertices) with the vertices they use, renumbered in order of first use, with their
+// normals and colours.
+Mesh WithTriangles(const Mesh& mesh, const std::vector<std::array<uint32_t, 3>>& triangles);
 
 // The field's colour at surface points (normalised frame) seen from outside, along minus their unit normals.
 std::vector<std::array<uint8_t, 3>> SurfaceColours(const NerfModel& model, const std::vector<Eigen::Vector3f>& points,

@@ -2,32 +2,12 @@
 
 #include <meshoptimizer.h>
 
+#include <cstring>
 #include <limits>
 
+#include "nerf/mesh.h"
+
 namespace p2n {
-namespace {
-
-// The vertices `indices` use, renumbered in order of first use.
-Mesh Compact(const Mesh& mesh, const std::vector<uint32_t>& indices) {
-  std::vector<uint32_t> remap(mesh.positions.size(), std::numeric_limits<uint32_t>::max());
-  Mesh out;
-  for (size_t i = 0; i < indices.size(); i += 3) {
-    std::array<uint32_t, 3>& triangle = out.triangles.emplace_back();
-    for (int c = 0; c < 3; ++c) {
-      uint32_t& to = remap[indices[i + c]];
-      if (to == std::numeric_limits<uint32_t>::max()) {
-        to = static_cast<uint32_t>(out.positions.size());
-        out.positions.push_back(mesh.positions[indices[i + c]]);
-        if (!mesh.normals.empty()) out.normals.push_back(mesh.normals[indices[i + c]]);
-        if (!mesh.colours.empty()) out.colours.push_back(mesh.colours[indices[i + c]]);
-      }
-      triangle[c] = to;
-    }
-  }
-  return out;
-}
-
-}  // namespace
 
 SimplifiedMesh SimplifyMesh(const Mesh& mesh, size_t max_triangles) {
   SimplifiedMesh result;
@@ -50,7 +30,9 @@ SimplifiedMesh SimplifyMesh(const Mesh& mesh, size_t max_triangles) {
                                        std::numeric_limits<float>::max(), &error));
   }
   result.error = error * meshopt_simplifyScale(positions, count, stride);
-  result.mesh = Compact(mesh, kept);
+  std::vector<std::array<uint32_t, 3>> triangles(kept.size() / 3);
+  std::memcpy(triangles.data(), kept.data(), kept.size() * sizeof(uint32_t));
+  result.mesh = WithTriangles(mesh, triangles);
   return result;
 }
 

@@ -139,6 +139,12 @@ double HitBox(const Vector3d& origin, const Vector3d& direction, const Box& box,
   return t_near;
 }
 
+double BoxDistance(const Vector3d& point, const Box& box) {
+  const Vector3d centre = 0.5 * (box.low + box.high), half = 0.5 * (box.high - box.low);
+  const Vector3d q = (point - centre).cwiseAbs() - half;
+  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+}
+
 Vector3d Shade(const Vector3d& origin, const Vector3d& direction) {
   double best = kNoHit;
   Vector3d normal = Vector3d::UnitZ();
@@ -280,6 +286,57 @@ void WriteSyntheticScene(const SyntheticSceneOptions& options, const std::filesy
   out.precision(17);
   out << truth.dump(2) << "\n";
   if (!out) throw std::runtime_error("cannot write '" + path.string() + "'");
+}
+
+double SyntheticSignedDistance(const Eigen::Vector3d& point) {
+  const Vector3d beyond(std::max(0.0, std::abs(point.x()) - kGroundHalfSize),
+                        std::max(0.0, std::abs(point.y()) - kGroundHalfSize), point.z());
+  double distance = beyond.norm();
+  for (const Sphere& sphere : kSpheres) distance = std::min(distance, (point - sphere.centre).norm() - sphere.radius);
+  for (const Box& box : kBoxes) distance = std::min(distance, BoxDistance(point, box));
+  return distance;
+}
+
+std::vector<Eigen::Vector3d> SyntheticSurfacePoints(double spacing) {
+  std::vector<Vector3d> points;
+  for (const Sphere& sphere : kSpheres) {  // a Fibonacci lattice
+    const int n = static_cast<int>(4 * kPi * sphere.radius * sphere.radius / (spacing * spacing));
+    for (int i = 0; i < n; ++i) {
+      const double z = 1 - (2 * i + 1.0) / n, r = std::sqrt(1 - z * z), angle = i * kPi * (3 - std::sqrt(5.0));
+      const Vector3d p = sphere.centre + sphere.radius * Vector3d(r * std::cos(angle), r * std::sin(angle), z);
+      if (p.z() > 0) points.push_back(p);
+    }
+  }
+  const auto inside_a_box = [](const Vector3d& p) {
+    for (const Box& box : kBoxes) {
+      if (BoxDistance(p, box) < -1e-9) return true;
+    }
+    return false;
+  };
+  for (const Box& box : kBoxes) {  // a grid on each face but the bottom
+    for (int axis = 0; axis < 3; ++axis) {
+      for (const int side : {0, 1}) {
+        if (axis == 2 && side == 0) continue;
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        for (double a = box.low[u] + spacing / 2; a < box.high[u]; a += spacing) {
+          for (double b = box.low[v] + spacing / 2; b < box.high[v]; b += spacing) {
+            Vector3d p;
+            p[axis] = side ? box.high[axis] : box.low[axis];
+            p[u] = a;
+            p[v] = b;
+            points.push_back(p);
+          }
+        }
+      }
+    }
+  }
+  for (double x = -kGroundHalfSize + spacing / 2; x < kGroundHalfSize; x += spacing) {
+    for (double y = -kGroundHalfSize + spacing / 2; y < kGroundHalfSize; y += spacing) {
+      const Vector3d p(x, y, 0);
+      if (!inside_a_box(p + Vector3d(0, 0, 1e-6))) points.push_back(p);
+    }
+  }
+  return points;
 }
 
 }  // namespace p2n

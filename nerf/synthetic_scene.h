@@ -39,6 +39,12 @@ PinholeCamera LookAtCamera(const Eigen::Vector3d& position, const Eigen::Vector3
 std::vector<PinholeCamera> SyntheticCameras(const SyntheticSceneOptions& options);
 // Renders one view (RGB, 8 bits), in parallel over rows.
 OIIO::ImageBuf RenderSyntheticView(const PinholeCamera& camera, int supersampling);
+// The scene's signed distance at `point`: to the nearest surface of its spheres, boxes and ground square (the
+// ground a slab of no thickness), negative inside a sphere or box. Its gradient is the surfaces' outward normal.
+double SyntheticSignedDistance(const Eigen::Vector3d& point);
+// Points about `spacing` apart over every surface a camera can see: the spheres above the ground, the boxes' sides
+// and tops, and the ground outside the boxes.
+std::vector<Eigen::Vector3d> SyntheticSurfacePoints(double spacing);
 // Writes view_000.png ... and ground_truth_cameras.json (transforms.json layout, camera_angle_x, fl_x, fl_y,
 // cx, cy, w, h, frames with file_path and transform_matrix) into `folder`. Throws std::runtime_error naming
 // the file when a write fails.

@@ -13,8 +13,10 @@
 namespace p2n {
 namespace {
 
-constexpr int kGutter = 2;               // texels round each chart repeating its edge
-constexpr float kMinChartCosine = 0.7f;  // a chart's triangles face within 45 degrees of its first one
+constexpr int kGutter = 2;  // texels round each chart repeating its edge
+// A chart's triangles face within 45 degrees of its first one; where a rough surface makes too many charts to fit,
+// within 73 and then 90 degrees (still never turned over when laid flat).
+constexpr float kChartCosines[] = {0.7f, 0.3f, 0.0f};
 constexpr size_t kMaxChartTriangles = 4096;
 
 // Connected triangles laid flat: `axes` rows project a point onto the chart's plane.
@@ -50,7 +52,7 @@ std::vector<std::array<uint32_t, 3>> Neighbours(const Mesh& mesh) {
 }
 
 // Charts grown breadth-first from the first triangle not yet in one.
-std::vector<Chart> GrowCharts(const Mesh& mesh) {
+std::vector<Chart> GrowCharts(const Mesh& mesh, float min_cosine) {
   const std::vector<std::array<uint32_t, 3>> neighbours = Neighbours(mesh);
   std::vector<bool> taken(mesh.triangles.size(), false);
   std::vector<Chart> charts;
@@ -62,8 +64,7 @@ std::vector<Chart> GrowCharts(const Mesh& mesh) {
     chart.triangles.push_back(seed);
     for (size_t next = 0; next < chart.triangles.size() && chart.triangles.size() < kMaxChartTriangles; ++next) {
       for (const uint32_t n : neighbours[chart.triangles[next]]) {
-        if (n >= taken.size() || taken[n] || FaceNormal(mesh, mesh.triangles[n]).dot(normal) < kMinChartCosine)
-          continue;
+        if (n >= taken.size() || taken[n] || FaceNormal(mesh, mesh.triangles[n]).dot(normal) < min_cosine) continue;
         taken[n] = true;
         chart.triangles.push_back(n);
       }
@@ -106,16 +107,11 @@ bool Pack(double scale, int texture_size, std::vector<Chart>* charts) {
   return true;
 }
 
-// The largest scale whose charts fit (bisection); returns it.
-double PackLargest(int texture_size, std::vector<Chart>* charts) {
+// The largest scale at which the charts fit (bisection); false when they do not fit at any.
+bool PackLargest(int texture_size, std::vector<Chart>* charts, double* scale) {
   std::sort(charts->begin(), charts->end(),
             [](const Chart& a, const Chart& b) { return a.high.y() - a.low.y() > b.high.y() - b.low.y(); });
-  if (!Pack(0, texture_size, charts)) {
-    throw UserError(
-        format("a texture of {0} x {0} pixels has no room for the mesh's {1} charts: raise "
-               "export.texture_size or lower export.max_triangles",
-               texture_size, charts->size()));
-  }
+  if (!Pack(0, texture_size, charts)) return false;
   double low = 0, high = 1;
   while (high < 1e12 && Pack(high, texture_size, charts)) high *= 2;
   for (int i = 0; i < 40; ++i) {
@@ -123,7 +119,21 @@ double PackLargest(int texture_size, std::vector<Chart>* charts) {
     (Pack(middle, texture_size, charts) ? low : high) = middle;
   }
   Pack(low, texture_size, charts);
-  return low;
+  *scale = low;
+  return true;
+}
+
+// The mesh's charts, packed at `*scale`: the strictest of kChartCosines that fits. UserError when none does.
+std::vector<Chart> ChartsThatFit(const Mesh& mesh, int texture_size, double* scale) {
+  std::vector<Chart> charts;
+  for (const float cosine : kChartCosines) {
+    charts = GrowCharts(mesh, cosine);
+    if (PackLargest(texture_size, &charts, scale)) return charts;
+  }
+  throw UserError(
+      format("a texture of {0} x {0} pixels has no room for the mesh's {1} charts: raise "
+             "export.texture_size or lower export.max_triangles",
+             texture_size, charts.size()));
 }
 
 // Texels whose centres a triangle covers: their index in the texture, the surface point and normal there.
@@ -212,8 +222,8 @@ void Dilate(int texture_size, std::vector<bool> covered, std::vector<uint8_t>* t
 }  // namespace
 
 TexturedMesh BakeTexture(const Mesh& mesh, int texture_size, const SurfaceColourFunction& colour) {
-  std::vector<Chart> charts = GrowCharts(mesh);
-  const double scale = PackLargest(texture_size, &charts);
+  double scale = 0;
+  const std::vector<Chart> charts = ChartsThatFit(mesh, texture_size, &scale);
   TexturedMesh out;
   out.texture_size = texture_size;
   out.texture.assign(size_t(3) * texture_size * texture_size, 0);

@@ -1,5 +1,6 @@
 #pragma once
-// A texture for a mesh: the surface cut into charts (connected triangles facing within 45 degrees of the first one),
+// A texture for a mesh: the surface cut into charts (connected triangles facing within 45 degrees of the first one,
+// wider where a rough surface makes too many small charts to fit),
 // each laid flat by projecting it along that direction, the charts packed in rows at the one scale (texels per
 // unit) that fills the texture; each texel a triangle covers is coloured by what a function says of the surface
 // point it stands for, and the texels round each chart repeat its edge (a gutter of kGutter texels) so that

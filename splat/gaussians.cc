@@ -44,29 +44,6 @@ void Gaussians<T>::Filter(const std::vector<bool>& keep) {
   });
 }
 
-void ApplySimilarity(const Eigen::Matrix3d& linear, const Eigen::Vector3d& translation, Gaussians<float>* g) {
-  const double determinant = linear.determinant();
-  const double scale = std::cbrt(determinant);
-  const Eigen::Matrix3d rotation = linear / scale;
-  if (!(determinant > 0) || !(rotation * rotation.transpose()).isIdentity(1e-6)) {
-    throw std::invalid_argument("ApplySimilarity: not a rotation times a positive scale");
-  }
-  if (std::any_of(g->sh_rest.begin(), g->sh_rest.end(), [](float v) { return v != 0; })) {
-    throw std::invalid_argument("ApplySimilarity: the higher SH coefficients would need turning");
-  }
-  const Eigen::Quaterniond turn(rotation);
-  const float log_scale = static_cast<float>(std::log(scale));
-  for (size_t i = 0; i < g->size(); ++i) {
-    float* p = &g->positions[3 * i];
-    const Eigen::Vector3d moved = linear * Eigen::Vector3d(p[0], p[1], p[2]) + translation;
-    for (int a = 0; a < 3; ++a) p[a] = static_cast<float>(moved[a]), g->log_scales[3 * i + a] += log_scale;
-    float* q = &g->rotations[4 * i];
-    const Eigen::Quaterniond turned = turn * Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
-    q[0] = static_cast<float>(turned.w()), q[1] = static_cast<float>(turned.x());
-    q[2] = static_cast<float>(turned.y()), q[3] = static_cast<float>(turned.z());
-  }
-}
-
 template <typename T>
 T Sigmoid(T x) {
   return T(1) / (T(1) + std::exp(-x));

@@ -60,11 +60,6 @@ struct Gaussians {
   }
 };
 
-// Moves Gaussians by the similarity x -> linear x + translation (linear: a rotation times a positive scale):
-// means, scales and rotations. Higher SH coefficients would need turning too: std::invalid_argument unless they
-// are all zero (use it on freshly placed Gaussians), as when `linear` is not a similarity of positive determinant.
-void ApplySimilarity(const Eigen::Matrix3d& linear, const Eigen::Vector3d& translation, Gaussians<float>* gaussians);
-
 template <typename T>
 T Sigmoid(T x);
 template <typename T>

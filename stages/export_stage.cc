@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <map>
+#include <optional>
 
 #include "base/errors.h"
 #include "base/file_util.h"
@@ -14,6 +15,7 @@
 #include "formats/output_frame.h"
 #include "formats/ply.h"
 #include "formats/transforms_json.h"
+#include "nerf/depth_fusion.h"
 #include "nerf/mesh.h"
 #include "nerf/mesh_simplify.h"
 #include "nerf/nerf_model.h"
@@ -33,6 +35,9 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr float kFallbackThreshold = 25;  // per normalised unit: what fits lego's surface
+// mesh_preview.glb, the report page's view: about 1.5 MB
+constexpr size_t kPreviewTriangles = 20000;
+constexpr int kPreviewTextureSize = 1024;
 
 // The training views' cameras as the field saw them: corrected where camera refinement moved them.
 void ApplyCameraCorrections(const std::map<std::string, CameraCorrection>& corrections, ImportedDataset* dataset) {
@@ -63,11 +68,19 @@ MeshRegion RegionKind(const NerfModel& model, const ExportOptions& options) {
   return model.space == SceneSpace::kBounded ? MeshRegion::kBox : MeshRegion::kFocus;
 }
 
+// export.surface resolved: the depths fused where a field's floaters and unseen space are (unbounded and
+// forward-facing scenes), the density where the scene is an object in a box (docs/benchmarks.md).
+MeshSurface SurfaceKind(const NerfModel& model, const ExportOptions& options) {
+  if (options.surface != MeshSurface::kAuto) return options.surface;
+  return model.space == SceneSpace::kBounded ? MeshSurface::kDensity : MeshSurface::kDepths;
+}
+
 // Where the training views' rays end (their median depth), where they are opaque.
 struct DepthSamples {
   std::vector<ColouredPoint> points;  // coloured, one per opaque pixel (at most kMaxSmallViewPixels)
   // Every one from the middle half (in width and height) of each view; only for the focus region (FitCube).
   std::vector<Eigen::Vector3d> central;
+  std::shared_ptr<const ViewRenders> views;  // the renders they come from
 };
 
 DepthSamples SampleDepths(const StageContext& context, const fs::path& model_file, const NerfModel& model,
@@ -80,6 +93,7 @@ DepthSamples SampleDepths(const StageContext& context, const fs::path& model_fil
   const std::shared_ptr<const ViewRenders> views_rendered =
       RenderViewsSmall(context, model_file, model, views, options.points_width, "export: point cloud");
   DepthSamples samples;
+  samples.views = views_rendered;
   const bool want_central = RegionKind(model, options) == MeshRegion::kFocus;
   for (size_t v = 0; v < views.size(); ++v) {
     const PinholeCamera& camera = views_rendered->cameras[v];
@@ -126,8 +140,10 @@ MeshOptions ChooseMeshOptions(const NerfModel& model, const ExportOptions& optio
   return mesh;
 }
 
-// The surface in the files' frame: points mapped, normals turned, triangles turned over where the frame mirrors.
-Mesh InFrame(Mesh mesh, const OutputFrame& frame) {
+// The surface (a Mesh or a TexturedMesh) in the files' frame: points mapped, normals turned, triangles turned over
+// where the frame mirrors.
+template <class SomeMesh>
+SomeMesh InFrame(SomeMesh mesh, const OutputFrame& frame) {
   for (Eigen::Vector3f& p : mesh.positions) p = frame.Point(p);
   for (Eigen::Vector3f& n : mesh.normals) n = frame.Direction(n);
   if (frame.rotation.determinant() < 0) {
@@ -136,54 +152,74 @@ Mesh InFrame(Mesh mesh, const OutputFrame& frame) {
   return mesh;
 }
 
-// The textured mesh in glTF's frame (UprightFrame).
-TexturedMesh Upright(TexturedMesh mesh, const OutputFrame& frame) {
-  const OutputFrame upright = UprightFrame(frame);
-  for (Eigen::Vector3f& p : mesh.positions) p = upright.Point(p);
-  for (Eigen::Vector3f& n : mesh.normals) n = upright.Direction(n);
-  return mesh;
+// `surface` textured with the field's colour in a square of `texture_size`: with the texture as JPEG, or none when
+// the texture has no room for the surface's charts (a warning says so).
+std::optional<std::pair<TexturedMesh, std::string>> Bake(const NerfModel& model, const Mesh& surface,
+                                                         int texture_size) {
+  try {
+    TexturedMesh textured = BakeTexture(surface, texture_size, [&](const auto& points, const auto& normals) {
+      return SurfaceColours(model, points, normals);
+    });
+    std::string jpeg = TextureJpeg(textured);
+    return std::pair{std::move(textured), std::move(jpeg)};
+  } catch (const UserError& e) {
+    LogWarning(format("export: no textured mesh: {}", e.what()));
+    return std::nullopt;
+  }
 }
 
-// The simplified surface textured with the field's colour: mesh_texture.jpg, mesh.glb, and mesh.obj with mesh.mtl
-// when asked.
+// The simplified surface textured: mesh_texture.jpg, mesh.glb, mesh_preview.glb (smaller, for the report page),
+// and mesh.obj with mesh.mtl when asked. Nothing when the texture has no room for the surface (Bake).
 ExportReport::Textured WriteTextured(const NerfModel& model, const ExportOptions& options, const Mesh& mesh,
                                      const OutputFrame& frame, const std::vector<std::string>& comments,
                                      const ExportResult& out) {
-  Progress progress("export: texture", 1, "textures");
-  const TexturedMesh textured = BakeTexture(mesh, options.texture_size, [&](const auto& points, const auto& normals) {
-    return SurfaceColours(model, points, normals);
-  });
+  Progress progress("export: texture", 2, "textures");
+  const std::string generator = "photo2nerf " + std::string(kVersion);
+  const auto baked = Bake(model, mesh, options.texture_size);
+  if (!baked) return {};
+  const auto& [textured, jpeg] = *baked;
+  WriteFileAtomic(out.mesh_glb(), MeshGlbBytes(InFrame(textured, UprightFrame(frame)), jpeg, generator));
+  WriteFileAtomic(out.texture(), jpeg);
   progress.Add(1);
-  WriteTextureJpeg(textured, out.texture());
-  WriteMeshGlb(out.mesh_glb(), Upright(textured, frame), ReadTextFile(out.texture()),
-               "photo2nerf " + std::string(kVersion));
+  if (const auto preview = Bake(model, SimplifyMesh(mesh, kPreviewTriangles).mesh,
+                                std::min(options.texture_size, kPreviewTextureSize))) {
+    WriteFileAtomic(out.mesh_preview(),
+                    MeshGlbBytes(InFrame(preview->first, UprightFrame(frame)), preview->second, generator));
+  }
+  progress.Add(1);
   ExportReport::Textured report{ExportResult{}.mesh_glb().string(), fs::file_size(out.mesh_glb()),
                                 ExportResult{}.texture().string(), options.texture_size, ""};
   if (options.obj) {
-    TexturedMesh in_frame = textured;
-    Mesh geometry = InFrame({textured.positions, textured.normals, {}, textured.triangles}, frame);
-    in_frame.positions = geometry.positions;
-    in_frame.normals = geometry.normals;
-    in_frame.triangles = geometry.triangles;
-    WriteTexturedObj(out.mesh_obj(), in_frame, out.texture().filename().string(), comments);
+    WriteTexturedObj(out.mesh_obj(), InFrame(textured, frame), out.texture().filename().string(), comments);
     report.obj = ExportResult{}.mesh_obj().string();
   }
   return report;
 }
 
-// Extracts the mesh (ChooseMeshOptions) and simplifies it to export.max_triangles; writes mesh.ply in `frame` and
-// the textured files (WriteTextured); returns what the report says of them.
+// The surface export.surface chooses, over the cube and at the resolution of `mesh_options`.
+Mesh ExtractSurface(const NerfModel& model, const ExportOptions& options, const MeshOptions& mesh_options,
+                    const DepthSamples& depths) {
+  if (SurfaceKind(model, options) == MeshSurface::kDepths) {
+    std::vector<DepthMap> maps;
+    for (size_t v = 0; v < depths.views->cameras.size(); ++v) {
+      const RenderedView& rendered = depths.views->renders[v];
+      maps.push_back({depths.views->cameras[v], &rendered.depth, &rendered.opacity});
+    }
+    return ExtractFusedSurface(model, mesh_options, FuseDepths(maps, mesh_options, {}));
+  }
+  Progress progress("export: density", options.resolution, "slices");
+  return ExtractMesh(model, mesh_options, [&](size_t n) {
+    progress.Add(static_cast<int64_t>(n));
+    ThrowIfCancelled();
+  });
+}
+
+// Extracts the mesh (ChooseMeshOptions, ExtractSurface) and simplifies it to export.max_triangles; writes mesh.ply
+// in `frame` and the textured files (WriteTextured); returns what the report says of them.
 ExportReport::Mesh WriteMesh(const NerfModel& model, const ExportOptions& options, const DepthSamples& depths,
                              const OutputFrame& frame, const ExportResult& out, ExportReport::Textured* textured) {
   const MeshOptions mesh_options = ChooseMeshOptions(model, options, depths);
-  Mesh marched;
-  {
-    Progress progress("export: density", options.resolution, "slices");
-    marched = ExtractMesh(model, mesh_options, [&](size_t n) {
-      progress.Add(static_cast<int64_t>(n));
-      ThrowIfCancelled();
-    });
-  }
+  const Mesh marched = ExtractSurface(model, options, mesh_options, depths);
   const SimplifiedMesh simplified =
       SimplifyMesh(marched, options.max_triangles > 0 ? size_t(options.max_triangles) : marched.triangles.size());
   const Mesh& mesh = simplified.mesh;
@@ -193,13 +229,18 @@ ExportReport::Mesh WriteMesh(const NerfModel& model, const ExportOptions& option
   const std::vector<std::string> comments = {
       frame.description,
       format("marching cubes at {}^3 samples of the cube of half size {:.4g} around ({:.4g}, {:.4g}, {:.4g}) "
-             "(normalised; the {}), density threshold {:.4g}{}; {} of its {} triangles kept",
+             "(normalised; the {}), {}; {} of its {} triangles kept",
              options.resolution, mesh_options.half_size, mesh_options.centre.x(), mesh_options.centre.y(),
              mesh_options.centre.z(), region == MeshRegion::kBox ? "scene box" : "focus region",
-             mesh_options.density_threshold, auto_threshold ? " (from the field)" : "", mesh.triangles.size(),
-             marched.triangles.size())};
+             SurfaceKind(model, options) == MeshSurface::kDepths
+                 ? std::string("the training views' depths fused")
+                 : format("density threshold {:.4g}{}", mesh_options.density_threshold,
+                          auto_threshold ? " (from the field)" : ""),
+             mesh.triangles.size(), marched.triangles.size())};
   WriteMeshPly(out.mesh(), InFrame(mesh, frame), comments);
-  if (mesh.triangles.empty()) {
+  if (mesh.triangles.empty() && SurfaceKind(model, options) == MeshSurface::kDepths) {
+    LogWarning("export: no training view sees a surface inside the region meshed: the mesh is empty");
+  } else if (mesh.triangles.empty()) {
     LogWarning(
         format("export: the density never reaches {:.4g} inside the region meshed: the mesh is empty; lower --{}",
                mesh_options.density_threshold, OptionKey(&ExportOptions::threshold)));
@@ -220,7 +261,8 @@ ExportReport::Mesh WriteMesh(const NerfModel& model, const ExportOptions& option
           auto_threshold,
           region,
           {mesh_options.centre.x(), mesh_options.centre.y(), mesh_options.centre.z()},
-          mesh_options.half_size};
+          mesh_options.half_size,
+          SurfaceKind(model, options)};
 }
 
 }  // namespace
@@ -245,7 +287,8 @@ void ExportStage::Run(StageContext& context) const {
   const std::map<std::string, CameraCorrection>& corrections = trained.corrections;
   ApplyCameraCorrections(corrections, &dataset);
   DepthSamples depths;
-  if (options.points || options.threshold == 0 || RegionKind(model, options) == MeshRegion::kFocus)
+  if (options.points || options.threshold == 0 || RegionKind(model, options) == MeshRegion::kFocus ||
+      SurfaceKind(model, options) == MeshSurface::kDepths)
     depths = SampleDepths(context, model_file, model, dataset, options);
 
   const ExportResult out{context.output_dir};

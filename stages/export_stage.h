@@ -17,6 +17,7 @@ namespace p2n {
 struct ExportOptions {
   static constexpr const char* kSection = "export";  // its options are export.NAME
 
+  MeshSurface surface = MeshSurface::kAuto;
   int resolution = 256;                  // density samples along each side of the scene box
   double threshold = 0;                  // surface density (1 / normalised unit); 0: from the field (SurfaceThreshold)
   FrameKind frame = FrameKind::kSource;  // the files' coordinates
@@ -30,6 +31,10 @@ struct ExportOptions {
 
   template <class V>
   void Visit(V& v) {
+    v("surface", surface,
+      "where the mesh's surface is: density (where the field's density crosses export.threshold), depths (where "
+      "the training views' rendered depths agree: a fused signed distance), auto: depths for unbounded and "
+      "forward-facing scenes (their floaters carved away), density for bounded ones");
     v("resolution", resolution, "density samples along each side of the scene box (memory and time grow as its cube)",
       "samples");
     v("threshold", threshold,

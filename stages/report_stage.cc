@@ -16,6 +16,7 @@
 #include "stages/splat_stage.h"
 #include "stages/stage_reports.h"
 #include "stages/training_data.h"
+#include "viewer/viewer_page.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -123,11 +124,13 @@ std::string SplatSection(const SplatResult& result, const SplatReport& report,
       "held-out view on the CPU. <a href=\"{}\">splats.ply</a> ({:.1f} MB) is in the standard 3D "
       "Gaussian Splatting layout, {}; SuperSplat, the PlayCanvas and three.js splat viewers open it as it is. "
       "<a href=\"{}\">splats.spz</a> ({:.1f} MB) holds the same splats in Niantic's compact SPZ, for the web (Spark, "
-      "Babylon.js, SuperSplat) and Scaniverse.</p>\n",
+      "Babylon.js, SuperSplat) and Scaniverse; <a href=\"{}\">splats.glb</a> ({:.1f} MB) in glTF with "
+      "KHR_gaussian_splatting, upright (+Y up), for the glTF tools that read it.</p>\n",
       report.splats, report.sh_degree, report.initial_splats, report.init == "sparse" ? "sparse points" : "field",
       report.seconds, report.steps, Number(report.heldout_psnr), Number(report.heldout_ssim, 3),
       Number(train ? train->heldout_psnr : std::nullopt), report.seconds_per_view, Link(result.splats()),
-      report.file_bytes / 1e6, HtmlEscape(report.frame_description), Link(result.spz()), report.spz_bytes / 1e6);
+      report.file_bytes / 1e6, HtmlEscape(report.frame_description), Link(result.spz()), report.spz_bytes / 1e6,
+      Link(result.glb()), report.glb_bytes / 1e6);
   return html;
 }
 
@@ -286,21 +289,44 @@ std::string HeldoutSection(const RenderResult& render, const std::optional<EvalR
   return html;
 }
 
+// The files' size in MB, as the page states it.
+double Megabytes(const fs::path& file) { return fs::exists(file) ? fs::file_size(file) / 1e6 : 0.0; }
+
 std::string ExportSection(const ExportResult& result, const ExportReport& exported) {
   const ExportReport::Mesh& mesh = exported.mesh;
   std::string html = format(
-      "<h2>Exports</h2>\n<p>Mesh <a href=\"{}\">mesh.ply</a>: {} vertices, {} triangles, "
-      "{}watertight (marching cubes at {}^3 over {}, density threshold {:.4g}), in the {} frame.",
-      Link(result.mesh()), mesh.vertices, mesh.triangles, mesh.watertight ? "" : "not ", mesh.resolution,
+      "<h2>Exports</h2>\n<p>Mesh <a href=\"{}\">mesh.ply</a> ({:.1f} MB): {} vertices, {} triangles (simplified from "
+      "{}), {}watertight (marching cubes at {}^3 over {}, {}), in the {} frame.",
+      Link(result.mesh()), Megabytes(result.mesh()), mesh.vertices, mesh.triangles, mesh.marched_triangles,
+      mesh.watertight ? "" : "not ", mesh.resolution,
       mesh.region == MeshRegion::kBox
           ? std::string("the scene box")
           : format("the region the photos look at (a cube of half size {:.3g})", mesh.half_size),
-      mesh.threshold, EnumName(exported.frame));
-  if (exported.points) {
-    html +=
-        format(" Point cloud <a href=\"{}\">points.ply</a>: {} points.", Link(result.points()), exported.points->count);
+      mesh.surface == MeshSurface::kDepths ? std::string("where the training views' depths agree")
+                                           : format("density threshold {:.4g}", mesh.threshold),
+      EnumName(exported.frame));
+  const ExportReport::Textured& textured = exported.textured;
+  if (!textured.file.empty()) {
+    html += format(
+        " Textured, <a href=\"{}\">mesh.glb</a> ({:.1f} MB, its {} x {} texture inside) for Blender, the web, "
+        "Sketchfab and game engines",
+        Link(result.mesh_glb()), Megabytes(result.mesh_glb()), textured.texture_size, textured.texture_size);
+    html += textured.obj.empty() ? "."
+                                 : format("; <a href=\"{}\">mesh.obj</a> ({:.1f} MB) with its material.",
+                                          Link(result.mesh_obj()), Megabytes(result.mesh_obj()));
   }
-  return html + "</p>\n";
+  if (exported.points) {
+    html += format(" Point cloud <a href=\"{}\">points.ply</a> ({:.1f} MB): {} points.", Link(result.points()),
+                   Megabytes(result.points()), exported.points->count);
+  }
+  html += "</p>\n";
+  if (fs::exists(result.mesh_preview())) {
+    html +=
+        "<p class=\"muted\">The textured mesh, simplified for this page: drag to turn it, scroll to zoom, "
+        "right-drag to move it.</p>\n";
+    html += MeshViewHtml(ReadTextFile(result.mesh_preview()), 640, 400);
+  }
+  return html;
 }
 
 }  // namespace

@@ -12,9 +12,12 @@
 #include "formats/ply.h"
 #include "nerf/plot.h"
 #include "nerf/renderer.h"
+#include "photo2nerf/version.h"
 #include "pipeline/cancel.h"
 #include "pipeline/log.h"
 #include "splat/field_init.h"
+#include "splat/similarity.h"
+#include "splat/splat_gltf.h"
 #include "splat/splat_ply.h"
 #include "splat/splat_trainer.h"
 #include "splat/spz.h"
@@ -56,6 +59,14 @@ double SplatTimeBudget(const SplatOptions& options, PresetName train_preset) {
 namespace {
 
 constexpr size_t kPixelsPerSplat = 64;
+
+// The splats (in `frame`) in glTF's frame (UprightFrame: +Y up, at the scale of `frame`), their view-dependent
+// colour turned with them.
+Gaussians<float> UprightSplats(Gaussians<float> splats, const OutputFrame& frame) {
+  const Eigen::Matrix3d linear = UprightFrame(frame).rotation * frame.rotation.inverse();
+  ApplySimilarity(linear, -linear * frame.translation, &splats);
+  return splats;
+}
 
 // The splats' world: the training data with every camera in the output frame (the training views as camera
 // refinement left them), the first Gaussians there, and the scene's extent.
@@ -274,6 +285,10 @@ void SplatStage::Run(StageContext& context) const {
     const std::vector<char> spz = SpzBytes(trainer.gaussians());
     WriteFileAtomic(out.spz(), std::string_view(spz.data(), spz.size()));
   });
+  WriteOrExplain([&] {
+    WriteFileAtomic(out.glb(), SplatGlbBytes(UprightSplats(trainer.gaussians(), setup.frame),
+                                             "photo2nerf " + std::string(kVersion)));
+  });
   size_t viewer_bytes = 0;
   WriteOrExplain([&] {
     fs::path root = context.workspace.root().lexically_normal();
@@ -294,6 +309,7 @@ void SplatStage::Run(StageContext& context) const {
   SplatReport report = MakeSplatReport(trainer, setup, options, scores, state.seconds, resumed_from, near);
   report.file_bytes = fs::file_size(out.splats());
   report.spz_bytes = fs::file_size(out.spz());
+  report.glb_bytes = fs::file_size(out.glb());
   report.viewer_bytes = viewer_bytes;
   WriteJsonAtomic(out.report(), report.ToJson());
   context.summary["splats"] = trainer.gaussians().size();

@@ -470,6 +470,8 @@ void Describe(S& s, SplatReport& report) {
   s("file_bytes", report.file_bytes);
   s.Written("spz", SplatResult{}.spz().string());
   s("spz_bytes", report.spz_bytes);
+  s.Written("glb", SplatResult{}.glb().string());
+  s("glb_bytes", report.glb_bytes);
   s.Written("viewer", SplatResult{}.viewer().string());
   s("viewer_bytes", report.viewer_bytes);
   s.Optional("warnings", report.warnings);
@@ -527,6 +529,7 @@ void Describe(S& s, PathReport& report) {
 template <class S>
 void Describe(S& s, ExportReport::Mesh& mesh) {
   s("file", mesh.file);
+  s("surface", mesh.surface);
   s("vertices", mesh.vertices);
   s("triangles", mesh.triangles);
   s("marched_triangles", mesh.marched_triangles);

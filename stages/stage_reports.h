@@ -208,8 +208,8 @@ struct SplatReport {
   std::string frame_description;
   double near = 0.01;
   std::array<float, 3> background{1, 1, 1};
-  size_t file_bytes = 0, spz_bytes = 0, viewer_bytes = 0;  // splats.ply, splats.spz, viewer.html
-  std::vector<FitWarning> warnings;                        // signs of a failed fit (none in older reports)
+  size_t file_bytes = 0, spz_bytes = 0, glb_bytes = 0, viewer_bytes = 0;  // splats.ply, .spz, .glb, viewer.html
+  std::vector<FitWarning> warnings;  // signs of a failed fit (none in older reports)
 
   nlohmann::json ToJson() const;
   static SplatReport Read(const std::filesystem::path& file);
@@ -276,6 +276,7 @@ struct ExportReport {
     MeshRegion region = MeshRegion::kBox;  // the cube meshed (normalised units) ...
     std::array<double, 3> centre{};
     double half_size = 1;
+    MeshSurface surface = MeshSurface::kDensity;  // where the surface was found (export.surface resolved)
   } mesh;
   // The same surface textured: mesh.glb (upright, glTF's +Y up), and mesh.obj with its .mtl when asked.
   struct Textured {

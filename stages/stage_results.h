@@ -63,6 +63,7 @@ struct SplatResult {
   std::filesystem::path dir;
   std::filesystem::path splats() const { return dir / "splats.ply"; }
   std::filesystem::path spz() const { return dir / "splats.spz"; }  // the same splats in Niantic's SPZ
+  std::filesystem::path glb() const { return dir / "splats.glb"; }  // and in glTF (KHR_gaussian_splatting), upright
   std::filesystem::path report() const { return dir / "splat_report.json"; }
   std::filesystem::path viewer() const { return dir / "viewer.html"; }
   std::filesystem::path metrics() const { return dir / "metrics.csv"; }
@@ -91,6 +92,7 @@ struct ExportResult {
   std::filesystem::path mesh_obj() const { return dir / "mesh.obj"; }
   std::filesystem::path mesh_mtl() const { return dir / "mesh.mtl"; }
   std::filesystem::path mesh_glb() const { return dir / "mesh.glb"; }
+  std::filesystem::path mesh_preview() const { return dir / "mesh_preview.glb"; }  // small, for the report page
   std::filesystem::path texture() const { return dir / "mesh_texture.jpg"; }
   std::filesystem::path points() const { return dir / "points.ply"; }
   std::filesystem::path cameras() const { return dir / "transforms.json"; }

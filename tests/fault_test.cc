@@ -61,7 +61,9 @@ std::vector<std::string> RunArgs(const fs::path& data, const fs::path& workspace
           "--export.points_width",
           "32",
           "--export.threshold",
-          "5"};
+          "5",
+          "--export.texture_size",
+          "256"};
 }
 
 // Starts a command with its output in `log`.
@@ -163,6 +165,7 @@ TEST_CASE("faults: SIGKILL at many moments, then a rerun, gives the uninterrupte
                                             "40_render.partial/video.mp4",
                                             "50_export.partial",
                                             "50_export.partial/mesh.ply",
+                                            "50_export.partial/mesh.glb",
                                             "60_report.partial",
                                             "60_report.partial/manifest.json"};
   const std::vector<std::string> folders = {"20_poses", "30_train", "35_splat", "40_render", "50_export", "60_report"};
@@ -247,6 +250,29 @@ TEST_CASE("faults: a full disk in the splat stage names its file and keeps the t
   REQUIRE(RunCommand(RunArgs(data, workspace), &output) == 0);
   CHECK_THAT(output, Catch::Contains("train: fresh, skipped"));
   CHECK(fs::exists(workspace / "35_splat" / "splats.ply"));
+}
+
+TEST_CASE("faults: a full disk in the export stage names its file and keeps the splats and renders", "[fault]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), workspace = dir / "ws";
+  std::vector<std::string> until_render = RunArgs(data, workspace);
+  until_render.insert(until_render.end(), {"--until", "render"});
+  std::string output;
+  REQUIRE(RunCommand(until_render, &output) == 0);
+  // 16 KiB: the export's first file, mesh.ply, is larger.
+  std::vector<std::string> limited = {"/bin/bash", "-c", "ulimit -f 16 && exec \"$@\"", "limited"};
+  for (const std::string& arg : RunArgs(data, workspace)) limited.push_back(arg);
+  CHECK(RunCommand(limited, &output) == 1);
+  INFO(output);
+  CHECK_THAT(output,
+             Catch::Contains("50_export") && Catch::Contains("File too large") && Catch::Contains("free space"));
+  std::string status;
+  REQUIRE(RunCommand({P2N_BINARY, "status", "-w", workspace.string()}, &status) == 0);
+  CHECK_THAT(status, Catch::Matches("(.|\n)*render +fresh(.|\n)*"));
+  CHECK_THAT(status, Catch::Matches("(.|\n)*export +(incomplete|missing)(.|\n)*"));
+  REQUIRE(RunCommand(RunArgs(data, workspace), &output) == 0);
+  CHECK_THAT(output, Catch::Contains("render: fresh, skipped"));
+  CHECK(fs::exists(workspace / "50_export" / "mesh.glb"));
 }
 
 }  // namespace p2n::testing

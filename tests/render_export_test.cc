@@ -25,6 +25,7 @@
 #include "nerf/camera_refinement.h"
 #include "pipeline/hash.h"
 #include "splat/gaussians.h"
+#include "splat/similarity.h"
 #include "splat/splat_ply.h"
 #include "stage_fixtures.h"
 #include "stages/camera_corrections.h"
@@ -310,6 +311,22 @@ TEST_CASE("export stage: mesh and point cloud open in Assimp, finite, in the sou
   const nlohmann::json box = ReadJsonFile(out / "export_report.json")["mesh"]["region"];
   CHECK(box["kind"] == "box");
   CHECK(box["half_size"] == 1.0);
+}
+
+TEST_CASE("export stage: a texture with no room for the mesh's charts leaves the textured files out, with a warning",
+          "[export]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(150);
+  config.Set("export.threshold", 2.0, "test");  // a young field's densities are low
+  config.Set("export.max_triangles", 0, "test");
+  config.Set("export.texture_size", 64, "test");  // 4,096 texels: a few hundred charts at most
+  setup.runner.Run(setup.workspace, config, Until("export"));
+  const fs::path out = setup.dir / "ws" / "50_export";
+  const nlohmann::json report = ReadJsonFile(out / "export_report.json");
+  REQUIRE(report["mesh"]["triangles"].get<size_t>() > 1000);
+  CHECK(fs::exists(out / "mesh.ply"));
+  CHECK_FALSE(fs::exists(out / "mesh.glb"));
+  CHECK(report["textured"]["file"] == "");
 }
 
 TEST_CASE("mesh.ply and points.ply read right in Assimp when the first vertex's first byte is a line end", "[export]") {

@@ -31,6 +31,7 @@ Config SmallStageConfig(int steps) {
   config.Set("render.fps", 6.0, "test");
   config.Set("export.resolution", 48, "test");
   config.Set("export.points_width", 32, "test");
+  config.Set("export.texture_size", 256, "test");
   return config;
 }
 

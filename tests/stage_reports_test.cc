@@ -95,6 +95,7 @@ SplatReport SomeSplatReport() {
   report.background = {0.0f, 0.5f, 1.0f};
   report.file_bytes = 1000;
   report.spz_bytes = 90;
+  report.glb_bytes = 120;
   report.viewer_bytes = 2000;
   return report;
 }
@@ -132,8 +133,22 @@ PathReport SomePathReport() {
 
 ExportReport SomeExportReport() {
   ExportReport report;
-  report.mesh = {"mesh.ply",          1000, 1990, 40000, 0.0125, false, 4, 1, 0, 256, 21.5, true, MeshRegion::kFocus,
-                 {0.125, -0.25, 0.5}, 0.375};
+  report.mesh = {"mesh.ply",
+                 1000,
+                 1990,
+                 40000,
+                 0.0125,
+                 false,
+                 4,
+                 1,
+                 0,
+                 256,
+                 21.5,
+                 true,
+                 MeshRegion::kFocus,
+                 {0.125, -0.25, 0.5},
+                 0.375,
+                 MeshSurface::kDepths};
   report.textured = {"mesh.glb", 123456, "mesh_texture.jpg", 1024, ""};
   report.frame = FrameKind::kSource;
   report.cameras = {"transforms.json", 50, true};

@@ -62,6 +62,13 @@ constexpr const char* kHelp =
 
 }  // namespace
 
+std::string MeshViewHtml(const std::string& glb, int width, int height) {
+  return "<canvas id=\"p2n-mesh-canvas\" style=\"width: " + std::to_string(width) +
+         "px; height: " + std::to_string(height) + "px; max-width: 100%; touch-action: none\"></canvas>\n" +
+         "<script id=\"p2n-mesh\" type=\"application/octet-stream\">" + Base64(glb.data(), glb.size()) +
+         "</script>\n<script>" + InScript(MeshViewerBundle()) + "</script>\n";
+}
+
 std::string Base64(const char* data, size_t size) {
   static constexpr char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   std::string out;

@@ -31,6 +31,10 @@ struct SplatViewerScene {
 // The page. `splats` is a compressed splat PLY (splat/compressed_ply.h).
 std::string ViewerPage(const SplatViewerScene& scene, const std::vector<char>& splats);
 
+// A view of a textured mesh to put in a page's body: a canvas `width` x `height` (CSS pixels), the glTF binary
+// `glb` in base64, and the bundled script (three.js) that draws it and lets the mouse turn round it.
+std::string MeshViewHtml(const std::string& glb, int width, int height);
+
 std::string Base64(const char* data, size_t size);
 
 }  // namespace p2n

@@ -4,10 +4,10 @@
 import { readFileSync } from 'node:fs';
 import { validateBytes } from 'gltf-validator';
 
-const report = await validateBytes(new Uint8Array(readFileSync(process.argv[2])), { maxIssues: 50 });
+const report = await validateBytes(new Uint8Array(readFileSync(process.argv[2])), { maxIssues: 100 });
 console.log(JSON.stringify({
   errors: report.issues.numErrors,
   warnings: report.issues.numWarnings,
-  messages: report.issues.messages.slice(0, 20),
+  messages: report.issues.messages.slice(0, 100),
   info: report.info,
 }));

@@ -3,7 +3,7 @@
 //   node mesh_check.mjs MESH.glb CAMERAS.json OUT_DIR
 // CAMERAS.json: {"background": [r, g, b] (0..1; without it the background is transparent), "near": n, "far": f, "cameras": [{"width", "height", "fx", "fy",
 // "cx", "cy", "pose": world_from_camera in the glTF's frame, OpenGL axes, 16 numbers column-major}]}.
-import { chromium } from "playwright-core";
+import { launch, watch } from "./browser.mjs";
 import * as esbuild from "esbuild";
 import { readFileSync, writeFileSync } from "node:fs";
 import { dirname, join } from "node:path";
@@ -20,16 +20,11 @@ const bundle = await esbuild.build({
   },
   bundle: true, write: false, format: "iife", logLevel: "warning",
 });
-const browser = await chromium.launch({
-  executablePath: process.env.P2N_CHROMIUM ?? "/usr/bin/chromium",
-  args: ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--disable-gpu-sandbox",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run"],
-});
+const browser = await launch();
 const result = { errors: [], files: [] };
 try {
   const page = await browser.newPage();
-  page.on("pageerror", (e) => result.errors.push(String(e)));
-  page.on("console", (m) => { if (m.type() === "error") result.errors.push(m.text()); });
+  watch(page, result);
   await page.setContent(`<canvas id="c"></canvas><script>${bundle.outputFiles[0].text}</script>`);
   const frames = await page.evaluate(async ([glb, setup]) => {
     const THREE = window.THREE;

@@ -2,22 +2,16 @@
 // errors or network requests, the PSNR between the frame it drew from a chosen camera and a reference image (our
 // CPU rasterizer's render of the same camera), and whether a mouse drag changed the picture.
 //   node viewer_check.mjs VIEWER.html CAMERA_NAME REFERENCE.png [SCREENSHOT.png]
-import { chromium } from "playwright-core";
+import { launch, watch } from "./browser.mjs";
 import { readFileSync, writeFileSync } from "node:fs";
 import { pathToFileURL } from "node:url";
 
 const [page_path, camera_name, reference_path, screenshot_path] = process.argv.slice(2);
-const browser = await chromium.launch({
-  executablePath: process.env.P2N_CHROMIUM ?? "/usr/bin/chromium",
-  args: ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--disable-gpu-sandbox",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run"],
-});
+const browser = await launch();
 const result = { errors: [], requests: [] };
 try {
   const page = await browser.newPage();
-  page.on("pageerror", (e) => result.errors.push(String(e)));
-  page.on("console", (m) => { if (m.type() === "error") result.errors.push(m.text()); });
-  page.on("request", (r) => { if (!/^(data|blob|file):/.test(r.url())) result.requests.push(r.url()); });
+  watch(page, result);
   const url = `${pathToFileURL(page_path)}#camera=${encodeURIComponent(camera_name)}&size=native`;
   await page.goto(url, { waitUntil: "load" });
   await page.evaluate(() => window.p2n.loaded);
