@@ -16,6 +16,7 @@
 #include <unordered_map>
 
 #include "base/file_util.h"
+#include "base/float_image.h"
 #include "formats/dataset_import.h"
 #include "nerf/synthetic_scene.h"
 #include "stages/stage_reports.h"
@@ -45,18 +46,6 @@ MeshFile ReadOurMeshPly(const fs::path& path) {
   }
   for (size_t f = 0; f < faces; ++f, at += 13) std::memcpy(mesh.triangles.emplace_back().data(), &data[at + 1], 12);
   return mesh;
-}
-
-double Percentile(std::vector<double> values, double q) {
-  if (values.empty()) return NAN;
-  std::sort(values.begin(), values.end());
-  return values[std::min(values.size() - 1, size_t(q * values.size()))];
-}
-
-double MeanOf(const std::vector<double>& values) {
-  double sum = 0;
-  for (const double v : values) sum += v;
-  return values.empty() ? NAN : sum / values.size();
 }
 
 // Points hashed into cubes of `cell`: the nearest of them to a query, searched out to `limit`.
@@ -166,18 +155,18 @@ int main(int argc, char** argv) {
       std::count_if(completeness.begin(), completeness.end(), [&](double e) { return e < 0.01 * side; }) /
       double(completeness.size());
 
-  const double acc = MeanOf(accuracy), comp = MeanOf(completeness);
+  const double acc = Mean(accuracy), comp = Mean(completeness);
   std::printf("mesh: %zu triangles, area %.3f; cube side %.3f scene units\n", mesh.triangles.size(), total_area, side);
   std::printf(
       "accuracy (mesh to truth): mean %.4f (%.2f%% of the side), median %.4f, 95th %.4f, max %.4f; "
       "%.2f%% of the area farther than 5%% of the side\n",
-      acc, 100 * acc / side, Percentile(accuracy, 0.5), Percentile(accuracy, 0.95),
+      acc, 100 * acc / side, Quantile(accuracy, 0.5), Quantile(accuracy, 0.95),
       *std::max_element(accuracy.begin(), accuracy.end()), 100 * floaters);
   std::printf(
       "completeness (truth to mesh, %zu points): mean %.4f (%.2f%%), median %.4f; %.1f%% within 1%% of the "
       "side\n",
-      completeness.size(), comp, 100 * comp / side, Percentile(completeness, 0.5), 100 * within);
+      completeness.size(), comp, 100 * comp / side, Quantile(completeness, 0.5), 100 * within);
   std::printf("chamfer %.4f (%.2f%% of the side); normal consistency %.3f\n", (acc + comp) / 2,
-              50 * (acc + comp) / side, MeanOf(consistency));
+              50 * (acc + comp) / side, Mean(consistency));
   return 0;
 }

@@ -51,20 +51,25 @@ std::vector<std::array<uint32_t, 3>> Neighbours(const Mesh& mesh) {
   return neighbours;
 }
 
+// What growing charts asks of the mesh, whatever the cosine: each triangle's neighbours and unit normal.
+struct Adjacency {
+  std::vector<std::array<uint32_t, 3>> neighbours;
+  std::vector<Eigen::Vector3f> normals;
+};
+
 // Charts grown breadth-first from the first triangle not yet in one.
-std::vector<Chart> GrowCharts(const Mesh& mesh, float min_cosine) {
-  const std::vector<std::array<uint32_t, 3>> neighbours = Neighbours(mesh);
+std::vector<Chart> GrowCharts(const Mesh& mesh, const Adjacency& adjacency, float min_cosine) {
   std::vector<bool> taken(mesh.triangles.size(), false);
   std::vector<Chart> charts;
   for (uint32_t seed = 0; seed < mesh.triangles.size(); ++seed) {
     if (taken[seed]) continue;
     Chart& chart = charts.emplace_back();
-    const Eigen::Vector3f normal = FaceNormal(mesh, mesh.triangles[seed]);
+    const Eigen::Vector3f& normal = adjacency.normals[seed];
     taken[seed] = true;
     chart.triangles.push_back(seed);
     for (size_t next = 0; next < chart.triangles.size() && chart.triangles.size() < kMaxChartTriangles; ++next) {
-      for (const uint32_t n : neighbours[chart.triangles[next]]) {
-        if (n >= taken.size() || taken[n] || FaceNormal(mesh, mesh.triangles[n]).dot(normal) < min_cosine) continue;
+      for (const uint32_t n : adjacency.neighbours[chart.triangles[next]]) {
+        if (n >= taken.size() || taken[n] || adjacency.normals[n].dot(normal) < min_cosine) continue;
         taken[n] = true;
         chart.triangles.push_back(n);
       }
@@ -125,9 +130,11 @@ bool PackLargest(int texture_size, std::vector<Chart>* charts, double* scale) {
 
 // The mesh's charts, packed at `*scale`: the strictest of kChartCosines that fits. UserError when none does.
 std::vector<Chart> ChartsThatFit(const Mesh& mesh, int texture_size, double* scale) {
+  Adjacency adjacency{Neighbours(mesh), {}};
+  for (const auto& t : mesh.triangles) adjacency.normals.push_back(FaceNormal(mesh, t));
   std::vector<Chart> charts;
   for (const float cosine : kChartCosines) {
-    charts = GrowCharts(mesh, cosine);
+    charts = GrowCharts(mesh, adjacency, cosine);
     if (PackLargest(texture_size, &charts, scale)) return charts;
   }
   throw UserError(

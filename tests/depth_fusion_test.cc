@@ -77,11 +77,7 @@ TEST_CASE("depth fusion: depths of a sphere from around fuse to the sphere, a fl
     CHECK((p - Eigen::Vector3f(0, 0, 0.85f)).norm() > 0.15f);  // nothing of the floater
   }
   CHECK(off < mesh.positions.size() / 100);
-  double volume = 0;
-  for (const auto& t : mesh.triangles) {
-    volume += mesh.positions[t[0]].dot(mesh.positions[t[1]].cross(mesh.positions[t[2]])) / 6.0;
-  }
-  CHECK(volume == Approx(4.0 / 3.0 * M_PI * std::pow(kRadius, 3)).epsilon(0.05));
+  CHECK(SignedVolume(mesh.positions, mesh.triangles) == Approx(4.0 / 3.0 * M_PI * std::pow(kRadius, 3)).epsilon(0.05));
 }
 
 TEST_CASE("depth fusion: a ground seen from above is a sheet, open at the cube's edges", "[mesh]") {

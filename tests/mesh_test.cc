@@ -26,11 +26,8 @@ TEST_CASE("mesh: a sphere's surface is closed, on the sphere, oriented outwards 
   REQUIRE(mesh.triangles.size() > 1000);
   CHECK(CountEdges(mesh).watertight());
   const float cell = 2.0f / options.resolution;
-  double signed_volume = 0;
-  for (const auto& t : mesh.triangles) {
-    signed_volume += mesh.positions[t[0]].dot(mesh.positions[t[1]].cross(mesh.positions[t[2]])) / 6.0;
-  }
-  CHECK(signed_volume == Approx(4.0 / 3.0 * M_PI * std::pow(kRadius, 3)).epsilon(0.03));  // > 0: wound outwards
+  CHECK(SignedVolume(mesh.positions, mesh.triangles) ==
+        Approx(4.0 / 3.0 * M_PI * std::pow(kRadius, 3)).epsilon(0.03));  // > 0: wound outwards
   for (size_t v = 0; v < mesh.positions.size(); ++v) {
     const Eigen::Vector3f& p = mesh.positions[v];
     REQUIRE(p.allFinite());

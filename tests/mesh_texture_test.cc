@@ -24,13 +24,6 @@ Mesh MarchedSphere(int resolution) {
   return ExtractMesh(SphereModel(), options);
 }
 
-double SignedVolume(const std::vector<Eigen::Vector3f>& positions,
-                    const std::vector<std::array<uint32_t, 3>>& triangles) {
-  double volume = 0;
-  for (const auto& t : triangles) volume += positions[t[0]].dot(positions[t[1]].cross(positions[t[2]])) / 6.0;
-  return volume;
-}
-
 // The texture read bilinearly at (u, v), texel centres at half-integers (as a GPU samples it without mipmaps).
 Eigen::Vector3f Sample(const TexturedMesh& mesh, const Eigen::Vector2f& uv) {
   const int n = mesh.texture_size;

@@ -3,7 +3,10 @@
 // coloured by the direction it is seen from.
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "nerf/nerf_model.h"
 
@@ -38,6 +41,14 @@ inline NerfModel SphereModel(float radius = kRadius) {
   NerfModel model;
   model.field = std::make_unique<SphereField>(radius);
   return model;  // the occupancy grid's cells are unknown: all count as occupied
+}
+
+// The volume a closed mesh wound counter-clockwise from outside encloses (negative wound the other way).
+inline double SignedVolume(const std::vector<Eigen::Vector3f>& positions,
+                           const std::vector<std::array<uint32_t, 3>>& triangles) {
+  double volume = 0;
+  for (const auto& t : triangles) volume += positions[t[0]].dot(positions[t[1]].cross(positions[t[2]])) / 6.0;
+  return volume;
 }
 
 }  // namespace p2n::testing

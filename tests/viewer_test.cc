@@ -15,8 +15,8 @@
 
 #include "base/file_util.h"
 #include "base/float_image.h"
-#include "base/image_io.h"
 #include "formats/gltf_io.h"
+#include "nerf/image_fit.h"
 #include "nerf/mesh.h"
 #include "nerf/mesh_simplify.h"
 #include "nerf/texture_atlas.h"
@@ -58,17 +58,6 @@ std::vector<size_t> Match(const Gaussians<float>& g, const Gaussians<float>& h) 
     }
   }
   return match;
-}
-
-// An 8-bit RGB file as floats.
-FloatImage LoadRgb(const fs::path& path) {
-  const ReadImageResult read = ReadImage(path);
-  REQUIRE(read.ok());
-  FloatImage image{read.image.spec().width, read.image.spec().height, 3, {}};
-  image.pixels.resize(size_t(3) * image.width * image.height);
-  read.image.get_pixels(OIIO::ROI(0, image.width, 0, image.height, 0, 1, 0, 3), OIIO::TypeDesc::FLOAT,
-                        image.pixels.data());
-  return image;
 }
 
 }  // namespace
@@ -304,7 +293,7 @@ TEST_CASE("three.js draws our textured sphere from a camera as the sphere looks 
   REQUIRE(status == 0);
   const nlohmann::json result = nlohmann::json::parse(output.substr(output.rfind('{')));
   CHECK(result["errors"].empty());
-  const FloatImage drawn = LoadRgb(dir / "0.png");
+  const FloatImage drawn = LoadImageForFit(dir / "0.png", "ignore");  // opaque: the background is drawn
   REQUIRE((drawn.width == camera.width && drawn.height == camera.height));
 
   // The analytic picture: each pixel's ray meets the sphere or shows the background. Where the sphere is seen
