@@ -173,7 +173,9 @@ TEST_CASE("sequential matching closes an orbit's loop", "[colmap][e2e]") {
   std::map<std::string, Eigen::Matrix4d> true_poses;
   const nlohmann::json truth = ReadJsonFile(dir / "photos" / "ground_truth_cameras.json");
   for (const auto& frame : truth["frames"]) true_poses[frame["file_path"]] = ReadMatrix(frame["transform_matrix"]);
-  CheckPoses(ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json"), true_poses, 0.5, 0.01);
+  // The worst camera within a degree: COLMAP's threads put it at 0.51 once (0.3 to 0.5 otherwise); a loop left open
+  // bends the orbit by tens of degrees.
+  CheckPoses(ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json"), true_poses, 1.0, 0.01);
 }
 
 // A messy photo folder (issue 7): the synthetic scene's views stored every way a folder of real photos may hold
