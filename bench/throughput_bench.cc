@@ -100,8 +100,8 @@ int main(int argc, char** argv) {
   const auto field_seconds = [&](p2n::NgpField<float>& measured) {
     std::vector<std::vector<float>> d_params(chunks, std::vector<float>(measured.num_dense_params()));
     return MedianSeconds(repeats, [&] {
-      Eigen::MatrixXf encoded, d_encoded(measured.grid().output_dims(), all_positions.cols());
-      measured.grid().Forward(all_positions, &encoded);
+      Eigen::MatrixXf encoded, d_encoded(measured.encoding().output_dims(), all_positions.cols());
+      measured.encoding().Forward(all_positions, &encoded);
       tbb::parallel_for(0, chunks, [&](int c) {
         Eigen::MatrixXf density, rgb, d_chunk;
         measured.ForwardEncoded(positions[c], encoded.middleCols(c * per_chunk, per_chunk), directions[c], &density,
@@ -109,12 +109,11 @@ int main(int argc, char** argv) {
         measured.Backward(caches[c], density, rgb, d_params[c].data(), &d_chunk);
         d_encoded.middleCols(c * per_chunk, per_chunk) = d_chunk;
       });
-      measured.grid().Backward(all_positions, d_encoded);
+      measured.encoding().Backward(all_positions, d_encoded);
     });
   };
-  // The hash grid alone, as the trainer calls it (the whole batch at once).
-  const auto grid_seconds = [&](const p2n::HashGridConfig& layout) {
-    p2n::HashGridEncoding<float> grid(3, layout, 1);
+  // The encoding alone, as the trainer calls it (the whole batch at once).
+  const auto grid_seconds = [&](p2n::Encoding<float>& grid) {
     Eigen::MatrixXf encoded;
     const Eigen::MatrixXf d_grid = Eigen::MatrixXf::Random(grid.output_dims(), all_positions.cols());
     return std::pair(MedianSeconds(repeats, [&] { grid.Forward(all_positions, &encoded); }),
@@ -137,12 +136,24 @@ int main(int argc, char** argv) {
     measured_config.grid = layout;
     p2n::NgpField<float> measured(measured_config, 1);
     const double whole = field_seconds(measured);
-    const auto [forward, backward] = grid_seconds(layout);
+    const auto [forward, backward] = grid_seconds(measured.encoding());
     std::printf(
         "%-15s grid %2dx%d, 2^%d: whole field fwd+bwd %.2f M samples/s (MLPs %.0f%% of its time); grid "
         "forward %.2f, backward %.2f M samples/s\n",
         name, layout.levels, layout.features_per_level, layout.log2_table_size, samples / whole / 1e6,
         100 * mlp_seconds / whole, samples / forward / 1e6, samples / backward / 1e6);
   }
+  // The planes (train.field planes) as the default preset trains them.
+  p2n::NgpFieldConfig planes_config = config;
+  planes_config.planes = p2n::PlanesFor(p2n::PresetFor(p2n::PresetName::kDefault), p2n::SceneSpace::kForward);
+  p2n::NgpField<float> planes(planes_config, 1);
+  const double whole = field_seconds(planes);
+  const auto [forward, backward] = grid_seconds(planes.encoding());
+  std::printf(
+      "planes %d x %d, %d^2 x %d: whole field fwd+bwd %.2f M samples/s (MLPs %.0f%% of its time); planes forward "
+      "%.2f, backward %.2f M samples/s\n",
+      planes_config.planes->levels, planes_config.planes->features_per_level, planes_config.planes->finest_resolution,
+      planes_config.planes->depth_resolution, samples / whole / 1e6, 100 * mlp_seconds / whole, samples / forward / 1e6,
+      samples / backward / 1e6);
   return 0;
 }

@@ -12,14 +12,25 @@
 namespace p2n {
 namespace {
 
+int EncodedFeatures(const NgpFieldConfig& config) {
+  return config.planes ? config.planes->levels * config.planes->features_per_level
+                       : config.grid.levels * config.grid.features_per_level;
+}
+
 MlpConfig DensityConfig(const NgpFieldConfig& config) {
-  return {config.grid.levels * config.grid.features_per_level, 1 + config.geometry_features, config.width,
-          config.density_hidden_layers, OutputActivation::kNone};
+  return {EncodedFeatures(config), 1 + config.geometry_features, config.width, config.density_hidden_layers,
+          OutputActivation::kNone};
 }
 
 MlpConfig ColourConfig(const NgpFieldConfig& config) {
   return {config.geometry_features + kSphericalHarmonicsCount, 3, config.width, config.colour_hidden_layers,
           OutputActivation::kSigmoid};
+}
+
+template <typename T>
+std::unique_ptr<Encoding<T>> MakeEncoding(const NgpFieldConfig& config, uint64_t seed) {
+  if (config.planes) return std::make_unique<PlaneGridEncoding<T>>(*config.planes, seed);
+  return std::make_unique<HashGridEncoding<T>>(3, config.grid, seed);
 }
 
 template <typename T, typename Matrix>
@@ -33,7 +44,7 @@ void ExpDensity(const Matrix& raw, Matrix* density) {
 
 nlohmann::json NgpFieldConfig::ToJson() const {
   return {{"otype", "NgpField"},
-          {"encoding", grid.ToJson()},
+          {"encoding", planes ? planes->ToJson() : grid.ToJson()},
           {"geometry_features", geometry_features},
           {"width", width},
           {"density_hidden_layers", density_hidden_layers},
@@ -53,7 +64,14 @@ NgpFieldConfig NgpFieldConfig::FromJson(const nlohmann::json& json) {
                  {"colour_hidden_layers", &config.colour_hidden_layers}},
                 {"otype", "encoding", "direction_encoding", "density_network", "colour_network", "density_activation"},
                 "NgpField config");
-  if (json.contains("encoding")) config.grid = HashGridConfig::FromJson(json.at("encoding"));
+  if (json.contains("encoding")) {
+    const nlohmann::json& encoding = json.at("encoding");
+    if (encoding.is_object() && encoding.value("otype", "") == "Planes") {
+      config.planes = PlaneGridConfig::FromJson(encoding);
+    } else {
+      config.grid = HashGridConfig::FromJson(encoding);
+    }
+  }
   CheckDerivedKeys(json, config.ToJson(),
                    {"direction_encoding", "density_network", "colour_network", "density_activation"},
                    "NgpField config");
@@ -63,7 +81,7 @@ NgpFieldConfig NgpFieldConfig::FromJson(const nlohmann::json& json) {
 template <typename T>
 NgpField<T>::NgpField(const NgpFieldConfig& config, uint64_t seed)
     : config_(config),
-      grid_(3, config.grid, seed),
+      encoding_(MakeEncoding<T>(config, seed)),
       density_mlp_(DensityConfig(config), seed + 1),
       colour_mlp_(ColourConfig(config), seed + 2) {}
 
@@ -71,7 +89,7 @@ template <typename T>
 void NgpField<T>::Forward(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb,
                           Cache* cache) const {
   Matrix encoded;
-  grid_.Forward(positions, &encoded);
+  encoding_->Forward(positions, &encoded);
   ForwardEncoded(positions, std::move(encoded), directions, density, rgb, cache);
 }
 
@@ -104,7 +122,7 @@ void NgpField<T>::Render(const Matrix& positions, const Matrix& directions, Matr
   if constexpr (std::is_same_v<T, float>) {
     if (RenderMlp::Available()) {
       Matrix encoded, hidden(density_mlp_.config().outputs, positions.cols()), colour_in;
-      grid_.Forward(positions, &encoded);
+      encoding_->Forward(positions, &encoded);
       RenderMlp(density_mlp_).Forward(encoded.data(), encoded.cols(), hidden.data());
       ExpDensity<T>(hidden, density);
       ColourInput(hidden, directions, &colour_in);
@@ -120,7 +138,7 @@ template <typename T>
 void NgpField<T>::Density(const Matrix& positions, Matrix* density) const {
   Matrix encoded;
   typename Mlp<T>::Cache cache;
-  grid_.Forward(positions, &encoded);
+  encoding_->Forward(positions, &encoded);
   ExpDensity<T>(density_mlp_.Forward(std::move(encoded), &cache), density);
 }
 

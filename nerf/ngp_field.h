@@ -1,5 +1,6 @@
 #pragma once
-// The `ngp` radiance field (instant-ngp's design): a multiresolution hash grid over the unit cube, a density
+// The `ngp` radiance field (instant-ngp's design): a multiresolution hash grid over the unit cube (or K-planes'
+// factorised planes, `planes`), a density
 // MLP (one hidden layer of 64) whose first output is the log-density and whose others are geometry features,
 // and a colour MLP (two hidden layers of 64) fed the features and the view direction's spherical harmonics.
 // Density = exp(clamped log-density): the clamp keeps it finite (at most e^kMaxLogDensity) and its gradient
@@ -7,13 +8,17 @@
 
 #include <nlohmann/json.hpp>
 
+#include <optional>
+
+#include "nerf/plane_grid.h"
 #include "nerf/radiance_field.h"
 
 namespace p2n {
 
 struct NgpFieldConfig {
   HashGridConfig grid;
-  int geometry_features = 15;  // density MLP outputs besides the log-density
+  std::optional<PlaneGridConfig> planes;  // set: the planes encode the points instead of the grid
+  int geometry_features = 15;             // density MLP outputs besides the log-density
   int width = 64;
   int density_hidden_layers = 1;
   int colour_hidden_layers = 2;
@@ -44,9 +49,9 @@ class NgpField : public RadianceField<T> {
   void Backward(const Cache& cache, const Matrix& d_density, const Matrix& d_rgb, T* d_dense,
                 Matrix* d_encoded) const override;
   std::vector<ParamBlock<T>> DenseParams() override;
-  Encoding<T>* TrainableEncoding() override { return &grid_; }
+  Encoding<T>* TrainableEncoding() override { return encoding_.get(); }
 
-  HashGridEncoding<T>& grid() { return grid_; }
+  Encoding<T>& encoding() { return *encoding_; }
   Mlp<T>& density_mlp() { return density_mlp_; }
   Mlp<T>& colour_mlp() { return colour_mlp_; }
 
@@ -56,7 +61,7 @@ class NgpField : public RadianceField<T> {
   void ColourInput(const Matrix& hidden, const Matrix& directions, Matrix* colour_in) const;
 
   NgpFieldConfig config_;
-  HashGridEncoding<T> grid_;
+  std::unique_ptr<Encoding<T>> encoding_;
   Mlp<T> density_mlp_, colour_mlp_;
 };
 

@@ -4,6 +4,8 @@
 
 #include "base/enum_names.h"
 #include "nerf/encoding.h"
+#include "nerf/nerf_model.h"
+#include "nerf/plane_grid.h"
 
 namespace p2n {
 
@@ -16,6 +18,10 @@ struct EnumNames<PresetName> {
 
 // train.distortion auto in unbounded and forward scenes.
 inline constexpr double kAutoDistortion = 0.002;
+
+// The planes (train.field planes) of a preset for a scene space.
+struct TrainPreset;
+PlaneGridConfig PlanesFor(const TrainPreset& preset, SceneSpace space);
 
 struct TrainPreset {
   double time_budget;      // seconds

@@ -165,13 +165,17 @@ void TrainOptions::Check() const {
   CheckOption(*this, march_samples, march_samples >= 0 && march_samples <= 8192, "must be 0..8192");
   CheckOption(*this, hash_table_log2, hash_table_log2 == 0 || (hash_table_log2 >= 10 && hash_table_log2 <= 24),
               "must be 0 (the preset's) or 10..24");
+  for (const int* resolution : {&plane_resolution, &plane_depth_resolution}) {
+    CheckOption(*this, *resolution, *resolution == 0 || (*resolution >= 8 && *resolution <= 8192),
+                "must be 0 (by the scene) or 8..8192");
+  }
   CheckOption(*this, vanilla_samples, vanilla_samples >= 1 && vanilla_samples <= 1024, "must be 1..1024");
   CheckOption(*this, learning_rate, learning_rate >= 0 && learning_rate < 1, "must be 0 (the field's) or in (0, 1)");
   CheckOption(*this, distortion, !distortion.value || *distortion.value >= 0,
               format("must be auto or a weight >= 0, not {}", AutoOrNumberText(distortion)));
-  CheckOption(
-      *this, refine_cameras, !refine_cameras || field == FieldKind::kNgp,
-      format("needs {} ngp (the vanilla field has no gradient with respect to its input)", OptionKey(*this, field)));
+  CheckOption(*this, refine_cameras, !refine_cameras || field != FieldKind::kVanilla,
+              format("needs {} ngp or planes (the vanilla field has no gradient with respect to its input)",
+                     OptionKey(*this, field)));
   CheckOption(*this, eval_interval, eval_interval > 0, "must be positive");
   CheckOption(*this, eval_share, eval_share > 0 && eval_share <= 1, "must be in (0, 1]");
   CheckOption(*this, eval_pixels, eval_pixels >= 0, "must be 0 (all) or positive");
@@ -203,6 +207,11 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
     if (space == SceneSpace::kBounded && preset.bounded_table_log2 > 0)
       field.grid.log2_table_size = preset.bounded_table_log2;
     if (options.hash_table_log2 > 0) field.grid.log2_table_size = options.hash_table_log2;
+    if (options.field == FieldKind::kPlanes) {
+      field.planes = PlanesFor(preset, space);
+      if (options.plane_resolution > 0) field.planes->finest_resolution = options.plane_resolution;
+      if (options.plane_depth_resolution > 0) field.planes->depth_resolution = options.plane_depth_resolution;
+    }
     trainer.field = field.ToJson();
   }
   const int march = options.march_samples > 0       ? options.march_samples

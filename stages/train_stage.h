@@ -15,12 +15,13 @@
 
 namespace p2n {
 
-// train.field: the hash grid with tiny MLPs, or the seed's positional-encoding MLP.
-enum class FieldKind { kNgp, kVanilla };
+// train.field: the hash grid with tiny MLPs, factorised planes with the same MLPs, or the seed's
+// positional-encoding MLP.
+enum class FieldKind { kNgp, kPlanes, kVanilla };
 template <>
 struct EnumNames<FieldKind> {
-  static constexpr std::pair<FieldKind, const char*> kValues[] = {{FieldKind::kNgp, "ngp"},
-                                                                  {FieldKind::kVanilla, "vanilla"}};
+  static constexpr std::pair<FieldKind, const char*> kValues[] = {
+      {FieldKind::kNgp, "ngp"}, {FieldKind::kPlanes, "planes"}, {FieldKind::kVanilla, "vanilla"}};
 };
 
 // train.scene: a scene space, or auto.
@@ -55,7 +56,9 @@ struct TrainOptions {
   int march_samples = 0;                   // samples across the scene cube's diagonal (ngp); 0: the preset's
   int vanilla_samples = 64;                // stratified samples per ray (vanilla)
   int hash_table_log2 = 0;                 // log2 of the hash-grid entries per level (ngp); 0: the preset's
-  double learning_rate = 0;                // 0: the field's (ngp 1e-2, vanilla 5e-4)
+  int plane_resolution = 0;                // cells across x and y of the finest planes (planes); 0: by the scene
+  int plane_depth_resolution = 0;          // cells along z of the finest planes (planes); 0: by the scene
+  double learning_rate = 0;                // 0: the field's (ngp and planes 1e-2, vanilla 5e-4)
   PhotometricLoss loss = PhotometricLoss::kMse;
   // Auto: random for images with alpha, fixed where the import knows it, else learnt.
   BackgroundChoice background = BackgroundChoice::kAuto;
@@ -73,7 +76,9 @@ struct TrainOptions {
   template <class V>
   void Visit(V& v) {
     v("preset", preset, "fast (a preview in about a minute), default, or quality");
-    v("field", field, "ngp (hash grid + tiny MLPs) or vanilla (the seed's positional-encoding MLP)");
+    v("field", field,
+      "ngp (hash grid + tiny MLPs), planes (K-planes' factorised feature planes + the same MLPs) or vanilla (the "
+      "seed's positional-encoding MLP)");
     v("scene", scene,
       "bounded (an object inside the unit box), unbounded (space beyond it contracted), forward (every camera "
       "looking one way, as LLFF captures: a mean camera's normalised device coordinates), or auto: bounded for "
@@ -85,7 +90,13 @@ struct TrainOptions {
     v("march_samples", march_samples, "samples across the scene cube's diagonal (ngp); 0: the preset's", "samples");
     v("vanilla_samples", vanilla_samples, "stratified samples per ray (vanilla)", "samples");
     v("hash_table_log2", hash_table_log2, "log2 of the hash-grid entries per level (ngp); 0: the preset's");
-    v("learning_rate", learning_rate, "Adam learning rate; 0: the field's (ngp 1e-2, vanilla 5e-4)");
+    v("plane_resolution", plane_resolution,
+      "cells across x and y (in a forward-facing scene the image plane) of the finest planes (planes); 0: by the "
+      "scene",
+      "cells");
+    v("plane_depth_resolution", plane_depth_resolution, "cells along z of the finest planes (planes); 0: by the scene",
+      "cells");
+    v("learning_rate", learning_rate, "Adam learning rate; 0: the field's (ngp and planes 1e-2, vanilla 5e-4)");
     v("loss", loss, "photometric loss: mse, or huber (delta 0.1)");
     v("background", background,
       "the colour behind the scene; auto: random behind images with alpha (they learn transparency), fixed where "

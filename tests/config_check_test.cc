@@ -48,6 +48,7 @@ TEST_CASE("engine option checks name the field, the rule and the value", "[confi
 TEST_CASE("every field type's config round-trips exactly through JSON and the field", "[config]") {
   // Every field away from its default.
   const NgpFieldConfig ngp{.grid = {8, 4, 15, 12, 1000},
+                           .planes = std::nullopt,
                            .geometry_features = 7,
                            .width = 32,
                            .density_hidden_layers = 2,

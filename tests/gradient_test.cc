@@ -354,7 +354,17 @@ TEST_CASE("the ngp field's gradients (grid, density MLP, colour MLP) match finit
   config.width = 8;
   NgpField<double> field(config, 11);
   // Larger grid values than the 1e-4 initialisation, so that every path carries gradient.
-  for (size_t k = 0; k < field.grid().num_params(); ++k) field.grid().params()[k] = 0.5 * std::sin(1.7 * k);
+  for (size_t k = 0; k < field.encoding().num_params(); ++k) field.encoding().params()[k] = 0.5 * std::sin(1.7 * k);
+  CheckFieldGradients(field);
+}
+
+TEST_CASE("the ngp field on planes: gradients (planes, density MLP, colour MLP) match finite differences",
+          "[gradients]") {
+  NgpFieldConfig config;
+  config.planes = PlaneGridConfig{.levels = 2, .features_per_level = 3, .finest_resolution = 4, .depth_resolution = 2};
+  config.geometry_features = 3;
+  config.width = 8;
+  NgpField<double> field(config, 11);
   CheckFieldGradients(field);
 }
 
@@ -390,7 +400,7 @@ TEST_CASE("the ngp field's density stays finite for huge raw outputs", "[gradien
   config.grid.finest_resolution = 32;
   NgpField<float> field(config, 1);
   for (int k = 0; k < field.density_mlp().num_params(); ++k) field.density_mlp().params()[k] = 1e3f;
-  for (size_t k = 0; k < field.grid().num_params(); ++k) field.grid().params()[k] = 10.0f;
+  for (size_t k = 0; k < field.encoding().num_params(); ++k) field.encoding().params()[k] = 10.0f;
   Eigen::MatrixXf positions = Eigen::MatrixXf::Constant(3, 2, 0.5f), directions(3, 2), density, rgb;
   directions << 0, 1, 0, 0, 1, 0;
   NgpField<float>::Cache cache;

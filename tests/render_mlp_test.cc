@@ -71,7 +71,7 @@ TEST_CASE("a field's rendering pass agrees with its training pass", "[render_mlp
   config.grid.log2_table_size = 12;
   NgpField<float> field(config, 11);
   for (int i = 0; i < 50; ++i) {  // features beyond the initial +-1e-4, so that the networks see real inputs
-    field.grid().params()[i * 37 % field.grid().num_params()] = 0.5f * std::sin(float(i));
+    field.encoding().params()[i * 37 % field.encoding().num_params()] = 0.5f * std::sin(float(i));
   }
   const Eigen::MatrixXf positions = (Eigen::MatrixXf::Random(3, 500).array() + 1) / 2;
   Eigen::MatrixXf directions = Eigen::MatrixXf::Random(3, 500);

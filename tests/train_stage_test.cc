@@ -76,6 +76,26 @@ TEST_CASE("train stage: bounded scenes get the default preset's larger hash tabl
   CHECK(table_log2(options, SceneSpace::kUnbounded) == 16);
 }
 
+TEST_CASE("train stage: planes take the image plane's resolution by the scene, or as the options say", "[train]") {
+  const auto planes = [](const TrainOptions& options, SceneSpace space) {
+    return NgpFieldConfig::FromJson(MakeTrainerOptions(options, space).field).planes;
+  };
+  TrainOptions options;
+  CHECK_FALSE(planes(options, SceneSpace::kForward).has_value());  // ngp: a hash grid
+  options.field = FieldKind::kPlanes;
+  REQUIRE(planes(options, SceneSpace::kForward).has_value());
+  CHECK(planes(options, SceneSpace::kForward)->depth_resolution <
+        planes(options, SceneSpace::kForward)->finest_resolution);
+  CHECK(planes(options, SceneSpace::kUnbounded)->depth_resolution ==
+        planes(options, SceneSpace::kUnbounded)->finest_resolution);
+  options.plane_resolution = 512;
+  options.plane_depth_resolution = 128;
+  CHECK(planes(options, SceneSpace::kBounded) ==
+        PlaneGridConfig{.levels = 4, .features_per_level = 8, .finest_resolution = 512, .depth_resolution = 128});
+  options.plane_depth_resolution = 4;
+  CHECK_THROWS_WITH(options.Check(), Catch::Contains("train.plane_depth_resolution"));
+}
+
 TEST_CASE("train stage: a short time budget trains with the fast preset's sizes, whatever the preset", "[train]") {
   const auto table_log2 = [](const TrainOptions& options, SceneSpace space) {
     return NgpFieldConfig::FromJson(MakeTrainerOptions(options, space).field).grid.log2_table_size;

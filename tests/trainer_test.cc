@@ -129,6 +129,24 @@ TEST_CASE("training learns a sphere: held-out PSNR rises far above the untrained
   }
 }
 
+TEST_CASE("the planes field learns the sphere too, and its model.bin renders the same after loading", "[trainer]") {
+  const TrainingData data = SphereScene();
+  TrainerOptions options = SmallOptions();
+  NgpFieldConfig field;
+  field.planes = PlaneGridConfig{.levels = 3, .features_per_level = 8, .finest_resolution = 64, .depth_resolution = 64};
+  options.field = field.ToJson();
+  Trainer trainer(options, data);
+  CheckLearns(&trainer);
+  CHECK(trainer.model().occupancy.OccupiedFraction() < 0.5);
+  TempDir dir;
+  SaveModel(trainer.model(), dir / "model.bin");
+  const NerfModel loaded = LoadModel(dir / "model.bin");
+  CHECK(loaded.field->Config() == field.ToJson());
+  const RenderedView original = RenderView(trainer.model(), data.heldout[0].camera, -1, -1, {});
+  const RenderedView copy = RenderView(loaded, data.heldout[0].camera, -1, -1, {});
+  CHECK((original.rgb.pixels == copy.rgb.pixels));
+}
+
 TEST_CASE("a held-out evaluation reports every ray, and an exception from its callback (Ctrl-C) stops it",
           "[trainer]") {
   const TrainingData data = SphereScene();
@@ -228,8 +246,9 @@ TEST_CASE("model.bin renders the same after loading, newer and damaged files are
   CHECK_THROWS_WITH(LoadModel(dir / "short.bin"), Catch::Contains("damaged"));
   WriteBinaryFileAtomic(dir / "other.bin", {'h', 'e', 'l', 'l', 'o'});
   CHECK_THROWS_WITH(LoadModel(dir / "other.bin"), Catch::Contains("not a photo2nerf model"));
-  // The fuzzer's seeds are valid models (of both fields; format version 1 with the densities, 2 without).
-  for (const char* seed : {"tiny_ngp.bin", "tiny_vanilla.bin", "tiny_ngp_v2.bin", "tiny_vanilla_v2.bin"}) {
+  // The fuzzer's seeds are valid models (of every field; format version 1 with the densities, 2 without).
+  for (const char* seed :
+       {"tiny_ngp.bin", "tiny_vanilla.bin", "tiny_ngp_v2.bin", "tiny_vanilla_v2.bin", "tiny_planes_v2.bin"}) {
     const NerfModel tiny =
         LoadModel(std::filesystem::path(P2N_SOURCE_DIR) / "tests" / "fuzz" / "corpus" / "model" / seed);
     CHECK(tiny.occupancy.resolution() == 2);
