@@ -81,19 +81,11 @@ PlaneGridEncoding<T>::PlaneGridEncoding(const PlaneGridConfig& config, uint64_t 
 }
 
 template <typename T>
-typename PlaneGridEncoding<T>::Lookup PlaneGridEncoding<T>::Locate(const Plane& plane, const T* p) const {
-  Lookup lookup;
-  uint32_t cell[2];
-  for (int k = 0; k < 2; ++k) {
-    // Into [0, 1] (a NaN coordinate to 0: std::max returns its first argument unless the second is greater); the
-    // far edge stays in the last cell.
-    const T position = std::min(std::max(T(0), p[plane.axis[k]]), T(1)) * static_cast<T>(plane.cells[k]);
-    cell[k] = std::min(static_cast<uint32_t>(position), plane.cells[k] - 1);
-    lookup.fraction[k] = position - static_cast<T>(cell[k]);
-  }
+typename PlaneGridEncoding<T>::Lookup PlaneGridEncoding<T>::CellLookup(const Plane& plane, uint32_t cell_u,
+                                                                       uint32_t cell_v, T fu, T fv) {
   const uint32_t row = plane.cells[0] + 1;
-  const uint32_t first = plane.offset + cell[1] * row + cell[0];
-  const T fu = lookup.fraction[0], fv = lookup.fraction[1];
+  const uint32_t first = plane.offset + cell_v * row + cell_u;
+  Lookup lookup;
   lookup.entries[0] = first;
   lookup.entries[1] = first + 1;
   lookup.entries[2] = first + row;
@@ -102,7 +94,23 @@ typename PlaneGridEncoding<T>::Lookup PlaneGridEncoding<T>::Locate(const Plane& 
   lookup.weights[1] = fu * (T(1) - fv);
   lookup.weights[2] = (T(1) - fu) * fv;
   lookup.weights[3] = fu * fv;
+  lookup.fraction[0] = fu;
+  lookup.fraction[1] = fv;
   return lookup;
+}
+
+template <typename T>
+typename PlaneGridEncoding<T>::Lookup PlaneGridEncoding<T>::Locate(const Plane& plane, const T* p) const {
+  uint32_t cell[2];
+  T fraction[2];
+  for (int k = 0; k < 2; ++k) {
+    // Into [0, 1] (a NaN coordinate to 0: std::max returns its first argument unless the second is greater); the
+    // far edge stays in the last cell.
+    const T position = std::min(std::max(T(0), p[plane.axis[k]]), T(1)) * static_cast<T>(plane.cells[k]);
+    cell[k] = std::min(static_cast<uint32_t>(position), plane.cells[k] - 1);
+    fraction[k] = position - static_cast<T>(cell[k]);
+  }
+  return CellLookup(plane, cell[0], cell[1], fraction[0], fraction[1]);
 }
 
 template <typename T>
@@ -121,7 +129,8 @@ void PlaneGridEncoding<T>::LocateGroup(int level, const Matrix& input, Eigen::In
   uint32_t cell[3][kGroup];
   T fraction[3][kGroup];
   for (int d = 0; d < 3; ++d) {
-    const T cells = static_cast<T>(planes_[3 * level + (d == 2 ? 1 : 0)].cells[d == 2 ? 1 : d]);
+    // Axis d's cells: the xy plane's along x and y, the xz plane's along z.
+    const T cells = static_cast<T>(d < 2 ? planes_[3 * level].cells[d] : planes_[3 * level + 1].cells[1]);
     const int32_t last = static_cast<int32_t>(cells) - 1;
     const T* p = input.data() + first * 3 + d;
     T position[kGroup];
@@ -137,21 +146,8 @@ void PlaneGridEncoding<T>::LocateGroup(int level, const Matrix& input, Eigen::In
   for (int k = 0; k < 3; ++k) {
     const Plane& plane = planes_[3 * level + k];
     const int u = plane.axis[0], v = plane.axis[1];
-    const uint32_t row = plane.cells[0] + 1;
     for (int i = 0; i < count; ++i) {
-      Lookup& lookup = lookups[k][i];
-      const uint32_t corner = plane.offset + cell[v][i] * row + cell[u][i];
-      const T fu = fraction[u][i], fv = fraction[v][i];
-      lookup.entries[0] = corner;
-      lookup.entries[1] = corner + 1;
-      lookup.entries[2] = corner + row;
-      lookup.entries[3] = corner + row + 1;
-      lookup.weights[0] = (T(1) - fu) * (T(1) - fv);
-      lookup.weights[1] = fu * (T(1) - fv);
-      lookup.weights[2] = (T(1) - fu) * fv;
-      lookup.weights[3] = fu * fv;
-      lookup.fraction[0] = fu;
-      lookup.fraction[1] = fv;
+      lookups[k][i] = CellLookup(plane, cell[u][i], cell[v][i], fraction[u][i], fraction[v][i]);
     }
   }
 }

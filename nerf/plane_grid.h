@@ -67,6 +67,8 @@ class PlaneGridEncoding : public Encoding<T> {
     T fraction[2];
   };
   Lookup Locate(const Plane& plane, const T* p) const;
+  // The lookup of the point at fractions (fu, fv) of cell (cell_u, cell_v).
+  static Lookup CellLookup(const Plane& plane, uint32_t cell_u, uint32_t cell_v, T fu, T fv);
   // The three planes of `level` at point `p`: their lookups and features (features[k * F + f]).
   void ReadLevel(int level, const T* p, Lookup* lookups, T* features) const;
   // Forward() and Backward() locate a group of points on a level's three planes (lookups[plane][point]) before
