@@ -211,9 +211,9 @@ void PlaneGridEncoding<T>::Scatter(const T* d_features, int features, const Look
 }
 
 template <typename T>
-template <int kFeatures>
-void PlaneGridEncoding<T>::ForwardLevel(int level, const Matrix& input, Eigen::Index begin, Eigen::Index end,
-                                        Matrix* output) const {
+template <int kFeatures, class Visit>
+void PlaneGridEncoding<T>::VisitLevel(int level, const Matrix& input, Eigen::Index begin, Eigen::Index end,
+                                      Visit&& visit) const {
   const int n = kFeatures > 0 ? kFeatures : config_.features_per_level;
   const T* table = params_.data();
   Lookup lookups[3][kGroup];
@@ -224,10 +224,28 @@ void PlaneGridEncoding<T>::ForwardLevel(int level, const Matrix& input, Eigen::I
     for (int i = 0; i < count; ++i) {
       if (i + kPrefetchAhead < count) Prefetch(lookups, i + kPrefetchAhead, n, table, false);
       for (int k = 0; k < 3; ++k) Blend<kFeatures>(table, n, lookups[k][i], features + k * n);
-      T* out = output->col(group + i).data() + level * n;
-      for (int f = 0; f < n; ++f) out[f] = features[f] * features[n + f] * features[2 * n + f];
+      visit(group + i, static_cast<const T*>(features));
     }
   }
+}
+
+template <typename T>
+void PlaneGridEncoding<T>::ProductGradient(const T* d_out, const T* features, int plane, int n, T* d_plane) {
+  // d(f_0 f_1 f_2)/d(f_k): the product of the other two planes' features.
+  const T* other0 = features + ((plane + 1) % 3) * n;
+  const T* other1 = features + ((plane + 2) % 3) * n;
+  for (int f = 0; f < n; ++f) d_plane[f] = d_out[f] * other0[f] * other1[f];
+}
+
+template <typename T>
+template <int kFeatures>
+void PlaneGridEncoding<T>::ForwardLevel(int level, const Matrix& input, Eigen::Index begin, Eigen::Index end,
+                                        Matrix* output) const {
+  const int n = kFeatures > 0 ? kFeatures : config_.features_per_level;
+  VisitLevel<kFeatures>(level, input, begin, end, [&](Eigen::Index i, const T* features) {
+    T* out = output->col(i).data() + level * n;
+    for (int f = 0; f < n; ++f) out[f] = features[f] * features[n + f] * features[2 * n + f];
+  });
 }
 
 template <typename T>
@@ -255,26 +273,13 @@ template <int kFeatures>
 void PlaneGridEncoding<T>::PlaneGradients(int level, const Matrix& input, const Matrix& d_output, Eigen::Index begin,
                                           Eigen::Index end, T* d_planes) const {
   const int n = kFeatures > 0 ? kFeatures : config_.features_per_level;
-  const T* table = params_.data();
   const size_t points = input.cols();
-  Lookup lookups[3][kGroup];
-  T features[3 * kMaxFeatures];
-  for (Eigen::Index group = begin; group < end; group += kGroup) {
-    const int count = static_cast<int>(std::min<Eigen::Index>(kGroup, end - group));
-    LocateGroup(level, input, group, count, lookups);
-    for (int i = 0; i < count; ++i) {
-      if (i + kPrefetchAhead < count) Prefetch(lookups, i + kPrefetchAhead, n, table, false);
-      for (int k = 0; k < 3; ++k) Blend<kFeatures>(table, n, lookups[k][i], features + k * n);
-      const T* d_out = d_output.col(group + i).data() + level * n;
-      for (int k = 0; k < 3; ++k) {
-        // d(f_0 f_1 f_2)/d(f_k): the product of the other two planes' features.
-        const T* other0 = features + ((k + 1) % 3) * n;
-        const T* other1 = features + ((k + 2) % 3) * n;
-        T* d_plane = d_planes + ((3 * level + k) * points + group + i) * n;
-        for (int f = 0; f < n; ++f) d_plane[f] = d_out[f] * other0[f] * other1[f];
-      }
+  VisitLevel<kFeatures>(level, input, begin, end, [&](Eigen::Index i, const T* features) {
+    for (int k = 0; k < 3; ++k) {
+      ProductGradient(d_output.col(i).data() + level * n, features, k, n,
+                      d_planes + ((3 * level + k) * points + i) * n);
     }
-  }
+  });
 }
 
 template <typename T>
@@ -321,41 +326,41 @@ void PlaneGridEncoding<T>::Backward(const Matrix& input, const Matrix& d_output)
 }
 
 template <typename T>
-void PlaneGridEncoding<T>::InputGradient(const Matrix& input, const Matrix& d_output, Matrix* d_input) const {
+void PlaneGridEncoding<T>::AddInputGradient(const T* p, const T* d_features, T* d_p) const {
   const int n = config_.features_per_level;
+  Lookup lookups[3];
+  T features[3 * kMaxFeatures], d_plane[kMaxFeatures];
+  for (int l = 0; l < config_.levels; ++l) {
+    ReadLevel(l, p, lookups, features);
+    for (int k = 0; k < 3; ++k) {
+      const Plane& plane = planes_[3 * l + k];
+      ProductGradient(d_features + l * n, features, k, n, d_plane);
+      T d_weight[4] = {};  // dL/d(each corner's weight)
+      for (int c = 0; c < 4; ++c) {
+        const T* entry = params_.data() + size_t{lookups[k].entries[c]} * n;
+        for (int f = 0; f < n; ++f) d_weight[c] += d_plane[f] * entry[f];
+      }
+      // The weights are bilinear in the fractions, which grow at `cells` per unit of the coordinate; a clamped
+      // coordinate has no gradient.
+      const T fu = lookups[k].fraction[0], fv = lookups[k].fraction[1];
+      const T d_fraction[2] = {(T(1) - fv) * (d_weight[1] - d_weight[0]) + fv * (d_weight[3] - d_weight[2]),
+                               (T(1) - fu) * (d_weight[2] - d_weight[0]) + fu * (d_weight[3] - d_weight[1])};
+      for (int a = 0; a < 2; ++a) {
+        const int axis = plane.axis[a];
+        if (p[axis] > T(0) && p[axis] < T(1)) d_p[axis] += d_fraction[a] * static_cast<T>(plane.cells[a]);
+      }
+    }
+  }
+}
+
+template <typename T>
+void PlaneGridEncoding<T>::InputGradient(const Matrix& input, const Matrix& d_output, Matrix* d_input) const {
   d_input->setZero(3, input.cols());
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, input.cols(), kBlock),
                     [&](const tbb::blocked_range<Eigen::Index>& range) {
                       FlushDenormalsOnThisThread();
-                      Lookup lookups[3];
-                      T features[3 * kMaxFeatures], d_plane[kMaxFeatures];
                       for (Eigen::Index i = range.begin(); i < range.end(); ++i) {
-                        const T* p = input.col(i).data();
-                        for (int l = 0; l < config_.levels; ++l) {
-                          ReadLevel(l, p, lookups, features);
-                          const T* d_out = d_output.col(i).data() + l * n;
-                          for (int k = 0; k < 3; ++k) {
-                            const Plane& plane = planes_[3 * l + k];
-                            const T* other0 = features + ((k + 1) % 3) * n;
-                            const T* other1 = features + ((k + 2) % 3) * n;
-                            for (int f = 0; f < n; ++f) d_plane[f] = d_out[f] * other0[f] * other1[f];
-                            T d_weight[4] = {};  // dL/d(each corner's weight)
-                            for (int c = 0; c < 4; ++c) {
-                              const T* entry = params_.data() + size_t{lookups[k].entries[c]} * n;
-                              for (int f = 0; f < n; ++f) d_weight[c] += d_plane[f] * entry[f];
-                            }
-                            // The weights are bilinear in the fractions, which grow at `cells` per unit of the
-                            // coordinate; a clamped coordinate has no gradient.
-                            const T fu = lookups[k].fraction[0], fv = lookups[k].fraction[1];
-                            const T d_fu = (T(1) - fv) * (d_weight[1] - d_weight[0]) + fv * (d_weight[3] - d_weight[2]);
-                            const T d_fv = (T(1) - fu) * (d_weight[2] - d_weight[0]) + fu * (d_weight[3] - d_weight[1]);
-                            for (int a = 0; a < 2; ++a) {
-                              const int axis = plane.axis[a];
-                              if (p[axis] <= T(0) || p[axis] >= T(1)) continue;
-                              (*d_input)(axis, i) += (a == 0 ? d_fu : d_fv) * static_cast<T>(plane.cells[a]);
-                            }
-                          }
-                        }
+                        AddInputGradient(input.col(i).data(), d_output.col(i).data(), d_input->col(i).data());
                       }
                     });
 }

@@ -82,6 +82,14 @@ class PlaneGridEncoding : public Encoding<T> {
   static void Blend(const T* table, int features, const Lookup& lookup, T* out);
   template <int kFeatures>
   static void Scatter(const T* d_features, int features, const Lookup& lookup, T* grads);
+  // Calls visit(point, features) with the three planes' features (features[k * F + f]) at `level` of each point
+  // begin..end, kFeatures features per level (0: any).
+  template <int kFeatures, class Visit>
+  void VisitLevel(int level, const Matrix& input, Eigen::Index begin, Eigen::Index end, Visit&& visit) const;
+  // dL/d(plane k's features) given dL/d(the level's product of the three) and the three planes' features.
+  static void ProductGradient(const T* d_out, const T* features, int plane, int n, T* d_plane);
+  // Adds dL/d(p) given dL/d(p's features at every level), into d_p.
+  void AddInputGradient(const T* p, const T* d_features, T* d_p) const;
   // Forward() of one level for points begin..end, kFeatures features per level (0: any).
   template <int kFeatures>
   void ForwardLevel(int level, const Matrix& input, Eigen::Index begin, Eigen::Index end, Matrix* output) const;

@@ -5,6 +5,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "encoding_checks.h"
 #include "nerf/encoding.h"
 #include "nerf/mlp.h"
 
@@ -12,14 +13,6 @@ namespace p2n::testing {
 namespace {
 
 using Matrix = Eigen::MatrixXd;
-
-Matrix Random(int rows, int cols, uint64_t seed, double low, double high) {
-  std::mt19937_64 random(seed);
-  std::uniform_real_distribution<double> uniform(low, high);
-  Matrix m(rows, cols);
-  for (Eigen::Index i = 0; i < m.size(); ++i) m.data()[i] = uniform(random);
-  return m;
-}
 
 // L = sum(weights .* f(x)): a scalar loss with a known gradient dL/df = weights.
 double MlpLoss(const Mlp<double>& mlp, const Matrix& input, const Matrix& weights) {
@@ -46,8 +39,8 @@ TEST_CASE("MLP gradients match finite differences", "[gradients]") {
   for (const OutputActivation activation : {OutputActivation::kNone, OutputActivation::kSigmoid}) {
     MlpConfig config{5, 3, 8, 2, activation};
     Mlp<double> mlp(config, 7);
-    const Matrix input = Random(5, 6, 1, -1, 1);
-    const Matrix weights = Random(3, 6, 2, -1, 1);
+    const Matrix input = RandomMatrix(5, 6, 1, -1, 1);
+    const Matrix weights = RandomMatrix(3, 6, 2, -1, 1);
     Matrix out, d_input;
     Mlp<double>::Cache cache;
     mlp.Forward(input, &out, &cache);
@@ -85,7 +78,7 @@ TEST_CASE("an MLP's input gradient can stop at its first input rows, the paramet
     using T = decltype(zero);
     using MatrixT = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic>;
     Mlp<T> mlp(MlpConfig{31, 3, 64, 2, OutputActivation::kSigmoid}, 7);
-    const MatrixT input = Random(31, 70, 1, -1, 1).cast<T>(), d_output = Random(3, 70, 2, -1, 1).cast<T>();
+    const MatrixT input = RandomMatrix(31, 70, 1, -1, 1).cast<T>(), d_output = RandomMatrix(3, 70, 2, -1, 1).cast<T>();
     MatrixT out, all, first;
     typename Mlp<T>::Cache cache;
     mlp.Forward(input, &out, &cache);
@@ -129,40 +122,9 @@ TEST_CASE("hash-grid gradients match finite differences, in 2D and 3D, dense and
     HashGridConfig config = SmallGridConfig();
     config.features_per_level = features;
     HashGridEncoding<double> grid(dims, config, 3);
-    const Matrix input = Random(dims, 70, 4, 0, 1);
-    const Matrix weights = Random(grid.output_dims(), 70, 5, -1, 1);
-    grid.Backward(input, weights);
-    const std::vector<double> analytic(grid.grads(), grid.grads() + grid.num_params());
-    // Every entry with a gradient is in a group the sparse Adam step will read.
-    for (size_t k = 0; k < grid.num_params(); ++k) {
-      if (analytic[k] != 0) REQUIRE(grid.touched()->marked(k / features / TouchMarks::kGroupEntries));
-    }
-    const auto loss = [&] {
-      Matrix out;
-      grid.Forward(input, &out);
-      return (out.array() * weights.array()).sum();
-    };
-    const double h = 1e-6;
-    double worst = 0;
-    size_t nonzero = 0;
-    for (size_t k = 0; k < grid.num_params(); ++k) {
-      const double saved = grid.params()[k];
-      grid.params()[k] = saved + h;
-      const double plus = loss();
-      grid.params()[k] = saved - h;
-      const double minus = loss();
-      grid.params()[k] = saved;
-      const double numeric = (plus - minus) / (2 * h);
-      worst = std::max(worst, std::abs(numeric - analytic[k]));
-      nonzero += std::abs(numeric) > 1e-9;
-    }
-    CHECK(worst < 1e-8);
-    CHECK(nonzero > 0);
-    // Backward adds to the gradient until ZeroGrad().
-    grid.Backward(input, weights);
-    for (size_t k = 0; k < grid.num_params(); ++k) CHECK(grid.grads()[k] == Approx(2 * analytic[k]).margin(1e-12));
-    grid.ZeroGrad();
-    CHECK(std::all_of(grid.grads(), grid.grads() + grid.num_params(), [](double g) { return g == 0; }));
+    const Matrix input = RandomMatrix(dims, 70, 4, 0, 1);
+    const Matrix weights = RandomMatrix(grid.output_dims(), 70, 5, -1, 1);
+    CHECK(CheckParameterGradients(grid, input, weights) > 0);
   }
 }
 
@@ -172,27 +134,10 @@ TEST_CASE("hash-grid gradients with respect to the input match finite difference
     std::mt19937_64 random(6);
     std::uniform_real_distribution<double> uniform(-1, 1);
     for (size_t k = 0; k < grid.num_params(); ++k) grid.params()[k] = uniform(random);  // features of size 1
-    Matrix input = Random(dims, 9, 4, 0.01, 0.99);
+    Matrix input = RandomMatrix(dims, 9, 4, 0.01, 0.99);
     input(0, 8) = 1.5;  // clamped along x: no gradient there
-    const Matrix weights = Random(grid.output_dims(), 9, 5, -1, 1);
-    Matrix d_input;
-    grid.InputGradient(input, weights, &d_input);
-    REQUIRE(d_input.rows() == dims);
-    REQUIRE(d_input.cols() == 9);
-    const auto loss = [&](const Matrix& points) {
-      Matrix out;
-      grid.Forward(points, &out);
-      return (out.array() * weights.array()).sum();
-    };
-    const double h = 1e-7;
-    for (Eigen::Index k = 0; k < input.size(); ++k) {
-      Matrix moved = input;
-      moved.data()[k] += h;
-      const double plus = loss(moved);
-      moved.data()[k] -= 2 * h;
-      const double numeric = (plus - loss(moved)) / (2 * h);
-      CHECK(d_input.data()[k] == Approx(numeric).margin(1e-6));
-    }
+    const Matrix weights = RandomMatrix(grid.output_dims(), 9, 5, -1, 1);
+    const Matrix d_input = CheckInputGradients(grid, input, weights);
     CHECK(d_input(0, 8) == 0);
     CHECK(d_input.cwiseAbs().maxCoeff() > 1);  // features of size 1 over cells of 1/20: slopes of tens
   }
@@ -217,7 +162,7 @@ TEST_CASE("the float hash grid (its own loops and layouts) agrees with the doubl
       grid.params()[k] = static_cast<float>(uniform(random));
       exact.params()[k] = grid.params()[k];
     }
-    const Matrix input = Random(3, 600, 4, 0, 1), d_output = Random(exact.output_dims(), 600, 5, -1, 1);
+    const Matrix input = RandomMatrix(3, 600, 4, 0, 1), d_output = RandomMatrix(exact.output_dims(), 600, 5, -1, 1);
     Matrix out;
     Eigen::MatrixXf out_float;
     exact.Forward(input, &out);

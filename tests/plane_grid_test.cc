@@ -5,6 +5,7 @@
 
 #include <random>
 
+#include "encoding_checks.h"
 #include "nerf/ngp_field.h"
 #include "nerf/plane_grid.h"
 
@@ -12,14 +13,6 @@ namespace p2n::testing {
 namespace {
 
 using Matrix = Eigen::MatrixXd;
-
-Matrix Random(int rows, int cols, uint64_t seed, double low, double high) {
-  std::mt19937_64 random(seed);
-  std::uniform_real_distribution<double> uniform(low, high);
-  Matrix m(rows, cols);
-  for (Eigen::Index i = 0; i < m.size(); ++i) m.data()[i] = uniform(random);
-  return m;
-}
 
 // Two levels, the image plane finer than the depth axis (as for a forward-facing scene).
 PlaneGridConfig SmallPlanes(int features) {
@@ -37,7 +30,7 @@ TEST_CASE("planes: one level with the xy plane linear in x and the others at 1 g
   for (int v = 0; v <= 5; ++v) {
     for (int u = 0; u <= 5; ++u) planes.params()[v * 6 + u] = u / 5.0;
   }
-  Matrix points = Random(3, 50, 2, 0, 1);
+  Matrix points = RandomMatrix(3, 50, 2, 0, 1);
   points.col(0) << 1, 1, 1;     // the far corner: the last cell's far edge
   points.col(1) << -3, 0.5, 7;  // outside: clamped into the cube
   Matrix out;
@@ -54,7 +47,7 @@ TEST_CASE("planes: a level is the product of its three planes, each bilinear in 
   // One cell a plane: xy = 2 + x, xz = 3 z, yz = 1 + y z.
   const double values[12] = {2, 3, 2, 3, 0, 0, 3, 3, 1, 1, 1, 2};
   std::copy(values, values + 12, planes.params());
-  const Matrix points = Random(3, 20, 3, 0, 1);
+  const Matrix points = RandomMatrix(3, 20, 3, 0, 1);
   Matrix out;
   planes.Forward(points, &out);
   for (Eigen::Index i = 0; i < points.cols(); ++i) {
@@ -68,39 +61,9 @@ TEST_CASE("planes: gradients of the features match finite differences, 1 to 8 fe
   for (const int features : {1, 3, 8}) {
     CAPTURE(features);
     PlaneGridEncoding<double> planes(SmallPlanes(features), 3);
-    const Matrix input = Random(3, 40, 4, 0, 1);
-    const Matrix weights = Random(planes.output_dims(), 40, 5, -1, 1);
-    planes.Backward(input, weights);
-    const std::vector<double> analytic(planes.grads(), planes.grads() + planes.num_params());
-    // Every entry with a gradient is in a group the sparse Adam step will read.
-    for (size_t k = 0; k < planes.num_params(); ++k) {
-      if (analytic[k] != 0) REQUIRE(planes.touched()->marked(k / features / TouchMarks::kGroupEntries));
-    }
-    const auto loss = [&] {
-      Matrix out;
-      planes.Forward(input, &out);
-      return (out.array() * weights.array()).sum();
-    };
-    const double h = 1e-6;
-    double worst = 0;
-    size_t nonzero = 0;
-    for (size_t k = 0; k < planes.num_params(); ++k) {
-      const double saved = planes.params()[k];
-      planes.params()[k] = saved + h;
-      const double plus = loss();
-      planes.params()[k] = saved - h;
-      const double minus = loss();
-      planes.params()[k] = saved;
-      const double numeric = (plus - minus) / (2 * h);
-      worst = std::max(worst, std::abs(numeric - analytic[k]));
-      nonzero += std::abs(numeric) > 1e-9;
-    }
-    CHECK(worst < 1e-8);
-    CHECK(nonzero > planes.num_params() / 2);
-    planes.Backward(input, weights);  // adds until ZeroGrad()
-    for (size_t k = 0; k < planes.num_params(); ++k) CHECK(planes.grads()[k] == Approx(2 * analytic[k]).margin(1e-12));
-    planes.ZeroGrad();
-    CHECK(std::all_of(planes.grads(), planes.grads() + planes.num_params(), [](double g) { return g == 0; }));
+    const Matrix input = RandomMatrix(3, 40, 4, 0, 1);
+    const Matrix weights = RandomMatrix(planes.output_dims(), 40, 5, -1, 1);
+    CHECK(CheckParameterGradients(planes, input, weights) > planes.num_params() / 2);
   }
 }
 
@@ -110,27 +73,10 @@ TEST_CASE("planes: gradients with respect to the input match finite differences,
   std::mt19937_64 random(6);
   std::uniform_real_distribution<double> uniform(-1, 1);
   for (size_t k = 0; k < planes.num_params(); ++k) planes.params()[k] = uniform(random);
-  Matrix input = Random(3, 9, 4, 0.01, 0.99);
+  Matrix input = RandomMatrix(3, 9, 4, 0.01, 0.99);
   input(2, 8) = 1.5;  // clamped along z
-  const Matrix weights = Random(planes.output_dims(), 9, 5, -1, 1);
-  Matrix d_input;
-  planes.InputGradient(input, weights, &d_input);
-  REQUIRE(d_input.rows() == 3);
-  REQUIRE(d_input.cols() == 9);
-  const auto loss = [&](const Matrix& points) {
-    Matrix out;
-    planes.Forward(points, &out);
-    return (out.array() * weights.array()).sum();
-  };
-  const double h = 1e-7;
-  for (Eigen::Index k = 0; k < input.size(); ++k) {
-    Matrix moved = input;
-    moved.data()[k] += h;
-    const double plus = loss(moved);
-    moved.data()[k] -= 2 * h;
-    const double numeric = (plus - loss(moved)) / (2 * h);
-    CHECK(d_input.data()[k] == Approx(numeric).margin(1e-6));
-  }
+  const Matrix weights = RandomMatrix(planes.output_dims(), 9, 5, -1, 1);
+  const Matrix d_input = CheckInputGradients(planes, input, weights);
   CHECK(d_input(2, 8) == 0);
   CHECK(d_input.cwiseAbs().maxCoeff() > 0.1);
 }
@@ -138,8 +84,8 @@ TEST_CASE("planes: gradients with respect to the input match finite differences,
 TEST_CASE("planes: in float with 8 features (the vector path) as in double", "[planes]") {
   PlaneGridEncoding<double> exact(SmallPlanes(8), 3);
   PlaneGridEncoding<float> planes(SmallPlanes(8), 3);
-  const Matrix input = Random(3, 300, 4, -0.1, 1.1);
-  const Matrix weights = Random(exact.output_dims(), 300, 5, -1, 1);
+  const Matrix input = RandomMatrix(3, 300, 4, -0.1, 1.1);
+  const Matrix weights = RandomMatrix(exact.output_dims(), 300, 5, -1, 1);
   Matrix out;
   Eigen::MatrixXf out_float;
   exact.Forward(input, &out);
