@@ -2,8 +2,8 @@
 // an Eigen single-precision GEMM of comparable shape (64 x 64 times 64 x N) and a large square one, then the
 // density and colour MLPs' forward + backward on N samples (FLOPs counted from their layer sizes), then the
 // whole field (hash grid included) and the hash grid alone, for the grid of NgpFieldConfig and those of the default
-// and quality presets. Uses the TBB threads given (default: all cores) by splitting N.
-// Usage: throughput_bench [SAMPLES [REPEATS]]
+// and quality presets, and the same for the planes (train.field planes) of the default preset. Uses the TBB threads
+// given (default: all cores) by splitting N. Usage: throughput_bench [SAMPLES [REPEATS]]
 
 #include <tbb/parallel_for.h>
 #include <Eigen/Core>
