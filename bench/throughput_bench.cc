@@ -145,7 +145,7 @@ int main(int argc, char** argv) {
   }
   // The planes (train.field planes) as the default preset trains them.
   p2n::NgpFieldConfig planes_config = config;
-  planes_config.planes = p2n::PlanesFor(p2n::PresetFor(p2n::PresetName::kDefault), p2n::SceneSpace::kForward);
+  planes_config.planes = p2n::PlanesFor(p2n::SceneSpace::kForward);
   p2n::NgpField<float> planes(planes_config, 1);
   const double whole = field_seconds(planes);
   const auto [forward, backward] = grid_seconds(planes.encoding());

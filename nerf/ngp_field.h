@@ -1,10 +1,9 @@
 #pragma once
 // The `ngp` radiance field (instant-ngp's design): a multiresolution hash grid over the unit cube (or K-planes'
-// factorised planes, `planes`), a density
-// MLP (one hidden layer of 64) whose first output is the log-density and whose others are geometry features,
-// and a colour MLP (two hidden layers of 64) fed the features and the view direction's spherical harmonics.
-// Density = exp(clamped log-density): the clamp keeps it finite (at most e^kMaxLogDensity) and its gradient
-// bounded.
+// factorised planes: `planes`), a density MLP (one hidden layer of 64) whose first output is the log-density and
+// whose others are geometry features, and a colour MLP (two hidden layers of 64) fed the features and the view
+// direction's spherical harmonics. Density = exp(clamped log-density): the clamp keeps it finite (at most
+// e^kMaxLogDensity) and its gradient bounded.
 
 #include <nlohmann/json.hpp>
 

@@ -13,8 +13,7 @@ TrainPreset PresetFor(PresetName name) {
   return {240, 256, 512, 1 << 16, 128, {16, 2, 17, 16, 2048}, 19, 256, 1 << 17};
 }
 
-PlaneGridConfig PlanesFor(const TrainPreset& preset, SceneSpace space) {
-  (void)preset;
+PlaneGridConfig PlanesFor(SceneSpace space) {
   PlaneGridConfig planes;
   // Forward-facing: 256 cells across the image plane, 64 in depth (fern, 2 minutes of the default preset: above
   // 512 x 512 and 256 x 256, which take fewer steps; docs/benchmarks.md, the planes).

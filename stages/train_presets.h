@@ -19,9 +19,8 @@ struct EnumNames<PresetName> {
 // train.distortion auto in unbounded and forward scenes.
 inline constexpr double kAutoDistortion = 0.002;
 
-// The planes (train.field planes) of a preset for a scene space.
-struct TrainPreset;
-PlaneGridConfig PlanesFor(const TrainPreset& preset, SceneSpace space);
+// The planes (train.field planes) for a scene space, in every preset.
+PlaneGridConfig PlanesFor(SceneSpace space);
 
 struct TrainPreset {
   double time_budget;      // seconds

@@ -208,7 +208,7 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
       field.grid.log2_table_size = preset.bounded_table_log2;
     if (options.hash_table_log2 > 0) field.grid.log2_table_size = options.hash_table_log2;
     if (options.field == FieldKind::kPlanes) {
-      field.planes = PlanesFor(preset, space);
+      field.planes = PlanesFor(space);
       if (options.plane_resolution > 0) field.planes->finest_resolution = options.plane_resolution;
       if (options.plane_depth_resolution > 0) field.planes->depth_resolution = options.plane_depth_resolution;
     }
