@@ -124,7 +124,7 @@ void PlaneGridEncoding<T>::ReadLevel(int level, const T* p, Lookup* lookups, T* 
 
 template <typename T>
 void PlaneGridEncoding<T>::LocateGroup(int level, const Matrix& input, Eigen::Index first, int count,
-                                       Lookup (*lookups)[kGroup]) const {
+                                       Lookup (*lookups)[kGroup], int only) const {
   // As Locate(), but each axis's cells and fractions in loops over the points without branches, which vectorise.
   uint32_t cell[3][kGroup];
   T fraction[3][kGroup];
@@ -144,6 +144,7 @@ void PlaneGridEncoding<T>::LocateGroup(int level, const Matrix& input, Eigen::In
     }
   }
   for (int k = 0; k < 3; ++k) {
+    if (only >= 0 && k != only) continue;
     const Plane& plane = planes_[3 * level + k];
     const int u = plane.axis[0], v = plane.axis[1];
     for (int i = 0; i < count; ++i) {
@@ -291,7 +292,7 @@ void PlaneGridEncoding<T>::ScatterPlane(int plane, const Matrix& input, const T*
   const Lookup* lookups = all_lookups[plane % 3];
   for (Eigen::Index group = 0; group < input.cols(); group += kGroup) {
     const int count = static_cast<int>(std::min<Eigen::Index>(kGroup, input.cols() - group));
-    LocateGroup(plane / 3, input, group, count, all_lookups);
+    LocateGroup(plane / 3, input, group, count, all_lookups, plane % 3);
     for (int i = 0; i < count; ++i) {
       if (i + kPrefetchAhead < count) {
         for (const int c : {0, 2})

@@ -74,7 +74,9 @@ class PlaneGridEncoding : public Encoding<T> {
   // Forward() and Backward() locate a group of points on a level's three planes (lookups[plane][point]) before
   // they read any entry, and ask the cache for a point's entries kPrefetchAhead points ahead, as the hash grid does.
   static constexpr int kGroup = 64, kPrefetchAhead = 8;
-  void LocateGroup(int level, const Matrix& input, Eigen::Index first, int count, Lookup (*lookups)[kGroup]) const;
+  // `only` >= 0: that plane's lookups alone.
+  void LocateGroup(int level, const Matrix& input, Eigen::Index first, int count, Lookup (*lookups)[kGroup],
+                   int only = -1) const;
   static void Prefetch(const Lookup (*lookups)[kGroup], int i, int features, const T* table, bool write);
   // out = the located point's features (kFeatures of them, 0: `features`); Scatter() adds d_features times each
   // corner's weight into `grads`.
