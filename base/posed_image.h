@@ -12,6 +12,12 @@
 
 namespace p2n {
 
+// A sparse point a training view sees (the structure from motion's): where it appears (pixels), how far it lies along
+// the ray through there (world units), and the point's reprojection error (pixels): free depth for that pixel.
+struct DepthPoint {
+  float u = 0, v = 0, distance = 0, error = 0;
+};
+
 // One posed image. Cameras are in the normalised world (transforms.json's frame); pixels are 8-bit RGB or
 // RGBA (straight alpha), row-major.
 struct TrainView {
@@ -20,6 +26,7 @@ struct TrainView {
   int channels = 3;
   std::vector<uint8_t> pixels;
   std::string name;
+  std::vector<DepthPoint> depth_points;  // loaded for the depth loss only
 
   // Channel c (0-2) of a pixel (index y * width + x) as a float in [0, 1], over `background` by its alpha.
   float OnBackground(size_t pixel, int c, float background) const {

@@ -183,25 +183,7 @@ ColmapModel ReadBinary(const fs::path& folder) {
     }
     in.ExpectEnd();
   }
-  {
-    BinaryReader in(folder / "points3D.bin");
-    const uint64_t count = in.ReadCount("point count", 8 + 24 + 3 + 8 + 8);
-    for (uint64_t i = 0; i < count; ++i) {
-      ColmapPoint3D point;
-      point.id = in.Read<uint64_t>("point id");
-      for (int k = 0; k < 3; ++k) point.xyz[k] = in.Read<double>("point position");
-      for (int k = 0; k < 3; ++k) point.rgb[k] = in.Read<uint8_t>("point colour");
-      point.error = in.Read<double>("point error");
-      const uint64_t track = in.ReadCount("track length", 8);
-      point.track.reserve(track);
-      for (uint64_t k = 0; k < track; ++k) {
-        const uint32_t image_id = in.Read<uint32_t>("track image id");
-        point.track.emplace_back(image_id, in.Read<uint32_t>("track point index"));
-      }
-      if (!model.points.emplace(point.id, point).second) in.Fail(format("point {} appears twice", point.id));
-    }
-    in.ExpectEnd();
-  }
+  model.points = ReadColmapPointsBinary(folder / "points3D.bin");
   return model;
 }
 
@@ -309,6 +291,28 @@ void Put(std::string& out, T value) {
 }
 
 }  // namespace
+
+std::map<uint64_t, ColmapPoint3D> ReadColmapPointsBinary(const fs::path& file) {
+  std::map<uint64_t, ColmapPoint3D> points;
+  BinaryReader in(file);
+  const uint64_t count = in.ReadCount("point count", 8 + 24 + 3 + 8 + 8);
+  for (uint64_t i = 0; i < count; ++i) {
+    ColmapPoint3D point;
+    point.id = in.Read<uint64_t>("point id");
+    for (int k = 0; k < 3; ++k) point.xyz[k] = in.Read<double>("point position");
+    for (int k = 0; k < 3; ++k) point.rgb[k] = in.Read<uint8_t>("point colour");
+    point.error = in.Read<double>("point error");
+    const uint64_t track = in.ReadCount("track length", 8);
+    point.track.reserve(track);
+    for (uint64_t k = 0; k < track; ++k) {
+      const uint32_t image_id = in.Read<uint32_t>("track image id");
+      point.track.emplace_back(image_id, in.Read<uint32_t>("track point index"));
+    }
+    if (!points.emplace(point.id, point).second) in.Fail(format("point {} appears twice", point.id));
+  }
+  in.ExpectEnd();
+  return points;
+}
 
 int ColmapModelParamCount(const std::string& model) {
   for (const CameraModelInfo& info : kCameraModels) {

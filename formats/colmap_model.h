@@ -68,6 +68,8 @@ PinholeCamera PinholeFromColmap(const ColmapCamera& camera, std::array<double, 4
 ColmapModel ReadColmapModel(const std::filesystem::path& folder);
 ColmapModel ReadColmapModelBinary(const std::filesystem::path& folder);
 ColmapModel ReadColmapModelText(const std::filesystem::path& folder);
+// points3D.bin alone (a dataset may ship it without images.bin); UserError naming the file and the point.
+std::map<uint64_t, ColmapPoint3D> ReadColmapPointsBinary(const std::filesystem::path& file);
 void WriteColmapModelBinary(const ColmapModel& model, const std::filesystem::path& folder);
 void WriteColmapModelText(const ColmapModel& model, const std::filesystem::path& folder);
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <set>
 
 #include "base/errors.h"
 #include "base/file_util.h"
@@ -34,6 +36,68 @@ TransformsMeta AddTransforms(const fs::path& root, const fs::path& file, const s
   }
   out->warnings.insert(out->warnings.end(), transforms.warnings.begin(), transforms.warnings.end());
   return transforms.meta;
+}
+
+// The model's points, their errors and each view's points (`view_of`: image id to view index).
+void AddPoints(const std::map<uint64_t, ColmapPoint3D>& points, const std::map<uint32_t, size_t>& view_of,
+               ImportedDataset* out) {
+  out->view_points.assign(out->views.size(), {});
+  for (const auto& [id, point] : points) {
+    const uint32_t index = static_cast<uint32_t>(out->points.size());
+    out->points.push_back(point.xyz);
+    out->colours.push_back(point.rgb);
+    out->point_errors.push_back(static_cast<float>(point.error));
+    for (const auto& [image, unused] : point.track) {
+      const auto it = view_of.find(image);
+      if (it != view_of.end()) out->view_points[it->second].push_back(index);
+    }
+  }
+  for (std::vector<uint32_t>& list : out->view_points) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+  }
+}
+
+// The share of the tracks' observations that project in front of their view and inside its image.
+double ShareInFrame(const ImportedDataset& dataset) {
+  size_t inside = 0, total = 0;
+  for (size_t v = 0; v < dataset.views.size(); ++v) {
+    const PinholeCamera& camera = dataset.views[v].view.camera;
+    for (const uint32_t p : dataset.view_points[v]) {
+      double depth;
+      const Eigen::Vector2d pixel = Project(camera, dataset.points[p], &depth);
+      inside +=
+          depth > 0 && pixel.x() >= 0 && pixel.y() >= 0 && pixel.x() <= camera.width && pixel.y() <= camera.height;
+      ++total;
+    }
+  }
+  return total == 0 ? 0 : double(inside) / total;
+}
+
+// LLFF's sparse/0/points3D.bin when the dataset ships it (fern does, without images.bin): COLMAP numbered the
+// images in the order LLFF sorts them, so the k-th image id is the k-th view. That is a convention, so it is
+// checked: the tracks are kept only when nearly all their observations fall inside their views.
+void AddLlffPoints(const fs::path& root, ImportedDataset* out) {
+  const fs::path file = root / "sparse" / "0" / "points3D.bin";
+  if (!fs::exists(file)) return;
+  const std::map<uint64_t, ColmapPoint3D> points = ReadColmapPointsBinary(file);
+  out->files.push_back(file);
+  std::set<uint32_t> ids;
+  for (const auto& [id, point] : points) {
+    if (!point.xyz.allFinite() || !std::isfinite(point.error)) Bad(file, format("point {}", id), "is not finite");
+    for (const auto& [image, unused] : point.track) ids.insert(image);
+  }
+  std::map<uint32_t, size_t> view_of;
+  if (ids.size() == out->views.size()) {
+    for (const uint32_t id : ids) view_of.emplace(id, view_of.size());
+  }
+  AddPoints(points, view_of, out);
+  constexpr double kMinShareInFrame = 0.95;
+  if (view_of.empty() || ShareInFrame(*out) < kMinShareInFrame) {
+    out->warnings.push_back(
+        format("'{}': its tracks do not fit the views in order; its points are kept without them", file.string()));
+    out->view_points.clear();
+  }
 }
 
 void LoadLlff(const fs::path& root, ImportedDataset* out) {
@@ -89,6 +153,7 @@ void LoadLlff(const fs::path& root, ImportedDataset* out) {
     out->files.push_back(files[i]);
     out->views.push_back(std::move(view));
   }
+  AddLlffPoints(root, out);
 }
 
 void LoadColmapProject(const fs::path& root, ImportedDataset* out) {
@@ -112,10 +177,9 @@ void LoadColmapProject(const fs::path& root, ImportedDataset* out) {
     out->files.push_back(view.source);
     out->views.push_back(std::move(view));
   }
-  for (const auto& [id, point] : model.points) {
-    out->points.push_back(point.xyz);
-    out->colours.push_back(point.rgb);
-  }
+  std::map<uint32_t, size_t> view_of;
+  for (const auto& [id, image] : model.images) view_of.emplace(id, view_of.size());
+  AddPoints(model.points, view_of, out);
 }
 
 void LoadNpz(const fs::path& file, ImportedDataset* out) {

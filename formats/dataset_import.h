@@ -29,7 +29,10 @@ struct ImportedDataset {
   std::vector<ImportedView> views;
   std::vector<Eigen::Vector3d> points;  // sparse points, when the dataset has them
   std::vector<std::array<uint8_t, 3>> colours;
-  std::vector<std::filesystem::path> files;  // every file the result depends on (for the cache key)
+  // Their tracks, when the dataset has them: each point's reprojection error (pixels), each view's points.
+  std::vector<float> point_errors;
+  std::vector<std::vector<uint32_t>> view_points;  // empty, or one list a view
+  std::vector<std::filesystem::path> files;        // every file the result depends on (for the cache key)
   std::vector<std::string> warnings;
   TransformsMeta meta;  // transforms.json's own fields (LoadTransformsJson); the defaults for other datasets
 

@@ -248,6 +248,21 @@ std::vector<CameraView> NormalizedViews(const std::vector<CameraView>& views, co
   return out;
 }
 
+void KeepTrainingViews(std::vector<CameraView>* views, int count) {
+  std::vector<CameraView*> train;
+  for (CameraView& view : *views) {
+    if (view.split == "train") train.push_back(&view);
+  }
+  const size_t n = train.size();
+  if (count <= 0 || size_t(count) >= n) return;
+  std::vector<bool> keep(n, false);
+  if (count == 1) keep[n / 2] = true;
+  for (int i = 0; count > 1 && i < count; ++i) keep[std::lround(double(i) * double(n - 1) / (count - 1))] = true;
+  for (size_t i = 0; i < n; ++i) {
+    if (!keep[i]) train[i]->split = "unused";
+  }
+}
+
 std::string AssignHoldout(std::vector<CameraView>* views, int every, bool inside_span) {
   std::vector<CameraView*> open;  // the views without a split of their own
   for (CameraView& view : *views) {

@@ -88,6 +88,10 @@ inline constexpr size_t kFewViews = 20;
 // ("" when none is held out).
 std::string AssignHoldout(std::vector<CameraView>* views, int every, bool inside_span);
 
+// Keeps `count` of the training views (0: all), spread evenly over them in order (the first and the last among them);
+// the others' split becomes "unused": what a capture of fewer photos would train on, scored on the same views.
+void KeepTrainingViews(std::vector<CameraView>* views, int count);
+
 // Centres, ups and viewing directions of the views, for NormalizeScene.
 void CameraFrames(const std::vector<CameraView>& views, std::vector<Eigen::Vector3d>* centres,
                   std::vector<Eigen::Vector3d>* ups, std::vector<Eigen::Vector3d>* axes);

@@ -32,6 +32,10 @@ constexpr double kPoseRateShare = 0.1;
 // grid's gradient with respect to its input costs about as much as its backward pass, and a pose has 6 values
 // where a batch has thousands of rays.
 constexpr size_t kPoseChunkShare = 8;
+// With a depth loss, this share of a batch's rays goes through depth points (the rest are drawn as without).
+constexpr double kDepthRayShare = 0.125;
+// A depth point's weight falls off with its reprojection error: 1 / (1 + (error / kDepthErrorScale)^2).
+constexpr float kDepthErrorScale = 1.0f;
 // A learnt background moves at the full rate once this share of a batch's light comes from behind the scene, in
 // proportion below it.
 constexpr double kBackgroundSeen = 0.01;
@@ -97,6 +101,7 @@ void TrainerOptions::Check() const {
   CheckField(learning_rate > 0, kWhat, "learning_rate", "be positive", learning_rate);
   CheckField(final_learning_rate > 0, kWhat, "final_learning_rate", "be positive", final_learning_rate);
   CheckField(distortion_weight >= 0, kWhat, "distortion_weight", "be at least 0", distortion_weight);
+  CheckField(depth_weight >= 0 && std::isfinite(depth_weight), kWhat, "depth_weight", "be at least 0", depth_weight);
   CheckField(min_transmittance >= 0 && min_transmittance < 1, kWhat, "min_transmittance", "be in [0, 1)",
              min_transmittance);
   CheckField(refine_warmup >= 0, kWhat, "refine_warmup", "be at least 0", refine_warmup);
@@ -163,6 +168,11 @@ Trainer::Trainer(const TrainerOptions& options, const TrainingData& data) : opti
   }
   pixel_offsets_.push_back(offset);
   if (options.error_sampling) error_map_ = std::make_unique<ErrorMap>(sizes);
+  if (options.depth_weight > 0) {
+    for (size_t v = 0; v < data.train.size(); ++v) {
+      for (size_t k = 0; k < data.train[v].depth_points.size(); ++k) depth_points_.emplace_back(v, k);
+    }
+  }
 }
 
 double Trainer::LearningRate(double progress) const {
@@ -192,17 +202,37 @@ RayBatch Trainer::SampleBatch(int rays) {
     batch.weights.resize(rays);
     batch.cells.resize(rays);
   }
+  const int depth_rays = depth_points_.empty() ? 0 : static_cast<int>(std::ceil(kDepthRayShare * rays));
+  if (depth_rays > 0) batch.depth.assign(rays, Eigen::Vector2f::Zero());
   std::mt19937_64 random(MixSeed(options_.seed, step_, 0));
   std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::uniform_int_distribution<size_t> any_depth_point(0, std::max<size_t>(depth_points_.size(), 1) - 1);
   for (int r = 0; r < rays; ++r) {
-    const ErrorMap::Draw draw = DrawPixel(&random);
+    ErrorMap::Draw draw;
+    double u, v;
+    if (r < depth_rays) {  // through a depth point, exactly where it appears
+      const auto [view, k] = depth_points_[any_depth_point(random)];
+      const DepthPoint& point = data_.train[view].depth_points[k];
+      draw.view = view;
+      draw.cell = RayBatch::kNoCell;
+      u = point.u;
+      v = point.v;
+      draw.x = std::clamp(static_cast<int>(u), 0, data_.train[view].camera.width - 1);
+      draw.y = std::clamp(static_cast<int>(v), 0, data_.train[view].camera.height - 1);
+      const float ratio = point.error / kDepthErrorScale;
+      batch.depth[r] = Eigen::Vector2f(point.distance, 1.0f / (1.0f + ratio * ratio));
+    } else {
+      draw = DrawPixel(&random);
+      u = draw.x + unit(random);
+      v = draw.y + unit(random);
+    }
     if (error_map_) {
       batch.weights[r] = draw.weight;
       batch.cells[r] = draw.cell;
     }
     const TrainView& view = data_.train[draw.view];
     const size_t pixel = size_t(draw.y) * view.camera.width + draw.x;
-    batch.rays[r] = CameraRay(view.camera, draw.x + unit(random), draw.y + unit(random));
+    batch.rays[r] = CameraRay(view.camera, u, v);
     batch.near_far[r] = Eigen::Vector2d(view.near, view.far);
     batch.views[r] = static_cast<int>(draw.view);
     for (int c = 0; c < 3; ++c) {
@@ -262,8 +292,19 @@ struct Trainer::Chunk {
   Eigen::MatrixXf used_positions, d_encoded;  // of those
   double d_encoded_magnitude = 0;             // the sum of |d_encoded|
   double loss = 0;                            // weighted, summed over the rays
+  double depth_loss = 0;                      // weighted, summed over the rays with a depth target
+  size_t depth_rays = 0;                      // those rays
   std::vector<float> ray_losses;              // each ray's, unweighted
 };
+
+float Trainer::DepthLoss(float depth, const Eigen::Vector2f& target, size_t rays, Chunk* chunk) const {
+  const float distance = target[0], weight = static_cast<float>(options_.depth_weight) * target[1];
+  if (weight == 0 || !(distance > 0)) return 0.0f;
+  const float relative = (depth - distance) / distance;
+  chunk->depth_loss += weight * relative * relative;
+  ++chunk->depth_rays;
+  return 2 * weight * relative / distance / static_cast<float>(rays);
+}
 
 void Trainer::MarchChunk(const RayBatch& batch, const std::vector<Ray>& rays, size_t c, Chunk* chunk) const {
   std::mt19937_64 random(MixSeed(options_.seed, step_, 2 + c));
@@ -348,7 +389,9 @@ void Trainer::BackpropagateChunk(const RayBatch& batch, const std::vector<Ray>& 
     chunk->background_weight += result.transmittance;
     for (size_t k = 0; k < result.used; ++k) chunk->used.push_back(static_cast<Eigen::Index>(o + k));
     if (segments.count == 0) continue;
-    CompositeBackward(segments, background, result, d_rgb, 0.0f, 0.0f, d_density.data() + o, d_colour.data() + 3 * o);
+    const float d_depth = batch.depth.empty() ? 0.0f : DepthLoss(result.depth, batch.depth[b], rays.size(), chunk);
+    CompositeBackward(segments, background, result, d_rgb, 0.0f, d_depth, d_density.data() + o,
+                      d_colour.data() + 3 * o);
     if (options_.distortion_weight > 0) {
       const float distortion_scale = static_cast<float>(options_.distortion_weight / rays.size()) * weight;
       AddDistortionGradient(model_, rays[b], segments, result.used, distortion_scale, d_density.data() + o);
@@ -426,11 +469,14 @@ StepResult Trainer::SumChunks(std::vector<Chunk>* chunks, double* d_encoded_magn
   // A hash-table entry's gradient sums weight (<= 1) x dL/d(encoding) over samples, so this sum bounds them all:
   // the table's gradient is finite when the sum is, with room to spare for rounding.
   double background_weight = 0;
+  size_t depth_rays = 0;
   for (size_t c = 0; c < chunks->size(); ++c) {
     const Chunk& chunk = (*chunks)[c];
     *d_encoded_magnitude += chunk.d_encoded_magnitude;
     result.rays += chunk.count;
     result.loss += chunk.loss;
+    result.depth_loss += chunk.depth_loss;
+    depth_rays += chunk.depth_rays;
     result.samples += chunk.offsets.back();
     result.samples_used += chunk.used.size();
     if (c > 0) {
@@ -442,13 +488,14 @@ StepResult Trainer::SumChunks(std::vector<Chunk>* chunks, double* d_encoded_magn
   }
   const double rays = static_cast<double>(std::max<size_t>(result.rays, 1));
   result.loss /= rays;
+  result.depth_loss /= static_cast<double>(std::max<size_t>(depth_rays, 1));
   background_seen_ = background_weight / rays;
   return result;
 }
 
 std::string Trainer::GradientProblem(const StepResult& result, const std::vector<float>& d_dense,
                                      double d_encoded_magnitude) const {
-  if (!std::isfinite(result.loss)) return "the loss is not finite";
+  if (!std::isfinite(result.loss) || !std::isfinite(result.depth_loss)) return "the loss is not finite";
   if (!AllFinite(d_dense)) return "a network gradient is not finite";
   if (!AllFinite(appearance_grads_)) return "an appearance gradient is not finite";
   if (!AllFinite(background_grads_)) return "the background's gradient is not finite";
@@ -503,7 +550,10 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
   UpdateParameters(LearningRate(progress), d_dense.data(), refine);
   if (error_map_ && !batch.cells.empty()) {
     for (const Chunk& chunk : chunks) {
-      for (size_t r = 0; r < chunk.count; ++r) error_map_->Record(batch.cells[chunk.first + r], chunk.ray_losses[r]);
+      for (size_t r = 0; r < chunk.count; ++r) {
+        const uint32_t cell = batch.cells[chunk.first + r];
+        if (cell != RayBatch::kNoCell) error_map_->Record(cell, chunk.ray_losses[r]);
+      }
     }
     error_map_->Rebuild();
   }

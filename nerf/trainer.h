@@ -65,6 +65,10 @@ struct TrainerOptions {
   bool refine_cameras = false;  // a pose correction per training image (camera_refinement.h)
   int refine_warmup = 100;      // steps before the corrections learn (a younger field's gradients mislead)
   bool error_sampling = false;  // pixels drawn by the error map (error_map.h), their losses weighted
+  // Weight of the depth loss on rays through the training views' depth points (TrainView::depth_points), as
+  // depth-supervised NeRF: ((rendered depth - the point's distance) / distance)^2, less for points the structure
+  // from motion placed badly; 0: off.
+  double depth_weight = 0;
   uint64_t seed = 0;
 
   // std::invalid_argument naming the field and its rule (the Trainer checks its options).
@@ -78,11 +82,16 @@ struct RayBatch {
   Eigen::Matrix3Xf target, background;
   std::vector<int> views;       // each ray's training view, for its appearance (empty: none)
   std::vector<float> weights;   // each ray's loss weight (empty: all 1)
-  std::vector<uint32_t> cells;  // each ray's error-map cell (empty: none), where its loss is recorded
+  std::vector<uint32_t> cells;  // each ray's error-map cell (empty: none), where its loss is recorded; kNoCell: none
+  // Each ray's depth target: the distance along it and the depth loss's weight (empty: none; weight 0: none).
+  std::vector<Eigen::Vector2f> depth;
+
+  static constexpr uint32_t kNoCell = ~uint32_t{0};
 };
 
 struct StepResult {
-  double loss = 0;  // of the batch: the photometric loss, mean over rays
+  double loss = 0;        // of the batch: the photometric loss, mean over rays
+  double depth_loss = 0;  // the depth loss (weighted), mean over the rays with a depth target
   size_t rays = 0;
   size_t samples = 0;       // marched and evaluated
   size_t samples_used = 0;  // before early termination (the ones with gradients)
@@ -151,6 +160,9 @@ class Trainer {
   double LearningRate(double progress) const;
   // The phases of StepOnBatch(): chunk c's rays marched; every sample's hash-grid encoding; a chunk's networks,
   // compositing and gradients; the pose corrections' gradients (after the hash grid's); the optimisers' steps.
+  // The depth loss of a ray that renders `depth` against `target` (RayBatch::depth), added to the chunk's; returns
+  // dL/d(depth) for a batch of `rays`.
+  float DepthLoss(float depth, const Eigen::Vector2f& target, size_t rays, Chunk* chunk) const;
   void MarchChunk(const RayBatch& batch, const std::vector<Ray>& rays, size_t c, Chunk* chunk) const;
   Eigen::MatrixXf EncodeBatch(std::vector<Chunk>* chunks) const;
   void BackpropagateChunk(const RayBatch& batch, const std::vector<Ray>& rays, const Eigen::MatrixXf& encoded,
@@ -184,9 +196,10 @@ class Trainer {
   size_t dense_count_ = 0;
   int step_ = 0;
   int skipped_ = 0;
-  double samples_per_ray_ = 0;           // running mean, for the batch size
-  std::vector<size_t> pixel_offsets_;    // first global pixel index of each training view
-  std::unique_ptr<ErrorMap> error_map_;  // with options.error_sampling
+  double samples_per_ray_ = 0;                               // running mean, for the batch size
+  std::vector<size_t> pixel_offsets_;                        // first global pixel index of each training view
+  std::unique_ptr<ErrorMap> error_map_;                      // with options.error_sampling
+  std::vector<std::pair<uint32_t, uint32_t>> depth_points_;  // (training view, its depth point), with depth_weight
 };
 
 }  // namespace p2n

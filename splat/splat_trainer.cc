@@ -281,7 +281,7 @@ std::vector<TrainView> HalfSizeViews(const std::vector<TrainView>& views) {
     if (w < 1 || ht < 1)
       throw std::invalid_argument("HalfSizeViews: a view of " + std::to_string(view.camera.width) + "x" +
                                   std::to_string(view.camera.height) + " pixels");
-    TrainView h{view.camera, view.near, view.far, c, {}, view.name};
+    TrainView h{view.camera, view.near, view.far, c, {}, view.name, {}};
     h.camera.width = w, h.camera.height = ht;
     h.camera.fx /= 2, h.camera.fy /= 2, h.camera.cx /= 2, h.camera.cy /= 2;
     h.pixels.assign(size_t(w) * ht * c, 0);
@@ -311,7 +311,7 @@ std::vector<TrainView> FittedViews(const std::vector<TrainView>& views, int max_
   for (const TrainView& view : views) {
     const int width = std::max(1, static_cast<int>(std::lround(view.camera.width * scale)));
     const int height = std::max(1, static_cast<int>(std::lround(view.camera.height * scale)));
-    TrainView small{ResizedCamera(view.camera, width, height), view.near, view.far, view.channels, {}, view.name};
+    TrainView small{ResizedCamera(view.camera, width, height), view.near, view.far, view.channels, {}, view.name, {}};
     small.pixels.resize(size_t(width) * height * view.channels);
     const cv::Mat source(view.camera.height, view.camera.width, CV_8UC(view.channels),
                          const_cast<uint8_t*>(view.pixels.data()));

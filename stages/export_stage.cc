@@ -88,7 +88,7 @@ DepthSamples SampleDepths(const StageContext& context, const fs::path& model_fil
   std::vector<TrainView> views;  // the training views' cameras, without their pixels
   for (const ImportedView& view : dataset.views) {
     if (view.view.split != "train") continue;
-    views.push_back({view.view.camera, view.view.near, view.view.far, 3, {}, view.source.filename().string()});
+    views.push_back({view.view.camera, view.view.near, view.view.far, 3, {}, view.source.filename().string(), {}});
   }
   const std::shared_ptr<const ViewRenders> views_rendered =
       RenderViewsSmall(context, model_file, model, views, options.points_width, "export: point cloud");

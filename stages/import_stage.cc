@@ -11,6 +11,7 @@
 #include "base/image_io.h"
 #include "formats/dataset_import.h"
 #include "formats/ply.h"
+#include "formats/sparse_tracks.h"
 #include "pipeline/hash.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
@@ -132,11 +133,14 @@ Normalization WriteCameras(const ImportedDataset& dataset, const fs::path& input
   // LLFF data keeps the NeRF paper's protocol (every 8th from the first), whatever its size.
   if (!has_split)
     transforms.meta.heldout_rule = AssignHoldout(&views, poses.holdout_every, dataset.kind != DatasetKind::kLlff);
+  KeepTrainingViews(&views, poses.train_views);
   Normalization& normalization = transforms.meta.normalization;
   if (poses.normalize) {
     std::vector<Eigen::Vector3d> centres, ups, axes;
     CameraFrames(views, &centres, &ups, &axes);
-    normalization = NormalizeScene(centres, ups, axes, dataset.points);
+    // LLFF data keeps the frame its cameras give (the points it may ship came later to it, for their depths).
+    const bool llff = dataset.kind == DatasetKind::kLlff;
+    normalization = NormalizeScene(centres, ups, axes, llff ? std::vector<Eigen::Vector3d>{} : dataset.points);
     for (const std::string& warning : normalization.warnings) LogWarning("import: " + warning);
   }
   views = NormalizedViews(views, normalization);
@@ -151,6 +155,11 @@ Normalization WriteCameras(const ImportedDataset& dataset, const fs::path& input
                        dataset.colours[i]});
     }
     WritePly(out.sparse_points(), cloud);
+  }
+  if (!dataset.view_points.empty()) {
+    SparseTracks tracks{dataset.point_errors, {}};
+    for (size_t i = 0; i < views.size(); ++i) tracks.views.push_back({views[i].file_path, dataset.view_points[i]});
+    tracks.Write(out.sparse_tracks());
   }
   return normalization;
 }

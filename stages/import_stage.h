@@ -37,8 +37,8 @@ class ImportStage : public StageOf<PosesResult> {
  public:
   // 2: images downsized to poses.max_image_size; 3: the background recorded only where the images show it, and
   // fewer than 20 views (but LLFF data) hold out views inside the span of the others; 4: transparent images keep
-  // their alpha
-  int format_version() const override { return 4; }
+  // their alpha; 5: sparse_tracks.json, and LLFF's points where the dataset has them
+  int format_version() const override { return 5; }
   std::vector<std::string> option_sections() const override {
     return {PosesOptions::kSection, ImportOptions::kSection};
   }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 #include "base/camera.h"
 #include "base/errors.h"
@@ -14,6 +15,7 @@
 #include "formats/colmap_model.h"
 #include "formats/ply.h"
 #include "formats/scene_normalization.h"
+#include "formats/sparse_tracks.h"
 #include "formats/transforms_json.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
@@ -64,10 +66,33 @@ void DownsizeLargeImages(const fs::path& out, int max_side, std::vector<CameraVi
                  views->size(), max_side, OptionKey(&PosesOptions::max_image_size)));
 }
 
+// Each view's points (indices in the model's order, as sparse_points.ply holds them) and each point's error.
+SparseTracks TracksOf(const ColmapModel& model, const std::vector<const ColmapImage*>& images,
+                      const std::vector<CameraView>& views) {
+  SparseTracks tracks;
+  std::map<uint64_t, uint32_t> index;
+  for (const auto& [id, point] : model.points) {
+    index.emplace(id, static_cast<uint32_t>(tracks.errors.size()));
+    tracks.errors.push_back(static_cast<float>(point.error));
+  }
+  for (size_t i = 0; i < images.size(); ++i) {
+    SparseTrackView view{views[i].file_path, {}};
+    for (const uint64_t id : images[i]->point3d_ids) {
+      const auto it = index.find(id);
+      if (it != index.end()) view.points.push_back(it->second);
+    }
+    std::sort(view.points.begin(), view.points.end());
+    view.points.erase(std::unique(view.points.begin(), view.points.end()), view.points.end());
+    tracks.views.push_back(std::move(view));
+  }
+  return tracks;
+}
+
 }  // namespace
 
 void PosesOptions::Check() const {
   CheckOption(*this, holdout_every, holdout_every >= 0, "must be 0 (none) or positive");
+  CheckOption(*this, train_views, train_views >= 0, "must be 0 (all) or positive");
   CheckOption(*this, max_image_size, max_image_size == 0 || max_image_size >= 16,
               format("must be 0 (as they are) or at least 16 pixels, not {}", max_image_size));
 }
@@ -115,6 +140,7 @@ void PosesStage::Run(StageContext& context) const {
   if (without_bounds > 0) LogWarning(format("poses: {} views see too few points for depth bounds", without_bounds));
   DownsizeLargeImages(context.output_dir, options.max_image_size, &views);
   const std::string heldout_rule = AssignHoldout(&views, options.holdout_every, true);
+  KeepTrainingViews(&views, options.train_views);
 
   Normalization normalization;
   if (options.normalize) {
@@ -136,6 +162,7 @@ void PosesStage::Run(StageContext& context) const {
         {(normalization.normalized_from_world * point.xyz.homogeneous()).head<3>().cast<float>(), point.rgb});
   }
   WritePly(out.sparse_points(), cloud);
+  TracksOf(model, images, transforms.views).Write(out.sparse_tracks());
   const size_t held_out =
       std::count_if(views.begin(), views.end(), [](const CameraView& v) { return v.split != "train"; });
   context.summary = {{"views", views.size()}, {"held_out", held_out}, {"points", cloud.size()}};

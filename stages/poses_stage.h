@@ -19,6 +19,7 @@ struct PosesOptions {
   int holdout_every = 8;  // every Nth view (in name order) is held out for evaluation (AssignHoldout); 0: none
   bool normalize = true;  // centre, rotate (up = +z) and scale the scene into the unit cube
   int max_image_size = kDefaultMaxTrainingImageSize;  // longest side of the images later stages read; 0: as they are
+  int train_views = 0;                                // training views kept (KeepTrainingViews); 0: all
 
   template <class V>
   void Visit(V& v) {
@@ -31,6 +32,10 @@ struct PosesOptions {
       "with an area filter, their intrinsics scaled; the cameras are solved on the photos as they are); 0: as they "
       "are",
       "px");
+    v("train_views", train_views,
+      "keep this many of the training views, spread evenly in name order, and leave the others out of training "
+      "(split \"unused\"): to measure what a capture of fewer photos would give, on the same held-out views; 0: all",
+      "views");
   }
   void Check() const;
 };
@@ -38,7 +43,8 @@ struct PosesOptions {
 class PosesStage : public StageOf<PosesResult> {
  public:
   // 2: images downsized to poses.max_image_size; 3: fewer than 20 photos hold out views inside the span of the others
-  int format_version() const override { return 3; }
+  // 4: sparse_tracks.json
+  int format_version() const override { return 4; }
   std::vector<std::string> upstream() const override { return {SfmResult::kId.name}; }
   void Run(StageContext& context) const override;
 };

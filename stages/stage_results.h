@@ -46,6 +46,7 @@ struct PosesResult {
   std::filesystem::path dir;
   std::filesystem::path transforms() const { return dir / "transforms.json"; }
   std::filesystem::path sparse_points() const { return dir / "sparse_points.ply"; }
+  std::filesystem::path sparse_tracks() const { return dir / "sparse_tracks.json"; }  // formats/sparse_tracks.h
   std::filesystem::path images() const { return dir / "images"; }  // images imported or downsized here, if any
 };
 

@@ -173,6 +173,7 @@ void TrainOptions::Check() const {
   CheckOption(*this, learning_rate, learning_rate >= 0 && learning_rate < 1, "must be 0 (the field's) or in (0, 1)");
   CheckOption(*this, distortion, !distortion.value || *distortion.value >= 0,
               format("must be auto or a weight >= 0, not {}", AutoOrNumberText(distortion)));
+  CheckOption(*this, depth, depth >= 0 && std::isfinite(depth), "must be a weight >= 0");
   CheckOption(*this, refine_cameras, !refine_cameras || field != FieldKind::kVanilla,
               format("needs {} ngp or planes (the vanilla field has no gradient with respect to its input)",
                      OptionKey(*this, field)));
@@ -231,6 +232,7 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
   trainer.loss = options.loss;
   trainer.space = space;
   trainer.distortion_weight = DistortionWeight(options, space);
+  trainer.depth_weight = options.depth;
   trainer.appearance = options.appearance;
   trainer.refine_cameras = options.refine_cameras;
   trainer.error_sampling = options.error_sampling;
@@ -321,7 +323,7 @@ void TrainStage::Run(StageContext& context) const {
   const ImportedDataset poses = LoadTransformsJson(transforms, context.workspace.root());
   setup.heldout_split = HeldoutSplit(poses);
   setup.heldout_rule = poses.meta.heldout_rule;
-  setup.data = LoadTrainingData(poses);
+  setup.data = LoadTrainingData(poses, options.depth > 0);
   const TrainingData& data = setup.data;
   setup.trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, poses));
   const TrainView* with_alpha = FirstWithAlpha(data.train);
@@ -367,6 +369,7 @@ void TrainStage::Run(StageContext& context) const {
                 {"steps", trainer.step()},
                 {"heldout_psnr", Mean(psnrs)},
                 {"distortion_weight", setup.trainer.distortion_weight},
+                {"depth_weight", setup.trainer.depth_weight},
                 {"appearance", setup.trainer.appearance},
                 {"refine_cameras", setup.trainer.refine_cameras}};
   const TrainResult out{context.output_dir};

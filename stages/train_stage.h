@@ -63,6 +63,7 @@ struct TrainOptions {
   // Auto: random for images with alpha, fixed where the import knows it, else learnt.
   BackgroundChoice background = BackgroundChoice::kAuto;
   AutoOrNumber distortion;          // weight of the distortion loss; auto: by the scene (DistortionWeight)
+  double depth = 0;                 // weight of the depth loss on the sparse points; 0: off
   bool appearance = false;          // a colour transform per training photo
   bool refine_cameras = false;      // a pose correction per training photo (ngp only)
   bool error_sampling = false;      // pixels drawn where the error is
@@ -105,6 +106,10 @@ struct TrainOptions {
     v("distortion", distortion,
       "weight of the distortion loss, which gathers each ray's weight into one place (against haze and floaters); "
       "auto: the weight measured best on real captures for unbounded scenes, 0 for bounded ones");
+    v("depth", depth,
+      "weight of the depth loss: rays through the sparse points each training photo sees (the structure from "
+      "motion's) learn to end at them, less so for points with a larger reprojection error (as depth-supervised "
+      "NeRF); for captures of few photos; 0: off");
     v("appearance", appearance,
       "on: a colour transform per training photo learnt with the field, for photos that differ in exposure and "
       "white balance (novel views show the average photo)");

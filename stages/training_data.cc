@@ -9,8 +9,12 @@
 #include "base/file_util.h"
 #include "base/format.h"
 #include "base/image_io.h"
+#include "formats/ply.h"
+#include "formats/sparse_tracks.h"
 #include "nerf/forward_space.h"
+#include "pipeline/log.h"
 #include "pipeline/progress.h"
+#include "stages/stage_results.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -52,7 +56,51 @@ std::string HeldoutSplit(const ImportedDataset& dataset) {
 
 bool ForwardFacingCapture(const ImportedDataset& dataset) { return FacesForward(dataset.Cameras()); }
 
-TrainingData LoadTrainingData(const ImportedDataset& poses) {
+namespace {
+
+// The points of `tracks` that `view` sees, where they appear in it (in front, inside the image).
+std::vector<DepthPoint> ViewDepthPoints(const ImportedView& view, const SparseTracks& tracks,
+                                        const std::vector<ColouredPoint>& points) {
+  std::vector<DepthPoint> out;
+  const PinholeCamera& camera = view.view.camera;
+  const Eigen::Vector3d centre = camera.world_from_cam.topRightCorner<3, 1>();
+  for (const uint32_t index : tracks.PointsOf(view.view.file_path)) {
+    const Eigen::Vector3d point = points[index].position.cast<double>();
+    double depth;
+    const Eigen::Vector2d pixel = Project(camera, point, &depth);
+    if (!(depth > 0) || pixel.x() < 0 || pixel.y() < 0 || pixel.x() >= camera.width || pixel.y() >= camera.height)
+      continue;
+    out.push_back({static_cast<float>(pixel.x()), static_cast<float>(pixel.y()),
+                   static_cast<float>((point - centre).norm()), tracks.errors[index]});
+  }
+  return out;
+}
+
+void AddDepthPoints(const ImportedDataset& poses, const std::vector<const ImportedView*>& train, TrainingData* data) {
+  const PosesResult files{poses.files.front().parent_path()};
+  if (!fs::exists(files.sparse_tracks())) {
+    LogWarning(
+        format("train: '{}' is not there: no depth points (rerun the poses stage)", files.sparse_tracks().string()));
+    return;
+  }
+  const SparseTracks tracks = SparseTracks::Read(files.sparse_tracks());
+  const std::vector<ColouredPoint> points = ReadPly(files.sparse_points());
+  if (points.size() != tracks.errors.size()) {
+    throw UserError(format("'{}' has {} points but '{}' tracks {}; rerun the poses stage",
+                           files.sparse_points().string(), points.size(), files.sparse_tracks().string(),
+                           tracks.errors.size()));
+  }
+  size_t count = 0;
+  for (size_t i = 0; i < train.size(); ++i) {
+    data->train[i].depth_points = ViewDepthPoints(*train[i], tracks, points);
+    count += data->train[i].depth_points.size();
+  }
+  LogInfo(format("train: {} depth points in {} training views", count, train.size()));
+}
+
+}  // namespace
+
+TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points) {
   TrainingData data;
   data.background = poses.meta.Background();
   data.background_known = poses.meta.background.has_value();
@@ -76,6 +124,7 @@ TrainingData LoadTrainingData(const ImportedDataset& poses) {
     }
     progress.Add();
   });
+  if (depth_points) AddDepthPoints(poses, train, &data);
   return data;
 }
 

@@ -24,7 +24,8 @@ bool ForwardFacingCapture(const ImportedDataset& dataset);
 
 // The training views ("train" split) and held-out views (HeldoutSplit's) of the poses stage's transforms.json
 // (LoadTransformsJson), decoded to 8 bits, with the background its images were composited on; UserError naming
-// a bad file.
-TrainingData LoadTrainingData(const ImportedDataset& poses);
+// a bad file. With `depth_points`, each training view's depth points too (from sparse_points.ply and
+// sparse_tracks.json beside transforms.json; none when the poses stage has no tracks).
+TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points = false);
 
 }  // namespace p2n

@@ -11,8 +11,12 @@
 #include "base/file_util.h"
 #include "formats/colmap_model.h"
 #include "formats/dataset_import.h"
+#include "formats/ply.h"
+#include "formats/sparse_tracks.h"
+#include "nerf/rays.h"
 #include "nerf/synthetic_scene.h"
 #include "stages/stages.h"
+#include "stages/training_data.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {
@@ -168,7 +172,9 @@ TEST_CASE("import: a COLMAP project folder (images/ + sparse/0) keeps its camera
     OpenCvCamFromWorld(cameras[i].world_from_cam, &image.cam_from_world_rotation, &image.cam_from_world_translation);
     model.images[image.id] = image;
   }
-  for (uint64_t p = 1; p <= 20; ++p) model.points[p] = {p, Eigen::Vector3d(0.05 * p, 0.1, 0.3), {1, 2, 3}, 0.5, {}};
+  // Points near the middle of the scene, seen by images 1 and 3 (the first and third views).
+  for (uint64_t p = 1; p <= 20; ++p)
+    model.points[p] = {p, Eigen::Vector3d(0.01 * p, 0.02, -0.01), {1, 2, 3}, 0.1 * p, {{1, 0}, {3, 0}}};
   WriteColmapModelBinary(model, dir / "data" / "sparse" / "0");
   CHECK(DetectDataset(dir / "data") == DatasetKind::kColmap);
   const nlohmann::json transforms = Import(dir / "data", dir / "ws");
@@ -180,6 +186,70 @@ TEST_CASE("import: a COLMAP project folder (images/ + sparse/0) keeps its camera
   }
   CHECK(WorstRotationAfterAlignment(ours, truth) < 1e-6);
   CHECK(fs::exists(dir / "ws" / "20_poses" / "sparse_points.ply"));
+
+  // The tracks: each view's points and each point's error, and the depth points training reads from them: where
+  // the ray through each meets its point.
+  const SparseTracks tracks = SparseTracks::Read(dir / "ws" / "20_poses" / "sparse_tracks.json");
+  REQUIRE(tracks.errors.size() == 20);
+  CHECK(tracks.errors[19] == Approx(2.0));
+  REQUIRE(tracks.views.size() == 5);
+  for (size_t i = 0; i < 5; ++i) CHECK(tracks.views[i].points.size() == (i == 0 || i == 2 ? 20u : 0u));
+  const ImportedDataset poses = LoadTransformsJson(dir / "ws" / "20_poses" / "transforms.json", dir / "ws");
+  const TrainingData data = LoadTrainingData(poses, true);
+  const std::vector<ColouredPoint> points = ReadPly(dir / "ws" / "20_poses" / "sparse_points.ply");
+  size_t depth_points = 0;
+  for (const TrainView& view : data.train) {
+    for (const DepthPoint& point : view.depth_points) {
+      const Ray ray = CameraRay(view.camera, point.u, point.v);
+      const Eigen::Vector3d end = ray.origin + point.distance * ray.direction;
+      double nearest = 1e9;
+      for (const ColouredPoint& p : points) nearest = std::min(nearest, (p.position.cast<double>() - end).norm());
+      CHECK(nearest < 1e-4);
+      ++depth_points;
+    }
+  }
+  CHECK(depth_points > 0);
+}
+
+TEST_CASE("poses.train_views keeps that many training views, spread evenly; the held-out views stay", "[import]") {
+  std::vector<CameraView> views(20);
+  AssignHoldout(&views, 8, false);
+  KeepTrainingViews(&views, 5);
+  std::vector<size_t> kept;
+  for (size_t i = 0; i < views.size(); ++i) {
+    if (views[i].split == "train") kept.push_back(i);
+    CHECK(views[i].split == (i % 8 == 0 ? "val" : views[i].split));
+  }
+  // The 17 training views are 1-7, 9-15, 17-19: the 1st, 5th, 9th, 13th and 17th of them.
+  CHECK(kept == std::vector<size_t>{1, 5, 10, 14, 19});
+  KeepTrainingViews(&views, 0);
+  CHECK(std::count_if(views.begin(), views.end(), [](const CameraView& v) { return v.split == "train"; }) == 5);
+  KeepTrainingViews(&views, 1);
+  CHECK(std::count_if(views.begin(), views.end(), [](const CameraView& v) { return v.split == "train"; }) == 1);
+}
+
+TEST_CASE("sparse_tracks.json reads back what was written; broken ones are refused by field", "[import]") {
+  TempDir dir;
+  const fs::path file = dir / "sparse_tracks.json";
+  SparseTracks tracks{{0.5f, 1.5f, 0.0f}, {{"images/a.png", {0, 2}}, {"images/b.png", {}}}};
+  tracks.Write(file);
+  const SparseTracks read = SparseTracks::Read(file);
+  CHECK(read.errors == tracks.errors);
+  CHECK(read.PointsOf("images/a.png") == std::vector<uint32_t>{0, 2});
+  CHECK(read.PointsOf("images/b.png").empty());
+  CHECK(read.PointsOf("images/c.png").empty());
+  const auto refused = [&](const std::string& text, const std::string& field) {
+    WriteFileAtomic(file, text);
+    CHECK_THROWS_WITH(SparseTracks::Read(file), Catch::Contains(field) && Catch::Contains("sparse_tracks.json"));
+  };
+  refused(R"({"errors": [1], "views": [{"file_path": "a", "points": [1]}]})", "views[0].points");
+  refused(R"({"errors": [-1], "views": []})", "errors[0]");
+  refused(R"({"errors": [1], "views": [{"file_path": "a", "points": []}, {"file_path": "a", "points": []}]})",
+          "views[1]");
+  refused(R"({"views": []})", "errors");
+  refused(R"({"errors": [1], "views": [{"points": []}]})", "views[0]");
+  refused(R"([1, 2])", "the file");
+  refused(R"({"errors": [1], "views": [{"file_path": 3, "points": []}]})", "views[0]");
 }
 
 TEST_CASE("transforms.json reads back exactly what was written: cameras, bounds, normalisation, meta", "[import]") {
@@ -353,6 +423,12 @@ TEST_CASE("import: the shared datasets (fox, lego, lego_200, fern)", "[import][d
     CHECK_FALSE(transforms.contains("background"));
     CHECK(transforms["heldout_rule"] == "every 8th view from the first");
     for (size_t i = 0; i < 20; ++i) CHECK(transforms["frames"][i]["split"] == (i % 8 == 0 ? "val" : "train"));
+    // Its sparse points with their tracks (points3D.bin without images.bin): image ids in the views' order, and
+    // nearly every observation inside its view (else the tracks would have been dropped).
+    CHECK(fern.points.size() == 10091);
+    REQUIRE(fern.view_points.size() == 20);
+    for (const std::vector<uint32_t>& seen : fern.view_points) CHECK(seen.size() > 1000);
+    CHECK(fern.warnings.empty());
   }
 }
 

@@ -15,8 +15,11 @@
 #include "base/file_util.h"
 #include "base/format.h"
 #include "formats/colmap_model.h"
+#include "formats/dataset_import.h"
+#include "formats/sparse_tracks.h"
 #include "nerf/synthetic_scene.h"
 #include "stages/stages.h"
+#include "stages/training_data.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {
@@ -135,6 +138,18 @@ TEST_CASE("sfm + poses recover the synthetic scene's cameras", "[colmap][e2e]") 
     const fs::path image = dir / "ws" / "20_poses" / small["frames"][i]["file_path"].get<std::string>();
     CHECK(image.parent_path().filename() == "images");
     CHECK(OIIO::ImageBuf(image.string()).spec().width == 160);
+  }
+  // The points' tracks name the views by their (downsized) images, and give every training view depth points
+  // inside its smaller image.
+  const SparseTracks tracks = SparseTracks::Read(dir / "ws" / "20_poses" / "sparse_tracks.json");
+  REQUIRE(tracks.views.size() == small["frames"].size());
+  for (size_t i = 0; i < tracks.views.size(); ++i) CHECK(tracks.views[i].file_path == small["frames"][i]["file_path"]);
+  const TrainingData data =
+      LoadTrainingData(LoadTransformsJson(dir / "ws" / "20_poses" / "transforms.json", dir / "ws"), true);
+  for (const TrainView& view : data.train) {
+    INFO(view.name);
+    CHECK(view.depth_points.size() > 20);
+    for (const DepthPoint& point : view.depth_points) CHECK((point.u < 160 && point.v < 160 && point.distance > 0));
   }
 }
 

@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <random>
@@ -492,6 +493,56 @@ TEST_CASE("camera refinement moves perturbed training cameras back towards the t
                              << " dB fixed, " << psnr[1] << " dB refined");
   CHECK(pixels[1] < 0.5 * pixels[0]);
   CHECK(psnr[1] > psnr[0] + 1);
+}
+
+// Photos that show one grey everywhere, over the same grey: the colours say nothing of where the surface is, so
+// only the depth loss can place it. Each training view sees depth points on the sphere of radius 0.5 (where its
+// rays meet it); after training, rays through them must render the sphere's distance.
+TEST_CASE("the depth loss places the surface where the sparse points say, where the colours cannot", "[trainer]") {
+  TrainingData data;
+  data.background = {0.5f, 0.5f, 0.5f};
+  data.background_known = true;
+  std::vector<Ray> rays;
+  std::vector<double> distances;
+  for (int i = 0; i < 12; ++i) {
+    TrainView view = SphereView(2 * M_PI * i / 12, i % 2 == 0 ? 0.6 : -0.4);
+    std::fill(view.pixels.begin(), view.pixels.end(), uint8_t{128});
+    for (int y = 4; y < kSize; y += 4) {
+      for (int x = 4; x < kSize; x += 4) {
+        const Ray ray = CameraRay(view.camera, x, y);
+        const double b = ray.origin.dot(ray.direction), c = ray.origin.squaredNorm() - 0.25;
+        if (b * b - c <= 0) continue;
+        const double distance = -b - std::sqrt(b * b - c);
+        view.depth_points.push_back({float(x), float(y), float(distance), 0.5f});
+        rays.push_back(ray);
+        distances.push_back(distance);
+      }
+    }
+    data.train.push_back(view);
+  }
+  REQUIRE(rays.size() > 200);
+  // The median relative error of the rendered distance (depth / opacity) on the depth points' rays.
+  const auto median_error = [&](double depth_weight) {
+    TrainerOptions options = SmallOptions();
+    options.depth_weight = depth_weight;
+    Trainer trainer(options, data);
+    for (int step = 0; step < 300; ++step) REQUIRE_FALSE(trainer.Step(step / 300.0).skipped);
+    const std::vector<Eigen::Vector2d> near_far(rays.size(), Eigen::Vector2d(-1, -1));
+    std::vector<float> rgb(3 * rays.size()), depth(rays.size()), opacity(rays.size());
+    RenderRays(trainer.model(), rays, near_far, {}, rgb.data(), depth.data(), opacity.data(), nullptr);
+    std::vector<double> errors;
+    for (size_t r = 0; r < rays.size(); ++r) {
+      const double rendered = opacity[r] > 0.01f ? depth[r] / opacity[r] : 0.0;
+      errors.push_back(std::abs(rendered - distances[r]) / distances[r]);
+    }
+    std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+    return errors[errors.size() / 2];
+  };
+  const double with_depth = median_error(1.0), without = median_error(0.0);
+  INFO("median relative error of the rendered distance: " << with_depth << " with the depth loss, " << without
+                                                          << " without");
+  CHECK(with_depth < 0.05);
+  CHECK(without > 4 * with_depth);
 }
 
 }  // namespace p2n::testing
