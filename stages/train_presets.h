@@ -19,6 +19,9 @@ struct EnumNames<PresetName> {
 // train.distortion auto in unbounded and forward scenes.
 inline constexpr double kAutoDistortion = 0.002;
 
+// train.depth auto for captures of fewer than kFewViews training views (with sparse tracks), and 0 otherwise.
+inline constexpr double kAutoDepth = 1.0;
+
 // The planes (train.field planes) for a scene space, in every preset.
 PlaneGridConfig PlanesFor(SceneSpace space);
 

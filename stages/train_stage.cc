@@ -173,7 +173,8 @@ void TrainOptions::Check() const {
   CheckOption(*this, learning_rate, learning_rate >= 0 && learning_rate < 1, "must be 0 (the field's) or in (0, 1)");
   CheckOption(*this, distortion, !distortion.value || *distortion.value >= 0,
               format("must be auto or a weight >= 0, not {}", AutoOrNumberText(distortion)));
-  CheckOption(*this, depth, depth >= 0 && std::isfinite(depth), "must be a weight >= 0");
+  CheckOption(*this, depth, !depth.value || (*depth.value >= 0 && std::isfinite(*depth.value)),
+              format("must be auto or a weight >= 0, not {}", AutoOrNumberText(depth)));
   CheckOption(*this, refine_cameras, !refine_cameras || field != FieldKind::kVanilla,
               format("needs {} ngp or planes (the vanilla field has no gradient with respect to its input)",
                      OptionKey(*this, field)));
@@ -193,6 +194,11 @@ double ResolvedTimeBudget(const TrainOptions& options) {
 double DistortionWeight(const TrainOptions& options, SceneSpace space) {
   const std::optional<double>& weight = options.distortion.value;
   return weight ? *weight : space != SceneSpace::kBounded ? kAutoDistortion : 0.0;
+}
+
+double DepthWeight(const TrainOptions& options, size_t training_views) {
+  const std::optional<double>& weight = options.depth.value;
+  return weight ? *weight : training_views < kFewViews ? kAutoDepth : 0.0;
 }
 
 TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space) {
@@ -232,7 +238,6 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
   trainer.loss = options.loss;
   trainer.space = space;
   trainer.distortion_weight = DistortionWeight(options, space);
-  trainer.depth_weight = options.depth;
   trainer.appearance = options.appearance;
   trainer.refine_cameras = options.refine_cameras;
   trainer.error_sampling = options.error_sampling;
@@ -323,9 +328,13 @@ void TrainStage::Run(StageContext& context) const {
   const ImportedDataset poses = LoadTransformsJson(transforms, context.workspace.root());
   setup.heldout_split = HeldoutSplit(poses);
   setup.heldout_rule = poses.meta.heldout_rule;
-  setup.data = LoadTrainingData(poses, options.depth > 0);
+  const size_t training_views = std::count_if(poses.views.begin(), poses.views.end(),
+                                              [](const ImportedView& view) { return view.view.split == "train"; });
+  const double depth_weight = DepthWeight(options, training_views);
+  setup.data = LoadTrainingData(poses, depth_weight > 0);
   const TrainingData& data = setup.data;
   setup.trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, poses));
+  setup.trainer.depth_weight = depth_weight;
   const TrainView* with_alpha = FirstWithAlpha(data.train);
   const bool alpha = with_alpha != nullptr;
   const BackgroundChoice background = options.background;

@@ -63,7 +63,7 @@ struct TrainOptions {
   // Auto: random for images with alpha, fixed where the import knows it, else learnt.
   BackgroundChoice background = BackgroundChoice::kAuto;
   AutoOrNumber distortion;          // weight of the distortion loss; auto: by the scene (DistortionWeight)
-  double depth = 0;                 // weight of the depth loss on the sparse points; 0: off
+  AutoOrNumber depth;               // weight of the depth loss on the sparse points; auto: by the views (DepthWeight)
   bool appearance = false;          // a colour transform per training photo
   bool refine_cameras = false;      // a pose correction per training photo (ngp only)
   bool error_sampling = false;      // pixels drawn where the error is
@@ -109,7 +109,7 @@ struct TrainOptions {
     v("depth", depth,
       "weight of the depth loss: rays through the sparse points each training photo sees (the structure from "
       "motion's) learn to end at them, less so for points with a larger reprojection error (as depth-supervised "
-      "NeRF); for captures of few photos; 0: off");
+      "NeRF); auto: on for captures of fewer than 20 training photos, where it was measured to help, else off");
     v("appearance", appearance,
       "on: a colour transform per training photo learnt with the field, for photos that differ in exposure and "
       "white balance (novel views show the average photo)");
@@ -139,6 +139,8 @@ SceneSpace ResolveSceneSpace(const TrainOptions& options, const ImportedDataset&
 
 // The trainer's options for these stage options (presets resolved) in a scene of this space.
 TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space);
+// train.depth as a weight for a capture of `training_views` views: auto is kAutoDepth below kFewViews, else 0.
+double DepthWeight(const TrainOptions& options, size_t training_views);
 // The preset's time budget unless one is given.
 double ResolvedTimeBudget(const TrainOptions& options);
 
@@ -148,8 +150,8 @@ class TrainStage : public StageOf<TrainResult> {
   // 7: train.scene auto picks forward for forward-facing captures
   // 9: bounded scenes' steps take 2^17 samples in the run's second half; 8: their hash table 2^19, occupancy 256^3
   // 10: a background the import knows stays fixed (auto); runs shorter than kShortBudget take the fast sizes
-  // 11: LLFF data is forward only when its cameras face forward
-  int format_version() const override { return 11; }
+  // 11: LLFF data is forward only when its cameras face forward; 12: train.depth auto: a depth loss with few photos
+  int format_version() const override { return 12; }
   std::vector<std::string> upstream() const override { return {PosesResult::kId.name}; }
   void Run(StageContext& context) const override;
 };

@@ -79,8 +79,8 @@ std::vector<DepthPoint> ViewDepthPoints(const ImportedView& view, const SparseTr
 void AddDepthPoints(const ImportedDataset& poses, const std::vector<const ImportedView*>& train, TrainingData* data) {
   const PosesResult files{poses.files.front().parent_path()};
   if (!fs::exists(files.sparse_tracks())) {
-    LogWarning(
-        format("train: '{}' is not there: no depth points (rerun the poses stage)", files.sparse_tracks().string()));
+    LogInfo(format("train: no depth loss: the poses have no sparse points with tracks ('{}')",
+                   files.sparse_tracks().string()));
     return;
   }
   const SparseTracks tracks = SparseTracks::Read(files.sparse_tracks());

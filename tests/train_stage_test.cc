@@ -96,6 +96,19 @@ TEST_CASE("train stage: planes take the image plane's resolution by the scene, o
   CHECK_THROWS_WITH(options.Check(), Catch::Contains("train.plane_depth_resolution"));
 }
 
+TEST_CASE("train stage: train.depth auto weighs the depth loss in captures of few photos only", "[train]") {
+  TrainOptions options;
+  CHECK(DepthWeight(options, kFewViews - 1) == kAutoDepth);
+  CHECK(DepthWeight(options, 5) == kAutoDepth);
+  CHECK(DepthWeight(options, kFewViews) == 0.0);
+  options.depth.value = 0.0;
+  CHECK(DepthWeight(options, 5) == 0.0);
+  options.depth.value = 0.25;
+  CHECK(DepthWeight(options, 200) == 0.25);
+  options.depth.value = -1.0;
+  CHECK_THROWS_WITH(options.Check(), Catch::Contains("train.depth"));
+}
+
 TEST_CASE("train stage: a short time budget trains with the fast preset's sizes, whatever the preset", "[train]") {
   const auto table_log2 = [](const TrainOptions& options, SceneSpace space) {
     return NgpFieldConfig::FromJson(MakeTrainerOptions(options, space).field).grid.log2_table_size;
