@@ -223,8 +223,8 @@ RayBatch Trainer::SampleBatch(int rays) {
       batch.depth[r] = Eigen::Vector2f(point.distance, 1.0f / (1.0f + ratio * ratio));
     } else {
       draw = DrawPixel(&random);
+      v = draw.y + unit(random);  // v's jitter first: the order the stream has always had them in
       u = draw.x + unit(random);
-      v = draw.y + unit(random);
     }
     if (error_map_) {
       batch.weights[r] = draw.weight;

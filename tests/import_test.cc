@@ -211,7 +211,7 @@ TEST_CASE("import: a COLMAP project folder (images/ + sparse/0) keeps its camera
   CHECK(depth_points > 0);
 }
 
-TEST_CASE("poses.train_views keeps that many training views, spread evenly; the held-out views stay", "[import]") {
+TEST_CASE("poses.train_views keeps that many training views, spread evenly, and the held-out views stay", "[import]") {
   std::vector<CameraView> views(20);
   AssignHoldout(&views, 8, false);
   KeepTrainingViews(&views, 5);
@@ -228,7 +228,7 @@ TEST_CASE("poses.train_views keeps that many training views, spread evenly; the 
   CHECK(std::count_if(views.begin(), views.end(), [](const CameraView& v) { return v.split == "train"; }) == 1);
 }
 
-TEST_CASE("sparse_tracks.json reads back what was written; broken ones are refused by field", "[import]") {
+TEST_CASE("sparse_tracks.json reads back what was written, and broken ones are refused by field", "[import]") {
   TempDir dir;
   const fs::path file = dir / "sparse_tracks.json";
   SparseTracks tracks{{0.5f, 1.5f, 0.0f}, {{"images/a.png", {0, 2}}, {"images/b.png", {}}}};
