@@ -9,5 +9,6 @@ int RunStage(int argc, char** argv);  // argv[0] names the stage: `photo2nerf in
 int RunStatus(int argc, char** argv);
 int RunClean(int argc, char** argv);
 int RunFitImage(int argc, char** argv);
+int RunStageJob(int argc, char** argv);  // a stage's work as a scheduler's job (pipeline/slurm.h)
 
 }  // namespace p2n

@@ -32,6 +32,7 @@ std::vector<Command> Commands() {
       {"clean", p2n::RunClean, "remove stage results from a workspace"},
       {"fit-image", p2n::RunFitImage,
        "fit a neural field to one image (the 2D warm-up): photo2nerf fit-image IMG -o DIR"},
+      {"stage-job", p2n::RunStageJob, "one stage's work as a Slurm job (run --run.scheduler slurm submits it)"},
   };
   const p2n::Runner runner = p2n::MakeRunner();
   for (const auto& stage : runner.stages()) {

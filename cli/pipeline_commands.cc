@@ -121,6 +121,10 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
   const Config config = ResolveConfig(registry, workspace, flags, /*remember=*/true);
   const auto thread_limit = ApplyRunOptions(config, workspace.LogDir() / "photo2nerf.log");
   LogInfo(format("{} (workspace {})", CommandLine(argc, argv), workspace.root().string()));
+  if (ReadOptions<RunOptions>(config).scheduler == Scheduler::kSlurm) {
+    RequireSbatch();
+    request.executor = SlurmExecutor(ReadOptions<SlurmOptions>(config), fs::read_symlink("/proc/self/exe"));
+  }
 
   const std::vector<StageRun> runs = stages.Run(workspace, config, request);
   PrintRunSummary(workspace, runs);

@@ -208,7 +208,7 @@ std::vector<StageRun> Runner::Run(const Workspace& workspace, const Config& conf
     const auto start = std::chrono::steady_clock::now();
     {
       const ProgressPrefixScope prefix(position);
-      statuses[i].manifest = RunOne(workspace, config, status, &memo);
+      statuses[i].manifest = RunOne(workspace, config, status, &memo, request.executor);
     }
     statuses[i].state = StageState::kFresh;
     for (size_t j = i + 1; j < stages_.size(); ++j) {  // those that read its old result, if this one differs
@@ -224,8 +224,30 @@ std::vector<StageRun> Runner::Run(const Workspace& workspace, const Config& conf
   return runs;
 }
 
-Manifest Runner::RunOne(const Workspace& workspace, const Config& config, const StageStatus& status,
-                        RunMemo* memo) const {
+StageContext Runner::ContextFor(const Workspace& workspace, const Config& config, const Stage& stage,
+                                const std::string& key, RunMemo* memo) const {
+  StageContext context{workspace.StagingDir(stage.folder()), workspace, config, {}, nlohmann::json::object(), key,
+                       workspace.ResumeDir(stage.folder()),  this,      memo};
+  for (const std::string& up : stage.UpstreamFor(config)) {
+    context.upstream_dirs[up] = workspace.StageDir(Get(up).folder());
+  }
+  return context;
+}
+
+nlohmann::json Runner::RunWork(const Workspace& workspace, const Config& config, std::string_view name,
+                               const std::string& key) const {
+  const Stage& stage = Get(name);
+  StageContext context = ContextFor(workspace, config, stage, key, nullptr);
+  if (!fs::is_directory(context.output_dir)) {
+    throw UserError(format("stage {} has no staging folder {}: the run that submitted this job is gone; run it again",
+                           name, context.output_dir.string()));
+  }
+  stage.Run(context);
+  return context.summary;
+}
+
+Manifest Runner::RunOne(const Workspace& workspace, const Config& config, const StageStatus& status, RunMemo* memo,
+                        const StageExecutor& executor) const {
   const Stage& stage = *status.stage;
   const fs::path staging = workspace.StagingDir(stage.folder());
   const fs::path final_dir = workspace.StageDir(stage.folder());
@@ -235,20 +257,13 @@ Manifest Runner::RunOne(const Workspace& workspace, const Config& config, const 
   fs::create_directories(staging, error);
   if (error) throw UserError(format("cannot create '{}': {}", staging.string(), error.message()));
 
-  StageContext context{staging,
-                       workspace,
-                       config,
-                       {},
-                       nlohmann::json::object(),
-                       status.expected_key,
-                       workspace.ResumeDir(stage.folder()),
-                       this,
-                       memo};
-  for (const std::string& up : stage.UpstreamFor(config)) {
-    context.upstream_dirs[up] = workspace.StageDir(Get(up).folder());
-  }
+  StageContext context = ContextFor(workspace, config, stage, status.expected_key, memo);
   const auto start = std::chrono::steady_clock::now();
-  stage.Run(context);
+  if (executor) {
+    executor(stage, context);
+  } else {
+    stage.Run(context);
+  }
   ThrowIfCancelled();
   WriteJsonAtomic(staging / kConfigName, config.ToJson());
 

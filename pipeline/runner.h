@@ -29,6 +29,7 @@ struct RunRequest {
   std::optional<std::string> from;   // stages before it are not run (they must be fresh)
   std::optional<std::string> until;  // stages after it are not run
   std::vector<std::string> force;    // rerun these and everything downstream of them, even if fresh
+  StageExecutor executor;            // runs each stage's work; empty: in this process
 };
 
 struct StageRun {
@@ -54,13 +55,22 @@ class Runner {
   std::vector<StageRun> Run(const Workspace& workspace, const Config& config, const RunRequest& request) const;
   // Removes the stage's result and any partial or old copies of it.
   void Clean(const Workspace& workspace, std::string_view name) const;
+  // A stage's work alone, for a job of a scheduler (pipeline/slurm.h): runs stage `name` into its staging folder,
+  // which the run that submitted the job made, for the result of cache key `key`; returns the stage's summary. The
+  // submitting run writes the manifest and commits the folder.
+  nlohmann::json RunWork(const Workspace& workspace, const Config& config, std::string_view name,
+                         const std::string& key) const;
 
  private:
   size_t IndexOf(std::string_view name) const;
   // Whether stage `i` reads stage `j`'s result under `config`, directly or not.
   bool DependsOn(size_t i, size_t j, const Config& config) const;
   // Makes the stage's result; returns its manifest.
-  Manifest RunOne(const Workspace& workspace, const Config& config, const StageStatus& status, RunMemo* memo) const;
+  Manifest RunOne(const Workspace& workspace, const Config& config, const StageStatus& status, RunMemo* memo,
+                  const StageExecutor& executor) const;
+  // What the stage's Run() sees when it makes the result of cache key `key`.
+  StageContext ContextFor(const Workspace& workspace, const Config& config, const Stage& stage, const std::string& key,
+                          RunMemo* memo) const;
 
   std::vector<std::unique_ptr<Stage>> stages_;
 };

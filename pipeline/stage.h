@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -68,5 +69,9 @@ class Stage {
     (void)config;
   }
 };
+
+// Runs a stage's work (Stage::Run into context.output_dir, filling context.summary): in this process when none is
+// given, or as a job elsewhere (pipeline/slurm.h).
+using StageExecutor = std::function<void(const Stage& stage, StageContext& context)>;
 
 }  // namespace p2n

@@ -57,10 +57,11 @@ std::string QuoteCommand(const std::vector<std::string>& argv) {
   return line;
 }
 
-SubprocessResult RunSubprocess(const std::vector<std::string>& argv, const std::filesystem::path& log_file,
-                               const std::string& step) {
+namespace {
+
+SubprocessResult Run(const std::vector<std::string>& argv, const std::filesystem::path& log_file,
+                     const std::string& step, bool cancellable) {
   P2N_CHECK(!argv.empty(), "empty command");
-  ThrowIfCancelled();
   const std::string command = QuoteCommand(argv);
   {
     std::error_code error;
@@ -106,7 +107,7 @@ SubprocessResult RunSubprocess(const std::vector<std::string>& argv, const std::
     if (waited < 0 && errno != EINTR) {
       throw ExternalToolError(format("{}: lost track of the child process: {}", step, std::strerror(errno)));
     }
-    if (CancelRequested()) {
+    if (cancellable && CancelRequested()) {
       StopChild(pid);
       throw Cancelled(format("interrupted during {}", step));
     }
@@ -120,6 +121,19 @@ SubprocessResult RunSubprocess(const std::vector<std::string>& argv, const std::
     result.exit_code = WEXITSTATUS(status);
   }
   return result;
+}
+
+}  // namespace
+
+SubprocessResult RunSubprocess(const std::vector<std::string>& argv, const std::filesystem::path& log_file,
+                               const std::string& step) {
+  ThrowIfCancelled();
+  return Run(argv, log_file, step, /*cancellable=*/true);
+}
+
+SubprocessResult RunCleanupSubprocess(const std::vector<std::string>& argv, const std::filesystem::path& log_file,
+                                      const std::string& step) {
+  return Run(argv, log_file, step, /*cancellable=*/false);
 }
 
 SubprocessResult CheckSubprocess(const std::vector<std::string>& argv, const std::filesystem::path& log_file,

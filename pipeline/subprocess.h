@@ -22,6 +22,11 @@ struct SubprocessResult {
 SubprocessResult RunSubprocess(const std::vector<std::string>& argv, const std::filesystem::path& log_file,
                                const std::string& step);
 
+// RunSubprocess, also after cancellation was requested, and never cancelled: for the cleanup that cancellation
+// itself needs (scancel of a job the interrupted run submitted).
+SubprocessResult RunCleanupSubprocess(const std::vector<std::string>& argv, const std::filesystem::path& log_file,
+                                      const std::string& step);
+
 // RunSubprocess, throwing ExternalToolError when the program exits non-zero or is killed.
 SubprocessResult CheckSubprocess(const std::vector<std::string>& argv, const std::filesystem::path& log_file,
                                  const std::string& step);

@@ -16,6 +16,8 @@ packages=(
   libassimp-dev                            # tests: an independent reader of our PLY and OBJ files
   libjpeg-dev                              # tests: writes a CMYK JPEG
   chromium fonts-dejavu-core               # tests: the report and viewer pages opened in a real browser
+  slurm-client munge                       # --run.scheduler slurm: sbatch, squeue, scancel
+  slurmctld slurmd                         # tests: a one-machine Slurm cluster (scripts/local_slurm.sh)
 )
 # The viewer page is bundled at build time with npm (viewer/package-lock.json): Debian's Node.js and npm, unless the
 # machine has its own.

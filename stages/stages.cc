@@ -25,6 +25,7 @@ namespace {
 template <class Section>
 void ForEachSection(Section&& section) {
   section.template operator()<RunOptions>();
+  section.template operator()<SlurmOptions>();
   section.template operator()<IngestOptions>();
   section.template operator()<SfmOptions>();
   section.template operator()<PosesOptions>();

@@ -111,6 +111,30 @@ TEST_CASE("a second run runs nothing", "[runner]") {
   CHECK(ReadText(f.workspace.StageDir("c") / "out.txt") == "c=1;b=1;a=1");
 }
 
+TEST_CASE("an executor runs each stage's work elsewhere, and the results are a local run's", "[runner]") {
+  Fixture local;
+  local.Run();
+  Fixture f;
+  // A stand-in for a scheduler's job: another runner, as `photo2nerf stage-job` makes, does the work.
+  std::vector<std::string> executed;
+  RunRequest request;
+  request.executor = [&](const Stage& stage, StageContext& context) {
+    executed.push_back(stage.name());
+    context.summary = MakeFakeRunner(f.counters).RunWork(f.workspace, f.config, stage.name(), context.key);
+  };
+  f.Run(request);
+  CHECK(executed == std::vector<std::string>{"a", "b", "c"});
+  CHECK(States(f.Status()) == std::vector{kFresh, kFresh, kFresh});
+  for (const char* stage : {"a", "b", "c"}) {
+    CHECK(ReadJsonFile(f.workspace.StageDir(stage) / kManifestName)["key"] ==
+          ReadJsonFile(local.workspace.StageDir(stage) / kManifestName)["key"]);
+  }
+  CHECK(ReadText(f.workspace.StageDir("c") / "out.txt") == "c=1;b=1;a=1");
+  // A job whose staging folder is gone (its run ended) does nothing and says so.
+  CHECK_THROWS_WITH(MakeFakeRunner(f.counters).RunWork(f.workspace, f.config, "b", "key"),
+                    Catch::Contains("has no staging folder"));
+}
+
 TEST_CASE("an option change reruns its stage and everything downstream, nothing upstream", "[runner]") {
   Fixture f;
   f.Run();

@@ -1,0 +1,47 @@
+// stage-job: one stage's work inside a job of a scheduler (pipeline/slurm.h). The run that submitted the job holds
+// the workspace lock, made the staging folder and commits it when this returns.
+
+#include <cstdlib>
+#include <string>
+
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
+#include "cli/cli_options.h"
+#include "cli/commands.h"
+#include "pipeline/log.h"
+#include "pipeline/slurm.h"
+#include "stages/stages.h"
+
+namespace p2n {
+
+int RunStageJob(int argc, char** argv) {
+  CLI::App app("Run one stage's work as a job of a scheduler; photo2nerf run --run.scheduler slurm submits it.",
+               "photo2nerf stage-job");
+  std::string workspace_path;
+  std::string job_file;
+  app.add_option("-w,--workspace", workspace_path, "workspace folder, as the submitting run gave it")->required();
+  app.add_option("--job", job_file, "the job file it wrote (logs/slurm/STAGE/job.json)")->required();
+  if (auto code = Parse(app, OptionRegistry(), argc, argv)) return *code;
+
+  const Workspace workspace = Workspace::Open(workspace_path, /*create=*/false);
+  const StageJob job = ReadStageJob(job_file);
+  const OptionRegistry registry = AllOptions();
+  Config config(registry);
+  config.Merge(job.config, job_file);
+  // A job given some CPUs of a node uses those, not every core of it.
+  const char* job_cpus = std::getenv("SLURM_CPUS_PER_TASK");
+  if (config.Get<int>("run.threads") == 0 && job_cpus != nullptr) {
+    config.SetFromText("run.threads", job_cpus, "SLURM_CPUS_PER_TASK");
+  }
+  CheckAllOptions(config);
+  const auto thread_limit = ApplyRunOptions(config, workspace.LogDir() / "photo2nerf.log");
+  const char* job_id = std::getenv("SLURM_JOB_ID");
+  LogInfo(format("{}: working in job {} (workspace {})", job.stage, job_id != nullptr ? job_id : "?",
+                 workspace.root().string()));
+  const nlohmann::json summary = MakeRunner(workspace.input()).RunWork(workspace, config, job.stage, job.key);
+  WriteJsonAtomic(job.summary_path, summary);
+  return kExitOk;
+}
+
+}  // namespace p2n

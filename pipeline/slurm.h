@@ -1,0 +1,72 @@
+#pragma once
+// Stages as jobs of a Slurm cluster (`--run.scheduler slurm`, DESIGN.md §2). The process that runs the pipeline
+// keeps the workspace lock, the cache keys, the manifests and the commit of every stage folder, exactly as a local
+// run; only a stage's work (Stage::Run into its staging folder) runs elsewhere: `sbatch` submits
+// `photo2nerf stage-job`, which reads the stage, its key and the resolved options from a job file and writes the
+// stage's summary when it is done. The workspace, on a file system every node sees, is all they share.
+//
+//   WS/logs/slurm/<stage folder>/job.json       the stage, its cache key, the options
+//   WS/logs/slurm/<stage folder>/job.sh         the batch script (it can be submitted by hand)
+//   WS/logs/slurm/<stage folder>/submit-N.log   what sbatch said for attempt N (the job id first)
+//   WS/logs/slurm/<stage folder>/attempt-N.log  what the job printed
+//   WS/logs/slurm/<stage folder>/exit-N         the job's exit code, written when photo2nerf returns
+//   WS/logs/slurm/<stage folder>/summary.json   the stage's summary, written when its work is done
+//
+// A job that ends without an exit code, or with the code of an interrupted run (scancel, a time limit, a node
+// lost), is submitted again: its partial work stays in the stage's resume folder (training resumes from its
+// checkpoint). One that fails on its own (bad input, a tool's failure) is not: its error is the stage's.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "base/enum_names.h"
+#include "pipeline/options.h"
+#include "pipeline/stage.h"
+
+namespace p2n {
+
+enum class Scheduler { kLocal, kSlurm };
+template <>
+struct EnumNames<Scheduler> {
+  static constexpr std::pair<Scheduler, const char*> kValues[] = {{Scheduler::kLocal, "local"},
+                                                                  {Scheduler::kSlurm, "slurm"}};
+};
+
+struct SlurmOptions {
+  static constexpr const char* kSection = "slurm";  // its options are slurm.NAME
+
+  std::string partition;    // The partition (queue) of the jobs; empty: the cluster's default.
+  int cpus = 0;             // CPUs a job asks for; 0: a whole node (--exclusive).
+  std::string sbatch_args;  // Further sbatch arguments, separated by spaces ("--account=geo --time=2:00:00").
+  int retries = 2;          // Resubmissions of a stage's job that ended before finishing.
+
+  template <class V>
+  void Visit(V& v) {
+    v("partition", partition, "Slurm partition of the jobs; empty: the cluster's default", "", OptionKind::kRuntime);
+    v("cpus", cpus, "CPUs a Slurm job asks for; 0: a whole node", "CPUs", OptionKind::kRuntime);
+    v("sbatch_args", sbatch_args, "further sbatch arguments, separated by spaces", "", OptionKind::kRuntime);
+    v("retries", retries, "resubmissions of a stage's job that ended before finishing (cancelled, node lost)", "jobs",
+      OptionKind::kRuntime);
+  }
+  void Check() const;
+};
+
+// UserError saying what to install or choose when sbatch is not on PATH.
+void RequireSbatch();
+
+// A StageExecutor that runs each stage's work as a Slurm job of `program` (the photo2nerf binary, reachable from
+// the nodes) and waits for it.
+StageExecutor SlurmExecutor(const SlurmOptions& options, std::filesystem::path program);
+
+// What a stage job is given: the stage, the cache key of the result it makes, the resolved options.
+struct StageJob {
+  std::string stage;
+  std::string key;
+  nlohmann::json config;               // Config::ToJson()
+  std::filesystem::path summary_path;  // where the stage's summary goes when its work is done
+};
+// Reads a job file; UserError naming the file and the field.
+StageJob ReadStageJob(const std::filesystem::path& path);
+
+}  // namespace p2n

@@ -1,0 +1,168 @@
+// `--run.scheduler slurm` against a real one-machine Slurm cluster (scripts/local_slurm.sh, which CTest starts
+// before these tests and stops after them; SLURM_CONF points at it): the results of a local run, a cancelled job
+// submitted again with the finished stages kept, a job's own failure reported and not retried, Ctrl-C cancelling
+// the running job, and a missing sbatch.
+
+#include <signal.h>
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <fstream>
+#include <thread>
+
+#include "base/file_util.h"
+#include "base/format.h"
+#include "tests/program_runs.h"
+#include "tests/stage_fixtures.h"
+
+namespace p2n::testing {
+namespace fs = std::filesystem;
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::vector<std::string> SlurmRunArgs(const fs::path& data, const fs::path& workspace) {
+  std::vector<std::string> args = RunArgs(data, workspace);
+  args.insert(args.end(), {"--run.scheduler", "slurm"});
+  return args;
+}
+
+fs::path JobDir(const fs::path& workspace, const std::string& folder) { return workspace / "logs" / "slurm" / folder; }
+
+// Waits (up to two minutes) until the stage's first job has started its work; its Slurm job id.
+std::string StartedJob(const fs::path& workspace, const std::string& folder) {
+  const fs::path dir = JobDir(workspace, folder);
+  const auto deadline = Clock::now() + std::chrono::seconds(120);
+  while (ReadText(dir / "attempt-1.log").find("working in job") == std::string::npos && Clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  REQUIRE_THAT(ReadText(dir / "attempt-1.log"), Catch::Contains("working in job"));
+  std::ifstream log(dir / "submit-1.log");
+  std::string line, id;
+  while (std::getline(log, line)) {
+    if (!line.empty() && line.find_first_not_of("0123456789") == std::string::npos) id = line;
+  }
+  REQUIRE(!id.empty());
+  return id;
+}
+
+// What squeue says of the job ("RUNNING", "CANCELLED", ...).
+std::string JobState(const std::string& id) {
+  std::string output;
+  RunCommand({"squeue", "--noheader", "--states=all", "--jobs=" + id, "--format=%T"}, &output);
+  return output;
+}
+
+}  // namespace
+
+TEST_CASE("slurm: a run as Slurm jobs makes the results of a local run", "[slurm]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir);
+  std::string output;
+  REQUIRE(RunCommand(RunArgs(data, dir / "local"), &output) == 0);
+  const int code = RunCommand(SlurmRunArgs(data, dir / "slurm"), &output);
+  INFO(output);
+  REQUIRE(code == 0);
+  // The same stage folders, cache keys and outputs as they list; the same picture within 0.05 dB (equal when the
+  // job has as many threads as the local run).
+  const std::map<std::string, std::string> local = CheckedKeys(dir / "local");
+  CHECK(local.size() == 6);
+  CHECK(CheckedKeys(dir / "slurm") == local);
+  const double local_psnr = ReadJsonFile(dir / "local" / "40_render" / "eval.json")["psnr"];
+  CHECK(ReadJsonFile(dir / "slurm" / "40_render" / "eval.json")["psnr"].get<double>() ==
+        Approx(local_psnr).margin(0.05));
+  for (const auto& [folder, key] : local) {
+    INFO(folder);
+    CHECK_THAT(ReadText(JobDir(dir / "slurm", folder) / "attempt-1.log"), Catch::Contains("working in job"));
+    CHECK(!fs::exists(JobDir(dir / "slurm", folder) / "submit-2.log"));
+  }
+  // Everything fresh, also for a local rerun.
+  REQUIRE(RunCommand(RunArgs(data, dir / "slurm"), &output) == 0);
+  CHECK_THAT(output, Catch::Contains("0 of 6 stages ran"));
+}
+
+TEST_CASE("slurm: a cancelled job is submitted again, resumes, and the stages done before it are kept", "[slurm]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), workspace = dir / "ws";
+  std::vector<std::string> args = SlurmRunArgs(data, workspace);
+  args.insert(args.end(), {"--train.steps", "600"});  // long enough to be cancelled while it trains
+  const pid_t run = Spawn(args, dir / "run.log");
+  const std::string job = StartedJob(workspace, "30_train");
+  const nlohmann::json poses = ReadJsonFile(workspace / "20_poses" / "manifest.json");
+  const auto deadline = Clock::now() + std::chrono::seconds(60);
+  while (!fs::exists(workspace / "30_train.resume" / "checkpoint.bin") && Clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::string ignored;
+  REQUIRE(RunCommand({"scancel", job}, &ignored) == 0);
+  const int code = Wait(run);
+  const std::string log = ReadText(dir / "run.log");
+  INFO(log);
+  REQUIRE(code == 0);
+  CHECK_THAT(log, Catch::Contains("submitting it again (1 of 2)"));
+  CHECK(fs::exists(JobDir(workspace, "30_train") / "attempt-2.log"));
+  CHECK(ReadJsonFile(workspace / "30_train" / "train_report.json")["resumed_from_step"].get<int>() > 0);
+  CHECK(ReadJsonFile(workspace / "20_poses" / "manifest.json") == poses);
+  CHECK(CheckedKeys(workspace).size() == 6);
+}
+
+TEST_CASE("slurm: a job that fails on its own is not submitted again, and its error is the stage's", "[slurm]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), photos = dir / "photos";
+  fs::create_directories(photos);
+  for (int i = 0; i < 4; ++i) {
+    const std::string name = format("view_{:03}.png", i);
+    fs::copy_file(data / name, photos / name);
+  }
+  // A COLMAP whose mapper finds no pair to start from: the sfm stage's own error, which a resubmission would repeat.
+  const fs::path colmap = dir / "colmap";
+  WriteText(colmap,
+            "#!/bin/sh\nif [ \"$1\" = help ]; then echo 'COLMAP 3.8 -- Structure-from-Motion'; exit 0; fi\n"
+            "if [ \"$1\" = mapper ]; then echo 'No good initial image pair found.'; exit 1; fi\nexit 0\n");
+  fs::permissions(colmap, fs::perms::owner_all);
+  std::string output;
+  const int code = RunCommand({P2N_BINARY, "run", photos.string(), "-w", (dir / "ws").string(), "--colmap",
+                               colmap.string(), "--run.scheduler", "slurm", "--run.progress", "plain"},
+                              &output);
+  INFO(output);
+  CHECK(code == 1);  // a user error, as in a local run
+  CHECK_THAT(output, Catch::Contains("stage sfm failed in its Slurm job (exit code 1)") &&
+                         Catch::Contains("no pair of photos to start the reconstruction from") &&
+                         Catch::Contains("attempt-1.log"));
+  CHECK(!fs::exists(JobDir(dir / "ws", "10_sfm") / "submit-2.log"));
+  CHECK(fs::exists(dir / "ws" / "00_ingest" / "manifest.json"));
+  REQUIRE(RunCommand({P2N_BINARY, "status", "-w", (dir / "ws").string(), "--colmap", colmap.string()}, &output) == 0);
+  CHECK_THAT(output, Catch::Matches("(.|\n)*sfm +incomplete(.|\n)*"));
+}
+
+TEST_CASE("slurm: Ctrl-C cancels the running job", "[slurm]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), workspace = dir / "ws";
+  std::vector<std::string> args = SlurmRunArgs(data, workspace);
+  args.insert(args.end(), {"--train.steps", "600"});
+  const pid_t run = Spawn(args, dir / "run.log");
+  const std::string job = StartedJob(workspace, "30_train");
+  ::kill(run, SIGINT);
+  CHECK(Wait(run) == 130);
+  INFO(ReadText(dir / "run.log"));
+  CHECK_THAT(ReadText(dir / "run.log"), Catch::Contains("cancelled Slurm job " + job));
+  const auto deadline = Clock::now() + std::chrono::seconds(30);
+  while (JobState(job).find("CANCELLED") == std::string::npos && Clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  CHECK_THAT(JobState(job), Catch::Contains("CANCELLED"));
+}
+
+TEST_CASE("slurm: without sbatch the run says what to install and runs nothing", "[slurm]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir);
+  std::vector<std::string> args = SlurmRunArgs(data, dir / "ws");
+  args.insert(args.begin(), {"/usr/bin/env", "PATH=" + (dir / "empty").string()});
+  std::string output;
+  CHECK(RunCommand(args, &output) == 1);
+  CHECK_THAT(output, Catch::Contains("needs Slurm's sbatch on PATH") && Catch::Contains("slurm-client") &&
+                         Catch::Contains("--run.scheduler local"));
+  CHECK(!fs::exists(dir / "ws" / "20_poses"));
+}
+
+}  // namespace p2n::testing
