@@ -101,6 +101,8 @@ constexpr auto kExitFilePoll = std::chrono::milliseconds(200);
 // exit file may take to appear after the job ended (a network file system's caches).
 constexpr auto kQueryInterval = std::chrono::seconds(5);
 constexpr auto kExitFileGrace = std::chrono::seconds(5);
+// How long a job left by an earlier run may take to end once cancelled.
+constexpr auto kLeftJobEnd = std::chrono::minutes(2);
 
 // Whether Slurm still has the job pending or running; false once it ended or is no longer known.
 bool JobAlive(const std::string& id, const fs::path& dir) {
@@ -136,6 +138,38 @@ void WaitForJob(const std::string& id, const fs::path& exit_file, const fs::path
     }
     std::this_thread::sleep_for(kExitFilePoll);
   }
+}
+
+// Cancels the jobs an earlier run of this stage submitted and left (it was killed while they ran), waits until Slurm
+// has ended them, and empties the staging folder they may have written into: one job at a time writes a stage.
+void CancelLeftJobs(const fs::path& dir, const fs::path& staging, const std::string& stage) {
+  if (!fs::is_directory(dir)) return;
+  std::vector<std::string> ids;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("submit-", 0) != 0 || entry.path().extension() != ".log") continue;
+    const std::string attempt = entry.path().stem().string().substr(7);  // submit-N.log
+    const std::optional<std::string> id = JobId(entry.path());
+    if (id && !fs::exists(dir / ("exit-" + attempt))) ids.push_back(*id);
+  }
+  for (const std::string& id : ids) {
+    if (!JobAlive(id, dir)) continue;
+    LogWarning(format("{}: Slurm job {} of an earlier run still runs; cancelling it", stage, id));
+    RunSubprocess({"scancel", id}, dir / "scancel.log", "scancel");
+    const auto deadline = std::chrono::steady_clock::now() + kLeftJobEnd;
+    while (JobAlive(id, dir)) {
+      if (std::chrono::steady_clock::now() > deadline) {
+        throw ExternalToolError(
+            format("{}: Slurm job {} of an earlier run does not end after scancel; end it (scancel "
+                   "--signal=KILL {}) and run again",
+                   stage, id, id));
+      }
+      std::this_thread::sleep_for(kExitFilePoll);
+    }
+  }
+  if (ids.empty()) return;
+  fs::remove_all(staging);
+  fs::create_directories(staging);
 }
 
 // Submits attempt `attempt` and waits for it; scancels the job when this process is interrupted. The job's
@@ -185,6 +219,7 @@ void RequireSbatch() {
 StageExecutor SlurmExecutor(const SlurmOptions& options, fs::path program) {
   return [options, program = std::move(program)](const Stage& stage, StageContext& context) {
     const fs::path dir = context.workspace.LogDir() / "slurm" / stage.folder();
+    CancelLeftJobs(dir, context.output_dir, stage.name());
     std::error_code error;
     fs::remove_all(dir, error);
     fs::create_directories(dir);

@@ -14,7 +14,9 @@
 //
 // A job that ends without an exit code, or with the code of an interrupted run (scancel, a time limit, a node
 // lost), is submitted again: its partial work stays in the stage's resume folder (training resumes from its
-// checkpoint). One that fails on its own (bad input, a tool's failure) is not: its error is the stage's.
+// checkpoint). One that fails on its own (bad input, a tool's failure) is not: its error is the stage's. Ctrl-C
+// cancels the running job; a job left running by a run that was killed is cancelled by the next run of its stage
+// before it submits its own.
 
 #include <filesystem>
 #include <string>

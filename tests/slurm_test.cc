@@ -1,7 +1,7 @@
 // `--run.scheduler slurm` against a real one-machine Slurm cluster (scripts/local_slurm.sh, which CTest starts
 // before these tests and stops after them; SLURM_CONF points at it): the results of a local run, a cancelled job
 // submitted again with the finished stages kept, a job's own failure reported and not retried, Ctrl-C cancelling
-// the running job, and a missing sbatch.
+// the running job, a killed run's job cancelled by the next run, and a missing sbatch.
 
 #include <signal.h>
 #include <catch2/catch.hpp>
@@ -151,6 +151,25 @@ TEST_CASE("slurm: Ctrl-C cancels the running job", "[slurm]") {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   CHECK_THAT(JobState(job), Catch::Contains("CANCELLED"));
+}
+
+TEST_CASE("slurm: a run killed with SIGKILL leaves its job running, and the next run cancels it first", "[slurm]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), workspace = dir / "ws";
+  std::vector<std::string> args = SlurmRunArgs(data, workspace);
+  args.insert(args.end(), {"--train.steps", "600"});
+  const pid_t run = Spawn(args, dir / "run.log");
+  const std::string job = StartedJob(workspace, "30_train");
+  ::kill(run, SIGKILL);
+  Wait(run);
+  CHECK_THAT(JobState(job), Catch::Contains("RUNNING"));
+  std::string output;
+  const int code = RunCommand(args, &output);
+  INFO(output);
+  REQUIRE(code == 0);
+  CHECK_THAT(output, Catch::Contains("train: Slurm job " + job + " of an earlier run still runs; cancelling it"));
+  CHECK_THAT(JobState(job), Catch::Contains("CANCELLED"));
+  CHECK(CheckedKeys(workspace).size() == 6);
 }
 
 TEST_CASE("slurm: without sbatch the run says what to install and runs nothing", "[slurm]") {
