@@ -226,8 +226,15 @@ std::vector<StageRun> Runner::Run(const Workspace& workspace, const Config& conf
 
 StageContext Runner::ContextFor(const Workspace& workspace, const Config& config, const Stage& stage,
                                 const std::string& key, RunMemo* memo) const {
-  StageContext context{workspace.StagingDir(stage.folder()), workspace, config, {}, nlohmann::json::object(), key,
-                       workspace.ResumeDir(stage.folder()),  this,      memo};
+  StageContext context{.output_dir = workspace.StagingDir(stage.folder()),
+                       .workspace = workspace,
+                       .config = config,
+                       .upstream_dirs = {},
+                       .summary = nlohmann::json::object(),
+                       .key = key,
+                       .resume_dir = workspace.ResumeDir(stage.folder()),
+                       .runner = this,
+                       .memo = memo};
   for (const std::string& up : stage.UpstreamFor(config)) {
     context.upstream_dirs[up] = workspace.StageDir(Get(up).folder());
   }

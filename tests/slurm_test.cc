@@ -27,6 +27,13 @@ std::vector<std::string> SlurmRunArgs(const fs::path& data, const fs::path& work
   return args;
 }
 
+// A Slurm run whose training lasts long enough to stop it while it trains.
+std::vector<std::string> LongSlurmRunArgs(const fs::path& data, const fs::path& workspace) {
+  std::vector<std::string> args = SlurmRunArgs(data, workspace);
+  args.insert(args.end(), {"--train.steps", "600"});
+  return args;
+}
+
 fs::path JobDir(const fs::path& workspace, const std::string& folder) { return workspace / "logs" / "slurm" / folder; }
 
 // Waits (up to two minutes) until the stage's first job has started its work; its Slurm job id.
@@ -84,9 +91,7 @@ TEST_CASE("slurm: a run as Slurm jobs makes the results of a local run", "[slurm
 TEST_CASE("slurm: a cancelled job is submitted again, resumes, and the stages done before it are kept", "[slurm]") {
   TempDir dir;
   const fs::path data = SmallDataset(dir), workspace = dir / "ws";
-  std::vector<std::string> args = SlurmRunArgs(data, workspace);
-  args.insert(args.end(), {"--train.steps", "600"});  // long enough to be cancelled while it trains
-  const pid_t run = Spawn(args, dir / "run.log");
+  const pid_t run = Spawn(LongSlurmRunArgs(data, workspace), dir / "run.log");
   const std::string job = StartedJob(workspace, "30_train");
   const nlohmann::json poses = ReadJsonFile(workspace / "20_poses" / "manifest.json");
   const auto deadline = Clock::now() + std::chrono::seconds(60);
@@ -138,9 +143,7 @@ TEST_CASE("slurm: a job that fails on its own is not submitted again, and its er
 TEST_CASE("slurm: Ctrl-C cancels the running job", "[slurm]") {
   TempDir dir;
   const fs::path data = SmallDataset(dir), workspace = dir / "ws";
-  std::vector<std::string> args = SlurmRunArgs(data, workspace);
-  args.insert(args.end(), {"--train.steps", "600"});
-  const pid_t run = Spawn(args, dir / "run.log");
+  const pid_t run = Spawn(LongSlurmRunArgs(data, workspace), dir / "run.log");
   const std::string job = StartedJob(workspace, "30_train");
   ::kill(run, SIGINT);
   CHECK(Wait(run) == 130);
@@ -156,8 +159,7 @@ TEST_CASE("slurm: Ctrl-C cancels the running job", "[slurm]") {
 TEST_CASE("slurm: a run killed with SIGKILL leaves its job running, and the next run cancels it first", "[slurm]") {
   TempDir dir;
   const fs::path data = SmallDataset(dir), workspace = dir / "ws";
-  std::vector<std::string> args = SlurmRunArgs(data, workspace);
-  args.insert(args.end(), {"--train.steps", "600"});
+  const std::vector<std::string> args = LongSlurmRunArgs(data, workspace);
   const pid_t run = Spawn(args, dir / "run.log");
   const std::string job = StartedJob(workspace, "30_train");
   ::kill(run, SIGKILL);
