@@ -59,7 +59,10 @@ if [ ! -f "$dir/munge.key" ]; then
   dd if=/dev/urandom of="$dir/munge.key" bs=1024 count=1 status=none
   chmod 400 "$dir/munge.key"
 fi
-munged --force --key-file="$dir/munge.key" --socket="$dir/munge.sock" --pid-file="$dir/munged.pid" \
+# A Unix socket's path holds at most 107 bytes: a deep folder's socket goes to /tmp.
+socket="$dir/munge.sock"
+[ ${#socket} -gt 100 ] && socket="/tmp/p2n-munge-$(echo "$dir" | sha1sum | cut -c1-12).sock"
+munged --force --key-file="$dir/munge.key" --socket="$socket" --pid-file="$dir/munged.pid" \
   --log-file="$dir/log/munged.log" --seed-file="$dir/munge.seed"
 
 host="$(hostname -s)"
@@ -74,7 +77,7 @@ SlurmdPort=$(free_port)
 SlurmUser=$user
 SlurmdUser=$user
 AuthType=auth/munge
-AuthInfo=socket=$dir/munge.sock
+AuthInfo=socket=$socket
 CredType=cred/munge
 StateSaveLocation=$dir/state
 SlurmdSpoolDir=$dir/spool
