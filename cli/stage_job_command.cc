@@ -31,9 +31,9 @@ int RunStageJob(int argc, char** argv) {
   config.Merge(job.config, job_file);
   // A job given some CPUs of a node uses those, not every core of it.
   const char* job_cpus = std::getenv("SLURM_CPUS_PER_TASK");
-  if (config.Get<int>("run.threads") == 0 && job_cpus != nullptr) {
-    config.SetFromText("run.threads", job_cpus, "SLURM_CPUS_PER_TASK");
-  }
+  const std::string threads = OptionKey(&RunOptions::threads);
+  if (config.Get<int>(threads) == 0 && job_cpus != nullptr)
+    config.SetFromText(threads, job_cpus, "SLURM_CPUS_PER_TASK");
   CheckAllOptions(config);
   const auto thread_limit = ApplyRunOptions(config, workspace.LogDir() / "photo2nerf.log");
   const char* job_id = std::getenv("SLURM_JOB_ID");
