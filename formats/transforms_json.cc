@@ -48,6 +48,14 @@ Eigen::Matrix4d Matrix(const nlohmann::json& rows, const fs::path& file, const s
   return m;
 }
 
+// An image's width or height: a whole number of pixels, written as an integer or (instant-ngp) as 1080.0.
+int Pixels(const nlohmann::json& value, const fs::path& file, const std::string& field) {
+  const double pixels = value.is_number() ? value.get<double>() : 0.0;
+  if (!(pixels >= 1 && pixels <= kMaxImageSide && pixels == std::floor(pixels)))
+    Bad(file, field, format("must be a whole number of pixels, 1 to {}, not {}", kMaxImageSide, value.dump()));
+  return static_cast<int>(pixels);
+}
+
 nlohmann::json Intrinsics(const PinholeCamera& camera) {
   return {{"camera_model", "PINHOLE"},
           {"fl_x", camera.fx},
@@ -126,7 +134,9 @@ std::optional<CameraView> ReadFrame(const nlohmann::json& json, size_t i, const 
   PinholeCamera& camera = view.camera;
   camera.world_from_cam = Matrix(frame.value("transform_matrix", nlohmann::json()), file, field + ".transform_matrix");
   std::tie(camera.width, camera.height) =
-      value("w") && value("h") ? std::pair<int, int>{value("w")->get<int>(), value("h")->get<int>()} : ImageSize(image);
+      value("w") && value("h")
+          ? std::pair<int, int>{Pixels(*value("w"), file, field + ".w"), Pixels(*value("h"), file, field + ".h")}
+          : ImageSize(image);
   if (value("fl_x")) {
     camera.fx = value("fl_x")->get<double>();
     camera.fy = value("fl_y") ? value("fl_y")->get<double>() : camera.fx;

@@ -3,8 +3,10 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <optional>
 
 #include "base/file_util.h"
+#include "base/json_number.h"
 
 namespace p2n {
 namespace {
@@ -88,11 +90,11 @@ NerfModel ReadModel(BinaryReader* reader) {
                   : header.value("contracted", false) ? SceneSpace::kUnbounded
                                                       : SceneSpace::kBounded;
     if (model.space == SceneSpace::kForward) model.forward = ForwardFrameFromJson(header.at("forward_frame"));
-    model.stratified_samples = header.value("stratified_samples", 0);
-    if (model.stratified_samples < 0 || model.stratified_samples > 65536)
-      reader->Fail("stratified_samples must be 0..65536");
+    const std::optional<int> stratified = JsonInteger<int>(header.value("stratified_samples", nlohmann::json(0)));
+    if (!stratified || *stratified < 0 || *stratified > 65536) reader->Fail("stratified_samples must be 0..65536");
+    model.stratified_samples = *stratified;
     model.info = header.value("info", nlohmann::json::object());
-    const int resolution = header.at("occupancy_resolution").get<int>();
+    const int resolution = JsonInteger<int>(header.at("occupancy_resolution")).value_or(0);
     if (!(model.march_step > 0 && model.march_step < 4)) reader->Fail("march_step must be in (0, 4)");
     for (ParamBlock<float>& block : model.field->DenseParams()) {
       const std::vector<float> values = reader->GetVector<float>(block.size);

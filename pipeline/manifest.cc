@@ -1,10 +1,12 @@
 #include "pipeline/manifest.h"
 
 #include <algorithm>
+#include <optional>
 #include <set>
 
 #include "base/errors.h"
 #include "base/format.h"
+#include "base/json_number.h"
 #include "pipeline/hash.h"
 
 namespace p2n {
@@ -31,6 +33,17 @@ void CompareMaps(const Map& before, const Map& now, const std::string& noun, Des
   for (const auto& [label, value] : before) {
     if (now.find(label) == now.end()) reasons->push_back(format("{} {} removed", noun, label));
   }
+}
+
+[[noreturn]] void Damaged(const std::string& source, const std::string& what) {
+  throw UserError(format("manifest '{}' is damaged ({}); rerun the stage with --force", source, what));
+}
+
+template <class T>
+T Integer(const nlohmann::json& value, const char* field, const std::string& source) {
+  const std::optional<T> n = JsonInteger<T>(value);
+  if (!n) Damaged(source, format("{} is not a whole number in range: {}", field, Short(value)));
+  return *n;
 }
 
 }  // namespace
@@ -99,7 +112,7 @@ Manifest Manifest::FromJson(const nlohmann::json& json, const std::string& sourc
   Manifest manifest;
   try {
     manifest.inputs.stage = json.at("stage").get<std::string>();
-    manifest.inputs.format_version = json.at("format_version").get<int>();
+    manifest.inputs.format_version = Integer<int>(json.at("format_version"), "format_version", source);
     manifest.inputs.options = json.at("options");
     manifest.inputs.upstream_keys = json.at("upstream").get<std::map<std::string, std::string>>();
     manifest.inputs.inputs = json.at("inputs").get<std::map<std::string, std::string>>();
@@ -111,16 +124,14 @@ Manifest Manifest::FromJson(const nlohmann::json& json, const std::string& sourc
     if (json.contains("upstream_results"))
       manifest.upstream_results = json.at("upstream_results").get<std::map<std::string, std::string>>();
     for (const nlohmann::json& file : json.at("outputs")) {
-      manifest.outputs.push_back(
-          {file.at("path").get<std::string>(), file.at("size").get<uint64_t>(), file.at("sha1").get<std::string>()});
+      manifest.outputs.push_back({file.at("path").get<std::string>(),
+                                  Integer<uint64_t>(file.at("size"), "outputs[].size", source),
+                                  file.at("sha1").get<std::string>()});
     }
   } catch (const nlohmann::json::exception& e) {
-    throw UserError(format("manifest '{}' is damaged ({}); rerun the stage with --force", source, e.what()));
+    Damaged(source, e.what());
   }
-  if (!manifest.inputs.options.is_object()) {
-    throw UserError(
-        format("manifest '{}' is damaged (options is not an object); rerun the stage with --force", source));
-  }
+  if (!manifest.inputs.options.is_object()) Damaged(source, "options is not an object");
   return manifest;
 }
 

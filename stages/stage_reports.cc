@@ -1,11 +1,13 @@
 #include "stages/stage_reports.h"
 
 #include <algorithm>
+#include <optional>
 #include <type_traits>
 
 #include "base/errors.h"
 #include "base/file_util.h"
 #include "base/format.h"
+#include "base/json_number.h"
 #include "stages/stage_results.h"
 
 namespace p2n {
@@ -236,8 +238,9 @@ struct PixelsPerView {
   static int Read(const Fields& fields, const char* key) {
     const nlohmann::json& value = fields.At(key);
     if (value == "all") return 0;
-    if (!value.is_number_integer() || value.get<int64_t>() < 1) fields.Fail(key, "must be \"all\" or a positive count");
-    return value.get<int>();
+    const std::optional<int> pixels = JsonInteger<int>(value);
+    if (!pixels || *pixels < 1) fields.Fail(key, "must be \"all\" or a positive count");
+    return *pixels;
   }
 };
 

@@ -3,6 +3,10 @@
 
 #include <catch2/catch.hpp>
 
+#include <cstdint>
+#include <limits>
+
+#include "base/json_number.h"
 #include "nerf/adam.h"
 #include "nerf/encoding.h"
 #include "nerf/mesh.h"
@@ -85,6 +89,22 @@ TEST_CASE("a config with an unknown key or a derived key that does not follow is
                     "NgpField config: 'width' must be an integer, not \"wide\"");
   // What a config leaves out keeps its default.
   CHECK(NgpFieldConfig::FromJson({{"otype", "NgpField"}, {"width", 32}}).grid == HashGridConfig{});
+}
+
+TEST_CASE("JsonInteger returns only integers the type holds", "[config][bad_input]") {
+  using nlohmann::json;
+  CHECK(JsonInteger<int>(json(7)) == 7);
+  CHECK(JsonInteger<int>(json(-7)) == -7);
+  CHECK(JsonInteger<int>(json(int64_t{std::numeric_limits<int>::max()})) == std::numeric_limits<int>::max());
+  CHECK_FALSE(JsonInteger<int>(json(int64_t{std::numeric_limits<int>::max()} + 1)));
+  CHECK_FALSE(JsonInteger<int>(json(int64_t{std::numeric_limits<int>::min()} - 1)));
+  CHECK_FALSE(JsonInteger<uint64_t>(json(-1)));
+  CHECK(JsonInteger<uint64_t>(json(std::numeric_limits<uint64_t>::max())) == std::numeric_limits<uint64_t>::max());
+  CHECK_FALSE(JsonInteger<int64_t>(json(std::numeric_limits<uint64_t>::max())));
+  CHECK_FALSE(JsonInteger<int>(json(2.0)));
+  CHECK_FALSE(JsonInteger<int>(json(1e30)));
+  CHECK_FALSE(JsonInteger<int>(json("2")));
+  CHECK_FALSE(JsonInteger<int>(json()));
 }
 
 }  // namespace p2n::testing

@@ -352,9 +352,17 @@ TEST_CASE("import: broken and hostile datasets are refused, naming the file and 
   CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("focal length"));
   write("[[1,0,0,\"x\"],[0,1,0,0],[0,0,1,0]]", "a.png");
   CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("not a number"));
-  WriteText(dir / "data" / "transforms.json", R"({"fl_x": 10, "w": "wide", "h": 6, "frames": [{"file_path": "a.png",
+  WriteText(dir / "data" / "transforms.json", R"({"fl_x": "long", "w": 8, "h": 6, "frames": [{"file_path": "a.png",
       "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]})");
   CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("transforms.json' has a value of the wrong type"));
+  WriteText(dir / "data" / "transforms.json", R"({"fl_x": 10, "w": 1e30, "h": 6, "frames": [{"file_path": "a.png",
+      "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]})");
+  CHECK_THROWS_WITH(LoadDataset(dir / "data"),
+                    Catch::Contains("frames[0].w must be a whole number of pixels") && Catch::Contains("1e+30"));
+  // instant-ngp writes sizes as 8.0: read as 8.
+  WriteText(dir / "data" / "transforms.json", R"({"fl_x": 10, "w": 8.0, "h": 6.0, "frames": [{"file_path": "a.png",
+      "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]})");
+  CHECK(LoadDataset(dir / "data").views.at(0).view.camera.width == 8);
   write(identity, "missing.png");
   CHECK_THROWS_WITH(LoadDataset(dir / "data"), Catch::Contains("no usable view"));
   // Declared 8x6, but the image is 8x6... declare another size: refused when the images are read.

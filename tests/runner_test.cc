@@ -366,6 +366,15 @@ TEST_CASE("a manifest that is damaged is reported, not trusted", "[runner]") {
   auto statuses = f.Status();
   CHECK(statuses[1].state == StageState::kIncomplete);
   CHECK_THAT(statuses[1].reasons.at(0), Catch::Contains("manifest.json' is damaged"));
+  // Numbers no integer holds (undefined behaviour if cast) are damage too.
+  WriteText(f.workspace.StageDir("b") / "manifest.json",
+            R"({"stage": "b", "format_version": 1e30, "options": {}, "upstream": {}, "inputs": {}, "key": "k",
+                "outputs": []})");
+  CHECK_THAT(f.Status()[1].reasons.at(0), Catch::Contains("format_version is not a whole number in range: 1e+30"));
+  WriteText(f.workspace.StageDir("b") / "manifest.json",
+            R"({"stage": "b", "format_version": 1, "options": {}, "upstream": {}, "inputs": {}, "key": "k",
+                "outputs": [{"path": "x", "size": -1, "sha1": ""}]})");
+  CHECK_THAT(f.Status()[1].reasons.at(0), Catch::Contains("outputs[].size is not a whole number in range: -1"));
   fs::remove(f.workspace.StageDir("b") / "manifest.json");
   CHECK(f.Status()[1].state == StageState::kIncomplete);
   f.Run();
