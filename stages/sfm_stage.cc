@@ -42,6 +42,12 @@ constexpr const char* kMapperTuning[] = {
 // which took 175 s for fox's 50 photos on 2 cores; these settings took a third of that.
 constexpr size_t kFeaturesPerWord = 64;
 constexpr int kTreeBranching = 16, kTreeIterations = 5, kTreeMaxImages = 30;
+
+// Whether `photos` are mapped by COLMAP's hierarchical mapper (sfm.hierarchical_min_images).
+bool UsesHierarchicalMapper(const SfmOptions& options, size_t photos) {
+  return options.hierarchical_min_images > 0 && photos >= static_cast<size_t>(options.hierarchical_min_images);
+}
+
 // What to try when too few photos register.
 std::string Advice() {
   return format("try --{} exhaustive, more features (--{}), a larger --{}, or photos with more overlap",
@@ -232,17 +238,34 @@ struct ColmapRun {
                       threads});
   }
 
+  // COLMAP's incremental mapper, or for sfm.hierarchical_min_images photos and more its hierarchical one: the
+  // photos' scene graph cut into clusters of at most sfm.leaf_max_images, each grown by a quarter of that many
+  // photos of its neighbours (COLMAP's 50 for our default 200; the merge aligns the clusters on them), mapped on
+  // its own, as many at once as there are threads, and the models merged.
+  std::vector<std::string> MapperCommand(size_t photos, const fs::path& output) const {
+    const bool hierarchical = UsesHierarchicalMapper(options, photos);
+    std::vector<std::string> command({options.colmap, hierarchical ? "hierarchical_mapper" : "mapper",
+                                      "--database_path", database().string(), "--image_path", images.string(),
+                                      "--output_path", output.string(), "--random_seed", seed,
+                                      "--Mapper.min_model_size", "3"});
+    if (hierarchical) {
+      command.insert(command.end(),
+                     {"--num_workers", threads, "--leaf_max_num_images", std::to_string(options.leaf_max_images),
+                      "--image_overlap", std::to_string(options.leaf_max_images / 4)});
+    } else {
+      command.insert(command.end(), {"--Mapper.num_threads", threads});
+    }
+    command.insert(command.end(), std::begin(kMapperTuning), std::end(kMapperTuning));
+    return command;
+  }
+
   // Runs the mapper (the step `step`) into out/`folder`; returns the folder of the model with the most registered
   // images (COLMAP's exit code says nothing about that) and lists every model in `models`. UserError when there is
   // none.
   fs::path MapLargestModel(size_t photos, const std::string& step, const std::string& folder,
                            std::vector<SfmReport::Model>* models) const {
     fs::create_directories(out.dir / folder);
-    std::vector<std::string> command({options.colmap, "mapper", "--database_path", database().string(), "--image_path",
-                                      images.string(), "--output_path", (out.dir / folder).string(), "--random_seed",
-                                      seed, "--Mapper.num_threads", threads, "--Mapper.min_model_size", "3"});
-    command.insert(command.end(), std::begin(kMapperTuning), std::end(kMapperTuning));
-    const fs::path log = steps->Run(step, command, /*allow_failure=*/true);
+    const fs::path log = steps->Run(step, MapperCommand(photos, out.dir / folder), /*allow_failure=*/true);
     if (!steps->last_ok()) {
       if (ReadTextFile(log).find("No good initial image pair found") != std::string::npos) {
         throw UserError(
@@ -269,6 +292,18 @@ struct ColmapRun {
                              log.string(), Advice()));
     }
     return chosen;
+  }
+
+  // The hierarchical mapper's merged model triangulated anew from every match, the cameras kept: the clusters'
+  // own points leave their seams weakly tied, and the final bundle adjustment then bends the cameras (1.2 degrees
+  // on the 24-view test scene, 0.4 after this; docs/benchmarks.md). Returns the new model's folder.
+  fs::path Retriangulate(const fs::path& model) const {
+    const fs::path triangulated = out.dir / "retriangulated";
+    fs::create_directories(triangulated);
+    steps->Run("triangulation", {options.colmap, "point_triangulator", "--database_path", database().string(),
+                                 "--image_path", images.string(), "--input_path", model.string(), "--output_path",
+                                 triangulated.string(), "--clear_points", "1", "--Mapper.num_threads", threads});
+    return triangulated;
   }
 
   // A final bundle adjustment that also refines the principal point; returns the refined model's folder.
@@ -387,6 +422,8 @@ void SfmOptions::Check() const {
   CheckOption(*this, max_image_size, max_image_size >= 100,
               format("must be at least 100 pixels, not {}", max_image_size));
   CheckOption(*this, max_num_features, max_num_features >= 100, "must be at least 100");
+  CheckOption(*this, hierarchical_min_images, hierarchical_min_images >= 0, "must be 0 (never) or a photo count");
+  CheckOption(*this, leaf_max_images, leaf_max_images >= 8, "must be at least 8");
   CheckOption(*this, min_registered, min_registered > 0 && min_registered <= 1, "must be in (0, 1]");
   CheckOption(*this, colmap, !colmap.empty(), "must name the COLMAP program");
 }
@@ -441,11 +478,14 @@ void SfmStage::Run(StageContext& context) const {
   const Matcher matcher = options.matcher != Matcher::kAuto
                               ? options.matcher
                               : AutoMatcher(names, options.exhaustive_max_images, OneVideo(ingested));
-  LogInfo(format("sfm: COLMAP {}, {} photos, {} matching, features at {} px", version.ToString(), names.size(),
-                 EnumName(matcher), options.max_image_size));
+  const bool hierarchical = UsesHierarchicalMapper(options, names.size());
+  LogInfo(format("sfm: COLMAP {}, {} photos, {} matching, features at {} px, the {} mapper", version.ToString(),
+                 names.size(), EnumName(matcher), options.max_image_size,
+                 hierarchical ? "hierarchical" : "incremental"));
   // Extraction (one per image size), the vocabulary tree or our matching, COLMAP's matching, mapping, the
-  // principal point's adjustment, undistortion.
-  StepRunner steps(out.logs(), (options.refine_principal_point ? 6 : 5) + (camera_per_group ? groups.size() - 1 : 0));
+  // triangulation after the hierarchical mapper, the principal point's adjustment, undistortion.
+  StepRunner steps(out.logs(), (options.refine_principal_point ? 6 : 5) + (hierarchical ? 1 : 0) +
+                                   (camera_per_group ? groups.size() - 1 : 0));
   const ColmapRun colmap{
       options, ColmapFlagsFor(version), images, out, std::to_string(options.seed), std::to_string(threads), &steps};
 
@@ -453,7 +493,8 @@ void SfmStage::Run(StageContext& context) const {
   std::vector<SfmReport::Model> models;
   std::string matching;
   const fs::path chosen = MatchAndMap(colmap, options, names.size(), matcher, &matching, &models);
-  const fs::path model_dir = options.refine_principal_point ? colmap.RefinePrincipalPoint(chosen) : chosen;
+  const fs::path mapped = hierarchical ? colmap.Retriangulate(chosen) : chosen;
+  const fs::path model_dir = options.refine_principal_point ? colmap.RefinePrincipalPoint(mapped) : mapped;
   const ColmapModel model = ReadColmapModel(model_dir);
   SfmReport report = ModelReport(model, names);
   report.colmap_version = version.ToString();

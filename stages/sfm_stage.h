@@ -22,6 +22,8 @@ struct SfmOptions {
   int exhaustive_max_images = 100;      // photos above which auto matching is sequential or by retrieval
   int sequential_overlap = 12;          // neighbours each photo is matched with (sequential)
   int retrieval_neighbours = 20;        // most similar photos each photo is matched with (vocab_tree)
+  int hierarchical_min_images = 0;      // photos from which COLMAP's hierarchical mapper maps them; 0: never
+  int leaf_max_images = 200;            // photos in one of its clusters at most
   int max_image_size = 1024;            // longest side for feature extraction, pixels
   int max_num_features = 2048;          // features per photo at most
   bool refine_principal_point = true;   // a final bundle adjustment that also refines cx, cy
@@ -48,6 +50,13 @@ struct SfmOptions {
       "images");
     v("sequential_overlap", sequential_overlap, "neighbours each photo is matched with (sequential)", "images");
     v("retrieval_neighbours", retrieval_neighbours, "most similar photos each photo is matched with (vocab_tree)",
+      "images");
+    v("hierarchical_min_images", hierarchical_min_images,
+      "photos from which COLMAP's hierarchical mapper maps them (clusters of at most leaf_max_images photos, each "
+      "grown by a quarter as many of its neighbours', mapped on their own, as many at once as there are threads, then "
+      "merged) instead of its incremental one; 0: never",
+      "images");
+    v("leaf_max_images", leaf_max_images, "photos in one cluster of the hierarchical mapper at most (8 or more)",
       "images");
     v("max_image_size", max_image_size, "longest image side for feature extraction", "px");
     v("max_num_features", max_num_features,

@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# COLMAP's incremental mapper against its hierarchical one (sfm.hierarchical_min_images) on the synthetic scene's
+# N views (make_synthetic_scene, 320 x 240): the sfm stage alone under GNU time (wall time, peak memory of it and
+# COLMAP), the time of its mapping, triangulation and bundle adjustment steps, the views registered, and the
+# cameras against the scene's true ones (bench/compare_cameras).
+# Usage: bench/mapper_bench.sh OUT N [photo2nerf options]   e.g. bench/mapper_bench.sh /tmp/mapper 300
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:?usage: bench/mapper_bench.sh OUT N [photo2nerf options]}
+n=${2:?usage: bench/mapper_bench.sh OUT N [photo2nerf options]}
+shift 2
+bin=$PWD/build/cli/photo2nerf
+compare=$PWD/build/bench/compare_cameras
+[ -x "$bin" ] && [ -x "$compare" ] || { echo "build first: $bin or $compare is missing" >&2; exit 1; }
+photos=$out/photos_$n
+if [ ! -d "$photos" ]; then
+  build/examples/make_synthetic_scene "$out/scene_$n" "$n" > /dev/null
+  mkdir -p "$photos"
+  mv "$out/scene_$n"/*.png "$photos/"
+fi
+
+for mapper in incremental hierarchical; do
+  ws=$out/ws_${n}_$mapper
+  rm -rf "$ws"
+  options=(--run.progress none "$@")
+  [ "$mapper" = hierarchical ] && options+=(--sfm.hierarchical_min_images "$n")
+  "$bin" ingest "$photos" -w "$ws" "${options[@]}" > "$out/log_${n}_$mapper" 2>&1
+  /usr/bin/time -f '%e %M' -o "$out/time_${n}_$mapper" "$bin" sfm -w "$ws" "${options[@]}" >> "$out/log_${n}_$mapper" 2>&1 ||
+    { echo "sfm failed with the $mapper mapper: $out/log_${n}_$mapper" >&2; exit 1; }
+  "$bin" poses -w "$ws" "${options[@]}" >> "$out/log_${n}_$mapper" 2>&1
+  read -r seconds kb < "$out/time_${n}_$mapper"
+  steps=$(python3 -c 'import json, sys
+r = json.load(open(sys.argv[1]))
+times = {s["step"]: s["wall_seconds"] for s in r["steps"]}
+steps = ", ".join(f"{k} {times[k]:.1f} s" for k in ("mapping", "triangulation", "bundle adjustment") if k in times)
+print(steps + "; " + str(r["registered"]) + "/" + str(r["images_given"]) + " registered")' "$ws/10_sfm/sfm_report.json")
+  echo "$mapper: sfm $seconds s, $((kb / 1024)) MB; $steps"
+  "$compare" "$ws/20_poses/transforms.json" "$out/scene_$n/ground_truth_cameras.json" | grep -E "rotations aligned|centre error"
+done
