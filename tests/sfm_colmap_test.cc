@@ -70,6 +70,14 @@ PoseErrors CompareWithTruth(const nlohmann::json& transforms, const std::map<std
   return errors;
 }
 
+// The synthetic scene's true world_from_cam of each view by file name (its ground_truth_cameras.json in `photos`).
+std::map<std::string, Eigen::Matrix4d> TruePoses(const fs::path& photos) {
+  const nlohmann::json truth = ReadJsonFile(photos / "ground_truth_cameras.json");
+  std::map<std::string, Eigen::Matrix4d> poses;
+  for (const auto& frame : truth["frames"]) poses[frame["file_path"]] = ReadMatrix(frame["transform_matrix"]);
+  return poses;
+}
+
 // All 24 views in transforms.json, within `max_angle_deg` and `max_centre` (fraction of the spread) of the truth.
 void CheckPoses(const nlohmann::json& transforms, const std::map<std::string, Eigen::Matrix4d>& truth,
                 double max_angle_deg, double max_centre) {
@@ -97,6 +105,14 @@ void RunUntilPoses(const fs::path& photos, const fs::path& workspace_path, const
   MakeRunner().Run(workspace, config, request);
 }
 
+// The synthetic scene's 24-view orbit in dir/photos, through ingest, sfm and poses in dir/ws.
+void OrbitUntilPoses(const fs::path& dir, const Config& config) {
+  SyntheticSceneOptions scene;
+  scene.num_views = 24;
+  WriteSyntheticScene(scene, dir / "photos");
+  RunUntilPoses(dir / "photos", dir / "ws", config);
+}
+
 }  // namespace
 
 TEST_CASE("sfm + poses recover the synthetic scene's cameras", "[colmap][e2e]") {
@@ -118,11 +134,8 @@ TEST_CASE("sfm + poses recover the synthetic scene's cameras", "[colmap][e2e]") 
   const nlohmann::json report = ReadJsonFile(dir / "ws" / "10_sfm" / "sfm_report.json");
   CHECK(report["registered"] == 24);
   CHECK(report["mean_reprojection_error_px"].get<double>() < 1.0);
-  const nlohmann::json truth = ReadJsonFile(dir / "photos" / "ground_truth_cameras.json");
   const nlohmann::json transforms = ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json");
-  std::map<std::string, Eigen::Matrix4d> true_poses;
-  for (const auto& frame : truth["frames"]) true_poses[frame["file_path"]] = ReadMatrix(frame["transform_matrix"]);
-  CheckPoses(transforms, true_poses, 0.5, 0.01);
+  CheckPoses(transforms, TruePoses(dir / "photos"), 0.5, 0.01);
   CHECK(fs::exists(dir / "ws" / "20_poses" / "sparse_points.ply"));
 
   // Images above poses.max_image_size: the same cameras, downsized copies and intrinsics scaled to them.
@@ -162,13 +175,10 @@ TEST_CASE("sequential matching closes an orbit's loop", "[colmap][e2e]") {
     return;
   }
   TempDir dir;
-  SyntheticSceneOptions scene;
-  scene.num_views = 24;
-  WriteSyntheticScene(scene, dir / "photos");
   Config config = QuietConfig();
   config.Set("sfm.matcher", "sequential", "test");
   config.Set("sfm.sequential_overlap", 4, "test");
-  RunUntilPoses(dir / "photos", dir / "ws", config);
+  OrbitUntilPoses(dir.path(), config);
 
   const fs::path sfm = dir / "ws" / "10_sfm";
   const nlohmann::json report = ReadJsonFile(sfm / "sfm_report.json");
@@ -185,12 +195,9 @@ TEST_CASE("sequential matching closes an orbit's loop", "[colmap][e2e]") {
   }
   INFO(shared << " points seen from view 0 and view 22");
   CHECK(shared >= 20);
-  std::map<std::string, Eigen::Matrix4d> true_poses;
-  const nlohmann::json truth = ReadJsonFile(dir / "photos" / "ground_truth_cameras.json");
-  for (const auto& frame : truth["frames"]) true_poses[frame["file_path"]] = ReadMatrix(frame["transform_matrix"]);
   // The worst camera within a degree: COLMAP's threads put it at 0.51 once (0.3 to 0.5 otherwise); a loop left open
   // bends the orbit by tens of degrees.
-  CheckPoses(ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json"), true_poses, 1.0, 0.01);
+  CheckPoses(ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json"), TruePoses(dir / "photos"), 1.0, 0.01);
 }
 
 // COLMAP's hierarchical mapper (issue 57), on clusters of at most 12 of the 24 views (grown by 3 photos): they are
@@ -203,13 +210,10 @@ TEST_CASE("the hierarchical mapper maps clusters of the photos and merges them i
     return;
   }
   TempDir dir;
-  SyntheticSceneOptions scene;
-  scene.num_views = 24;
-  WriteSyntheticScene(scene, dir / "photos");
   Config config = QuietConfig();
   config.Set("sfm.hierarchical_min_images", 20, "test");
   config.Set("sfm.leaf_max_images", 12, "test");
-  RunUntilPoses(dir / "photos", dir / "ws", config);
+  OrbitUntilPoses(dir.path(), config);
 
   const fs::path sfm = dir / "ws" / "10_sfm";
   const std::string log = ReadTextFile(sfm / "logs" / "mapping.log");
@@ -220,10 +224,7 @@ TEST_CASE("the hierarchical mapper maps clusters of the photos and merges them i
   const nlohmann::json report = ReadJsonFile(sfm / "sfm_report.json");
   CHECK(report["registered"] == 24);
   CHECK(report["mean_reprojection_error_px"].get<double>() < 1.0);
-  std::map<std::string, Eigen::Matrix4d> true_poses;
-  const nlohmann::json truth = ReadJsonFile(dir / "photos" / "ground_truth_cameras.json");
-  for (const auto& frame : truth["frames"]) true_poses[frame["file_path"]] = ReadMatrix(frame["transform_matrix"]);
-  CheckPoses(ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json"), true_poses, 0.5, 0.01);
+  CheckPoses(ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json"), TruePoses(dir / "photos"), 0.5, 0.01);
 }
 
 // A messy photo folder (issue 7): the synthetic scene's views stored every way a folder of real photos may hold
