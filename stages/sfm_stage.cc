@@ -295,8 +295,8 @@ struct ColmapRun {
   }
 
   // The hierarchical mapper's merged model triangulated anew from every match, the cameras kept: the clusters'
-  // own points leave their seams weakly tied, and the final bundle adjustment then bends the cameras (1.2 degrees
-  // on the 24-view test scene, 0.4 after this; docs/benchmarks.md). Returns the new model's folder.
+  // own points tie them together only where they overlap, and the final bundle adjustment then bends the cameras
+  // (docs/benchmarks.md). Returns the new model's folder.
   fs::path Retriangulate(const fs::path& model) const {
     const fs::path triangulated = out.dir / "retriangulated";
     fs::create_directories(triangulated);
