@@ -7,10 +7,13 @@
 
 #include <algorithm>
 #include <initializer_list>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
+
+#include "base/json_number.h"
 
 namespace p2n {
 
@@ -37,10 +40,10 @@ inline void ReadIntFields(const nlohmann::json& json, std::initializer_list<std:
       if (std::none_of(other_keys.begin(), other_keys.end(), is_key)) {
         throw std::invalid_argument(what + ": unknown key '" + key + "'");
       }
-    } else if (!value.is_number_integer()) {
-      throw std::invalid_argument(what + ": '" + key + "' must be an integer, not " + value.dump());
+    } else if (const std::optional<int> n = JsonInteger<int>(value)) {
+      *field->second = *n;
     } else {
-      *field->second = value.get<int>();
+      throw std::invalid_argument(what + ": '" + key + "' must be an integer, not " + value.dump());
     }
   }
 }

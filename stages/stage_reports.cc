@@ -60,10 +60,16 @@ class Fields {
   void Convert(const char* key, const nlohmann::json& value, T* out) const {
     const bool number_wanted = std::is_arithmetic_v<T> && !std::is_same_v<T, bool>;
     if (number_wanted && !value.is_number()) Fail(key, format("must be a number, not {}", value.type_name()));
-    try {
-      *out = value.get<T>();
-    } catch (const nlohmann::json::exception&) {
-      Fail(key, format("has the wrong type ({})", value.type_name()));
+    if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) {
+      const std::optional<T> n = JsonInteger<T>(value);
+      if (!n) Fail(key, format("must be a whole number in range, not {}", value.dump()));
+      *out = *n;
+    } else {
+      try {
+        *out = value.get<T>();
+      } catch (const nlohmann::json::exception&) {
+        Fail(key, format("has the wrong type ({})", value.type_name()));
+      }
     }
   }
 

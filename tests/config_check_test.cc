@@ -87,6 +87,8 @@ TEST_CASE("a config with an unknown key or a derived key that does not follow is
                     Catch::Contains("'skip_after' follows from the other fields"));
   CHECK_THROWS_WITH(NgpFieldConfig::FromJson({{"width", "wide"}}),
                     "NgpField config: 'width' must be an integer, not \"wide\"");
+  CHECK_THROWS_WITH(NgpFieldConfig::FromJson({{"width", int64_t{1} << 40}}),
+                    "NgpField config: 'width' must be an integer, not 1099511627776");
   // What a config leaves out keeps its default.
   CHECK(NgpFieldConfig::FromJson({{"otype", "NgpField"}, {"width", 32}}).grid == HashGridConfig{});
 }

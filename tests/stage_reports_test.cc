@@ -284,6 +284,11 @@ TEST_CASE("A damaged report names its file, the field and the stage to rerun", "
   const nlohmann::json sfm_json = SomeSfmReport().ToJson();
   CHECK_THAT(ErrorAfterEdit<SfmReport>(sfm, sfm_json, "/registered", 13),
              Catch::Contains("\"registered\" must be at most images_given") && Catch::Contains("photo2nerf sfm"));
+  // Numbers no integer field holds (undefined behaviour if cast) are refused like any damage.
+  CHECK_THAT(ErrorAfterEdit<SfmReport>(sfm, sfm_json, "/points", 1e30),
+             Catch::Contains("\"points\" must be a whole number in range, not 1e+30"));
+  CHECK_THAT(ErrorAfterEdit<SfmReport>(sfm, sfm_json, "/points", -1),
+             Catch::Contains("\"points\" must be a whole number in range, not -1"));
   CHECK_THAT(ErrorAfterEdit<SfmReport>(sfm, sfm_json, "/left_out", "none"),
              Catch::Contains("\"left_out\" must be an array"));
   CHECK_THAT(ErrorAfterEdit<SfmReport>(sfm, sfm_json, "/left_out/0/reason", "blurry"),
