@@ -83,8 +83,9 @@ std::vector<CameraGroup> CameraGroups(const IngestReport& ingest);
 
 class SfmStage : public StageOf<SfmResult> {
  public:
-  // 2: loop pairs in sequential matching, the reasons photos were left out.
-  int format_version() const override { return 2; }
+  // 2: loop pairs in sequential matching, the reasons photos were left out; 3: the final bundle adjustment stops
+  // when the cost stops falling.
+  int format_version() const override { return 3; }
   std::vector<std::string> upstream() const override { return {IngestResult::kId.name}; }
   // "tool colmap" -> its version: a result made with another COLMAP is stale.
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
