@@ -29,14 +29,17 @@ namespace {
 
 constexpr double kSuspiciousFocusAngleDeg = 20;  // correct orbit models stay near 8 (DESIGN.md §7)
 constexpr size_t kMaxNamesListed = 20;
-// How the mapper adjusts while the model grows (COLMAP's defaults otherwise): global adjustments stop when the cost
-// changes by less than 1e-6 of it (COLMAP's default 0 runs each to its iteration limit; the final bundle adjustment
-// refines the cameras anyway), a global one runs when the images or points grew by 40% since the last (COLMAP's
-// 10%), and local ones stop after 10 iterations (25): faster mapping, the cameras as close to the references
-// (docs/benchmarks.md, structure from motion).
-constexpr const char* kMapperTuning[] = {
-    "--Mapper.ba_global_function_tolerance", "1e-6", "--Mapper.ba_global_images_ratio",      "1.4",
-    "--Mapper.ba_global_points_ratio",       "1.4",  "--Mapper.ba_local_max_num_iterations", "10"};
+// Global bundle adjustments, the mapper's and the final one, stop when an iteration changes the cost by less than
+// this share of it (Ceres's own default; COLMAP's 0 runs each to its iteration limit, 100 for the final one, on a
+// cost that stopped falling after the first few: most of the sfm stage at many photos, docs/benchmarks.md).
+constexpr const char* kGlobalAdjustmentTolerance = "1e-6";
+// How the mapper adjusts while the model grows (COLMAP's defaults otherwise): a global adjustment runs when the
+// images or points grew by 40% since the last (COLMAP's 10%), and local ones stop after 10 iterations (25): faster
+// mapping, the cameras as close to the references (docs/benchmarks.md, structure from motion).
+constexpr const char* kMapperTuning[] = {"--Mapper.ba_global_function_tolerance", kGlobalAdjustmentTolerance,
+                                         "--Mapper.ba_global_images_ratio",       "1.4",
+                                         "--Mapper.ba_global_points_ratio",       "1.4",
+                                         "--Mapper.ba_local_max_num_iterations",  "10"};
 // The vocabulary tree, built from the photos themselves: a word per 64 features at most, clustered from up to 30
 // photos with a narrower, shallower k-means than COLMAP's defaults (branching 256, 11 iterations, every photo),
 // which took 175 s for fox's 50 photos on 2 cores; these settings took a third of that.
@@ -306,16 +309,13 @@ struct ColmapRun {
     return triangulated;
   }
 
-  // A final bundle adjustment that also refines the principal point; returns the refined model's folder. It stops
-  // once an iteration lowers the cost by less than a millionth (Ceres's own default): COLMAP's bundle_adjuster has
-  // no stopping rule of its own (tolerances 0), so it ran its 100 iterations on a cost that stopped falling after
-  // the first few, the sfm stage's largest cost at many photos (docs/benchmarks.md).
+  // A final bundle adjustment that also refines the principal point; returns the refined model's folder.
   fs::path RefinePrincipalPoint(const fs::path& model) const {
     const fs::path refined = out.dir / "refined";
     fs::create_directories(refined);
-    steps->Run("bundle adjustment",
-               {options.colmap, "bundle_adjuster", "--input_path", model.string(), "--output_path", refined.string(),
-                "--BundleAdjustment.refine_principal_point", "1", "--BundleAdjustment.function_tolerance", "1e-6"});
+    steps->Run("bundle adjustment", {options.colmap, "bundle_adjuster", "--input_path", model.string(), "--output_path",
+                                     refined.string(), "--BundleAdjustment.refine_principal_point", "1",
+                                     "--BundleAdjustment.function_tolerance", kGlobalAdjustmentTolerance});
     return refined;
   }
 
