@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace p2n {
 
@@ -70,6 +71,37 @@ Eigen::Vector2d Project(const PinholeCamera& camera, const Eigen::Vector3d& poin
   const double z = -in_gl.z();  // distance in front of the camera
   if (depth != nullptr) *depth = z;
   return {camera.cx + camera.fx * in_gl.x() / z, camera.cy - camera.fy * in_gl.y() / z};
+}
+
+std::vector<size_t> SpreadCameras(const std::vector<PinholeCamera>& cameras, size_t count) {
+  std::vector<size_t> chosen;
+  if (cameras.size() <= count) {
+    for (size_t i = 0; i < cameras.size(); ++i) chosen.push_back(i);
+    return chosen;
+  }
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const PinholeCamera& camera : cameras) mean += camera.world_from_cam.topRightCorner<3, 1>();
+  mean /= double(cameras.size());
+  double spread = 0;
+  for (const PinholeCamera& camera : cameras)
+    spread += (camera.world_from_cam.topRightCorner<3, 1>() - mean).squaredNorm();
+  spread = std::sqrt(spread / double(cameras.size()));
+  // Each camera as a point: its centre in units of the spread, then its viewing direction (OpenGL looks down -z).
+  std::vector<Eigen::Matrix<double, 6, 1>> keys(cameras.size());
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    const Eigen::Vector3d centre = cameras[i].world_from_cam.topRightCorner<3, 1>() - mean;
+    keys[i] << (spread > 0 ? centre / spread : centre), -cameras[i].world_from_cam.block<3, 1>(0, 2).normalized();
+  }
+  std::vector<double> distance(cameras.size(), std::numeric_limits<double>::infinity());
+  size_t next = 0;
+  while (chosen.size() < count) {
+    chosen.push_back(next);
+    for (size_t i = 0; i < keys.size(); ++i) distance[i] = std::min(distance[i], (keys[i] - keys[next]).squaredNorm());
+    next = size_t(std::max_element(distance.begin(), distance.end()) - distance.begin());
+    if (distance[next] == 0) break;  // the others stand and look where a chosen one does
+  }
+  std::sort(chosen.begin(), chosen.end());
+  return chosen;
 }
 
 }  // namespace p2n

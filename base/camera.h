@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <vector>
 
 namespace p2n {
 
@@ -41,5 +42,11 @@ Eigen::Matrix4d LookAtPose(const Eigen::Vector3d& position, const Eigen::Vector3
 // The pixel where `point_in_world` appears; its depth along the viewing direction in `depth` (negative:
 // behind the camera).
 Eigen::Vector2d Project(const PinholeCamera& camera, const Eigen::Vector3d& point_in_world, double* depth = nullptr);
+
+// The indices (ascending) of `count` of `cameras` spread over where they stand and which way they look: farthest-point
+// sampling, from the first camera, on each camera's centre (in units of the centres' root-mean-square distance from
+// their mean) and viewing direction (a unit vector); every index when there are no more than `count`, fewer when the
+// others coincide with chosen ones.
+std::vector<size_t> SpreadCameras(const std::vector<PinholeCamera>& cameras, size_t count);
 
 }  // namespace p2n

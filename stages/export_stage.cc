@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 
+#include "base/camera.h"
 #include "base/errors.h"
 #include "base/file_util.h"
 #include "base/format.h"
@@ -38,6 +39,10 @@ constexpr float kFallbackThreshold = 25;  // per normalised unit: what fits lego
 // mesh_preview.glb, the report page's view: about 1.5 MB
 constexpr size_t kPreviewTriangles = 20000;
 constexpr int kPreviewTextureSize = 1024;
+// The depth surface and the point cloud come from at most this many training views, spread out (SpreadCameras):
+// fusing them costs the lattice's points times the views, and a few hundred views around a scene see what a
+// thousand do.
+constexpr size_t kMaxDepthViews = 200;
 
 // The training views' cameras as the field saw them: corrected where camera refinement moved them.
 void ApplyCameraCorrections(const std::map<std::string, CameraCorrection>& corrections, ImportedDataset* dataset) {
@@ -75,7 +80,7 @@ MeshSurface SurfaceKind(const NerfModel& model, const ExportOptions& options) {
   return model.space == SceneSpace::kBounded ? MeshSurface::kDensity : MeshSurface::kDepths;
 }
 
-// Where the training views' rays end (their median depth), where they are opaque.
+// Where the training views' rays end (their median depth), where they are opaque: at most kMaxDepthViews of them.
 struct DepthSamples {
   std::vector<ColouredPoint> points;  // coloured, one per opaque pixel (at most kMaxSmallViewPixels)
   // Every one from the middle half (in width and height) of each view; only for the focus region (FitCube).
@@ -85,11 +90,15 @@ struct DepthSamples {
 
 DepthSamples SampleDepths(const StageContext& context, const fs::path& model_file, const NerfModel& model,
                           const ImportedDataset& dataset, const ExportOptions& options) {
-  std::vector<TrainView> views;  // the training views' cameras, without their pixels
+  std::vector<TrainView> training;  // the training views' cameras, without their pixels
+  std::vector<PinholeCamera> cameras;
   for (const ImportedView& view : dataset.views) {
     if (view.view.split != "train") continue;
-    views.push_back({view.view.camera, view.view.near, view.view.far, 3, {}, view.source.filename().string(), {}});
+    training.push_back({view.view.camera, view.view.near, view.view.far, 3, {}, view.source.filename().string(), {}});
+    cameras.push_back(view.view.camera);
   }
+  std::vector<TrainView> views;
+  for (size_t i : SpreadCameras(cameras, kMaxDepthViews)) views.push_back(std::move(training[i]));
   const std::shared_ptr<const ViewRenders> views_rendered =
       RenderViewsSmall(context, model_file, model, views, options.points_width, "export: point cloud");
   DepthSamples samples;
@@ -233,7 +242,7 @@ ExportReport::Mesh WriteMesh(const NerfModel& model, const ExportOptions& option
              options.resolution, mesh_options.half_size, mesh_options.centre.x(), mesh_options.centre.y(),
              mesh_options.centre.z(), region == MeshRegion::kBox ? "scene box" : "focus region",
              SurfaceKind(model, options) == MeshSurface::kDepths
-                 ? std::string("the training views' depths fused")
+                 ? format("the depths of {} training views fused", depths.views->renders.size())
                  : format("density threshold {:.4g}{}", mesh_options.density_threshold,
                           auto_threshold ? " (from the field)" : ""),
              mesh.triangles.size(), marched.triangles.size())};
@@ -297,6 +306,7 @@ void ExportStage::Run(StageContext& context) const {
   report.frame = options.frame;
   WriteCameras(out.cameras(), dataset, frame, !corrections.empty());
   report.cameras = {ExportResult{}.cameras().string(), dataset.views.size(), !corrections.empty()};
+  if (depths.views) report.depth_views = depths.views->renders.size();
   if (options.points) {
     std::vector<ColouredPoint>& points = depths.points;
     for (ColouredPoint& point : points) point.position = frame.Point(point.position);

@@ -63,8 +63,8 @@ struct ExportOptions {
 class ExportStage : public StageOf<ExportResult> {
  public:
   // 5: the point cloud rendered at most 2 M pixels; 6: at the median depth (the splat stage's renders); 7: the mesh
-  // simplified, mesh.glb and its texture
-  int format_version() const override { return 7; }
+  // simplified, mesh.glb and its texture; 8: from at most 200 training views
+  int format_version() const override { return 8; }
   std::vector<std::string> upstream() const override { return {PosesResult::kId.name, TrainResult::kId.name}; }
   void Run(StageContext& context) const override;
 };

@@ -585,6 +585,7 @@ void Describe(S& s, ExportReport& report) {
   s("textured", report.textured);
   s("frame", report.frame);
   s("cameras", report.cameras);
+  s("depth_views", report.depth_views);
   s("points", report.points);
 }
 

@@ -292,6 +292,9 @@ struct ExportReport {
     size_t views = 0;
     bool refined = false;
   } cameras;
+  // The training views whose renders gave the point cloud, the focus region and the depth surface: at most 200,
+  // spread over the capture; 0 when none of them was asked for.
+  size_t depth_views = 0;
   std::optional<ExportedPoints> points;  // none with export.points false
 
   nlohmann::json ToJson() const;

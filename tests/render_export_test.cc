@@ -241,6 +241,11 @@ TEST_CASE("export stage: mesh and point cloud open in Assimp, finite, in the sou
   const fs::path out = setup.dir / "ws" / "50_export";
   const nlohmann::json report = ReadJsonFile(out / "export_report.json");
   REQUIRE(report["mesh"]["triangles"].get<size_t>() > 100);
+  // Every training view's depths (fewer than 200 of them).
+  const nlohmann::json poses = ReadJsonFile(setup.dir / "ws" / "20_poses" / "transforms.json");
+  size_t training_views = 0;
+  for (const nlohmann::json& frame : poses["frames"]) training_views += frame["split"] == "train";
+  CHECK(report["depth_views"].get<size_t>() == training_views);
   // The small scene is unbounded (a transforms.json dataset): the mesh covers the cube the views look at, inside
   // the scene box.
   const nlohmann::json& region = report["mesh"]["region"];
