@@ -4,6 +4,7 @@
 # COLMAP), the time of its mapping, triangulation and bundle adjustment steps, the views registered, and the
 # cameras against the scene's true ones (bench/compare_cameras).
 # Usage: bench/mapper_bench.sh OUT N [photo2nerf options]   e.g. bench/mapper_bench.sh /tmp/mapper 300
+# MAPPERS="hierarchical" in the environment runs that mapper alone (default: "incremental hierarchical").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:?usage: bench/mapper_bench.sh OUT N [photo2nerf options]}
@@ -19,11 +20,11 @@ if [ ! -d "$photos" ]; then
   mv "$out/scene_$n"/*.png "$photos/"
 fi
 
-for mapper in incremental hierarchical; do
+for mapper in ${MAPPERS:-incremental hierarchical}; do
   ws=$out/ws_${n}_$mapper
   rm -rf "$ws"
   options=(--run.progress none "$@")
-  [ "$mapper" = hierarchical ] && options+=(--sfm.hierarchical_min_images "$n")
+  if [ "$mapper" = hierarchical ]; then options+=(--sfm.hierarchical_min_images "$n"); else options+=(--sfm.hierarchical_min_images 0); fi
   "$bin" ingest "$photos" -w "$ws" "${options[@]}" > "$out/log_${n}_$mapper" 2>&1
   /usr/bin/time -f '%e %M' -o "$out/time_${n}_$mapper" "$bin" sfm -w "$ws" "${options[@]}" >> "$out/log_${n}_$mapper" 2>&1 ||
     { echo "sfm failed with the $mapper mapper: $out/log_${n}_$mapper" >&2; exit 1; }
