@@ -22,7 +22,7 @@ struct SfmOptions {
   int exhaustive_max_images = 100;      // photos above which auto matching is sequential or by retrieval
   int sequential_overlap = 12;          // neighbours each photo is matched with (sequential)
   int retrieval_neighbours = 20;        // most similar photos each photo is matched with (vocab_tree)
-  int hierarchical_min_images = 1000;   // photos from which COLMAP's hierarchical mapper maps them; 0: never
+  int hierarchical_min_images = 500;    // photos from which COLMAP's hierarchical mapper maps them; 0: never
   int leaf_max_images = 200;            // photos in one of its clusters at most
   int max_image_size = 1024;            // longest side for feature extraction, pixels
   int max_num_features = 2048;          // features per photo at most
