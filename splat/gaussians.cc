@@ -31,6 +31,18 @@ void Gaussians<T>::Append(const Gaussians& other, size_t index) {
 }
 
 template <typename T>
+void Gaussians<T>::Append(const Gaussians& other) {
+  if (other.sh_degree != sh_degree) throw std::invalid_argument("Gaussians::Append: the SH degrees differ");
+  std::vector<const std::vector<T>*> from;
+  other.ForEachArray([&](const std::vector<T>& values, int) { from.push_back(&values); });
+  size_t array = 0;
+  ForEachArray([&](std::vector<T>& values, int) {
+    const std::vector<T>& source = *from[array++];
+    values.insert(values.end(), source.begin(), source.end());
+  });
+}
+
+template <typename T>
 void Gaussians<T>::Filter(const std::vector<bool>& keep) {
   if (keep.size() != size()) throw std::invalid_argument("Gaussians::Filter: one flag per Gaussian");
   ForEachArray([&](std::vector<T>& values, int per) {

@@ -35,6 +35,8 @@ struct Gaussians {
   void SetZero();
   // Appends Gaussian `index` of `other` (same sh_degree).
   void Append(const Gaussians& other, size_t index);
+  // Appends every Gaussian of `other` (same sh_degree).
+  void Append(const Gaussians& other);
   // Keeps the Gaussians whose `keep` is true, in order.
   void Filter(const std::vector<bool>& keep);
 

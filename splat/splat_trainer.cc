@@ -44,11 +44,19 @@ SplatTrainer::SplatTrainer(Gaussians<float> gaussians, const SplatScene& scene, 
       throw std::invalid_argument("SplatTrainer: a background learnt behind photos with alpha (" + view->name + ")");
     }
   }
+  if (scene_.context != nullptr && scene_.context->sh_degree != gaussians_.sh_degree)
+    throw std::invalid_argument("SplatTrainer: the context's SH degree is not the splats'");
   gaussians_.ForEachArray([&](const std::vector<float>& values, int per) {
     adams_.emplace_back(AdamOptions{1e-3, 0.9, 0.999, 1e-15}, values.size(), std::max(per, 1));
   });
   screen_gradient_sum_.assign(gaussians_.size(), 0);
   screen_gradient_count_.assign(gaussians_.size(), 0);
+}
+
+Gaussians<float> SplatTrainer::Drawn() const {
+  Gaussians<float> drawn = gaussians_;
+  if (scene_.context != nullptr) drawn.Append(*scene_.context);
+  return drawn;
 }
 
 int SplatTrainer::ShDegree() const { return std::min(gaussians_.sh_degree, step_ / options_.sh_interval); }
@@ -87,7 +95,13 @@ double SplatTrainer::Step() {
   raster.projection.near = scene_.near;
   raster.projection.sh_degree = ShDegree();
   for (int c = 0; c < 3; ++c) raster.background[c] = background_[c];
-  rasterizer_.Forward(gaussians_, view.camera, raster);
+  const Gaussians<float>* drawn = &gaussians_;
+  if (scene_.context != nullptr) {
+    drawn_ = gaussians_;
+    drawn_.Append(*scene_.context);
+    drawn = &drawn_;
+  }
+  rasterizer_.Forward(*drawn, view.camera, raster);
 
   // (1 - w) L1 + w (1 - SSIM) against the photo on the background (w: options_.ssim_weight).
   const std::vector<float>& rgb = rasterizer_.rgb();
@@ -111,10 +125,11 @@ double SplatTrainer::Step() {
   loss += (1 - weight) * l1 / rgb.size();
   Gaussians<float>& grads = gradients_;  // kept between steps: no allocation of its tens of megabytes each step
   grads.sh_degree = gaussians_.sh_degree;
-  if (grads.size() != gaussians_.size()) grads.Resize(gaussians_.size());
+  if (grads.size() != drawn->size()) grads.Resize(drawn->size());
   grads.SetZero();
   std::vector<float> screen;
   rasterizer_.Backward(d_rgb, &grads, &screen);
+  grads.Resize(gaussians_.size());  // the context's gradients go (its capacity stays for the next step)
   if (scene_.learn_background) StepBackground(d_rgb);
 
   // Screen-space gradients in normalised device units (as the reference's threshold is), for densification.

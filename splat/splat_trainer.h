@@ -58,6 +58,8 @@ struct SplatScene {
   // Learn the colour behind every splat (what lies beyond them: a sky, a far wall) with them; only for photos
   // without alpha, whose pixels do not depend on it.
   bool learn_background = false;
+  // Splats drawn with the trained ones and never changed (block training: the other blocks, as they started).
+  const Gaussians<float>* context = nullptr;
 };
 
 class SplatTrainer {
@@ -75,6 +77,8 @@ class SplatTrainer {
   void SetProgress(double share) { progress_ = share; }
   int step() const { return step_; }
   const Gaussians<float>& gaussians() const { return gaussians_; }
+  // What the trainer draws: its splats, then the scene's context.
+  Gaussians<float> Drawn() const;
   const std::array<float, 3>& background() const { return background_; }
   // The SH degree in use at this step.
   int ShDegree() const;
@@ -99,6 +103,7 @@ class SplatTrainer {
   static constexpr size_t kShRestArray = 5;  // sh_rest's place in Gaussians::ForEachArray's order
   std::vector<Adam<float>> adams_;           // one per parameter array, in Gaussians::ForEachArray's order
   Gaussians<float> gradients_;
+  Gaussians<float> drawn_;  // the splats with the context, when there is one (kept between steps, as gradients_)
   Rasterizer<float> rasterizer_;
   SsimLoss ssim_;
   int step_ = 0;

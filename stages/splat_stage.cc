@@ -15,6 +15,7 @@
 #include "photo2nerf/version.h"
 #include "pipeline/cancel.h"
 #include "pipeline/log.h"
+#include "splat/blocks.h"
 #include "splat/field_init.h"
 #include "splat/similarity.h"
 #include "splat/splat_gltf.h"
@@ -41,6 +42,7 @@ void SplatOptions::Check() const {
   CheckOption(*this, sh_degree, sh_degree >= 0 && sh_degree <= kMaxShDegree, "must be 0..3");
   CheckOption(*this, init_width, init_width >= 8 && init_width <= 8192, "must be 8..8192");
   CheckOption(*this, max_gaussians, max_gaussians >= 1, "must be positive");
+  CheckOption(*this, blocks, blocks >= 1 && blocks <= 64, "must be 1..64");
   CheckOption(*this, coarse, coarse >= 0 && coarse <= 1, "must be 0..1");
   CheckOption(*this, max_image_size, max_image_size == 0 || max_image_size >= 16,
               "must be 0 (as they are) or at least 16 pixels");
@@ -183,27 +185,35 @@ Scores Evaluate(const Gaussians<float>& gaussians, const std::array<float, 3>& b
   return scores;
 }
 
-// A metrics.csv row: the run so far, the training loss since the last row and the held-out PSNR.
-void AddMetricsRow(const SplatTrainer& trainer, const Scores& scores, RunState* state) {
+// A metrics.csv row: the run so far (`earlier`: the steps and seconds of the blocks optimised before this one), the
+// splats drawn, the training loss since the last row and the held-out PSNR.
+struct Earlier {
+  int steps = 0;
+  double seconds = 0;
+};
+void AddMetricsRow(int step, size_t splats, const Scores& scores, const Earlier& earlier, RunState* state) {
   const double loss = state->TakeMeanLoss(0);
-  state->metrics += format("{:.3f},{},{},{:.6g},{:.4f}\n", state->seconds, trainer.step(), trainer.gaussians().size(),
-                           loss, Mean(scores.psnr));
+  state->metrics += format("{:.3f},{},{},{:.6g},{:.4f}\n", earlier.seconds + state->seconds, earlier.steps + step,
+                           splats, loss, Mean(scores.psnr));
 }
 
-// Optimises until the budget (seconds, else steps) is spent: a metrics row at every evaluation but the last (the
-// caller's final evaluation makes it), checkpoints.
-void OptimiseUntilDone(SplatTrainer& trainer, const SplatSetup& setup, const SplatOptions& options, double budget,
-                       double near, const fs::path& checkpoint, const std::string& key, RunState* state) {
+// Optimises on `views` until the budget (seconds, else steps) is spent: a metrics row at every evaluation but the last
+// (the caller's final evaluation makes it), checkpoints in `checkpoint`.
+void OptimiseUntilDone(SplatTrainer& trainer, const std::vector<TrainView>& views, const SplatSetup& setup,
+                       const SplatOptions& options, double budget, double near, const fs::path& checkpoint,
+                       const std::string& key, const Earlier& earlier, RunState* state) {
   const RunLoop loop{SplatResult::kId.name,      budget, options.steps, options.eval_interval, 1, false,
                      options.checkpoint_interval};
-  const std::vector<TrainView> coarse = options.coarse > 0 ? HalfSizeViews(setup.data.train) : std::vector<TrainView>{};
+  const std::vector<TrainView> coarse = options.coarse > 0 ? HalfSizeViews(views) : std::vector<TrainView>{};
   const auto step = [&](double share) -> std::optional<double> {
-    trainer.SetViews(!coarse.empty() && share < options.coarse ? &coarse : &setup.data.train);
+    trainer.SetViews(!coarse.empty() && share < options.coarse ? &coarse : &views);
     trainer.SetProgress(share);
     return trainer.Step();
   };
   const auto add_row = [&](RunState* run) {
-    AddMetricsRow(trainer, Evaluate(trainer.gaussians(), trainer.background(), setup, near, false), run);
+    const Gaussians<float> drawn = trainer.Drawn();
+    AddMetricsRow(trainer.step(), drawn.size(), Evaluate(drawn, trainer.background(), setup, near, false), earlier,
+                  run);
   };
   const auto save = [&](const RunState& run) {
     WriteOrExplain([&] { SaveRunCheckpoint(checkpoint, key, run, [&](BinaryWriter* w) { trainer.Save(w); }); });
@@ -212,20 +222,100 @@ void OptimiseUntilDone(SplatTrainer& trainer, const SplatSetup& setup, const Spl
       state, [&] { return trainer.step(); }, step, add_row, save);
 }
 
-}  // namespace
+// What the optimisation made: the splats, the colour behind them, its steps (every block's), the steps a resumed run
+// started from, and its state (every block's metrics rows, its seconds summed).
+struct Optimised {
+  Gaussians<float> splats;
+  std::array<float, 3> background{1, 1, 1};
+  int steps = 0, resumed_from = 0;
+  RunState state;
+};
+
+// Optimises `splats` on `views` (with `scene.context` drawn), resuming from `checkpoint` where it holds this run.
+Optimised OptimiseSplats(const Gaussians<float>& splats, const std::vector<TrainView>& views, SplatScene scene,
+                         const SplatTrainerOptions& trainer_options, const SplatSetup& setup,
+                         const SplatOptions& options, const StageContext& context, double budget,
+                         const fs::path& checkpoint, const Earlier& earlier, bool checkpoint_at_end) {
+  scene.views = &views;
+  SplatTrainer trainer(splats, scene, trainer_options);
+  Optimised out;
+  const bool resumed = LoadRunCheckpoint(checkpoint, context.key, SplatResult::kId.name, &out.state,
+                                         [&](BinaryReader* r) { trainer.Load(r); });
+  out.resumed_from = resumed ? trainer.step() : 0;
+  if (out.resumed_from > 0) {
+    LogInfo(format("splat: resumed at step {} from {}", out.resumed_from, checkpoint.string()));
+  }
+  OptimiseUntilDone(trainer, views, setup, options, budget, scene.near, checkpoint, context.key, earlier, &out.state);
+  if (checkpoint_at_end && options.checkpoint_interval > 0) {
+    WriteOrExplain(
+        [&] { SaveRunCheckpoint(checkpoint, context.key, out.state, [&](BinaryWriter* w) { trainer.Save(w); }); });
+  }
+  out.splats = trainer.gaussians();
+  out.background = trainer.background();
+  out.steps = trainer.step();
+  return out;
+}
+
+// The training views seen by a block when at least this share of the splats they show are the block's.
+constexpr double kBlockViewShare = 0.1;
+
+// Optimises each of options.blocks slabs in turn (splat/blocks.h), each for the whole budget, with its checkpoint
+// kept when it ends so that a resumed run goes on with the next; merges them.
+Optimised OptimiseBlocks(const SplatScene& scene, const SplatTrainerOptions& trainer_options, const SplatSetup& setup,
+                         const SplatOptions& options, const StageContext& context, double budget) {
+  const SplatBlocks blocks = CutIntoBlocks(setup.gaussians, options.blocks);
+  LogInfo(
+      format("splat: {} blocks across the {} axis, each optimised for the budget", blocks.count(), "xyz"[blocks.axis]));
+  std::vector<Gaussians<float>> optimised;
+  Optimised merged;
+  merged.background = {0, 0, 0};
+  Earlier earlier;
+  for (int b = 0; b < blocks.count(); ++b) {
+    Gaussians<float> own = SplatsOfBlock(setup.gaussians, blocks, b, true);
+    const Gaussians<float> others = SplatsOfBlock(setup.gaussians, blocks, b, false);
+    std::vector<TrainView> views;
+    for (const size_t v : ViewsOfBlock(setup.data.train, setup.gaussians, blocks, b, kBlockViewShare, scene.near))
+      views.push_back(setup.data.train[v]);
+    LogInfo(
+        format("splat: block {} of {}: {} splats, {} training views", b + 1, blocks.count(), own.size(), views.size()));
+    SplatScene block_scene = scene;
+    block_scene.context = &others;
+    Optimised block;
+    block.splats = own;
+    block.background = scene.background;
+    if (own.size() > 0 && !views.empty()) {
+      const fs::path checkpoint = context.resume_dir / format("checkpoint_block{}.bin", b + 1);
+      SplatTrainerOptions block_options = trainer_options;
+      block_options.seed += static_cast<uint64_t>(b);
+      block = OptimiseSplats(own, views, block_scene, block_options, setup, options, context, budget, checkpoint,
+                             earlier, true);
+    }
+    optimised.push_back(std::move(block.splats));
+    for (int c = 0; c < 3; ++c) merged.background[c] += block.background[c] / blocks.count();
+    merged.steps += block.steps;
+    merged.resumed_from += block.resumed_from;
+    merged.state.metrics += block.state.metrics;
+    merged.state.seconds += block.state.seconds;
+    merged.state.loss_sum += block.state.loss_sum;
+    merged.state.loss_steps += block.state.loss_steps;
+    earlier = {merged.steps, merged.state.seconds};
+  }
+  merged.splats = MergeBlocks(optimised);
+  return merged;
+}
 
 // splat_report.json's content (but the sizes of the files written), with the signs of a failed fit.
-SplatReport MakeSplatReport(const SplatTrainer& trainer, const SplatSetup& setup, const SplatOptions& options,
-                            const Scores& scores, double seconds, int resumed_from, double near) {
+SplatReport MakeSplatReport(const Optimised& optimised, const SplatSetup& setup, const SplatOptions& options,
+                            const Scores& scores, double near) {
   SplatReport report;
   report.enabled = true;
-  report.splats = trainer.gaussians().size();
+  report.splats = optimised.splats.size();
   report.initial_splats = setup.gaussians.size();
   report.init = EnumName(options.init);
-  report.sh_degree = trainer.gaussians().sh_degree;
-  report.steps = trainer.step();
-  report.seconds = seconds;
-  report.resumed_from_step = resumed_from;
+  report.sh_degree = optimised.splats.sh_degree;
+  report.steps = optimised.steps;
+  report.seconds = optimised.state.seconds;
+  report.resumed_from_step = optimised.resumed_from;
   report.heldout_views = setup.data.heldout.size();
   if (!setup.data.heldout.empty()) {
     report.heldout_psnr = Mean(scores.psnr);
@@ -236,10 +326,49 @@ SplatReport MakeSplatReport(const SplatTrainer& trainer, const SplatSetup& setup
   report.frame = setup.frame.kind;
   report.frame_description = setup.frame.description;
   report.near = near;
-  report.background = trainer.background();
+  report.background = optimised.background;
   report.warnings = CheckSplatFit(HeldoutViewFits(setup.data, scores.psnr), report.heldout_psnr, setup.field_psnr);
   return report;
 }
+
+// splats.ply, .spz, .glb, viewer.html, metrics.csv and the PSNR plot; the report's file sizes filled in.
+void WriteSplatFiles(const SplatResult& out, const Optimised& optimised, const SplatSetup& setup,
+                     const StageContext& context, double near, SplatReport* report) {
+  const Gaussians<float>& splats = optimised.splats;
+  WriteOrExplain([&] {
+    WriteSplatPly(out.splats(), splats,
+                  {setup.frame.description, format("{} splats of SH degree {}", splats.size(), splats.sh_degree)});
+  });
+  WriteOrExplain([&] {
+    const std::vector<char> spz = SpzBytes(splats);
+    WriteFileAtomic(out.spz(), std::string_view(spz.data(), spz.size()));
+  });
+  WriteOrExplain([&] {
+    WriteFileAtomic(out.glb(),
+                    SplatGlbBytes(UprightSplats(splats, setup.frame), "photo2nerf " + std::string(kVersion)));
+  });
+  WriteOrExplain([&] {
+    fs::path root = context.workspace.root().lexically_normal();
+    if (!root.has_filename()) root = root.parent_path();  // "ws/" -> "ws"
+    const std::string scene = root.filename().string();
+    report->viewer_bytes = WriteSplatViewer(out.viewer(), "photo2nerf: " + scene, splats, setup.data, setup.frame,
+                                            optimised.background, near);
+  });
+  const std::string metrics = "wall_seconds,step,splats,train_loss,heldout_psnr\n" + optimised.state.metrics;
+  WriteFileAtomic(out.metrics(), metrics);
+  const PlotSeries curve = CsvSeries("held-out PSNR", metrics, 0, 4);
+  if (!curve.x.empty()) {
+    WriteOrExplain([&] {
+      WriteLinePlot(out.psnr_plot(), {"splats: held-out PSNR against optimisation time", "time (s)", "PSNR (dB)"},
+                    {curve});
+    });
+  }
+  report->file_bytes = fs::file_size(out.splats());
+  report->spz_bytes = fs::file_size(out.spz());
+  report->glb_bytes = fs::file_size(out.glb());
+}
+
+}  // namespace
 
 void SplatStage::Run(StageContext& context) const {
   const SplatOptions options = ReadOptions<SplatOptions>(context.config);
@@ -265,56 +394,20 @@ void SplatStage::Run(StageContext& context) const {
   SplatScene scene{&setup.data.train, setup.background, setup.extent, near};
   scene.learn_background = options.background == SplatBackground::kAuto &&
                            FirstWithAlpha(setup.data.train) == nullptr && !setup.data.background_known;
-  SplatTrainer trainer(setup.gaussians, scene, trainer_options);
-  RunState state;
-  const fs::path checkpoint = CheckpointFile(context);
-  const bool resumed =
-      LoadRunCheckpoint(checkpoint, context.key, name(), &state, [&](BinaryReader* r) { trainer.Load(r); });
-  const int resumed_from = resumed ? trainer.step() : 0;
-  if (resumed_from > 0) LogInfo(format("splat: resumed at step {} from {}", resumed_from, checkpoint.string()));
-  OptimiseUntilDone(trainer, setup, options, budget, near, checkpoint, context.key, &state);
+  Optimised optimised = options.blocks > 1
+                            ? OptimiseBlocks(scene, trainer_options, setup, options, context, budget)
+                            : OptimiseSplats(setup.gaussians, setup.data.train, scene, trainer_options, setup, options,
+                                             context, budget, CheckpointFile(context), Earlier{}, false);
 
-  const Scores scores = Evaluate(trainer.gaussians(), trainer.background(), setup, near, true);
-  AddMetricsRow(trainer, scores, &state);
-  WriteOrExplain([&] {
-    WriteSplatPly(out.splats(), trainer.gaussians(),
-                  {setup.frame.description,
-                   format("{} splats of SH degree {}", trainer.gaussians().size(), trainer.gaussians().sh_degree)});
-  });
-  WriteOrExplain([&] {
-    const std::vector<char> spz = SpzBytes(trainer.gaussians());
-    WriteFileAtomic(out.spz(), std::string_view(spz.data(), spz.size()));
-  });
-  WriteOrExplain([&] {
-    WriteFileAtomic(out.glb(), SplatGlbBytes(UprightSplats(trainer.gaussians(), setup.frame),
-                                             "photo2nerf " + std::string(kVersion)));
-  });
-  size_t viewer_bytes = 0;
-  WriteOrExplain([&] {
-    fs::path root = context.workspace.root().lexically_normal();
-    if (!root.has_filename()) root = root.parent_path();  // "ws/" -> "ws"
-    const std::string scene = root.filename().string();
-    viewer_bytes = WriteSplatViewer(out.viewer(), "photo2nerf: " + scene, trainer.gaussians(), setup.data, setup.frame,
-                                    trainer.background(), near);
-  });
-  const std::string metrics = "wall_seconds,step,splats,train_loss,heldout_psnr\n" + state.metrics;
-  WriteFileAtomic(out.metrics(), metrics);
-  const PlotSeries curve = CsvSeries("held-out PSNR", metrics, 0, 4);
-  if (!curve.x.empty()) {
-    WriteOrExplain([&] {
-      WriteLinePlot(out.psnr_plot(), {"splats: held-out PSNR against optimisation time", "time (s)", "PSNR (dB)"},
-                    {curve});
-    });
-  }
-  SplatReport report = MakeSplatReport(trainer, setup, options, scores, state.seconds, resumed_from, near);
-  report.file_bytes = fs::file_size(out.splats());
-  report.spz_bytes = fs::file_size(out.spz());
-  report.glb_bytes = fs::file_size(out.glb());
-  report.viewer_bytes = viewer_bytes;
+  const Scores scores = Evaluate(optimised.splats, optimised.background, setup, near, true);
+  AddMetricsRow(optimised.steps, optimised.splats.size(), scores, Earlier{}, &optimised.state);
+  SplatReport report = MakeSplatReport(optimised, setup, options, scores, near);
+  WriteSplatFiles(out, optimised, setup, context, near, &report);
   WriteJsonAtomic(out.report(), report.ToJson());
-  context.summary["splats"] = trainer.gaussians().size();
+  context.summary["splats"] = optimised.splats.size();
+  if (options.blocks > 1) context.summary["splat_blocks"] = options.blocks;
   if (!setup.data.heldout.empty()) context.summary["splat_psnr"] = Mean(scores.psnr);
-  LogInfo(format("splat: {} splats, held-out PSNR {:.2f} dB, {:.3f} s per held-out view", trainer.gaussians().size(),
+  LogInfo(format("splat: {} splats, held-out PSNR {:.2f} dB, {:.3f} s per held-out view", optimised.splats.size(),
                  Mean(scores.psnr), scores.seconds_per_view));
   LogFitWarnings(SplatResult::kId.name, report.warnings);
 }

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <random>
 
+#include "splat/blocks.h"
 #include "splat/field_init.h"
 #include "splat/rasterizer.h"
 #include "splat/similarity.h"
@@ -20,12 +21,13 @@
 namespace p2n::testing {
 namespace {
 
-PinholeCamera CameraAt(const Eigen::Vector3d& position, int size = 32) {
+PinholeCamera CameraAt(const Eigen::Vector3d& position, int size = 32,
+                       const Eigen::Vector3d& target = Eigen::Vector3d::Zero()) {
   PinholeCamera camera;
   camera.width = camera.height = size;
   camera.fx = camera.fy = size;
   camera.cx = camera.cy = size / 2.0;
-  camera.world_from_cam = LookAtPose(position, Eigen::Vector3d::Zero());
+  camera.world_from_cam = LookAtPose(position, target);
   return camera;
 }
 
@@ -45,14 +47,15 @@ Gaussians<float> RandomSplats(int count, int degree, uint64_t seed) {
   return g;
 }
 
-// Views of the origin from a ring of cameras, their pixels rendered from `truth` over `background`.
+// Views of `centre` from a ring of cameras around it, their pixels rendered from `truth` over `background`.
 std::vector<TrainView> ViewsOf(const Gaussians<float>& truth, int count,
-                               const std::array<float, 3>& background = {1, 1, 1}) {
+                               const std::array<float, 3>& background = {1, 1, 1},
+                               const Eigen::Vector3d& centre = Eigen::Vector3d::Zero()) {
   std::vector<TrainView> views;
   for (int v = 0; v < count; ++v) {
     const double angle = 2 * M_PI * v / count;
     TrainView view;
-    view.camera = CameraAt({2.5 * std::cos(angle), 2.5 * std::sin(angle), 0.8});
+    view.camera = CameraAt(centre + Eigen::Vector3d(2.5 * std::cos(angle), 2.5 * std::sin(angle), 0.8), 32, centre);
     const FloatImage image = RenderSplats(truth, view.camera, background, 0.01);
     for (const float value : image.pixels)
       view.pixels.push_back(static_cast<uint8_t>(std::lround(255 * std::clamp(value, 0.0f, 1.0f))));
@@ -386,6 +389,94 @@ TEST_CASE("Splat optimisation learns the colour behind the splats from photos wi
   with_alpha[2].name = "cut_out.png";
   scene.views = &with_alpha;
   CHECK_THROWS_WITH(SplatTrainer(truth, scene, options), Catch::Contains("cut_out.png"));
+}
+
+TEST_CASE("Blocks: equal slabs across the widest axis, the views that see each, merged with every splat kept once",
+          "[splat]") {
+  Gaussians<float> splats = RandomSplats(300, 0, 7);
+  for (size_t i = 0; i < splats.size(); ++i) splats.positions[3 * i + 1] *= 10;  // y spreads most: -4..4
+  const SplatBlocks blocks = CutIntoBlocks(splats, 3);
+  CHECK(blocks.axis == 1);
+  REQUIRE(blocks.count() == 3);
+  std::vector<int> counts(3, 0);
+  for (int b = 0; b < 3; ++b) counts[b] = static_cast<int>(SplatsOfBlock(splats, blocks, b, true).size());
+  for (const int count : counts) CHECK(std::abs(count - 100) <= 1);
+  CHECK(SplatsOfBlock(splats, blocks, 1, false).size() == splats.size() - counts[1]);
+  CHECK(CutIntoBlocks(splats, 1).count() == 1);
+
+  // Cameras looking at either end, from along x: each sees its end's block, the middle one both ends do not reach.
+  std::vector<TrainView> views(2);
+  views[0].camera = CameraAt({3, -4, 0}, 32, {0, -4, 0});
+  views[1].camera = CameraAt({3, 4, 0}, 32, {0, 4, 0});
+  CHECK(ViewsOfBlock(views, splats, blocks, 0, 0.1, 0.01) == std::vector<size_t>{0});
+  CHECK(ViewsOfBlock(views, splats, blocks, 2, 0.1, 0.01) == std::vector<size_t>{1});
+
+  // A splat that moved across a cut during its block's optimisation stays its block's: kept once, where it went.
+  std::vector<Gaussians<float>> optimised;
+  for (int b = 0; b < 3; ++b) optimised.push_back(SplatsOfBlock(splats, blocks, b, true));
+  optimised[0].positions[1] = blocks.cuts[1] + 1;  // now in block 2
+  const Gaussians<float> merged = MergeBlocks(optimised);
+  CHECK(merged.size() == splats.size());
+  CHECK(merged.positions[1] == blocks.cuts[1] + 1);
+  CHECK(SplatsOfBlock(merged, blocks, 2, true).size() == optimised[2].size() + 1);
+  CHECK_THROWS(MergeBlocks({}));
+}
+
+TEST_CASE("Block optimisation: two objects apart, each block on the views that see it, fit as well as at once",
+          "[splat]") {
+  // Two objects 4 apart along x, each circled by its own cameras (which see the other behind it from some sides).
+  Gaussians<float> truth = RandomSplats(20, 0, 5), right = RandomSplats(20, 0, 8);
+  for (size_t i = 0; i < truth.size(); ++i) truth.positions[3 * i] -= 2, right.positions[3 * i] += 2;
+  truth.Append(right);
+  std::vector<TrainView> views = ViewsOf(truth, 8, {1, 1, 1}, {-2, 0, 0});
+  for (TrainView& view : ViewsOf(truth, 8, {1, 1, 1}, {2, 0, 0})) views.push_back(std::move(view));
+  Gaussians<float> start = truth;
+  std::mt19937_64 random(6);
+  std::normal_distribution<float> noise(0, 1);
+  for (float& v : start.sh_dc) v += 1.0f * noise(random);
+  const SplatScene scene{&views, {1, 1, 1}, 4.5, 0.01};
+  SplatTrainerOptions options;
+  options.steps = 240;
+  options.densify_from = options.densify_interval = 40;
+  const auto psnr = [&](const Gaussians<float>& g) {
+    double sum = 0;
+    for (const TrainView& view : views)
+      sum += Psnr(RenderSplats(g, view.camera, {1, 1, 1}, 0.01), PhotoOnBackground(view, {1, 1, 1}));
+    return sum / views.size();
+  };
+  SplatTrainer whole(start, scene, options);
+  for (int s = 0; s < options.steps; ++s) whole.Step();
+
+  const SplatBlocks blocks = CutIntoBlocks(start, 2);
+  CHECK(blocks.axis == 0);
+  std::vector<Gaussians<float>> optimised;
+  for (int b = 0; b < blocks.count(); ++b) {
+    const Gaussians<float> others = SplatsOfBlock(start, blocks, b, false);
+    std::vector<TrainView> seeing;
+    for (const size_t v : ViewsOfBlock(views, start, blocks, b, 0.1, 0.01)) seeing.push_back(views[v]);
+    CHECK(seeing.size() >= 8);  // its own ring, and the other ring's views that show it
+    CHECK(seeing.size() < views.size());
+    SplatScene block_scene = scene;
+    block_scene.views = &seeing;
+    block_scene.context = &others;
+    SplatTrainer trainer(SplatsOfBlock(start, blocks, b, true), block_scene, options);
+    for (int s = 0; s < options.steps; ++s) trainer.Step();
+    CHECK(trainer.Drawn().size() == trainer.gaussians().size() + others.size());
+    optimised.push_back(trainer.gaussians());
+  }
+  const Gaussians<float> merged = MergeBlocks(optimised);
+  CHECK(merged.size() == optimised[0].size() + optimised[1].size());
+  const double before = psnr(start), blocked = psnr(merged), at_once = psnr(whole.gaussians());
+  INFO("PSNR " << before << " -> " << blocked << " by blocks, " << at_once << " at once");
+  CHECK(blocked > before + 4);
+  CHECK(blocked > at_once - 1);
+
+  Gaussians<float> other_degree = start;
+  other_degree.sh_degree = 1;
+  other_degree.Resize(start.size());
+  SplatScene mismatched = scene;
+  mismatched.context = &other_degree;
+  CHECK_THROWS_WITH(SplatTrainer(start, mismatched, options), Catch::Contains("SH degree"));
 }
 
 }  // namespace p2n::testing
