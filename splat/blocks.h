@@ -1,9 +1,11 @@
 #pragma once
 // Optimising splats by spatial blocks, for captures too large for one optimisation in the time: the splats cut into
 // slabs of equal count along the axis where they spread most; each slab optimised by its own trainer on the training
-// views that see it, with every other splat drawn as it started (so that the pixels showing other slabs are explained
-// by them, not pulled into this one); the results merged, each splat owned by the slab it started in (its children
-// from densification too) wherever the optimisation moved it, so that none is lost or doubled at a cut.
+// views that see it, with every other splat drawn as it was when the blocks began (so that the pixels showing other
+// slabs are explained by them); the results merged, each splat owned by the slab it began in (its children from
+// densification too) wherever the optimisation moved it, so that none is lost or doubled at a cut. The other slabs
+// must already look like the scene when the blocks begin: the splat stage optimises the whole first
+// (stages/splat_optimisation.h).
 
 #include <cstddef>
 #include <vector>

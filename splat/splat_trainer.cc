@@ -73,6 +73,37 @@ double SplatTrainer::PositionLearningRate() const {
   return scene_.extent * std::exp((1 - t) * std::log(options_.position_lr) + t * std::log(options_.final_position_lr));
 }
 
+void SplatTrainer::Restrict(const std::vector<bool>& keep, const Gaussians<float>* context,
+                            const std::vector<TrainView>* views) {
+  if (context != nullptr && context->sh_degree != gaussians_.sh_degree)
+    throw std::invalid_argument("SplatTrainer::Restrict: the context's SH degree is not the splats'");
+  if (views == nullptr || views->empty()) throw std::invalid_argument("SplatTrainer::Restrict: no training views");
+  std::vector<int64_t> sources;
+  std::vector<float> gradient_sum;
+  std::vector<uint32_t> gradient_count;
+  for (size_t i = 0; i < keep.size(); ++i) {
+    if (!keep[i]) continue;
+    sources.push_back(static_cast<int64_t>(i));
+    gradient_sum.push_back(screen_gradient_sum_[i]);
+    gradient_count.push_back(screen_gradient_count_[i]);
+  }
+  gaussians_.Filter(keep);
+  RemapAdams(sources);
+  screen_gradient_sum_ = std::move(gradient_sum);
+  screen_gradient_count_ = std::move(gradient_count);
+  scene_.context = context;
+  scene_.views = views;
+  order_.clear();  // an epoch of the new views begins
+}
+
+void SplatTrainer::RemapAdams(const std::vector<int64_t>& sources) {
+  size_t array = 0;  // an array of no values per Gaussian (SH degree 0's higher coefficients) keeps none
+  gaussians_.ForEachArray([&](const std::vector<float>&, int per) {
+    if (per > 0) adams_[array].Remap(sources);
+    ++array;
+  });
+}
+
 void SplatTrainer::SetViews(const std::vector<TrainView>* views) {
   if (views->size() != scene_.views->size()) throw std::invalid_argument("SplatTrainer::SetViews: other views");
   scene_.views = views;
@@ -222,11 +253,7 @@ void SplatTrainer::Densify() {
   sources.resize(sources.size() + added.size(), -1);
   gaussians_.Filter(keep);
   for (size_t k = 0; k < added.size(); ++k) gaussians_.Append(added, k);
-  size_t array = 0;  // an array of no values per Gaussian (SH degree 0's higher coefficients) keeps none
-  gaussians_.ForEachArray([&](const std::vector<float>&, int per) {
-    if (per > 0) adams_[array].Remap(sources);
-    ++array;
-  });
+  RemapAdams(sources);
   screen_gradient_sum_.assign(gaussians_.size(), 0);
   screen_gradient_count_.assign(gaussians_.size(), 0);
 }

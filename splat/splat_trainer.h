@@ -58,7 +58,8 @@ struct SplatScene {
   // Learn the colour behind every splat (what lies beyond them: a sky, a far wall) with them; only for photos
   // without alpha, whose pixels do not depend on it.
   bool learn_background = false;
-  // Splats drawn with the trained ones and never changed (block training: the other blocks, as they started).
+  // Splats drawn with the trained ones and never changed (block training: the other blocks, as they were when the
+  // blocks began).
   const Gaussians<float>* context = nullptr;
 };
 
@@ -79,6 +80,9 @@ class SplatTrainer {
   const Gaussians<float>& gaussians() const { return gaussians_; }
   // What the trainer draws: its splats, then the scene's context.
   Gaussians<float> Drawn() const;
+  // Goes on with the splats flagged in `keep` alone (their optimiser's state with them), drawn with `context` and
+  // trained on `views` from the next step on: one block of a run that was optimised whole so far (splat/blocks.h).
+  void Restrict(const std::vector<bool>& keep, const Gaussians<float>* context, const std::vector<TrainView>* views);
   const std::array<float, 3>& background() const { return background_; }
   // The SH degree in use at this step.
   int ShDegree() const;
@@ -93,6 +97,7 @@ class SplatTrainer {
   double PositionLearningRate() const;
   void Densify();
   void StepBackground(const std::vector<float>& d_rgb);
+  void RemapAdams(const std::vector<int64_t>& sources);  // as Adam::Remap, every parameter array's
   const TrainView& NextView();
 
   Gaussians<float> gaussians_;

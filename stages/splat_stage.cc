@@ -1,10 +1,8 @@
 #include "stages/splat_stage.h"
 
-#include <chrono>
 #include <cmath>
 #include <optional>
 
-#include "base/binary_io.h"
 #include "base/errors.h"
 #include "base/file_util.h"
 #include "base/format.h"
@@ -13,9 +11,7 @@
 #include "nerf/plot.h"
 #include "nerf/renderer.h"
 #include "photo2nerf/version.h"
-#include "pipeline/cancel.h"
 #include "pipeline/log.h"
-#include "splat/blocks.h"
 #include "splat/field_init.h"
 #include "splat/similarity.h"
 #include "splat/splat_gltf.h"
@@ -24,10 +20,10 @@
 #include "splat/spz.h"
 #include "stages/camera_corrections.h"
 #include "stages/fit_checks.h"
+#include "stages/splat_optimisation.h"
 #include "stages/splat_viewer.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"
-#include "stages/timed_run.h"
 #include "stages/train_stage.h"
 #include "stages/training_data.h"
 #include "stages/view_renders.h"
@@ -69,17 +65,6 @@ Gaussians<float> UprightSplats(Gaussians<float> splats, const OutputFrame& frame
   ApplySimilarity(linear, -linear * frame.translation, &splats);
   return splats;
 }
-
-// The splats' world: the training data with every camera in the output frame (the training views as camera
-// refinement left them), the first Gaussians there, and the scene's extent.
-struct SplatSetup {
-  TrainingData data;
-  OutputFrame frame;
-  Gaussians<float> gaussians;
-  std::array<float, 3> background{1, 1, 1};
-  double extent = 1;
-  std::optional<double> field_psnr;  // the field's held-out PSNR, as the train stage measured it
-};
 
 // 1.1 times the largest distance of a training camera from their mean (3D Gaussian Splatting's scene radius).
 double CameraExtent(const std::vector<TrainView>& views) {
@@ -160,148 +145,6 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
                    options.max_image_size));
   }
   return setup;
-}
-
-// PSNR and SSIM of the splats on every held-out view (the same during the run as at its end, so that the curve
-// ends at the reported score).
-struct Scores {
-  std::vector<double> psnr, ssim;
-  double seconds_per_view = 0;
-};
-Scores Evaluate(const Gaussians<float>& gaussians, const std::array<float, 3>& background, const SplatSetup& setup,
-                double near, bool with_ssim) {
-  Scores scores;
-  double seconds = 0;
-  for (const TrainView& view : setup.data.heldout) {
-    ThrowIfCancelled();
-    const auto start = std::chrono::steady_clock::now();
-    const FloatImage image = RenderSplats(gaussians, view.camera, background, near);
-    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const FloatImage photo = PhotoOnBackground(view, background);
-    scores.psnr.push_back(Psnr(image, photo));
-    if (with_ssim) scores.ssim.push_back(Ssim(image, photo));
-  }
-  scores.seconds_per_view = scores.psnr.empty() ? 0 : seconds / scores.psnr.size();
-  return scores;
-}
-
-// A metrics.csv row: the run so far (`earlier`: the steps and seconds of the blocks optimised before this one), the
-// splats drawn, the training loss since the last row and the held-out PSNR.
-struct Earlier {
-  int steps = 0;
-  double seconds = 0;
-};
-void AddMetricsRow(int step, size_t splats, const Scores& scores, const Earlier& earlier, RunState* state) {
-  const double loss = state->TakeMeanLoss(0);
-  state->metrics += format("{:.3f},{},{},{:.6g},{:.4f}\n", earlier.seconds + state->seconds, earlier.steps + step,
-                           splats, loss, Mean(scores.psnr));
-}
-
-// Optimises on `views` until the budget (seconds, else steps) is spent: a metrics row at every evaluation but the last
-// (the caller's final evaluation makes it), checkpoints in `checkpoint`.
-void OptimiseUntilDone(SplatTrainer& trainer, const std::vector<TrainView>& views, const SplatSetup& setup,
-                       const SplatOptions& options, double budget, double near, const fs::path& checkpoint,
-                       const std::string& key, const Earlier& earlier, RunState* state) {
-  const RunLoop loop{SplatResult::kId.name,      budget, options.steps, options.eval_interval, 1, false,
-                     options.checkpoint_interval};
-  const std::vector<TrainView> coarse = options.coarse > 0 ? HalfSizeViews(views) : std::vector<TrainView>{};
-  const auto step = [&](double share) -> std::optional<double> {
-    trainer.SetViews(!coarse.empty() && share < options.coarse ? &coarse : &views);
-    trainer.SetProgress(share);
-    return trainer.Step();
-  };
-  const auto add_row = [&](RunState* run) {
-    const Gaussians<float> drawn = trainer.Drawn();
-    AddMetricsRow(trainer.step(), drawn.size(), Evaluate(drawn, trainer.background(), setup, near, false), earlier,
-                  run);
-  };
-  const auto save = [&](const RunState& run) {
-    WriteOrExplain([&] { SaveRunCheckpoint(checkpoint, key, run, [&](BinaryWriter* w) { trainer.Save(w); }); });
-  };
-  loop.Run(
-      state, [&] { return trainer.step(); }, step, add_row, save);
-}
-
-// What the optimisation made: the splats, the colour behind them, its steps (every block's), the steps a resumed run
-// started from, and its state (every block's metrics rows, its seconds summed).
-struct Optimised {
-  Gaussians<float> splats;
-  std::array<float, 3> background{1, 1, 1};
-  int steps = 0, resumed_from = 0;
-  RunState state;
-};
-
-// Optimises `splats` on `views` (with `scene.context` drawn), resuming from `checkpoint` where it holds this run.
-Optimised OptimiseSplats(const Gaussians<float>& splats, const std::vector<TrainView>& views, SplatScene scene,
-                         const SplatTrainerOptions& trainer_options, const SplatSetup& setup,
-                         const SplatOptions& options, const StageContext& context, double budget,
-                         const fs::path& checkpoint, const Earlier& earlier, bool checkpoint_at_end) {
-  scene.views = &views;
-  SplatTrainer trainer(splats, scene, trainer_options);
-  Optimised out;
-  const bool resumed = LoadRunCheckpoint(checkpoint, context.key, SplatResult::kId.name, &out.state,
-                                         [&](BinaryReader* r) { trainer.Load(r); });
-  out.resumed_from = resumed ? trainer.step() : 0;
-  if (out.resumed_from > 0) {
-    LogInfo(format("splat: resumed at step {} from {}", out.resumed_from, checkpoint.string()));
-  }
-  OptimiseUntilDone(trainer, views, setup, options, budget, scene.near, checkpoint, context.key, earlier, &out.state);
-  if (checkpoint_at_end && options.checkpoint_interval > 0) {
-    WriteOrExplain(
-        [&] { SaveRunCheckpoint(checkpoint, context.key, out.state, [&](BinaryWriter* w) { trainer.Save(w); }); });
-  }
-  out.splats = trainer.gaussians();
-  out.background = trainer.background();
-  out.steps = trainer.step();
-  return out;
-}
-
-// The training views seen by a block when at least this share of the splats they show are the block's.
-constexpr double kBlockViewShare = 0.1;
-
-// Optimises each of options.blocks slabs in turn (splat/blocks.h), each for the whole budget, with its checkpoint
-// kept when it ends so that a resumed run goes on with the next; merges them.
-Optimised OptimiseBlocks(const SplatScene& scene, const SplatTrainerOptions& trainer_options, const SplatSetup& setup,
-                         const SplatOptions& options, const StageContext& context, double budget) {
-  const SplatBlocks blocks = CutIntoBlocks(setup.gaussians, options.blocks);
-  LogInfo(
-      format("splat: {} blocks across the {} axis, each optimised for the budget", blocks.count(), "xyz"[blocks.axis]));
-  std::vector<Gaussians<float>> optimised;
-  Optimised merged;
-  merged.background = {0, 0, 0};
-  Earlier earlier;
-  for (int b = 0; b < blocks.count(); ++b) {
-    Gaussians<float> own = SplatsOfBlock(setup.gaussians, blocks, b, true);
-    const Gaussians<float> others = SplatsOfBlock(setup.gaussians, blocks, b, false);
-    std::vector<TrainView> views;
-    for (const size_t v : ViewsOfBlock(setup.data.train, setup.gaussians, blocks, b, kBlockViewShare, scene.near))
-      views.push_back(setup.data.train[v]);
-    LogInfo(
-        format("splat: block {} of {}: {} splats, {} training views", b + 1, blocks.count(), own.size(), views.size()));
-    SplatScene block_scene = scene;
-    block_scene.context = &others;
-    Optimised block;
-    block.splats = own;
-    block.background = scene.background;
-    if (own.size() > 0 && !views.empty()) {
-      const fs::path checkpoint = context.resume_dir / format("checkpoint_block{}.bin", b + 1);
-      SplatTrainerOptions block_options = trainer_options;
-      block_options.seed += static_cast<uint64_t>(b);
-      block = OptimiseSplats(own, views, block_scene, block_options, setup, options, context, budget, checkpoint,
-                             earlier, true);
-    }
-    optimised.push_back(std::move(block.splats));
-    for (int c = 0; c < 3; ++c) merged.background[c] += block.background[c] / blocks.count();
-    merged.steps += block.steps;
-    merged.resumed_from += block.resumed_from;
-    merged.state.metrics += block.state.metrics;
-    merged.state.seconds += block.state.seconds;
-    merged.state.loss_sum += block.state.loss_sum;
-    merged.state.loss_steps += block.state.loss_steps;
-    earlier = {merged.steps, merged.state.seconds};
-  }
-  merged.splats = MergeBlocks(optimised);
-  return merged;
 }
 
 // splat_report.json's content (but the sizes of the files written), with the signs of a failed fit.
@@ -387,20 +230,16 @@ void SplatStage::Run(StageContext& context) const {
                  setup.data.heldout.size(),
                  budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
 
-  SplatTrainerOptions trainer_options;
-  trainer_options.seed = static_cast<uint64_t>(options.seed);
-  trainer_options.max_gaussians = 2 * static_cast<size_t>(options.max_gaussians);
-  trainer_options.ssim_weight = options.ssim_weight;
-  SplatScene scene{&setup.data.train, setup.background, setup.extent, near};
-  scene.learn_background = options.background == SplatBackground::kAuto &&
-                           FirstWithAlpha(setup.data.train) == nullptr && !setup.data.background_known;
-  Optimised optimised = options.blocks > 1
-                            ? OptimiseBlocks(scene, trainer_options, setup, options, context, budget)
-                            : OptimiseSplats(setup.gaussians, setup.data.train, scene, trainer_options, setup, options,
-                                             context, budget, CheckpointFile(context), Earlier{}, false);
+  SplatRun run{setup, options, context, {&setup.data.train, setup.background, setup.extent, near}, {}, budget};
+  run.scene.learn_background = options.background == SplatBackground::kAuto &&
+                               FirstWithAlpha(setup.data.train) == nullptr && !setup.data.background_known;
+  run.trainer.seed = static_cast<uint64_t>(options.seed);
+  run.trainer.max_gaussians = 2 * static_cast<size_t>(options.max_gaussians);
+  run.trainer.ssim_weight = options.ssim_weight;
+  Optimised optimised = options.blocks > 1 ? OptimiseBlocks(run) : OptimiseWhole(run);
 
   const Scores scores = Evaluate(optimised.splats, optimised.background, setup, near, true);
-  AddMetricsRow(optimised.steps, optimised.splats.size(), scores, Earlier{}, &optimised.state);
+  AddMetricsRow(optimised.steps, optimised.state.seconds, optimised.splats.size(), scores, &optimised.state);
   SplatReport report = MakeSplatReport(optimised, setup, options, scores, near);
   WriteSplatFiles(out, optimised, setup, context, near, &report);
   WriteJsonAtomic(out.report(), report.ToJson());

@@ -38,7 +38,7 @@ struct SplatOptions {
   SplatInit init = SplatInit::kField;  // where the first Gaussians come from
   int init_width = 128;                // training views rendered this wide to place the first Gaussians
   int max_gaussians = 100'000;         // of the first; densification may double it. Fewer: more steps for the time
-  int blocks = 1;                      // optimised in this many spatial blocks (splat/blocks.h), each for the budget
+  int blocks = 1;                      // optimised in this many spatial blocks after a whole part (splat/blocks.h)
   double coarse = 0.75;                // share of the optimisation on the photos at half size
   int max_image_size = 1080;           // the photos are downsized to at most this on their longest side; 0: any size
   double ssim_weight = 0.1;            // the loss: (1 - w) L1 + w (1 - SSIM)
@@ -63,9 +63,9 @@ struct SplatOptions {
       "pixels");
     v("max_gaussians", max_gaussians, "splats placed from the field (densification may add as many again)");
     v("blocks", blocks,
-      "optimise the splats in this many blocks (slabs across the scene's widest axis), each on the training views that "
-      "see it with the other blocks drawn as they started, each for the whole budget, then merged: for scenes too "
-      "large for one optimisation in the time; 1: the whole scene at once");
+      "optimise the splats whole for half the budget, then in this many blocks (slabs across the scene's widest axis) "
+      "for the other half each, every block on the training views that see it with the others drawn as the whole "
+      "optimisation left them, then merged: for scenes too large for one optimisation in the time; 1: whole");
     v("coarse", coarse,
       "share of the optimisation time spent on the photos at half size (four times the steps; coarse to fine)");
     v("max_image_size", max_image_size,

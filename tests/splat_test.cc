@@ -422,7 +422,7 @@ TEST_CASE("Blocks: equal slabs across the widest axis, the views that see each, 
   CHECK_THROWS(MergeBlocks({}));
 }
 
-TEST_CASE("Block optimisation: two objects apart, each block on the views that see it, fit as well as at once",
+TEST_CASE("Block optimisation: optimised whole, then each block on the views that see it, fit as well as at once",
           "[splat]") {
   // Two objects 4 apart along x, each circled by its own cameras (which see the other behind it from some sides).
   Gaussians<float> truth = RandomSplats(20, 0, 5), right = RandomSplats(20, 0, 8);
@@ -445,23 +445,34 @@ TEST_CASE("Block optimisation: two objects apart, each block on the views that s
     return sum / views.size();
   };
   SplatTrainer whole(start, scene, options);
-  for (int s = 0; s < options.steps; ++s) whole.Step();
+  for (int s = 0; s < options.steps / 2; ++s) whole.Step();
+  BinaryWriter halfway;
+  whole.Save(&halfway);
+  for (int s = options.steps / 2; s < options.steps; ++s) whole.Step();
 
-  const SplatBlocks blocks = CutIntoBlocks(start, 2);
+  // The second half by blocks, each from where the whole run was halfway, the other block drawn as it was then.
+  SplatTrainer first_half(start, scene, options);
+  BinaryReader reader(halfway.buffer(), "halfway");
+  first_half.Load(&reader);
+  const Gaussians<float>& middle = first_half.gaussians();
+  const SplatBlocks blocks = CutIntoBlocks(middle, 2);
   CHECK(blocks.axis == 0);
   std::vector<Gaussians<float>> optimised;
   for (int b = 0; b < blocks.count(); ++b) {
-    const Gaussians<float> others = SplatsOfBlock(start, blocks, b, false);
+    const Gaussians<float> others = SplatsOfBlock(middle, blocks, b, false);
     std::vector<TrainView> seeing;
-    for (const size_t v : ViewsOfBlock(views, start, blocks, b, 0.1, 0.01)) seeing.push_back(views[v]);
+    for (const size_t v : ViewsOfBlock(views, middle, blocks, b, 0.1, 0.01)) seeing.push_back(views[v]);
     CHECK(seeing.size() >= 8);  // its own ring, and the other ring's views that show it
     CHECK(seeing.size() < views.size());
-    SplatScene block_scene = scene;
-    block_scene.views = &seeing;
-    block_scene.context = &others;
-    SplatTrainer trainer(SplatsOfBlock(start, blocks, b, true), block_scene, options);
-    for (int s = 0; s < options.steps; ++s) trainer.Step();
-    CHECK(trainer.Drawn().size() == trainer.gaussians().size() + others.size());
+    std::vector<bool> keep(middle.size());
+    for (size_t i = 0; i < middle.size(); ++i) keep[i] = blocks.BlockOf(&middle.positions[3 * i]) == b;
+    SplatTrainer trainer(start, scene, options);
+    BinaryReader again(halfway.buffer(), "halfway");
+    trainer.Load(&again);
+    trainer.Restrict(keep, &others, &seeing);
+    CHECK(trainer.gaussians().positions == SplatsOfBlock(middle, blocks, b, true).positions);
+    CHECK(trainer.Drawn().size() == middle.size());
+    for (int s = options.steps / 2; s < options.steps; ++s) trainer.Step();
     optimised.push_back(trainer.gaussians());
   }
   const Gaussians<float> merged = MergeBlocks(optimised);
@@ -474,6 +485,10 @@ TEST_CASE("Block optimisation: two objects apart, each block on the views that s
   Gaussians<float> other_degree = start;
   other_degree.sh_degree = 1;
   other_degree.Resize(start.size());
+  const std::vector<bool> all(start.size(), true);
+  CHECK_THROWS_WITH(first_half.Restrict(all, &other_degree, &views), Catch::Contains("SH degree"));
+  const std::vector<TrainView> none;
+  CHECK_THROWS_WITH(first_half.Restrict(all, nullptr, &none), Catch::Contains("no training views"));
   SplatScene mismatched = scene;
   mismatched.context = &other_degree;
   CHECK_THROWS_WITH(SplatTrainer(start, mismatched, options), Catch::Contains("SH degree"));

@@ -1,0 +1,69 @@
+#pragma once
+// The splat stage's optimisation (stages/splat_stage.cc): the splats optimised whole, or block by block
+// (splat.blocks, splat/blocks.h), until the budget is spent, with held-out evaluations as metrics.csv rows and
+// checkpoints that a killed run resumes from.
+
+#include <array>
+#include <vector>
+
+#include "base/posed_image.h"
+#include "formats/output_frame.h"
+#include "pipeline/stage.h"
+#include "splat/gaussians.h"
+#include "splat/splat_trainer.h"
+#include "stages/splat_stage.h"
+#include "stages/timed_run.h"
+
+namespace p2n {
+
+// The splats' world: the training data with every camera in the output frame (the training views as camera
+// refinement left them), the first Gaussians there, and the scene's extent.
+struct SplatSetup {
+  TrainingData data;
+  OutputFrame frame;
+  Gaussians<float> gaussians;
+  std::array<float, 3> background{1, 1, 1};
+  double extent = 1;
+  std::optional<double> field_psnr;  // the field's held-out PSNR, as the train stage measured it
+};
+
+// What every optimisation of one stage run shares.
+struct SplatRun {
+  const SplatSetup& setup;
+  const SplatOptions& options;
+  const StageContext& context;
+  SplatScene scene;  // the training views, the background, the extent and the near plane
+  SplatTrainerOptions trainer;
+  double budget = 0;  // seconds each trainer optimises for; 0: options.steps
+};
+
+// What the optimisation made: the splats, the colour behind them, its steps (every block's), the steps a resumed run
+// started from, and its state (every block's metrics rows, their seconds summed).
+struct Optimised {
+  Gaussians<float> splats;
+  std::array<float, 3> background{1, 1, 1};
+  int steps = 0, resumed_from = 0;
+  RunState state;
+};
+
+// The whole scene's splats optimised at once, resuming from the stage's checkpoint.
+Optimised OptimiseWhole(const SplatRun& run);
+// The splats optimised whole for part of the budget, then each of options.blocks slabs in turn from there for the
+// rest (as blocks on as many machines would run at once), each part's checkpoint kept when it ends so that a resumed
+// run goes on with the next; merged.
+Optimised OptimiseBlocks(const SplatRun& run);
+
+// PSNR and SSIM of the splats on every held-out view (the same during the run as at its end, so that the curve
+// ends at the reported score).
+struct Scores {
+  std::vector<double> psnr, ssim;
+  double seconds_per_view = 0;
+};
+Scores Evaluate(const Gaussians<float>& gaussians, const std::array<float, 3>& background, const SplatSetup& setup,
+                double near, bool with_ssim);
+
+// Appends the metrics.csv row of `splats` after `steps` (every block's) and the run's seconds: the training loss
+// since the last row and the held-out PSNR.
+void AddMetricsRow(int steps, double seconds, size_t splats, const Scores& scores, RunState* state);
+
+}  // namespace p2n
