@@ -78,6 +78,7 @@ void SplatTrainer::Restrict(const std::vector<bool>& keep, const Gaussians<float
   if (context != nullptr && context->sh_degree != gaussians_.sh_degree)
     throw std::invalid_argument("SplatTrainer::Restrict: the context's SH degree is not the splats'");
   if (views == nullptr || views->empty()) throw std::invalid_argument("SplatTrainer::Restrict: no training views");
+  if (keep.size() != gaussians_.size()) throw std::invalid_argument("SplatTrainer::Restrict: one flag per splat");
   std::vector<int64_t> sources;
   std::vector<float> gradient_sum;
   std::vector<uint32_t> gradient_count;

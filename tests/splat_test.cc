@@ -64,6 +64,14 @@ std::vector<TrainView> ViewsOf(const Gaussians<float>& truth, int count,
   return views;
 }
 
+// The mean PSNR of `splats` over white in `views`.
+double MeanPsnr(const Gaussians<float>& splats, const std::vector<TrainView>& views) {
+  double sum = 0;
+  for (const TrainView& view : views)
+    sum += Psnr(RenderSplats(splats, view.camera, {1, 1, 1}, 0.01), PhotoOnBackground(view, {1, 1, 1}));
+  return sum / views.size();
+}
+
 }  // namespace
 
 TEST_CASE("Splat PLY files have the standard layout and read back exactly", "[splat]") {
@@ -302,12 +310,7 @@ TEST_CASE("Splat optimisation fits photos, and a resumed run continues as an uni
   options.steps = 160;
   options.densify_from = 40;
   options.densify_interval = 40;
-  const auto psnr = [&](const Gaussians<float>& g) {
-    double sum = 0;
-    for (const TrainView& view : views)
-      sum += Psnr(RenderSplats(g, view.camera, {1, 1, 1}, 0.01), PhotoOnBackground(view, {1, 1, 1}));
-    return sum / views.size();
-  };
+  const auto psnr = [&](const Gaussians<float>& g) { return MeanPsnr(g, views); };
   SplatTrainer whole(start, scene, options);
   for (int s = 0; s < options.steps; ++s) whole.Step();
   const double before = psnr(start), after = psnr(whole.gaussians());
@@ -438,12 +441,7 @@ TEST_CASE("Block optimisation: optimised whole, then each block on the views tha
   SplatTrainerOptions options;
   options.steps = 240;
   options.densify_from = options.densify_interval = 40;
-  const auto psnr = [&](const Gaussians<float>& g) {
-    double sum = 0;
-    for (const TrainView& view : views)
-      sum += Psnr(RenderSplats(g, view.camera, {1, 1, 1}, 0.01), PhotoOnBackground(view, {1, 1, 1}));
-    return sum / views.size();
-  };
+  const auto psnr = [&](const Gaussians<float>& g) { return MeanPsnr(g, views); };
   SplatTrainer whole(start, scene, options);
   for (int s = 0; s < options.steps / 2; ++s) whole.Step();
   BinaryWriter halfway;
