@@ -5,10 +5,13 @@
 
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "base/errors.h"
 #include "base/file_util.h"
 #include "formats/output_frame.h"
+#include "pipeline/cancel.h"
 #include "splat/splat_ply.h"
 #include "splat/spz.h"
 #include "stage_fixtures.h"
@@ -76,6 +79,35 @@ TEST_CASE("splat stage: splat.blocks optimises whole, then each block, merged in
   const std::string metrics = ReadTextFile(out / "metrics.csv");
   const std::string last = metrics.substr(metrics.rfind('\n', metrics.size() - 2) + 1);
   CHECK(last.find(",45,") != std::string::npos);
+}
+
+TEST_CASE("splat stage: a block run cancelled in its last block resumes there, the parts before it kept", "[splat]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(60);
+  setup.runner.Run(setup.workspace, config, Until("train"));
+  config.Set("splat.blocks", 2, "test");
+  config.Set("splat.steps", 300, "test");  // 150 whole, then 150 a block
+  config.Set("splat.checkpoint_interval", 0.05, "test");
+  config.Set("splat.eval_interval", 1e6, "test");
+  const fs::path resume = setup.dir / "ws" / "35_splat.resume";
+  // Cancel (as Ctrl-C does) once the last block has a checkpoint of its own.
+  std::thread canceller([&] {
+    while (!fs::exists(resume / "checkpoint_block2.bin")) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    RequestCancel();
+  });
+  CHECK_THROWS_AS(setup.runner.Run(setup.workspace, config, Until("splat")), Cancelled);
+  canceller.join();
+  ResetCancel();
+  CHECK(fs::exists(resume / "checkpoint.bin"));
+  CHECK(fs::exists(resume / "checkpoint_block1.bin"));
+
+  setup.runner.Run(setup.workspace, config, Until("splat"));
+  const nlohmann::json report = ReadJsonFile(setup.dir / "ws" / "35_splat" / "splat_report.json");
+  CHECK(report["steps"] == 450);
+  // The whole part and the first block resumed at their ends, the last block where it was cancelled.
+  CHECK(report["resumed_from_step"].get<int>() > 300);
+  CHECK(report["resumed_from_step"].get<int>() < 450);
+  CHECK_FALSE(fs::exists(resume));
 }
 
 TEST_CASE("splat stage: splat.enabled false writes no splats and says so", "[splat]") {
