@@ -2,6 +2,8 @@
 // the workspace lock, made the staging folder and commits it when this returns.
 
 #include <cstdlib>
+#include <filesystem>
+#include <optional>
 #include <string>
 
 #include "base/errors.h"
@@ -14,6 +16,7 @@
 #include "stages/stages.h"
 
 namespace p2n {
+namespace fs = std::filesystem;
 
 int RunStageJob(int argc, char** argv) {
   CLI::App app("Run one stage's work as a job of a scheduler; photo2nerf run --run.scheduler slurm submits it.",
@@ -22,6 +25,8 @@ int RunStageJob(int argc, char** argv) {
   std::string job_file;
   app.add_option("-w,--workspace", workspace_path, "workspace folder, as the submitting run gave it")->required();
   app.add_option("--job", job_file, "the job file it wrote (logs/slurm/STAGE/job.json)")->required();
+  std::optional<int> part;
+  app.add_option("--part", part, "one part of the stage's work (an element of the job array its job submitted)");
   if (auto code = Parse(app, OptionRegistry(), argc, argv)) return *code;
 
   const Workspace workspace = Workspace::Open(workspace_path, /*create=*/false);
@@ -37,10 +42,15 @@ int RunStageJob(int argc, char** argv) {
   CheckAllOptions(config);
   const auto thread_limit = ApplyRunOptions(config, workspace.LogDir() / "photo2nerf.log");
   const char* job_id = std::getenv("SLURM_JOB_ID");
-  LogInfo(format("{}: working in job {} (workspace {})", job.stage, job_id != nullptr ? job_id : "?",
-                 workspace.root().string()));
-  const nlohmann::json summary = MakeRunner(workspace.input()).RunWork(workspace, config, job.stage, job.key);
-  WriteJsonAtomic(job.summary_path, summary);
+  LogInfo(format("{}: {} in job {} (workspace {})", job.stage, part ? format("part {}", *part) : "working",
+                 job_id != nullptr ? job_id : "?", workspace.root().string()));
+  StageWork work{part, nullptr};
+  if (!part && ReadOptions<RunOptions>(config).scheduler == Scheduler::kSlurm) {
+    work.parts = SlurmParts(ReadOptions<SlurmOptions>(config), fs::read_symlink("/proc/self/exe"), workspace, job_file,
+                            job.stage);
+  }
+  const nlohmann::json summary = MakeRunner(workspace.input()).RunWork(workspace, config, job.stage, job.key, work);
+  if (!part) WriteJsonAtomic(job.summary_path, summary);
   return kExitOk;
 }
 

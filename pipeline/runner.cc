@@ -242,14 +242,19 @@ StageContext Runner::ContextFor(const Workspace& workspace, const Config& config
 }
 
 nlohmann::json Runner::RunWork(const Workspace& workspace, const Config& config, std::string_view name,
-                               const std::string& key) const {
+                               const std::string& key, const StageWork& work) const {
   const Stage& stage = Get(name);
   StageContext context = ContextFor(workspace, config, stage, key, nullptr);
   if (!fs::is_directory(context.output_dir)) {
     throw UserError(format("stage {} has no staging folder {}: the run that submitted this job is gone; run it again",
                            name, context.output_dir.string()));
   }
-  stage.Run(context);
+  if (work.part) {
+    stage.RunPart(context, *work.part);
+  } else {
+    context.parts = work.parts;
+    stage.Run(context);
+  }
   return context.summary;
 }
 

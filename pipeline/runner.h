@@ -38,6 +38,13 @@ struct StageRun {
   double wall_seconds = 0;
 };
 
+// Which of a stage's work a scheduler's job does (Runner::RunWork): one part of it (Stage::RunPart), or all of it
+// with `parts` running its parts.
+struct StageWork {
+  std::optional<int> part;
+  PartsExecutor parts = nullptr;
+};
+
 class Runner {
  public:
   // Stages in an order where every stage comes after its upstream stages; InternalError otherwise.
@@ -59,7 +66,7 @@ class Runner {
   // which the run that submitted the job made, for the result of cache key `key`; returns the stage's summary. The
   // submitting run writes the manifest and commits the folder.
   nlohmann::json RunWork(const Workspace& workspace, const Config& config, std::string_view name,
-                         const std::string& key) const;
+                         const std::string& key, const StageWork& work = {}) const;
 
  private:
   size_t IndexOf(std::string_view name) const;

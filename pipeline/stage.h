@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,10 @@
 namespace p2n {
 
 class Runner;
+
+// Runs `parts` of a stage's work, which need nothing of one another (Stage::RunPart): `here(part)` runs one in this
+// process; a scheduler may run some as jobs of their own instead. Returns once every part has finished.
+using PartsExecutor = std::function<void(const std::vector<int>& parts, const std::function<void(int)>& here)>;
 
 // What a stage's Run() sees.
 struct StageContext {
@@ -32,6 +37,13 @@ struct StageContext {
   std::filesystem::path resume_dir;
   const Runner* runner = nullptr;  // the stage table this stage runs in (for a report of every stage)
   RunMemo* memo = nullptr;         // what earlier stages of this run kept for later ones; null outside a run
+  PartsExecutor parts = nullptr;   // runs parts of the work; empty: each here, in turn
+
+  // Runs `parts` by `parts`, or each by `here` in turn when there is no executor.
+  void RunParts(const std::vector<int>& list, const std::function<void(int)>& here) const {
+    if (parts) return parts(list, here);
+    for (const int part : list) here(part);
+  }
 };
 
 class Stage {
@@ -61,6 +73,12 @@ class Stage {
     return {};
   }
   virtual void Run(StageContext& context) const = 0;
+  // Part `part` of Run()'s work in a process of its own (a scheduler's job): what Run() hands to
+  // StageContext::RunParts. Only stages that hand out parts have any.
+  virtual void RunPart(StageContext& context, int part) const {
+    (void)context;
+    throw std::logic_error(name() + " has no parts to run (part " + std::to_string(part) + ")");
+  }
   // Applies the stage's kCheck thresholds to its complete result in `result_dir`; throws UserError saying what
   // fails. Run() applies the same check to what it makes; the runner calls this on a fresh result, whose
   // thresholds may have changed since (they are not in the key).

@@ -41,10 +41,16 @@ SplatBlocks CutIntoBlocks(const Gaussians<float>& splats, int count) {
   return blocks;
 }
 
+std::vector<bool> InBlock(const Gaussians<float>& splats, const SplatBlocks& blocks, int block) {
+  std::vector<bool> in(splats.size());
+  for (size_t i = 0; i < splats.size(); ++i) in[i] = blocks.BlockOf(&splats.positions[3 * i]) == block;
+  return in;
+}
+
 Gaussians<float> SplatsOfBlock(const Gaussians<float>& splats, const SplatBlocks& blocks, int block, bool inside) {
   Gaussians<float> selected = splats;
-  std::vector<bool> keep(splats.size());
-  for (size_t i = 0; i < splats.size(); ++i) keep[i] = (blocks.BlockOf(&splats.positions[3 * i]) == block) == inside;
+  std::vector<bool> keep = InBlock(splats, blocks, block);
+  if (!inside) keep.flip();
   selected.Filter(keep);
   return selected;
 }

@@ -27,6 +27,8 @@ struct SplatBlocks {
 // 5th and 95th percentiles, so that a few far splats do not choose it).
 SplatBlocks CutIntoBlocks(const Gaussians<float>& splats, int count);
 
+// Whether each of `splats` is in `block`.
+std::vector<bool> InBlock(const Gaussians<float>& splats, const SplatBlocks& blocks, int block);
 // The splats in `block` (inside), or in every other block (!inside), in order.
 Gaussians<float> SplatsOfBlock(const Gaussians<float>& splats, const SplatBlocks& blocks, int block, bool inside);
 

@@ -1,9 +1,15 @@
 #include "stages/splat_optimisation.h"
 
+#include <algorithm>
 #include <chrono>
+#include <memory>
 #include <optional>
+#include <sstream>
+#include <stdexcept>
 
 #include "base/binary_io.h"
+#include "base/errors.h"
+#include "base/file_util.h"
 #include "base/format.h"
 #include "nerf/renderer.h"
 #include "pipeline/cancel.h"
@@ -40,12 +46,6 @@ void AddMetricsRow(int steps, double seconds, size_t splats, const Scores& score
 
 namespace {
 
-// The steps and seconds of the parts optimised before the one at hand (their metrics rows go on from there).
-struct Earlier {
-  int steps = 0;
-  double seconds = 0;
-};
-
 // A part of the optimisation: its share of the run (from, to: of the budget, of densification's schedule) and the
 // trainer's step when it begins.
 struct Part {
@@ -53,10 +53,11 @@ struct Part {
   int start_step = 0;
 };
 
-// Optimises on `views` until the part's share of the budget (seconds, else steps) is spent: a metrics row at every
-// evaluation but the last (the caller's final evaluation makes it), checkpoints in `checkpoint`.
+// Optimises on `views` until the part's share of the budget (seconds, else steps) is spent: a metrics row (its
+// steps and seconds the part's own) at every evaluation but the last (the caller's final evaluation makes it),
+// checkpoints in `checkpoint`.
 void OptimiseUntilDone(const SplatRun& run, SplatTrainer& trainer, const std::vector<TrainView>& views,
-                       const fs::path& checkpoint, const Earlier& earlier, const Part& part, RunState* state) {
+                       const fs::path& checkpoint, const Part& part, RunState* state) {
   const SplatOptions& options = run.options;
   const double width = part.to - part.from;
   const int steps = options.steps > 0 ? std::max(1, static_cast<int>(std::lround(options.steps * width))) : 0;
@@ -72,8 +73,7 @@ void OptimiseUntilDone(const SplatRun& run, SplatTrainer& trainer, const std::ve
   const auto add_row = [&](RunState* now) {
     const Gaussians<float> drawn = trainer.Drawn();
     const Scores scores = Evaluate(drawn, trainer.background(), run.setup, run.scene.near, false);
-    AddMetricsRow(earlier.steps + trainer.step() - part.start_step, earlier.seconds + now->seconds, drawn.size(),
-                  scores, now);
+    AddMetricsRow(trainer.step() - part.start_step, now->seconds, drawn.size(), scores, now);
   };
   const auto save = [&](const RunState& now) {
     WriteOrExplain(
@@ -84,17 +84,17 @@ void OptimiseUntilDone(const SplatRun& run, SplatTrainer& trainer, const std::ve
 }
 
 // Optimises with `trainer` on `views` for `part` of the run, resuming from `checkpoint` where it holds this run;
-// saves one there at the end when `checkpoint_at_end`.
+// saves one there at the end when `checkpoint_at_end` (the next part begins from it).
 Optimised OptimisePart(const SplatRun& run, SplatTrainer& trainer, const std::vector<TrainView>& views,
-                       const fs::path& checkpoint, const Earlier& earlier, const Part& part, bool checkpoint_at_end) {
+                       const fs::path& checkpoint, const Part& part, bool checkpoint_at_end) {
   Optimised out;
   const std::string& key = run.context.key;
   const bool resumed =
       LoadRunCheckpoint(checkpoint, key, SplatResult::kId.name, &out.state, [&](BinaryReader* r) { trainer.Load(r); });
   out.resumed_from = resumed ? trainer.step() - part.start_step : 0;
   if (out.resumed_from > 0) LogInfo(format("splat: resumed at step {} from {}", trainer.step(), checkpoint.string()));
-  OptimiseUntilDone(run, trainer, views, checkpoint, earlier, part, &out.state);
-  if (checkpoint_at_end && run.options.checkpoint_interval > 0) {
+  OptimiseUntilDone(run, trainer, views, checkpoint, part, &out.state);
+  if (checkpoint_at_end) {
     WriteOrExplain([&] { SaveRunCheckpoint(checkpoint, key, out.state, [&](BinaryWriter* w) { trainer.Save(w); }); });
   }
   out.splats = trainer.gaussians();
@@ -110,63 +110,184 @@ constexpr double kWholeShare = 0.5;
 // The training views seen by a block when at least this share of the splats they show are the block's.
 constexpr double kBlockViewShare = 0.1;
 
-// Adds `part`'s steps, seconds, metrics rows and loss to `total`.
+// `rows` (metrics.csv rows: seconds, step, then the rest) moved on by `seconds` and `steps`.
+std::string ShiftRows(const std::string& rows, int steps, double seconds) {
+  std::istringstream lines(rows);
+  std::string line, shifted;
+  while (std::getline(lines, line)) {
+    const size_t first = line.find(','), second = line.find(',', first + 1);
+    if (second == std::string::npos) throw std::logic_error("ShiftRows: a metrics row without its fields: " + line);
+    shifted += format("{:.3f},{}{}\n", std::stod(line.substr(0, first)) + seconds,
+                      std::stoi(line.substr(first + 1, second - first - 1)) + steps, line.substr(second));
+  }
+  return shifted;
+}
+
+// Adds `part` (made after the parts in `total`) to `total`: its steps and seconds, its metrics rows moved on by
+// those of `total`, its loss.
 void AddPart(const Optimised& part, Optimised* total) {
+  total->state.metrics += ShiftRows(part.state.metrics, total->steps, total->state.seconds);
   total->steps += part.steps;
   total->resumed_from += part.resumed_from;
-  total->state.metrics += part.state.metrics;
   total->state.seconds += part.state.seconds;
   total->state.loss_sum += part.state.loss_sum;
   total->state.loss_steps += part.state.loss_steps;
+}
+
+// Where every block begins: the trainer as the whole part left it, its splats cut into blocks.
+struct BlocksStart {
+  BinaryWriter trainer;
+  Gaussians<float> splats;
+  std::array<float, 3> background{1, 1, 1};
+  int step = 0;
+  SplatBlocks blocks;
+};
+
+BlocksStart StartOfBlocks(const SplatTrainer& whole, int count) {
+  BlocksStart start;
+  whole.Save(&start.trainer);
+  start.splats = whole.gaussians();
+  start.background = whole.background();
+  start.step = whole.step();
+  start.blocks = CutIntoBlocks(start.splats, count);
+  return start;
+}
+
+// Block b's trainer as the whole part left it, restricted to the block's splats and the views that see it, the
+// other splats its context; none when the block has no splats or no view sees it.
+struct Block {
+  std::vector<TrainView> views;
+  Gaussians<float> splats, others;
+  std::optional<SplatTrainer> trainer;
+};
+
+std::unique_ptr<Block> MakeBlock(const SplatRun& run, const BlocksStart& start, int b) {
+  auto block = std::make_unique<Block>();
+  std::vector<bool> keep = InBlock(start.splats, start.blocks, b);
+  block->splats = block->others = start.splats;
+  block->splats.Filter(keep);
+  keep.flip();
+  block->others.Filter(keep);
+  keep.flip();
+  for (const size_t v :
+       ViewsOfBlock(run.setup.data.train, start.splats, start.blocks, b, kBlockViewShare, run.scene.near)) {
+    block->views.push_back(run.setup.data.train[v]);
+  }
+  if (block->splats.size() == 0 || block->views.empty()) return block;
+  block->trainer.emplace(start.splats, run.scene, run.trainer);
+  BinaryReader reader(start.trainer.buffer(), "the splats optimised whole");
+  block->trainer->Load(&reader);
+  block->trainer->Restrict(keep, &block->others, &block->views);
+  return block;
+}
+
+fs::path BlockCheckpoint(const SplatRun& run, int b) {
+  return run.context.resume_dir / format("checkpoint_block{}.bin", b + 1);
+}
+// Written when block b's part has finished: the key of the result, the steps it resumed from.
+fs::path BlockDoneFile(const SplatRun& run, int b) { return run.context.resume_dir / format("block{}.json", b + 1); }
+
+std::optional<nlohmann::json> BlockDone(const SplatRun& run, int b) {
+  const fs::path file = BlockDoneFile(run, b);
+  if (!fs::exists(file)) return std::nullopt;
+  const nlohmann::json done = ReadJsonFile(file);
+  if (done.value("key", "") != run.context.key) return std::nullopt;
+  return done;
+}
+
+// Block b's part: optimised from where the whole part ended for the rest of the budget (resuming from its own
+// checkpoint), the result in its checkpoint.
+void OptimiseBlock(const SplatRun& run, const BlocksStart& start, int b) {
+  const std::unique_ptr<Block> block = MakeBlock(run, start, b);
+  LogInfo(format("splat: block {} of {}: {} splats, {} training views", b + 1, start.blocks.count(),
+                 block->splats.size(), block->views.size()));
+  int resumed_from = 0;
+  if (block->trainer) {
+    resumed_from =
+        OptimisePart(run, *block->trainer, block->views, BlockCheckpoint(run, b), {kWholeShare, 1, start.step}, true)
+            .resumed_from;
+  }
+  WriteOrExplain([&] {
+    WriteJsonAtomic(BlockDoneFile(run, b), {{"key", run.context.key}, {"resumed_from", resumed_from}});
+  });
+}
+
+// What block b's finished part made, from its checkpoint; `earlier`: it finished before this run of the stage (its
+// steps count as resumed from).
+Optimised FinishedBlock(const SplatRun& run, const BlocksStart& start, int b, bool earlier) {
+  const std::optional<nlohmann::json> done = BlockDone(run, b);
+  if (!done) {
+    throw ExternalToolError(format("splat: block {} did not finish ({} is missing); run the stage again", b + 1,
+                                   BlockDoneFile(run, b).string()));
+  }
+  const std::unique_ptr<Block> block = MakeBlock(run, start, b);
+  Optimised out;
+  out.splats = block->splats;
+  out.background = start.background;
+  if (!block->trainer) return out;
+  SplatTrainer& trainer = *block->trainer;
+  if (!LoadRunCheckpoint(BlockCheckpoint(run, b), run.context.key, SplatResult::kId.name, &out.state,
+                         [&](BinaryReader* r) { trainer.Load(r); })) {
+    throw ExternalToolError(format("splat: block {}'s result {} is missing or not this run's; run the stage again",
+                                   b + 1, BlockCheckpoint(run, b).string()));
+  }
+  out.splats = trainer.gaussians();
+  out.background = trainer.background();
+  out.steps = trainer.step() - start.step;
+  out.resumed_from = earlier ? out.steps : done->value("resumed_from", 0);
+  return out;
 }
 
 }  // namespace
 
 Optimised OptimiseWhole(const SplatRun& run) {
   SplatTrainer trainer(run.setup.gaussians, run.scene, run.trainer);
-  return OptimisePart(run, trainer, run.setup.data.train, CheckpointFile(run.context), {}, {}, false);
+  return OptimisePart(run, trainer, run.setup.data.train, CheckpointFile(run.context), {},
+                      run.options.checkpoint_interval > 0);
 }
 
 Optimised OptimiseBlocks(const SplatRun& run) {
-  const SplatSetup& setup = run.setup;
-  SplatTrainer whole(setup.gaussians, run.scene, run.trainer);
-  Optimised total = OptimisePart(run, whole, setup.data.train, CheckpointFile(run.context), {}, {0, kWholeShare}, true);
-  const Gaussians<float>& start = whole.gaussians();
-  const SplatBlocks blocks = CutIntoBlocks(start, run.options.blocks);
+  SplatTrainer whole(run.setup.gaussians, run.scene, run.trainer);
+  Optimised total;
+  AddPart(OptimisePart(run, whole, run.setup.data.train, CheckpointFile(run.context), {0, kWholeShare}, true), &total);
+  const BlocksStart start = StartOfBlocks(whole, run.options.blocks);
   LogInfo(format("splat: {} blocks across the {} axis, each optimised from here for the rest of the budget",
-                 blocks.count(), "xyz"[blocks.axis]));
-  BinaryWriter where_whole_ended;
-  whole.Save(&where_whole_ended);
+                 start.blocks.count(), "xyz"[start.blocks.axis]));
+  std::vector<int> pending;  // parts: block b is part b + 1
+  for (int b = 0; b < start.blocks.count(); ++b) {
+    if (!BlockDone(run, b)) pending.push_back(b + 1);
+  }
+  run.context.RunParts(pending, [&](int part) { OptimiseBlock(run, start, part - 1); });
+
   std::vector<Gaussians<float>> optimised;
   std::array<double, 3> background{0, 0, 0};
-  for (int b = 0; b < blocks.count(); ++b) {
-    const Gaussians<float> others = SplatsOfBlock(start, blocks, b, false);
-    std::vector<TrainView> views;
-    for (const size_t v : ViewsOfBlock(setup.data.train, start, blocks, b, kBlockViewShare, run.scene.near))
-      views.push_back(setup.data.train[v]);
-    std::vector<bool> keep(start.size());
-    for (size_t i = 0; i < start.size(); ++i) keep[i] = blocks.BlockOf(&start.positions[3 * i]) == b;
-    LogInfo(format("splat: block {} of {}: {} splats, {} training views", b + 1, blocks.count(),
-                   start.size() - others.size(), views.size()));
-    Optimised block;
-    block.splats = SplatsOfBlock(start, blocks, b, true);
-    block.background = whole.background();
-    if (block.splats.size() > 0 && !views.empty()) {
-      SplatTrainer trainer(start, run.scene, run.trainer);  // where the whole part ended
-      BinaryReader reader(where_whole_ended.buffer(), "the splats optimised whole");
-      trainer.Load(&reader);
-      trainer.Restrict(keep, &others, &views);
-      const fs::path checkpoint = run.context.resume_dir / format("checkpoint_block{}.bin", b + 1);
-      block = OptimisePart(run, trainer, views, checkpoint, {total.steps, total.state.seconds},
-                           {kWholeShare, 1, whole.step()}, true);
-    }
-    optimised.push_back(std::move(block.splats));
-    for (int c = 0; c < 3; ++c) background[c] += block.background[c] / blocks.count();
+  for (int b = 0; b < start.blocks.count(); ++b) {
+    const bool earlier = std::find(pending.begin(), pending.end(), b + 1) == pending.end();
+    Optimised block = FinishedBlock(run, start, b, earlier);
+    for (int c = 0; c < 3; ++c) background[c] += block.background[c] / start.blocks.count();
     AddPart(block, &total);
+    optimised.push_back(std::move(block.splats));
   }
   total.splats = MergeBlocks(optimised);
   for (int c = 0; c < 3; ++c) total.background[c] = static_cast<float>(background[c]);
   return total;
+}
+
+void OptimiseBlockAlone(const SplatRun& run, int b) {
+  SplatTrainer whole(run.setup.gaussians, run.scene, run.trainer);
+  RunState state;
+  if (!LoadRunCheckpoint(CheckpointFile(run.context), run.context.key, SplatResult::kId.name, &state,
+                         [&](BinaryReader* r) { whole.Load(r); })) {
+    throw ExternalToolError(
+        format("splat: block {}: the whole part's result {} is missing or not this run's; run "
+               "the stage again",
+               b + 1, CheckpointFile(run.context).string()));
+  }
+  const BlocksStart start = StartOfBlocks(whole, run.options.blocks);
+  if (b < 0 || b >= start.blocks.count()) {
+    throw UserError(format("splat: there is no block {} of {}", b + 1, start.blocks.count()));
+  }
+  OptimiseBlock(run, start, b);
 }
 
 }  // namespace p2n

@@ -48,10 +48,12 @@ struct Optimised {
 
 // The whole scene's splats optimised at once, resuming from the stage's checkpoint.
 Optimised OptimiseWhole(const SplatRun& run);
-// The splats optimised whole for part of the budget, then each of options.blocks slabs in turn from there for the
-// rest (as blocks on as many machines would run at once), each part's checkpoint kept when it ends so that a resumed
-// run goes on with the next; merged.
+// The splats optimised whole for part of the budget, then each of options.blocks slabs from there for the rest, as
+// parts of the stage's work (StageContext::RunParts: in turn here, or as jobs of a scheduler at once); merged. Each
+// part's result is a checkpoint kept until the stage completes, so that a resumed run goes on with the parts left.
 Optimised OptimiseBlocks(const SplatRun& run);
+// Block b's part alone (in a job of its own), from the whole part's checkpoint.
+void OptimiseBlockAlone(const SplatRun& run, int b);
 
 // PSNR and SSIM of the splats on every held-out view (the same during the run as at its end, so that the curve
 // ends at the reported score).

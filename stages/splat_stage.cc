@@ -95,7 +95,8 @@ Gaussians<float> GaussiansFromSparseFile(const fs::path& file, const FieldInitOp
   return GaussiansFromSparsePoints(points, rgb, init.max_gaussians, init.sh_degree);
 }
 
-SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& options) {
+// The splats' world; `place`: the first splats too (a block's part begins from the whole part's instead).
+SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& options, bool place) {
   SplatSetup setup;
   const PosesResult poses_result = Upstream<PosesResult>(context);
   const TrainResult train = Upstream<TrainResult>(context);
@@ -117,7 +118,9 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   for (const TrainView& view : setup.data.train) pixels += size_t(view.camera.width) * view.camera.height;
   init.max_gaussians = std::min(static_cast<size_t>(options.max_gaussians), pixels / kPixelsPerSplat);
   init.sh_degree = options.sh_degree;
-  if (options.init == SplatInit::kSparse) {
+  if (!place) {
+    setup.gaussians.sh_degree = options.sh_degree;
+  } else if (options.init == SplatInit::kSparse) {
     setup.gaussians = GaussiansFromSparseFile(poses_result.sparse_points(), init);
   } else {
     const std::shared_ptr<const ViewRenders> renders = RenderViewsSmall(
@@ -211,7 +214,26 @@ void WriteSplatFiles(const SplatResult& out, const Optimised& optimised, const S
   report->glb_bytes = fs::file_size(out.glb());
 }
 
+// What the stage's optimisations share: the scene, the trainer's options, the budget.
+SplatRun MakeSplatRun(const SplatSetup& setup, const SplatOptions& options, const StageContext& context) {
+  const double near = 0.01 * setup.extent;
+  const double budget = SplatTimeBudget(options, ReadOptions<TrainOptions>(context.config).preset);
+  SplatRun run{setup, options, context, {&setup.data.train, setup.background, setup.extent, near}, {}, budget};
+  run.scene.learn_background = options.background == SplatBackground::kAuto &&
+                               FirstWithAlpha(setup.data.train) == nullptr && !setup.data.background_known;
+  run.trainer.seed = static_cast<uint64_t>(options.seed);
+  run.trainer.max_gaussians = 2 * static_cast<size_t>(options.max_gaussians);
+  run.trainer.ssim_weight = options.ssim_weight;
+  return run;
+}
+
 }  // namespace
+
+void SplatStage::RunPart(StageContext& context, int part) const {
+  const SplatOptions options = ReadOptions<SplatOptions>(context.config);
+  const SplatSetup setup = LoadSplatSetup(context, options, /*place=*/false);
+  OptimiseBlockAlone(MakeSplatRun(setup, options, context), part - 1);
+}
 
 void SplatStage::Run(StageContext& context) const {
   const SplatOptions options = ReadOptions<SplatOptions>(context.config);
@@ -221,21 +243,13 @@ void SplatStage::Run(StageContext& context) const {
     context.summary["splats"] = "off";
     return;
   }
-  const TrainOptions train_options = ReadOptions<TrainOptions>(context.config);
-  const double budget = SplatTimeBudget(options, train_options.preset);
-  const SplatSetup setup = LoadSplatSetup(context, options);
-  const double near = 0.01 * setup.extent;
+  const SplatSetup setup = LoadSplatSetup(context, options, /*place=*/true);
+  const SplatRun run = MakeSplatRun(setup, options, context);
+  const double near = run.scene.near;
   LogInfo(format("splat: {} splats placed from the {}; {} training and {} held-out views, {}", setup.gaussians.size(),
                  options.init == SplatInit::kSparse ? "sparse points" : "field", setup.data.train.size(),
                  setup.data.heldout.size(),
-                 budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
-
-  SplatRun run{setup, options, context, {&setup.data.train, setup.background, setup.extent, near}, {}, budget};
-  run.scene.learn_background = options.background == SplatBackground::kAuto &&
-                               FirstWithAlpha(setup.data.train) == nullptr && !setup.data.background_known;
-  run.trainer.seed = static_cast<uint64_t>(options.seed);
-  run.trainer.max_gaussians = 2 * static_cast<size_t>(options.max_gaussians);
-  run.trainer.ssim_weight = options.ssim_weight;
+                 run.budget > 0 ? format("{:.0f} s budget", run.budget) : format("{} steps", options.steps)));
   Optimised optimised = options.blocks > 1 ? OptimiseBlocks(run) : OptimiseWhole(run);
 
   const Scores scores = Evaluate(optimised.splats, optimised.background, setup, near, true);

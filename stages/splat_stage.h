@@ -99,6 +99,8 @@ class SplatStage : public StageOf<SplatResult> {
   int format_version() const override { return 9; }
   std::vector<std::string> upstream() const override { return {PosesResult::kId.name, TrainResult::kId.name}; }
   void Run(StageContext& context) const override;
+  // Block `part` (from 1) of splat.blocks (stages/splat_optimisation.h).
+  void RunPart(StageContext& context, int part) const override;
 };
 
 }  // namespace p2n

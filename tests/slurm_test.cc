@@ -89,6 +89,48 @@ TEST_CASE("slurm: a run as Slurm jobs makes the results of a local run", "[slurm
   CHECK_THAT(output, Catch::Contains("0 of 6 stages ran"));
 }
 
+TEST_CASE("slurm: splat blocks run as a job array beside the stage's job, or in it when there is no room", "[slurm]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), workspace = dir / "ws";
+  std::vector<std::string> local = RunArgs(data, workspace);
+  local.insert(local.end(), {"--splat.blocks", "2", "--until", "splat"});
+  std::string output;
+  REQUIRE(RunCommand(local, &output) == 0);
+  const fs::path report = workspace / "35_splat" / "splat_report.json";
+  const nlohmann::json here = ReadJsonFile(report);
+  const fs::path jobs = JobDir(workspace, "35_splat");
+  const std::vector<std::string> splat = {
+      P2N_BINARY, "splat", "-w", workspace.string(), "--force", "--run.progress", "plain", "--run.scheduler", "slurm"};
+
+  // A CPU a job: the stage's job optimises the whole, then block 1 while block 2 is element 2 of a job array.
+  std::vector<std::string> beside = splat;
+  beside.insert(beside.end(), {"--slurm.cpus", "1"});
+  int code = RunCommand(beside, &output);
+  INFO(output);
+  REQUIRE(code == 0);
+  INFO(ReadText(jobs / "attempt-1.log"));
+  CHECK_THAT(ReadText(jobs / "attempt-1.log"), Catch::Contains("splat: parts 2 as Slurm job array"));
+  CHECK_THAT(ReadText(jobs / "part-2.log"),
+             Catch::Contains("splat: part 2 in job") && Catch::Contains("splat: block 2 of 2"));
+  CHECK(ReadText(jobs / "exit-part-2") == "0\n");
+  // The same steps and metrics rows; the same picture within 0.2 dB (the jobs have one thread, the local run two).
+  nlohmann::json there = ReadJsonFile(report);
+  CHECK(there["steps"] == here["steps"]);
+  CHECK(there["heldout_psnr"].get<double>() == Approx(here["heldout_psnr"].get<double>()).margin(0.2));
+  CHECK(there["resumed_from_step"] == 0);
+
+  // A whole node a job (the default): the element waits for the stage's job, which takes it back and runs it.
+  code = RunCommand(splat, &output);
+  INFO(output);
+  REQUIRE(code == 0);
+  CHECK_THAT(ReadText(jobs / "attempt-1.log"),
+             Catch::Contains("splat: part 2 was still waiting for room in Slurm; running it here"));
+  CHECK(!fs::exists(jobs / "part-2.log"));
+  there = ReadJsonFile(report);
+  CHECK(there["steps"] == here["steps"]);
+  CHECK(there["heldout_psnr"].get<double>() == Approx(here["heldout_psnr"].get<double>()).margin(0.05));
+}
+
 TEST_CASE("slurm: a cancelled job is submitted again, resumes, and the stages done before it are kept", "[slurm]") {
   TempDir dir;
   const fs::path data = SmallDataset(dir), workspace = dir / "ws";

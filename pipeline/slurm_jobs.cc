@@ -1,0 +1,149 @@
+#include "pipeline/slurm_jobs.h"
+
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "base/errors.h"
+#include "base/format.h"
+#include "pipeline/log.h"
+#include "pipeline/subprocess.h"
+
+namespace p2n::slurm {
+namespace fs = std::filesystem;
+namespace {
+
+// How long a job may take to end once cancelled.
+constexpr auto kCancelledJobEnd = std::chrono::minutes(2);
+
+std::vector<std::string> SplitSpaces(const std::string& text) {
+  std::vector<std::string> words;
+  std::stringstream stream(text);
+  std::string word;
+  while (stream >> word) words.push_back(word);
+  return words;
+}
+
+// What squeue says of job `id` in `format`, one line per job (or array element); nothing when it fails.
+std::vector<std::string> Squeue(const std::string& id, const std::string& format, bool array, const fs::path& dir) {
+  const fs::path answer = dir / "squeue.log";
+  std::error_code error;
+  fs::remove(answer, error);
+  std::vector<std::string> argv = {"squeue", "--noheader", "--jobs=" + id, "--format=" + format};
+  if (array) argv.push_back("--array");
+  const SubprocessResult result = RunSubprocess(argv, answer, "asking Slurm about job " + id);
+  if (result.signal != 0 || result.exit_code != 0) return {};
+  std::ifstream log(answer);
+  std::vector<std::string> lines;
+  std::string line;
+  std::getline(log, line);  // the command
+  while (std::getline(log, line)) lines.push_back(line);
+  return lines;
+}
+
+}  // namespace
+
+std::vector<std::string> SbatchCommand(const SlurmOptions& options, const Workspace& workspace, const std::string& name,
+                                       const fs::path& output, const std::vector<std::string>& extra,
+                                       const fs::path& script) {
+  std::vector<std::string> argv = {"sbatch", "--parsable", "--job-name=" + name, "--chdir=" + workspace.root().string(),
+                                   "--output=" + output.string()};
+  if (!options.partition.empty()) argv.push_back("--partition=" + options.partition);
+  argv.push_back(options.cpus > 0 ? format("--cpus-per-task={}", options.cpus) : "--exclusive");
+  for (std::string& word : SplitSpaces(options.sbatch_args)) argv.push_back(std::move(word));
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  argv.push_back(script.string());
+  return argv;
+}
+
+std::string Submit(const std::vector<std::string>& sbatch, const fs::path& submit_log, const std::string& what) {
+  const SubprocessResult submitted = RunSubprocess(sbatch, submit_log, "submitting " + what + " to Slurm");
+  const std::optional<std::string> id = JobId(submit_log);
+  if (submitted.signal != 0 || submitted.exit_code != 0 || !id) {
+    throw ExternalToolError(
+        format("sbatch did not take {}: {} (sbatch's output: {}); check the cluster and the slurm.* options", what,
+               LastError(submit_log), submit_log.string()));
+  }
+  return *id;
+}
+
+std::optional<std::string> JobId(const fs::path& submit_log) {
+  std::ifstream log(submit_log);
+  std::string line;
+  while (std::getline(log, line)) {
+    const std::string id = line.substr(0, line.find(';'));
+    if (!id.empty() && id.find_first_not_of("0123456789") == std::string::npos) return id;
+  }
+  return std::nullopt;
+}
+
+bool JobAlive(const std::string& id, const fs::path& dir) {
+  for (const std::string& state : Squeue(id, "%T", false, dir)) {
+    if (!Ended(state)) return true;
+  }
+  return false;
+}
+
+std::map<int, ElementState> ArrayStates(const std::string& id, const fs::path& dir) {
+  std::map<int, ElementState> states;
+  for (const std::string& line : Squeue(id, "%K %T %r", true, dir)) {
+    std::istringstream words(line);
+    int index = 0;
+    ElementState state;
+    if (words >> index >> state.state) {
+      std::getline(words >> std::ws, state.reason);
+      states[index] = state;
+    }
+  }
+  return states;
+}
+
+bool Ended(const std::string& state) {
+  for (const char* ended : {"", "COMPLETED", "CANCELLED", "FAILED", "TIMEOUT", "NODE_FAIL", "OUT_OF_MEMORY",
+                            "PREEMPTED", "BOOT_FAIL", "DEADLINE"}) {
+    if (state == ended) return true;
+  }
+  return false;
+}
+
+bool CancelAndWait(const std::string& id, const fs::path& dir, const std::string& stage) {
+  if (!JobAlive(id, dir)) return false;
+  LogWarning(format("{}: Slurm job {} of an earlier run still runs; cancelling it", stage, id));
+  RunSubprocess({"scancel", id}, dir / "scancel.log", "scancel");
+  const auto deadline = std::chrono::steady_clock::now() + kCancelledJobEnd;
+  while (JobAlive(id, dir)) {
+    if (std::chrono::steady_clock::now() > deadline) {
+      throw ExternalToolError(
+          format("{}: Slurm job {} of an earlier run does not end after scancel; end it (scancel --signal=KILL {}) "
+                 "and run again",
+                 stage, id, id));
+    }
+    std::this_thread::sleep_for(kExitFilePoll);
+  }
+  return true;
+}
+
+std::optional<int> ReadExitCode(const fs::path& path) {
+  std::ifstream file(path);
+  int code = 0;
+  if (file >> code) return code;
+  return std::nullopt;
+}
+
+std::string LastError(const fs::path& log_file) {
+  std::ifstream log(log_file);
+  std::string line, last, last_error;
+  while (std::getline(log, line)) {
+    if (line.empty()) continue;
+    last = line;
+    if (line.find("error") != std::string::npos) last_error = line;
+  }
+  return last_error.empty() ? last : last_error;
+}
+
+std::string WriteExitCode(const fs::path& exit_file, const std::string& suffix) {
+  const std::string file = QuoteCommand({exit_file.string()}) + suffix;
+  return format("echo $? > {0}.part && mv {0}.part {0}\n", file);
+}
+
+}  // namespace p2n::slurm
