@@ -1,7 +1,8 @@
 // `--run.scheduler slurm` against a real one-machine Slurm cluster (scripts/local_slurm.sh, which CTest starts
 // before these tests and stops after them; SLURM_CONF points at it): the results of a local run, a cancelled job
-// submitted again with the finished stages kept, a job's own failure reported and not retried, Ctrl-C cancelling
-// the running job, a killed run's job cancelled by the next run, and a missing sbatch.
+// submitted again with the finished stages kept, splat blocks as a job array (beside the stage's job, taken back by it
+// when there is no room, rerun by it from a checkpoint when cancelled), a job's own failure reported and not retried,
+// Ctrl-C cancelling the running job, a killed run's job cancelled by the next run, and a missing sbatch.
 
 #include <signal.h>
 #include <catch2/catch.hpp>
@@ -37,6 +38,17 @@ std::vector<std::string> LongSlurmRunArgs(const fs::path& data, const fs::path& 
 
 fs::path JobDir(const fs::path& workspace, const std::string& folder) { return workspace / "logs" / "slurm" / folder; }
 
+// The job id in what sbatch said.
+std::string SubmittedJob(const fs::path& submit_log) {
+  std::ifstream log(submit_log);
+  std::string line, id;
+  while (std::getline(log, line)) {
+    if (!line.empty() && line.find_first_not_of("0123456789") == std::string::npos) id = line;
+  }
+  REQUIRE(!id.empty());
+  return id;
+}
+
 // Waits (up to two minutes) until the stage's first job has started its work; its Slurm job id.
 std::string StartedJob(const fs::path& workspace, const std::string& folder) {
   const fs::path dir = JobDir(workspace, folder);
@@ -45,13 +57,7 @@ std::string StartedJob(const fs::path& workspace, const std::string& folder) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   REQUIRE_THAT(ReadText(dir / "attempt-1.log"), Catch::Contains("working in job"));
-  std::ifstream log(dir / "submit-1.log");
-  std::string line, id;
-  while (std::getline(log, line)) {
-    if (!line.empty() && line.find_first_not_of("0123456789") == std::string::npos) id = line;
-  }
-  REQUIRE(!id.empty());
-  return id;
+  return SubmittedJob(dir / "submit-1.log");
 }
 
 // What squeue says of the job ("RUNNING", "CANCELLED", ...).
@@ -129,6 +135,31 @@ TEST_CASE("slurm: splat blocks run as a job array beside the stage's job, or in 
   there = ReadJsonFile(report);
   CHECK(there["steps"] == here["steps"]);
   CHECK(there["heldout_psnr"].get<double>() == Approx(here["heldout_psnr"].get<double>()).margin(0.05));
+}
+
+TEST_CASE("slurm: a block whose job is cancelled is optimised by the stage's job from its checkpoint", "[slurm]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), workspace = dir / "ws";
+  std::vector<std::string> args = SlurmRunArgs(data, workspace);
+  // Blocks long enough to cancel one while it runs (some seconds): 300 steps whole, then 300 each.
+  args.insert(args.end(), {"--slurm.cpus", "1", "--splat.blocks", "2", "--splat.steps", "600", "--until", "splat"});
+  const pid_t run = Spawn(args, dir / "run.log");
+  const fs::path jobs = JobDir(workspace, "35_splat"),
+                 checkpoint = workspace / "35_splat.resume" / "checkpoint_block2.bin";
+  const auto deadline = Clock::now() + std::chrono::seconds(240);
+  while (!fs::exists(checkpoint) && Clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  REQUIRE(fs::exists(checkpoint));
+  std::string ignored;
+  REQUIRE(RunCommand({"scancel", SubmittedJob(jobs / "submit-parts.log") + "_2"}, &ignored) == 0);
+  const int code = Wait(run);
+  INFO(ReadText(dir / "run.log"));
+  REQUIRE(code == 0);
+  const std::string job_log = ReadText(jobs / "attempt-1.log");
+  INFO(job_log);
+  CHECK_THAT(job_log, Catch::Contains("splat: part 2") && Catch::Contains("running it here"));
+  const nlohmann::json report = ReadJsonFile(workspace / "35_splat" / "splat_report.json");
+  CHECK(report["steps"] == 900);
+  CHECK(report["resumed_from_step"].get<int>() > 0);  // block 2 went on from its checkpoint
 }
 
 TEST_CASE("slurm: a cancelled job is submitted again, resumes, and the stages done before it are kept", "[slurm]") {
