@@ -26,6 +26,8 @@ struct PartArray {
   std::string id;
   std::set<int> waiting;
 
+  // Where this job's questions to Slurm are logged: not beside the stage's, which the submitting run asks.
+  fs::path Queries() const { return dir / "parts"; }
   fs::path ExitFile(int part) const { return dir / format("exit-part-{}", part); }
   fs::path Log(int part) const { return dir / format("part-{}.log", part); }
 };
@@ -62,8 +64,8 @@ void PartEnded(const PartArray& array, int part, int code, const std::function<v
 // Takes part `part` back from the array when its element has not started: true when it is cancelled unstarted.
 bool TakeBack(const PartArray& array, int part) {
   const std::string element = format("{}_{}", array.id, part);
-  RunSubprocess({"scancel", "--state=PENDING", element}, array.dir / "scancel.log", "scancel");
-  const std::map<int, slurm::ElementState> states = slurm::ArrayStates(array.id, array.dir);
+  RunSubprocess({"scancel", "--state=PENDING", element}, array.Queries() / "scancel.log", "scancel");
+  const std::map<int, slurm::ElementState> states = slurm::ArrayStates(array.id, array.Queries());
   const auto found = states.find(part);
   const std::string state = found == states.end() ? "" : found->second.state;
   return (state.empty() || state == "CANCELLED") && !fs::exists(array.Log(part)) && !fs::exists(array.ExitFile(part));
@@ -99,7 +101,7 @@ void WaitForParts(PartArray& array, const std::function<void(int)>& here) {
     }
     if (array.waiting.empty() || Clock::now() < next_query) continue;
     next_query = Clock::now() + slurm::kQueryInterval;
-    const std::map<int, slurm::ElementState> states = slurm::ArrayStates(array.id, array.dir);
+    const std::map<int, slurm::ElementState> states = slurm::ArrayStates(array.id, array.Queries());
     for (const int part : std::set<int>(array.waiting)) {
       const auto found = states.find(part);
       const slurm::ElementState element = found == states.end() ? slurm::ElementState{} : found->second;
@@ -129,7 +131,10 @@ PartsExecutor SlurmParts(const SlurmOptions& options, fs::path program, const Wo
     PartArray array{job_file.parent_path(), stage, "", std::set<int>(parts.begin() + 1, parts.end())};
     const fs::path submit_log = array.dir / "submit-parts.log";
     // An earlier attempt of this stage job may have left its array running: one writer per part.
-    if (const std::optional<std::string> left = slurm::JobId(submit_log)) slurm::CancelAndWait(*left, array.dir, stage);
+    fs::create_directories(array.Queries());
+    if (const std::optional<std::string> left = slurm::JobId(submit_log)) {
+      slurm::CancelAndWait(*left, array.Queries(), stage);
+    }
     std::string indices;
     for (const int part : array.waiting) {
       std::error_code error;
