@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <memory>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -153,38 +152,18 @@ BlocksStart StartOfBlocks(const SplatTrainer& whole, int count) {
   return start;
 }
 
-// Block b's trainer as the whole part left it, restricted to the block's splats and the views that see it, the
-// other splats its context; none when the block has no splats or no view sees it.
-struct Block {
+// The training views of `indices`.
+std::vector<TrainView> TrainViews(const SplatRun& run, const std::vector<size_t>& indices) {
   std::vector<TrainView> views;
-  Gaussians<float> splats, others;
-  std::optional<SplatTrainer> trainer;
-};
-
-std::unique_ptr<Block> MakeBlock(const SplatRun& run, const BlocksStart& start, int b) {
-  auto block = std::make_unique<Block>();
-  std::vector<bool> keep = InBlock(start.splats, start.blocks, b);
-  block->splats = block->others = start.splats;
-  block->splats.Filter(keep);
-  keep.flip();
-  block->others.Filter(keep);
-  keep.flip();
-  for (const size_t v :
-       ViewsOfBlock(run.setup.data.train, start.splats, start.blocks, b, kBlockViewShare, run.scene.near)) {
-    block->views.push_back(run.setup.data.train[v]);
-  }
-  if (block->splats.size() == 0 || block->views.empty()) return block;
-  block->trainer.emplace(start.splats, run.scene, run.trainer);
-  BinaryReader reader(start.trainer.buffer(), "the splats optimised whole");
-  block->trainer->Load(&reader);
-  block->trainer->Restrict(keep, &block->others, &block->views);
-  return block;
+  for (const size_t v : indices) views.push_back(run.setup.data.train[v]);
+  return views;
 }
 
 fs::path BlockCheckpoint(const SplatRun& run, int b) {
   return run.context.resume_dir / format("checkpoint_block{}.bin", b + 1);
 }
-// Written when block b's part has finished: the key of the result, the steps it resumed from.
+// Written when block b's part has finished: the key of the result, the steps it resumed from, the training views it
+// was optimised on (none: it was not, having no splats or no view that sees it).
 fs::path BlockDoneFile(const SplatRun& run, int b) { return run.context.resume_dir / format("block{}.json", b + 1); }
 
 std::optional<nlohmann::json> BlockDone(const SplatRun& run, int b) {
@@ -195,20 +174,33 @@ std::optional<nlohmann::json> BlockDone(const SplatRun& run, int b) {
   return done;
 }
 
-// Block b's part: optimised from where the whole part ended for the rest of the budget (resuming from its own
-// checkpoint), the result in its checkpoint.
+// Block b's part: its splats optimised from where the whole part ended for the rest of the budget, on the views that
+// see it, the other splats its context (resuming from its own checkpoint); the result in its checkpoint.
 void OptimiseBlock(const SplatRun& run, const BlocksStart& start, int b) {
-  const std::unique_ptr<Block> block = MakeBlock(run, start, b);
-  LogInfo(format("splat: block {} of {}: {} splats, {} training views", b + 1, start.blocks.count(),
-                 block->splats.size(), block->views.size()));
+  std::vector<bool> keep = InBlock(start.splats, start.blocks, b);
+  const size_t splats = std::count(keep.begin(), keep.end(), true);
+  std::vector<size_t> seeing =
+      ViewsOfBlock(run.setup.data.train, start.splats, start.blocks, b, kBlockViewShare, run.scene.near);
+  LogInfo(format("splat: block {} of {}: {} splats, {} training views", b + 1, start.blocks.count(), splats,
+                 seeing.size()));
+  if (splats == 0) seeing.clear();
   int resumed_from = 0;
-  if (block->trainer) {
+  if (!seeing.empty()) {
+    const std::vector<TrainView> views = TrainViews(run, seeing);
+    Gaussians<float> others = start.splats;
+    keep.flip();
+    others.Filter(keep);
+    keep.flip();
+    SplatTrainer trainer(start.splats, run.scene, run.trainer);
+    BinaryReader reader(start.trainer.buffer(), "the splats optimised whole");
+    trainer.Load(&reader);
+    trainer.Restrict(keep, &others, &views);
     resumed_from =
-        OptimisePart(run, *block->trainer, block->views, BlockCheckpoint(run, b), {kWholeShare, 1, start.step}, true)
-            .resumed_from;
+        OptimisePart(run, trainer, views, BlockCheckpoint(run, b), {kWholeShare, 1, start.step}, true).resumed_from;
   }
   WriteOrExplain([&] {
-    WriteJsonAtomic(BlockDoneFile(run, b), {{"key", run.context.key}, {"resumed_from", resumed_from}});
+    WriteJsonAtomic(BlockDoneFile(run, b),
+                    {{"key", run.context.key}, {"resumed_from", resumed_from}, {"views", seeing}});
   });
 }
 
@@ -220,12 +212,20 @@ Optimised FinishedBlock(const SplatRun& run, const BlocksStart& start, int b, bo
     throw ExternalToolError(format("splat: block {} did not finish ({} is missing); run the stage again", b + 1,
                                    BlockDoneFile(run, b).string()));
   }
-  const std::unique_ptr<Block> block = MakeBlock(run, start, b);
   Optimised out;
-  out.splats = block->splats;
   out.background = start.background;
-  if (!block->trainer) return out;
-  SplatTrainer& trainer = *block->trainer;
+  const std::vector<size_t> seeing = done->value("views", std::vector<size_t>{});
+  if (seeing.empty()) {  // not optimised: the block's splats as the whole part left them
+    out.splats = start.splats;
+    out.splats.Filter(InBlock(start.splats, start.blocks, b));
+    return out;
+  }
+  const std::vector<TrainView> views = TrainViews(run, seeing);
+  SplatScene scene = run.scene;
+  scene.views = &views;
+  Gaussians<float> none;
+  none.sh_degree = start.splats.sh_degree;
+  SplatTrainer trainer(none, scene, run.trainer);  // all of it read from the checkpoint
   if (!LoadRunCheckpoint(BlockCheckpoint(run, b), run.context.key, SplatResult::kId.name, &out.state,
                          [&](BinaryReader* r) { trainer.Load(r); })) {
     throw ExternalToolError(format("splat: block {}'s result {} is missing or not this run's; run the stage again",
