@@ -39,6 +39,8 @@ struct StageContext {
   RunMemo* memo = nullptr;         // what earlier stages of this run kept for later ones; null outside a run
   PartsExecutor parts = nullptr;   // runs parts of the work; empty: each here, in turn
 
+  // Whether a scheduler runs the parts (each may be a job of its own, at once with the others).
+  bool Scheduled() const { return parts != nullptr; }
   // Runs `parts` by `parts`, or each by `here` in turn when there is no executor.
   void RunParts(const std::vector<int>& list, const std::function<void(int)>& here) const {
     if (parts) return parts(list, here);

@@ -11,6 +11,7 @@ packages=(
   libopenimageio-dev openimageio-tools
   catch2 nlohmann-json3-dev libcli11-dev zlib1g-dev
   libsqlite3-dev                           # COLMAP's database: descriptors read, matches written
+  libmetis-dev                             # the photos cut into clusters mapped apart on Slurm
   libmeshoptimizer-dev libtinygltf-dev     # the exported mesh: simplified, written as glTF
   libopenvdb-dev libblosc-dev libboost-dev      # marching cubes (OpenVDB's headers need Boost's)
   libassimp-dev                            # tests: an independent reader of our PLY and OBJ files

@@ -16,6 +16,7 @@
 #include "pipeline/cancel.h"
 #include "pipeline/log.h"
 #include "pipeline/subprocess.h"
+#include "stages/cluster_mapping.h"
 #include "stages/colmap_flags.h"
 #include "stages/feature_matching.h"
 #include "stages/left_out.h"
@@ -40,6 +41,9 @@ constexpr const char* kMapperTuning[] = {"--Mapper.ba_global_function_tolerance"
                                          "--Mapper.ba_global_images_ratio",       "1.4",
                                          "--Mapper.ba_global_points_ratio",       "1.4",
                                          "--Mapper.ba_local_max_num_iterations",  "10"};
+// The clusters' models are aligned on the points whose reprojection errors stay under this (pixels): COLMAP's
+// model_merger's 64 admits alignments that bend the merged model by degrees where its mapper's own 4 does not.
+constexpr const char* kMergeMaxReprojectionError = "4";
 // The vocabulary tree, built from the photos themselves: a word per 64 features at most, clustered from up to 30
 // photos with a narrower, shallower k-means than COLMAP's defaults (branching 256, 11 iterations, every photo),
 // which took 175 s for fox's 50 photos on 2 cores; these settings took a third of that.
@@ -128,6 +132,7 @@ struct ColmapRun {
   SfmResult out;
   std::string seed, threads;
   StepRunner* steps;
+  const StageContext* context;  // hands the clusters of the photos to the scheduler, when there is one
 
   fs::path database() const { return out.database(); }  // always new: the staging folder starts empty
 
@@ -245,8 +250,7 @@ struct ColmapRun {
   // photos' scene graph cut into clusters of at most sfm.leaf_max_images, each grown by a quarter of that many
   // photos of its neighbours (COLMAP's 50 for our default 200; the merge aligns the clusters on them), mapped on
   // its own, as many at once as there are threads, and the models merged.
-  std::vector<std::string> MapperCommand(size_t photos, const fs::path& output) const {
-    const bool hierarchical = UsesHierarchicalMapper(options, photos);
+  std::vector<std::string> MapperCommand(bool hierarchical, const fs::path& output) const {
     std::vector<std::string> command({options.colmap, hierarchical ? "hierarchical_mapper" : "mapper",
                                       "--database_path", database().string(), "--image_path", images.string(),
                                       "--output_path", output.string(), "--random_seed", seed,
@@ -262,13 +266,53 @@ struct ColmapRun {
     return command;
   }
 
+  // Cluster `part` of the photos (PlanClusters) mapped by COLMAP's incremental mapper, in its folder: a part of
+  // the stage's work. A cluster the mapper cannot start on makes no model (the merge leaves it out).
+  void MapCluster(const fs::path& clusters, int part) const {
+    const fs::path models = ClusterModels(clusters, part);
+    fs::remove_all(models);  // what a stopped run of it left
+    fs::create_directories(models);
+    std::vector<std::string> command = MapperCommand(false, models);
+    command.insert(command.end(), {"--image_list_path", ClusterImageList(clusters, part).string()});
+    const fs::path log = out.logs() / format("mapping_cluster_{}.log", part);
+    const SubprocessResult result = RunSubprocess(command, log, format("mapping cluster {}", part));
+    if (result.signal != 0 || result.exit_code != 0) {
+      LogWarning(format("sfm: COLMAP's mapper failed on cluster {} of the photos; log: {}", part, log.string()));
+    }
+  }
+
+  // The hierarchical mapper's work with each cluster a part for the scheduler (cluster_mapping.h): the models into
+  // out/`folder` as the mappers write theirs, the merged one first.
+  void MapInClusters(const std::string& step, const std::string& folder) const {
+    const fs::path clusters = out.dir / "clusters";
+    fs::remove_all(clusters);
+    const size_t overlap = options.leaf_max_images / 4;
+    const std::vector<int> parts = PlanClusters(database(), clusters, options.leaf_max_images, overlap);
+    LogInfo(format("sfm: {} clusters of at most {} photos (each grown by {}), mapped as parts of the stage",
+                   parts.size(), options.leaf_max_images, overlap));
+    steps->RunHere(step, [&] { context->RunParts(parts, [&](int part) { MapCluster(clusters, part); }); });
+    steps->AddSteps(static_cast<int>(parts.size()) - 1);
+    int merges = 0;
+    MergeClusterModels(clusters, out.dir / folder, [&](const fs::path& a, const fs::path& b, const fs::path& into) {
+      steps->Run(format("merging models {}", ++merges),
+                 {options.colmap, "model_merger", "--input_path1", a.string(), "--input_path2", b.string(),
+                  "--output_path", into.string(), "--max_reproj_error", kMergeMaxReprojectionError});
+    });
+  }
+
   // Runs the mapper (the step `step`) into out/`folder`; returns the folder of the model with the most registered
   // images (COLMAP's exit code says nothing about that) and lists every model in `models`. UserError when there is
   // none.
   fs::path MapLargestModel(size_t photos, const std::string& step, const std::string& folder,
                            std::vector<SfmReport::Model>* models) const {
     fs::create_directories(out.dir / folder);
-    const fs::path log = steps->Run(step, MapperCommand(photos, out.dir / folder), /*allow_failure=*/true);
+    const bool hierarchical = UsesHierarchicalMapper(options, photos);
+    fs::path log = out.logs() / "mapping_cluster_1.log";  // in clusters: the first one's says why it made nothing
+    if (hierarchical && context->Scheduled()) {
+      MapInClusters(step, folder);
+    } else {
+      log = steps->Run(step, MapperCommand(hierarchical, out.dir / folder), /*allow_failure=*/true);
+    }
     if (!steps->last_ok()) {
       if (ReadTextFile(log).find("No good initial image pair found") != std::string::npos) {
         throw UserError(
@@ -458,14 +502,51 @@ std::vector<CameraGroup> CameraGroups(const IngestReport& ingest) {
   return groups;
 }
 
+// What every COLMAP step of the stage (or of one of its parts) is given.
+struct SfmSetup {
+  SfmOptions options;
+  SfmResult out;
+  IngestResult ingest;
+  ColmapFlags flags;
+  ColmapVersion version;
+  int threads = -1;  // COLMAP's: every core
+
+  // COLMAP's version asked with its answer in logs/`version_log` (one for each process at once).
+  SfmSetup(const StageContext& context, const std::string& version_log)
+      : options(ReadOptions<SfmOptions>(context.config)),
+        out{context.output_dir},
+        ingest(Upstream<IngestResult>(context)) {
+    fs::create_directories(out.logs());
+    version = DetectColmapVersion(options.colmap, out.logs() / version_log);
+    flags = ColmapFlagsFor(version);
+    const int run_threads = ReadOptions<RunOptions>(context.config).threads;
+    if (run_threads > 0) threads = run_threads;
+  }
+
+  ColmapRun Colmap(StepRunner* steps, const StageContext& context) const {
+    return {.options = options,
+            .flags = flags,
+            .images = ingest.images(),
+            .out = out,
+            .seed = std::to_string(options.seed),
+            .threads = std::to_string(threads),
+            .steps = steps,
+            .context = &context};
+  }
+};
+
+void SfmStage::RunPart(StageContext& context, int part) const {
+  const SfmSetup setup(context, format("version_cluster_{}.log", part));
+  StepRunner steps(setup.out.logs(), 1);
+  setup.Colmap(&steps, context).MapCluster(setup.out.dir / "clusters", part);
+}
+
 void SfmStage::Run(StageContext& context) const {
-  const SfmOptions options = ReadOptions<SfmOptions>(context.config);
-  const int run_threads = ReadOptions<RunOptions>(context.config).threads;
-  const int threads = run_threads > 0 ? run_threads : -1;
-  const SfmResult out{context.output_dir};
-  fs::create_directories(out.logs());
-  const ColmapVersion version = DetectColmapVersion(options.colmap, out.logs() / "version.log");
-  const IngestResult ingest = Upstream<IngestResult>(context);
+  const SfmSetup setup(context, "version.log");
+  const SfmOptions& options = setup.options;
+  const SfmResult& out = setup.out;
+  const ColmapVersion& version = setup.version;
+  const IngestResult& ingest = setup.ingest;
   const fs::path images = ingest.images();
   const std::vector<std::string> names = ImageNames(images);
   // COLMAP's shared camera would skip every photo of another size: with several sizes, features are extracted
@@ -490,8 +571,7 @@ void SfmStage::Run(StageContext& context) const {
   // triangulation after the hierarchical mapper, the principal point's adjustment, undistortion.
   StepRunner steps(out.logs(), (options.refine_principal_point ? 6 : 5) + (hierarchical ? 1 : 0) +
                                    (camera_per_group ? groups.size() - 1 : 0));
-  const ColmapRun colmap{
-      options, ColmapFlagsFor(version), images, out, std::to_string(options.seed), std::to_string(threads), &steps};
+  const ColmapRun colmap = setup.Colmap(&steps, context);
 
   colmap.ExtractFeatures(camera_per_group ? groups : std::vector<CameraGroup>{});
   std::vector<SfmReport::Model> models;

@@ -53,8 +53,8 @@ struct SfmOptions {
       "images");
     v("hierarchical_min_images", hierarchical_min_images,
       "photos from which COLMAP's hierarchical mapper maps them (clusters of at most leaf_max_images photos, each "
-      "grown by a quarter as many of its neighbours', mapped on their own, as many at once as there are threads, then "
-      "merged) instead of its incremental one; 0: never",
+      "grown by a quarter as many of its neighbours', mapped on their own, as many at once as there are threads, or "
+      "each as a job of its own under a scheduler, then merged) instead of its incremental one; 0: never",
       "images");
     v("leaf_max_images", leaf_max_images, "photos in one cluster of the hierarchical mapper at most (8 or more)",
       "images");
@@ -90,6 +90,9 @@ class SfmStage : public StageOf<SfmResult> {
   // "tool colmap" -> its version: a result made with another COLMAP is stale.
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
   void Run(StageContext& context) const override;
+  // Under a scheduler, photos the hierarchical mapper would map are mapped in clusters (cluster_mapping.h): part k
+  // maps cluster k.
+  void RunPart(StageContext& context, int part) const override;
   void CheckResult(const std::filesystem::path& result_dir, const Config& config) const override;
 };
 

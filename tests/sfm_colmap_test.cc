@@ -20,6 +20,7 @@
 #include "nerf/synthetic_scene.h"
 #include "stages/stages.h"
 #include "stages/training_data.h"
+#include "tests/pose_truth.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {
@@ -27,67 +28,6 @@ namespace fs = std::filesystem;
 namespace {
 
 bool HaveColmap() { return std::system("colmap help > /dev/null 2>&1") == 0; }
-
-Eigen::Matrix4d ReadMatrix(const nlohmann::json& rows) {
-  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-  for (int r = 0; r < static_cast<int>(rows.size()); ++r) {
-    for (int c = 0; c < 4; ++c) m(r, c) = rows[r][c].get<double>();
-  }
-  return m;
-}
-
-// The worst rotation (degrees) and camera-centre error (fraction of the cameras' spread) of the poses stage's
-// transforms.json against the true world_from_cam of each image name, after the best similarity alignment.
-struct PoseErrors {
-  double worst_angle_deg = 0, worst_centre = 0;
-};
-PoseErrors CompareWithTruth(const nlohmann::json& transforms, const std::map<std::string, Eigen::Matrix4d>& truth) {
-  const int n = static_cast<int>(transforms["frames"].size());
-  Eigen::Matrix3Xd estimated(3, n), expected(3, n);
-  std::vector<Eigen::Matrix3d> estimated_rotations, true_rotations;
-  for (int i = 0; i < n; ++i) {
-    const nlohmann::json& frame = transforms["frames"][i];
-    const std::string name = fs::path(frame["file_path"].get<std::string>()).filename().string();
-    const Eigen::Matrix4d mine = ReadMatrix(frame["transform_matrix"]);
-    const Eigen::Matrix4d theirs = truth.at(name);
-    estimated.col(i) = mine.topRightCorner<3, 1>();
-    expected.col(i) = theirs.topRightCorner<3, 1>();
-    estimated_rotations.push_back(mine.topLeftCorner<3, 3>());
-    true_rotations.push_back(theirs.topLeftCorner<3, 3>());
-  }
-  const Eigen::Matrix4d alignment = Eigen::umeyama(estimated, expected, true);
-  const double scale = std::cbrt(alignment.topLeftCorner<3, 3>().determinant());
-  const Eigen::Matrix3d rotation = alignment.topLeftCorner<3, 3>() / scale;
-  const Eigen::Vector3d centroid = expected.rowwise().mean();
-  const double spread = std::sqrt((expected.colwise() - centroid).colwise().squaredNorm().mean());
-  PoseErrors errors;
-  for (int i = 0; i < n; ++i) {
-    const Eigen::Matrix3d difference = true_rotations[i].transpose() * rotation * estimated_rotations[i];
-    errors.worst_angle_deg = std::max(errors.worst_angle_deg, Eigen::AngleAxisd(difference).angle() * 180 / M_PI);
-    const Eigen::Vector3d aligned = (alignment * estimated.col(i).homogeneous()).head<3>();
-    errors.worst_centre = std::max(errors.worst_centre, (aligned - expected.col(i)).norm() / spread);
-  }
-  return errors;
-}
-
-// The synthetic scene's true world_from_cam of each view by file name (its ground_truth_cameras.json in `photos`).
-std::map<std::string, Eigen::Matrix4d> TruePoses(const fs::path& photos) {
-  const nlohmann::json truth = ReadJsonFile(photos / "ground_truth_cameras.json");
-  std::map<std::string, Eigen::Matrix4d> poses;
-  for (const auto& frame : truth["frames"]) poses[frame["file_path"]] = ReadMatrix(frame["transform_matrix"]);
-  return poses;
-}
-
-// All 24 views in transforms.json, within `max_angle_deg` and `max_centre` (fraction of the spread) of the truth.
-void CheckPoses(const nlohmann::json& transforms, const std::map<std::string, Eigen::Matrix4d>& truth,
-                double max_angle_deg, double max_centre) {
-  REQUIRE(transforms["frames"].size() == 24);
-  const PoseErrors errors = CompareWithTruth(transforms, truth);
-  INFO("worst rotation error " << errors.worst_angle_deg << " deg, worst centre error " << 100 * errors.worst_centre
-                               << "% of spread");
-  CHECK(errors.worst_angle_deg < max_angle_deg);
-  CHECK(errors.worst_centre < max_centre);
-}
 
 Config QuietConfig() {
   static const OptionRegistry registry = AllOptions();

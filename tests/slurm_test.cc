@@ -1,8 +1,9 @@
 // `--run.scheduler slurm` against a real one-machine Slurm cluster (scripts/local_slurm.sh, which CTest starts
 // before these tests and stops after them; SLURM_CONF points at it): the results of a local run, a cancelled job
-// submitted again with the finished stages kept, splat blocks as a job array (beside the stage's job, taken back by it
-// when there is no room, rerun by it from a checkpoint when cancelled), a job's own failure reported and not retried,
-// Ctrl-C cancelling the running job, a killed run's job cancelled by the next run, and a missing sbatch.
+// submitted again with the finished stages kept, the mapper's clusters and splat blocks as job arrays (beside the
+// stage's job, taken back by it when there is no room, rerun by it from a checkpoint when cancelled), a job's own
+// failure reported and not retried, Ctrl-C cancelling the running job, a killed run's job cancelled by the next run,
+// and a missing sbatch.
 
 #include <signal.h>
 #include <catch2/catch.hpp>
@@ -13,6 +14,8 @@
 
 #include "base/file_util.h"
 #include "base/format.h"
+#include "nerf/synthetic_scene.h"
+#include "tests/pose_truth.h"
 #include "tests/program_runs.h"
 #include "tests/stage_fixtures.h"
 
@@ -135,6 +138,41 @@ TEST_CASE("slurm: splat blocks run as a job array beside the stage's job, or in 
   there = ReadJsonFile(report);
   CHECK(there["steps"] == here["steps"]);
   CHECK(there["heldout_psnr"].get<double>() == Approx(here["heldout_psnr"].get<double>()).margin(0.05));
+}
+
+// Photos the hierarchical mapper would map, under Slurm: each cluster mapped by COLMAP's incremental mapper as a part
+// of the sfm stage (an element of a job array beside the stage's job), the models merged, triangulated anew and
+// adjusted; every view as near the truth as the local hierarchical mapper's test asks (0.5 deg, 1% of the spread).
+TEST_CASE("slurm: the photos' clusters are mapped as a job array and merged into the true cameras", "[slurm]") {
+  TempDir dir;
+  SyntheticSceneOptions scene;
+  scene.num_views = 24;
+  WriteSyntheticScene(scene, dir / "photos");
+  const fs::path workspace = dir / "ws";
+  std::string output;
+  const int code = RunCommand({P2N_BINARY, "run", (dir / "photos").string(), "-w", workspace.string(), "--until",
+                               "poses", "--run.progress", "plain", "--run.scheduler", "slurm", "--slurm.cpus", "1",
+                               "--sfm.hierarchical_min_images", "20", "--sfm.leaf_max_images", "12"},
+                              &output);
+  INFO(output);
+  REQUIRE(code == 0);
+  const fs::path jobs = JobDir(workspace, "10_sfm"), sfm = workspace / "10_sfm";
+  INFO(ReadText(jobs / "attempt-1.log"));
+  CHECK_THAT(ReadText(jobs / "attempt-1.log"),
+             Catch::Contains("sfm: 2 clusters of at most 12 photos (each grown by 3)") &&
+                 Catch::Contains("sfm: parts 2 as Slurm job array"));
+  CHECK_THAT(ReadText(jobs / "part-2.log"), Catch::Contains("sfm: part 2 in job"));
+  CHECK(ReadText(jobs / "exit-part-2") == "0\n");
+  for (const char* cluster : {"mapping_cluster_1.log", "mapping_cluster_2.log"}) {
+    CHECK_THAT(ReadText(sfm / "logs" / cluster),
+               Catch::StartsWith("$ colmap mapper") && Catch::Contains("--image_list_path"));
+  }
+  CHECK_THAT(ReadText(sfm / "logs" / "merging_models_1.log"), Catch::Contains("Merge succeeded"));
+  CHECK_THAT(ReadText(sfm / "logs" / "triangulation.log"), Catch::StartsWith("$ colmap point_triangulator"));
+  const nlohmann::json report = ReadJsonFile(sfm / "sfm_report.json");
+  CHECK(report["registered"] == 24);
+  CHECK(report["chosen_model"] == "sparse/0");
+  CheckPoses(ReadJsonFile(workspace / "20_poses" / "transforms.json"), TruePoses(dir / "photos"), 0.5, 0.01);
 }
 
 TEST_CASE("slurm: a block whose job is cancelled is optimised by the stage's job from its checkpoint", "[slurm]") {
