@@ -4,7 +4,9 @@
 # COLMAP), the time of its mapping, triangulation and bundle adjustment steps, the views registered, and the
 # cameras against the scene's true ones (bench/compare_cameras).
 # Usage: bench/mapper_bench.sh OUT N [photo2nerf options]   e.g. bench/mapper_bench.sh /tmp/mapper 300
-# MAPPERS="hierarchical" in the environment runs that mapper alone (default: "incremental hierarchical").
+# MAPPERS="hierarchical" in the environment runs that mapper alone (default: "incremental hierarchical"); "slurm" is
+# the hierarchical mapper's clusters as parts of the sfm stage's Slurm job (SLURM_CONF set; the stage's job and its
+# array's elements: their memory is not measured, only the submitting process's).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:?usage: bench/mapper_bench.sh OUT N [photo2nerf options]}
@@ -24,17 +26,28 @@ for mapper in ${MAPPERS:-incremental hierarchical}; do
   ws=$out/ws_${n}_$mapper
   rm -rf "$ws"
   options=(--run.progress none "$@")
-  if [ "$mapper" = hierarchical ]; then options+=(--sfm.hierarchical_min_images "$n"); else options+=(--sfm.hierarchical_min_images 0); fi
+  case $mapper in
+    incremental) options+=(--sfm.hierarchical_min_images 0) ;;
+    hierarchical) options+=(--sfm.hierarchical_min_images "$n") ;;
+    slurm) options+=(--sfm.hierarchical_min_images "$n") ;;
+    *) echo "unknown mapper $mapper (incremental, hierarchical or slurm)" >&2; exit 1 ;;
+  esac
   "$bin" ingest "$photos" -w "$ws" "${options[@]}" > "$out/log_${n}_$mapper" 2>&1
-  /usr/bin/time -f '%e %M' -o "$out/time_${n}_$mapper" "$bin" sfm -w "$ws" "${options[@]}" >> "$out/log_${n}_$mapper" 2>&1 ||
+  sfm_options=("${options[@]}")
+  [ "$mapper" = slurm ] && sfm_options+=(--run.scheduler slurm)
+  /usr/bin/time -f '%e %M' -o "$out/time_${n}_$mapper" "$bin" sfm -w "$ws" "${sfm_options[@]}" >> "$out/log_${n}_$mapper" 2>&1 ||
     { echo "sfm failed with the $mapper mapper: $out/log_${n}_$mapper" >&2; exit 1; }
   "$bin" poses -w "$ws" "${options[@]}" >> "$out/log_${n}_$mapper" 2>&1
   read -r seconds kb < "$out/time_${n}_$mapper"
   steps=$(python3 -c 'import json, sys
 r = json.load(open(sys.argv[1]))
 times = {s["step"]: s["wall_seconds"] for s in r["steps"]}
-steps = ", ".join(f"{k} {times[k]:.1f} s" for k in ("mapping", "triangulation", "bundle adjustment") if k in times)
+merging = sum(t for k, t in times.items() if k.startswith("merging models"))
+if merging: times["merging"] = merging
+steps = ", ".join(f"{k} {times[k]:.1f} s" for k in ("mapping", "merging", "triangulation", "bundle adjustment") if k in times)
 print(steps + "; " + str(r["registered"]) + "/" + str(r["images_given"]) + " registered")' "$ws/10_sfm/sfm_report.json")
-  echo "$mapper: sfm $seconds s, $((kb / 1024)) MB; $steps"
+  memory="$((kb / 1024)) MB"
+  [ "$mapper" = slurm ] && memory="memory in the jobs not measured"
+  echo "$mapper: sfm $seconds s, $memory; $steps"
   "$compare" "$ws/20_poses/transforms.json" "$out/scene_$n/ground_truth_cameras.json" | grep -E "rotations aligned|centre error"
 done
