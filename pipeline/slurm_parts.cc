@@ -61,10 +61,12 @@ void PartEnded(const PartArray& array, int part, int code, const std::function<v
   here(part);
 }
 
-// Takes part `part` back from the array when its element has not started: true when it is cancelled unstarted.
+// Takes part `part` back from the array when its element has not started: true when it is cancelled unstarted. (Not
+// `scancel --state=PENDING`: the array's pending elements are one record to Slurm, and that cancels all of them. An
+// element that started just before is cancelled after starting, and run here as one that ended unfinished.)
 bool TakeBack(const PartArray& array, int part) {
   const std::string element = format("{}_{}", array.id, part);
-  RunSubprocess({"scancel", "--state=PENDING", element}, array.Queries() / "scancel.log", "scancel");
+  RunSubprocess({"scancel", element}, array.Queries() / "scancel.log", "scancel");
   const std::map<int, slurm::ElementState> states = slurm::ArrayStates(array.id, array.Queries());
   const auto found = states.find(part);
   const std::string state = found == states.end() ? "" : found->second.state;

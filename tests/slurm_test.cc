@@ -102,7 +102,7 @@ TEST_CASE("slurm: splat blocks run as a job array beside the stage's job, or in 
   TempDir dir;
   const fs::path data = SmallDataset(dir), workspace = dir / "ws";
   std::vector<std::string> local = RunArgs(data, workspace);
-  local.insert(local.end(), {"--splat.blocks", "2", "--until", "splat"});
+  local.insert(local.end(), {"--splat.blocks", "3", "--until", "splat"});
   std::string output;
   REQUIRE(RunCommand(local, &output) == 0);
   const fs::path report = workspace / "35_splat" / "splat_report.json";
@@ -111,16 +111,17 @@ TEST_CASE("slurm: splat blocks run as a job array beside the stage's job, or in 
   const std::vector<std::string> splat = {
       P2N_BINARY, "splat", "-w", workspace.string(), "--force", "--run.progress", "plain", "--run.scheduler", "slurm"};
 
-  // A CPU a job: the stage's job optimises the whole, then block 1 while block 2 is element 2 of a job array.
+  // A CPU a job: the stage's job optimises the whole, then block 1 while block 2 is element 2 of a job array (block 3
+  // runs after it, or in the stage's job if that is free first).
   std::vector<std::string> beside = splat;
   beside.insert(beside.end(), {"--slurm.cpus", "1"});
   int code = RunCommand(beside, &output);
   INFO(output);
   REQUIRE(code == 0);
   INFO(ReadText(jobs / "attempt-1.log"));
-  CHECK_THAT(ReadText(jobs / "attempt-1.log"), Catch::Contains("splat: parts 2 as Slurm job array"));
+  CHECK_THAT(ReadText(jobs / "attempt-1.log"), Catch::Contains("splat: parts 2,3 as Slurm job array"));
   CHECK_THAT(ReadText(jobs / "part-2.log"),
-             Catch::Contains("splat: part 2 in job") && Catch::Contains("splat: block 2 of 2"));
+             Catch::Contains("splat: part 2 in job") && Catch::Contains("splat: block 2 of 3"));
   CHECK(ReadText(jobs / "exit-part-2") == "0\n");
   // The same steps and metrics rows; the same picture within 0.2 dB (the jobs have one thread, the local run two).
   nlohmann::json there = ReadJsonFile(report);
@@ -128,13 +129,17 @@ TEST_CASE("slurm: splat blocks run as a job array beside the stage's job, or in 
   CHECK(there["heldout_psnr"].get<double>() == Approx(here["heldout_psnr"].get<double>()).margin(0.2));
   CHECK(there["resumed_from_step"] == 0);
 
-  // A whole node a job (the default): the element waits for the stage's job, which takes it back and runs it.
+  // A whole node a job (the default): the elements wait for the stage's job, which takes each back in turn (taking
+  // one back leaves the other pending) and runs it.
   code = RunCommand(splat, &output);
   INFO(output);
   REQUIRE(code == 0);
-  CHECK_THAT(ReadText(jobs / "attempt-1.log"),
-             Catch::Contains("splat: part 2 was still waiting for room in Slurm; running it here"));
+  const std::string log = ReadText(jobs / "attempt-1.log");
+  CHECK_THAT(log, Catch::Contains("splat: part 2 was still waiting for room in Slurm; running it here") &&
+                      Catch::Contains("splat: part 3 was still waiting for room in Slurm; running it here") &&
+                      !Catch::Contains("without finishing"));
   CHECK(!fs::exists(jobs / "part-2.log"));
+  CHECK(!fs::exists(jobs / "part-3.log"));
   there = ReadJsonFile(report);
   CHECK(there["steps"] == here["steps"]);
   CHECK(there["heldout_psnr"].get<double>() == Approx(here["heldout_psnr"].get<double>()).margin(0.05));
