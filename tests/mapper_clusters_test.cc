@@ -1,4 +1,5 @@
-// The photos cut into clusters for mapping apart: where they share least, each grown by its strongest neighbours.
+// The photos cut into clusters for mapping apart: where they share least, each grown by its strongest neighbours;
+// the clusters' models merged by the photos they share.
 
 #include <catch2/catch.hpp>
 
@@ -6,7 +7,11 @@
 #include <numeric>
 #include <set>
 
+#include "base/file_util.h"
+#include "formats/colmap_model.h"
+#include "stages/cluster_mapping.h"
 #include "stages/mapper_clusters.h"
+#include "tests/test_util.h"
 
 namespace p2n::testing {
 namespace {
@@ -22,6 +27,28 @@ void AddClique(const std::vector<uint32_t>& ids, size_t inliers, std::vector<Ver
   for (size_t i = 0; i < ids.size(); ++i) {
     for (size_t j = i + 1; j < ids.size(); ++j) pairs->push_back({ids[i], ids[j], inliers});
   }
+}
+
+// A model of the photos `names` (one camera, no points) in `folder`.
+void WriteModel(const std::vector<std::string>& names, const std::filesystem::path& folder) {
+  ColmapModel model;
+  model.cameras[1] = {1, "SIMPLE_PINHOLE", 320, 240, {300, 160, 120}};
+  uint32_t id = 0;
+  for (const std::string& name : names) {
+    ColmapImage image;
+    image.id = ++id;
+    image.camera_id = 1;
+    image.name = name;
+    model.images[id] = image;
+  }
+  std::filesystem::create_directories(folder);
+  WriteColmapModelBinary(model, folder);
+}
+
+std::set<std::string> NamesIn(const std::filesystem::path& folder) {
+  std::set<std::string> names;
+  for (const auto& [id, image] : ReadColmapModel(folder).images) names.insert(image.name);
+  return names;
 }
 
 bool Contains(const std::vector<uint32_t>& cluster, const std::vector<uint32_t>& ids) {
@@ -79,6 +106,41 @@ TEST_CASE("mapper clusters: as many photos as a cluster holds stay one cluster",
   REQUIRE(clusters.size() == 1);
   CHECK(clusters[0] == std::vector<uint32_t>{3, 5, 9});
   CHECK_THROWS_AS(ClusterImages({1}, {}, 0, 0), std::invalid_argument);
+}
+
+// Clusters: 1 the largest, 2 sharing 3 photos with it, 3 sharing 2 with them, 4 inside the merged model, 5 without a
+// model, 6 sharing 3 but not aligning (the merger leaves the first model as it was, as model_merger does).
+TEST_CASE("mapper clusters: the models merged from the largest, by the photos they share; the rest kept apart",
+          "[sfm]") {
+  TempDir dir;
+  const std::filesystem::path clusters = dir / "clusters", output = dir / "sparse";
+  const std::vector<std::vector<std::string>> photos = {{"p1", "p2", "p3", "p4", "p5", "p6"},
+                                                        {"p4", "p5", "p6", "p7", "p8"},
+                                                        {"p7", "p8", "p9", "p10"},
+                                                        {"p1", "p2"},
+                                                        {"p12"},
+                                                        {"p1", "p2", "p3", "p11"}};
+  for (size_t k = 0; k < photos.size(); ++k) {
+    const int part = static_cast<int>(k) + 1;
+    std::filesystem::create_directories(ClusterModels(clusters, part));
+    WriteFileAtomic(ClusterImageList(clusters, part), "");
+    if (part != 5) WriteModel(photos[k], ClusterModels(clusters, part) / "0");
+  }
+  WriteModel({"p9"}, ClusterModels(clusters, 3) / "1");  // a smaller second model of cluster 3: not merged
+  std::vector<std::pair<std::set<std::string>, std::set<std::string>>> merges;
+  MergeClusterModels(clusters, output, [&](const auto& first, const auto& second, const auto& into) {
+    merges.push_back({NamesIn(first), NamesIn(second)});
+    std::set<std::string> names = NamesIn(first);
+    if (!NamesIn(second).contains("p11")) names.merge(NamesIn(second));
+    WriteModel(std::vector<std::string>(names.begin(), names.end()), into);
+  });
+  REQUIRE(merges.size() == 2);
+  CHECK(merges[0].second.contains("p7"));   // cluster 2 first: it shares 3 photos, as 6 does, and is larger
+  CHECK(merges[1].second.contains("p11"));  // then 6, which does not align
+  CHECK(NamesIn(output / "0") == std::set<std::string>{"p1", "p2", "p3", "p4", "p5", "p6", "p7", "p8"});
+  CHECK(NamesIn(output / "1") == std::set<std::string>{"p1", "p2", "p3", "p11"});
+  CHECK(NamesIn(output / "2") == std::set<std::string>{"p10", "p7", "p8", "p9"});
+  CHECK(!std::filesystem::exists(output / "3"));
 }
 
 }  // namespace p2n::testing
