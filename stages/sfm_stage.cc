@@ -246,7 +246,7 @@ struct ColmapRun {
                       threads});
   }
 
-  // COLMAP's incremental mapper, or for sfm.hierarchical_min_images photos and more its hierarchical one: the
+  // COLMAP's incremental mapper, or when `hierarchical` (UsesHierarchicalMapper) its hierarchical one: the
   // photos' scene graph cut into clusters of at most sfm.leaf_max_images, each grown by a quarter of that many
   // photos of its neighbours (COLMAP's 50 for our default 200; the merge aligns the clusters on them), mapped on
   // its own, as many at once as there are threads, and the models merged.
