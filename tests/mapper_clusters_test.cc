@@ -110,7 +110,7 @@ TEST_CASE("mapper clusters: as many photos as a cluster holds stay one cluster",
 
 // Clusters: 1 the largest, 2 sharing 3 photos with it, 3 sharing 2 with them, 4 inside the merged model, 5 without a
 // model, 6 sharing 3 but not aligning (the merger leaves the first model as it was, as model_merger does).
-TEST_CASE("mapper clusters: the models merged from the largest, by the photos they share; the rest kept apart",
+TEST_CASE("mapper clusters: the models merged from the largest by the photos they share and the rest kept apart",
           "[sfm]") {
   TempDir dir;
   const std::filesystem::path clusters = dir / "clusters", output = dir / "sparse";
