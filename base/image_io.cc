@@ -184,13 +184,14 @@ std::string PixelFingerprint(const OIIO::ImageBuf& image) {
   return sha1.digest();
 }
 
-std::pair<int, int> ImageFileSize(const std::filesystem::path& path, std::string* error) {
+ImageFileHeader ReadImageHeader(const std::filesystem::path& path, std::string* error) {
   auto input = OIIO::ImageInput::open(path.string());
   if (!input) {
     *error = OIIO::geterror();
-    return {0, 0};
+    return {};
   }
-  return {input->spec().width, input->spec().height};
+  const OIIO::ImageSpec& spec = input->spec();
+  return {spec.width, spec.height, spec.nchannels, spec.get_int_attribute("Orientation", 1)};
 }
 
 std::string WriteImage(const OIIO::ImageBuf& image, const std::filesystem::path& path) {

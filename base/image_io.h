@@ -29,8 +29,13 @@ std::string CameraIdentity(const OIIO::ImageSpec& spec);
 // Decodes the whole file. Any decoder complaint (a truncated JPEG decodes partly and only warns) is an error.
 ReadImageResult ReadImage(const std::filesystem::path& path);
 
-// The width and height the file declares (its header only); {0, 0} with `error` set when it cannot be read.
-std::pair<int, int> ImageFileSize(const std::filesystem::path& path, std::string* error);
+// What a file's header declares.
+struct ImageFileHeader {
+  int width = 0, height = 0, channels = 0;  // as stored
+  int orientation = 1;                      // EXIF's (5 to 8: ReadImage swaps width and height)
+};
+// The file's header only; all 0 with `error` set when it cannot be read.
+ImageFileHeader ReadImageHeader(const std::filesystem::path& path, std::string* error);
 
 // Downsizes so that the longer side is at most `max_side` with an area filter; smaller images are returned as
 // they are. Float and half images are resized in float.

@@ -28,6 +28,9 @@ struct TrainView {
   std::string name;
   std::vector<DepthPoint> depth_points;  // loaded for the depth loss only
 
+  // The size its pixels have in memory (whether or not they are loaded).
+  size_t PixelBytes() const { return size_t(camera.width) * camera.height * channels; }
+
   // Channel c (0-2) of a pixel (index y * width + x) as a float in [0, 1], over `background` by its alpha.
   float OnBackground(size_t pixel, int c, float background) const {
     const uint8_t* value = pixels.data() + pixel * channels;

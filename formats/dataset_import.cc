@@ -132,8 +132,9 @@ void LoadLlff(const fs::path& root, ImportedDataset* out) {
       for (int c = 0; c < 5; ++c) m(r, c) = row[5 * r + c];
     }
     std::string error;
-    const auto [width, height] = ImageFileSize(files[i], &error);
+    const ImageFileHeader header = ReadImageHeader(files[i], &error);
     if (!error.empty()) Bad(files[i], "the image", "cannot be read: " + error);
+    const int width = header.width, height = header.height;
     const double factor = m(1, 4) / width;  // full-resolution width over this folder's
     ImportedView view;
     view.source = files[i];

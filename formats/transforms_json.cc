@@ -100,9 +100,9 @@ nlohmann::json MetaJson(const TransformsMeta& meta) {
 
 std::pair<int, int> ImageSize(const fs::path& image) {
   std::string error;
-  const std::pair<int, int> size = ImageFileSize(image, &error);
+  const ImageFileHeader header = ReadImageHeader(image, &error);
   if (!error.empty()) throw UserError(format("cannot read the image '{}': {}", image.string(), error));
-  return size;
+  return {header.width, header.height};
 }
 
 // The view of frames[i], or none when its image is missing; intrinsics from the frame, else the top level.

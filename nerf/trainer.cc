@@ -110,10 +110,14 @@ void TrainerOptions::Check() const {
 Trainer::Trainer(const TrainerOptions& options, const TrainingData& data) : options_(options), data_(data) {
   options.Check();
   if (data.train.empty()) throw std::invalid_argument("there are no training views");
-  for (const TrainView& view : data.train) {
-    if (view.pixels.size() != size_t(view.camera.width) * view.camera.height * view.channels) {
+  std::vector<size_t> in_memory;
+  for (size_t v = 0; v < data.train.size(); ++v) {
+    const TrainView& view = data.train[v];
+    if (view.pixels.empty()) continue;
+    if (view.pixels.size() != view.PixelBytes()) {
       throw std::invalid_argument("training view " + view.name + ": the pixels do not match its size");
     }
+    in_memory.push_back(v);
   }
   model_.field = MakeField<float>(options.field, options.seed);
   model_.occupancy = OccupancyGrid(options.occupancy_resolution);
@@ -159,20 +163,28 @@ Trainer::Trainer(const TrainerOptions& options, const TrainingData& data) : opti
     pose_adam_ = std::make_unique<Adam<float>>(adam, poses_.size(), kPoseParams);
     for (const TrainView& view : data.train) centres_.push_back(view.camera.world_from_cam.block<3, 1>(0, 3));
   }
-  size_t offset = 0;
   std::vector<std::pair<int, int>> sizes;
-  for (const TrainView& view : data.train) {
+  for (const TrainView& view : data.train) sizes.emplace_back(view.camera.width, view.camera.height);
+  if (options.error_sampling) error_map_ = std::make_unique<ErrorMap>(sizes);
+  SampleFrom(std::move(in_memory));
+}
+
+void Trainer::SampleFrom(std::vector<size_t> views) {
+  is_sampled_.assign(data_.train.size(), 0);
+  pixel_offsets_.clear();
+  depth_points_.clear();
+  size_t offset = 0;
+  for (const size_t v : views) {
+    const TrainView& view = data_.train.at(v);
+    if (view.pixels.empty()) throw std::invalid_argument("training view " + view.name + " has no pixels in memory");
+    is_sampled_[v] = 1;
     pixel_offsets_.push_back(offset);
     offset += size_t(view.camera.width) * view.camera.height;
-    sizes.emplace_back(view.camera.width, view.camera.height);
+    if (options_.depth_weight == 0) continue;
+    for (size_t k = 0; k < view.depth_points.size(); ++k) depth_points_.emplace_back(v, k);
   }
   pixel_offsets_.push_back(offset);
-  if (options.error_sampling) error_map_ = std::make_unique<ErrorMap>(sizes);
-  if (options.depth_weight > 0) {
-    for (size_t v = 0; v < data.train.size(); ++v) {
-      for (size_t k = 0; k < data.train[v].depth_points.size(); ++k) depth_points_.emplace_back(v, k);
-    }
-  }
+  sampled_ = std::move(views);
 }
 
 double Trainer::LearningRate(double progress) const {
@@ -181,11 +193,18 @@ double Trainer::LearningRate(double progress) const {
 }
 
 ErrorMap::Draw Trainer::DrawPixel(std::mt19937_64* random) const {
-  if (error_map_) return error_map_->Sample(random);
-  ErrorMap::Draw draw;  // uniform over all training pixels
+  if (sampled_.empty()) throw std::logic_error("no training view has its pixels in memory");
+  if (error_map_) {
+    ErrorMap::Draw draw = error_map_->Sample(random);
+    while (!is_sampled_[draw.view]) draw = error_map_->Sample(random);
+    return draw;
+  }
+  ErrorMap::Draw draw;  // uniform over the sampled views' pixels
   const size_t global = std::uniform_int_distribution<size_t>(0, pixel_offsets_.back() - 1)(*random);
-  draw.view = std::upper_bound(pixel_offsets_.begin(), pixel_offsets_.end(), global) - pixel_offsets_.begin() - 1;
-  const size_t pixel = global - pixel_offsets_[draw.view];
+  const size_t index =
+      std::upper_bound(pixel_offsets_.begin(), pixel_offsets_.end(), global) - pixel_offsets_.begin() - 1;
+  draw.view = sampled_[index];
+  const size_t pixel = global - pixel_offsets_[index];
   draw.x = static_cast<int>(pixel % data_.train[draw.view].camera.width);
   draw.y = static_cast<int>(pixel / data_.train[draw.view].camera.width);
   return draw;

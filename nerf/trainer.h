@@ -110,8 +110,15 @@ struct BehindScene {
 
 class Trainer {
  public:
-  // `data` must outlive the trainer.
+  // `data` must outlive the trainer. Training views without pixels (not in memory, see SampleFrom) are not drawn.
   Trainer(const TrainerOptions& options, const TrainingData& data);
+
+  // Rays are drawn from these training views only (each must have its pixels) until the next call: the ones a
+  // window over photos too many for memory holds (stages/photo_window.h). The error map's draws outside them are
+  // drawn again (their weights then carry a common factor, the resident views' share of the two distributions).
+  // The training views with pixels by default.
+  void SampleFrom(std::vector<size_t> views);
+  const std::vector<size_t>& sampled_views() const { return sampled_; }
 
   // One step at `progress` in [0, 1] of the run (for the learning-rate schedule).
   StepResult Step(double progress);
@@ -130,8 +137,8 @@ class Trainer {
   std::vector<double> HeldoutPsnr(size_t pixels_per_view, RenderStats* stats = nullptr,
                                   const std::function<void(size_t)>& on_rays_done = {},
                                   std::vector<double>* fitted = nullptr, BehindScene* behind = nullptr) const;
-  // The same scores of at most `max_views` training views spread over them: how well the field fits its photos,
-  // to compare with the held-out views'.
+  // The same scores of at most `max_views` training views spread over the sampled ones (sampled_views()): how well
+  // the field fits its photos, to compare with the held-out views'.
   std::vector<double> TrainingPsnr(size_t pixels_per_view, size_t max_views,
                                    const std::function<void(size_t)>& on_rays_done = {}) const;
   // Each training view's colour transform (kAppearanceParams values a view); empty without options.appearance.
@@ -197,9 +204,11 @@ class Trainer {
   int step_ = 0;
   int skipped_ = 0;
   double samples_per_ray_ = 0;                               // running mean, for the batch size
-  std::vector<size_t> pixel_offsets_;                        // first global pixel index of each training view
+  std::vector<size_t> sampled_;                              // the training views rays are drawn from
+  std::vector<char> is_sampled_;                             // for each training view, whether it is in sampled_
+  std::vector<size_t> pixel_offsets_;                        // first global pixel index of each of sampled_
   std::unique_ptr<ErrorMap> error_map_;                      // with options.error_sampling
-  std::vector<std::pair<uint32_t, uint32_t>> depth_points_;  // (training view, its depth point), with depth_weight
+  std::vector<std::pair<uint32_t, uint32_t>> depth_points_;  // (sampled view, its depth point), with depth_weight
 };
 
 }  // namespace p2n

@@ -50,8 +50,8 @@ std::vector<double> Trainer::HeldoutPsnr(size_t pixels_per_view, RenderStats* st
 std::vector<double> Trainer::TrainingPsnr(size_t pixels_per_view, size_t max_views,
                                           const std::function<void(size_t)>& on_rays_done) const {
   std::vector<const TrainView*> views;
-  const size_t count = std::min(max_views, data_.train.size());
-  for (size_t i = 0; i < count; ++i) views.push_back(&data_.train[i * data_.train.size() / count]);
+  const size_t count = std::min(max_views, sampled_.size());
+  for (size_t i = 0; i < count; ++i) views.push_back(&data_.train[sampled_[i * sampled_.size() / count]]);
   return ViewPsnrs(views, pixels_per_view, nullptr, on_rays_done, nullptr, nullptr);
 }
 

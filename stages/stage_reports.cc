@@ -444,6 +444,7 @@ void Describe(S& s, TrainReport& report) {
   s("skipped_steps", report.skipped_steps);
   s("resumed_from_step", report.resumed_from_step);
   s("training_views", report.training_views);
+  s("training_views_in_memory", report.training_views_in_memory);
   s("samples_per_ray_rendered", report.samples_per_ray_rendered);
   s("render_seconds_per_view", report.render_seconds_per_view);
   s("occupied_fraction", report.occupied_fraction);

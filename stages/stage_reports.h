@@ -128,6 +128,8 @@ struct TrainReport {
   int steps = 0, skipped_steps = 0, resumed_from_step = 0;
   double wall_seconds = 0;  // of training
   size_t training_views = 0, heldout_views = 0;
+  // The training photos in memory at once when they did not all fit (train.photo_memory); none when all were.
+  std::optional<size_t> training_views_in_memory;
   std::string heldout_split;
   int heldout_pixels_per_view = 0;     // 0: every pixel (written "all")
   std::optional<double> heldout_psnr;  // none without held-out views

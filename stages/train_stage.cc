@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <optional>
 
 #include "base/errors.h"
 #include "base/file_util.h"
 #include "base/float_image.h"
 #include "base/format.h"
+#include "base/photo_window.h"
 #include "formats/dataset_import.h"
 #include "nerf/appearance.h"
 #include "nerf/ngp_field.h"
@@ -36,7 +38,10 @@ struct TrainingSetup {
   TrainerOptions trainer;
   TrainingData data;
   std::string heldout_split, heldout_rule;
+  std::optional<size_t> training_views_in_memory;  // with a window over the training photos
 };
+
+constexpr double kBytesPerMB = 1 << 20;  // train.photo_memory's unit
 
 // Training views scored at the end beside the held-out ones (spread over them).
 constexpr size_t kTrainingViewsScored = 8;
@@ -183,6 +188,7 @@ void TrainOptions::Check() const {
   CheckOption(*this, eval_pixels, eval_pixels >= 0, "must be 0 (all) or positive");
   CheckOption(*this, final_eval_pixels, final_eval_pixels >= 0, "must be 0 (all) or positive");
   CheckOption(*this, checkpoint_interval, checkpoint_interval >= 0, "must be 0 (none) or positive");
+  CheckOption(*this, photo_memory, photo_memory > 0 && std::isfinite(photo_memory), "must be positive");
 }
 
 double ResolvedTimeBudget(const TrainOptions& options) {
@@ -252,12 +258,15 @@ void CheckCancel(size_t) { ThrowIfCancelled(); }  // Ctrl-C stops an evaluation 
 // Trains until the budget (seconds, else steps) is spent, from where `state` left off: a metrics row at every
 // evaluation (evaluations take at most train.eval_share of the wall time), checkpoints every
 // train.checkpoint_interval seconds into `checkpoint`, tagged with the result's `key`.
+// With a `window` over the training photos, each step trains on those it holds at that step.
 void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptions& options, double budget,
-                    const fs::path& checkpoint, const std::string& key, RunState* state, SessionLog* session) {
+                    const fs::path& checkpoint, const std::string& key, PhotoWindow* window, RunState* state,
+                    SessionLog* session) {
   const RunLoop loop{TrainResult::kId.name,      budget, options.steps, options.eval_interval, options.eval_share, true,
                      options.checkpoint_interval};
   int consecutive_skips = 0;
   const auto step = [&](double share) -> std::optional<double> {
+    if (window != nullptr && window->MoveTo(trainer.step())) trainer.SampleFrom(window->resident());
     const StepResult result = trainer.Step(share);
     session->steps.rays += result.rays;
     session->steps.samples += result.samples;
@@ -302,6 +311,7 @@ TrainReport WriteTrainReport(const TrainResult& out, Trainer& trainer, const Tra
   report.wall_seconds = state.seconds;
   report.heldout_split = setup.heldout_split;
   report.heldout_rule = setup.heldout_rule;
+  report.training_views_in_memory = setup.training_views_in_memory;
   std::vector<std::string> names;
   for (const TrainView& view : setup.data.train) names.push_back(view.name);
   report.camera_refinement = CameraRefinementJson(names, trainer.camera_corrections());
@@ -318,6 +328,30 @@ TrainReport WriteTrainReport(const TrainResult& out, Trainer& trainer, const Tra
   return report;
 }
 
+// A window over the training photos when LoadTrainingData left their pixels out (they would take more than
+// train.photo_memory); null when they are in memory.
+std::unique_ptr<PhotoWindow> MakePhotoWindow(const TrainOptions& options, const ImportedDataset& poses,
+                                             TrainingData* data) {
+  if (!data->train.front().pixels.empty()) return nullptr;
+  double bytes = 0;
+  for (const TrainView& view : data->train) bytes += view.PixelBytes();
+  std::unique_ptr<PhotoWindow> window;
+  try {
+    window = std::make_unique<PhotoWindow>(
+        &data->train, [train = TrainingViews(poses)](size_t v) { return LoadTrainView(*train[v]).pixels; },
+        options.photo_memory * kBytesPerMB, static_cast<uint64_t>(options.seed));
+  } catch (const std::invalid_argument& e) {
+    throw UserError(
+        format("{} is {} MB: {}; raise it", OptionKey(options, options.photo_memory), options.photo_memory, e.what()));
+  }
+  LogInfo(
+      format("train: the {} training photos would take {:.1f} MB, more than {} ({} MB): {} at a time in memory, "
+             "{} more every {} steps",
+             data->train.size(), bytes / kBytesPerMB, OptionKey(options, options.photo_memory), options.photo_memory,
+             window->size(), window->stride(), PhotoWindow::kStepsPerMove));
+  return window;
+}
+
 }  // namespace
 
 void TrainStage::Run(StageContext& context) const {
@@ -331,8 +365,9 @@ void TrainStage::Run(StageContext& context) const {
   const size_t training_views = std::count_if(poses.views.begin(), poses.views.end(),
                                               [](const ImportedView& view) { return view.view.split == "train"; });
   const double depth_weight = DepthWeight(options, training_views);
-  setup.data = LoadTrainingData(poses, depth_weight > 0);
+  setup.data = LoadTrainingData(poses, depth_weight > 0, options.photo_memory * kBytesPerMB);
   const TrainingData& data = setup.data;
+  const std::unique_ptr<PhotoWindow> window = MakePhotoWindow(options, poses, &setup.data);
   setup.trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, poses));
   setup.trainer.depth_weight = depth_weight;
   const TrainView* with_alpha = FirstWithAlpha(data.train);
@@ -365,7 +400,7 @@ void TrainStage::Run(StageContext& context) const {
                    checkpoint.string()));
   }
   SessionLog session;
-  TrainUntilDone(trainer, data, options, budget, checkpoint, context.key, &state, &session);
+  TrainUntilDone(trainer, data, options, budget, checkpoint, context.key, window.get(), &state, &session);
 
   if (!ModelIsFinite(trainer.model())) throw InternalError("training ended with non-finite parameters");
   FinalEvaluation evaluation;
@@ -383,6 +418,7 @@ void TrainStage::Run(StageContext& context) const {
                 {"refine_cameras", setup.trainer.refine_cameras}};
   const TrainResult out{context.output_dir};
   WriteOrExplain([&] { SaveModel(model, out.model()); });
+  if (window) setup.training_views_in_memory = window->size();
   const TrainReport report = WriteTrainReport(out, trainer, setup, evaluation, state, resumed_from, session);
   context.summary = {{"steps", trainer.step()},
                      {"train_seconds", state.seconds},

@@ -72,6 +72,7 @@ struct TrainOptions {
   int eval_pixels = 4096;           // held-out pixels per view in each evaluation during training (0: all)
   int final_eval_pixels = 65536;    // held-out pixels per view in the final evaluation (0: all)
   double checkpoint_interval = 60;  // seconds between checkpoints (0: none)
+  double photo_memory = 2048;       // MB the training photos may take; beyond it a window over them (photo_window.h)
   int seed = 0;
 
   template <class V>
@@ -128,6 +129,10 @@ struct TrainOptions {
     v("final_eval_pixels", final_eval_pixels, "held-out pixels per view in the final evaluation; 0: all", "pixels");
     v("checkpoint_interval", checkpoint_interval, "time between checkpoints that a killed run resumes from; 0: none",
       "s", OptionKind::kRuntime);
+    v("photo_memory", photo_memory,
+      "memory the training photos may take; when they would take more, a window over them is kept in memory, "
+      "moving on every few steps, the next photos read from disk while the field trains",
+      "MB");
     v("seed", seed, "random seed (initialisation, rays, samples)");
   }
   void Check() const;

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "base/errors.h"
 #include "base/file_util.h"
@@ -19,12 +20,45 @@
 namespace p2n {
 namespace fs = std::filesystem;
 
-TrainView LoadTrainView(const ImportedView& imported) {
+namespace {
+
+// The view's camera and name, without its pixels.
+TrainView ViewWithoutPixels(const ImportedView& imported) {
   TrainView view;
   view.camera = imported.view.camera;
   view.near = imported.view.near;
   view.far = imported.view.far;
   view.name = imported.source.filename().string();
+  return view;
+}
+
+// UserError when the image's size is not its camera's.
+void CheckImageSize(const ImportedView& imported, int width, int height) {
+  const PinholeCamera& camera = imported.view.camera;
+  if (width != camera.width || height != camera.height) {
+    throw UserError(format("'{}' is {}x{} but transforms.json says {}x{}; rerun the poses stage",
+                           imported.source.string(), width, height, camera.width, camera.height));
+  }
+}
+
+// The channels LoadTrainView makes of an image's: grey expanded to RGB, beyond four cut to RGBA.
+int LoadedChannels(int channels) { return channels <= 2 ? channels + 2 : std::min(channels, 4); }
+
+}  // namespace
+
+TrainView TrainViewHeader(const ImportedView& imported) {
+  TrainView view = ViewWithoutPixels(imported);
+  std::string error;
+  const ImageFileHeader header = ReadImageHeader(imported.source, &error);
+  if (!error.empty()) throw UserError(format("cannot read '{}': {}", imported.source.string(), error));
+  const bool turned = header.orientation >= 5;  // a quarter turn
+  CheckImageSize(imported, turned ? header.height : header.width, turned ? header.width : header.height);
+  view.channels = LoadedChannels(header.channels);
+  return view;
+}
+
+TrainView LoadTrainView(const ImportedView& imported) {
+  TrainView view = ViewWithoutPixels(imported);
   const ReadImageResult read = ReadImage(imported.source);
   if (!read.ok()) throw UserError(format("cannot read '{}': {}", imported.source.string(), read.error));
   OIIO::ImageBuf image = read.image;
@@ -36,10 +70,7 @@ TrainView LoadTrainView(const ImportedView& imported) {
     image = OIIO::ImageBufAlgo::channels(image, 4, {});
   }
   const OIIO::ImageSpec& spec = image.spec();
-  if (spec.width != view.camera.width || spec.height != view.camera.height) {
-    throw UserError(format("'{}' is {}x{} but transforms.json says {}x{}; rerun the poses stage",
-                           imported.source.string(), spec.width, spec.height, view.camera.width, view.camera.height));
-  }
+  CheckImageSize(imported, spec.width, spec.height);
   view.channels = spec.nchannels;
   view.pixels.resize(size_t(spec.width) * spec.height * spec.nchannels);
   if (!image.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::UINT8, view.pixels.data())) {
@@ -100,14 +131,22 @@ void AddDepthPoints(const ImportedDataset& poses, const std::vector<const Import
 
 }  // namespace
 
-TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points) {
+std::vector<const ImportedView*> TrainingViews(const ImportedDataset& poses) {
+  std::vector<const ImportedView*> train;
+  for (const ImportedView& view : poses.views) {
+    if (view.view.split == "train") train.push_back(&view);
+  }
+  return train;
+}
+
+TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points, double photo_bytes) {
   TrainingData data;
   data.background = poses.meta.Background();
   data.background_known = poses.meta.background.has_value();
   const std::string heldout_split = HeldoutSplit(poses);
-  std::vector<const ImportedView*> train, heldout;
+  const std::vector<const ImportedView*> train = TrainingViews(poses);
+  std::vector<const ImportedView*> heldout;
   for (const ImportedView& view : poses.views) {
-    if (view.view.split == "train") train.push_back(&view);
     if (view.view.split == heldout_split) heldout.push_back(&view);
   }
   if (train.empty()) {  // files.front(): the transforms.json
@@ -115,12 +154,19 @@ TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points) {
   }
   data.train.resize(train.size());
   data.heldout.resize(heldout.size());
-  Progress progress("train: loading images", static_cast<int64_t>(train.size() + heldout.size()), "images");
-  tbb::parallel_for(size_t{0}, train.size() + heldout.size(), [&](size_t i) {
-    if (i < train.size()) {
+  size_t loaded = train.size();
+  if (std::isfinite(photo_bytes)) {
+    tbb::parallel_for(size_t{0}, train.size(), [&](size_t i) { data.train[i] = TrainViewHeader(*train[i]); });
+    double bytes = 0;
+    for (const TrainView& view : data.train) bytes += view.PixelBytes();
+    if (bytes > photo_bytes) loaded = 0;
+  }
+  Progress progress("train: loading images", static_cast<int64_t>(loaded + heldout.size()), "images");
+  tbb::parallel_for(size_t{0}, loaded + heldout.size(), [&](size_t i) {
+    if (i < loaded) {
       data.train[i] = LoadTrainView(*train[i]);
     } else {
-      data.heldout[i - train.size()] = LoadTrainView(*heldout[i - train.size()]);
+      data.heldout[i - loaded] = LoadTrainView(*heldout[i - loaded]);
     }
     progress.Add();
   });

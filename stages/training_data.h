@@ -4,7 +4,9 @@
 
 #include <array>
 #include <filesystem>
+#include <limits>
 #include <string>
+#include <vector>
 
 #include "formats/dataset_import.h"
 #include "nerf/trainer.h"
@@ -14,6 +16,8 @@ namespace p2n {
 // The view's image decoded to 8-bit RGB or RGBA (grey expanded); UserError naming the file when it cannot be read or
 // its size is not the camera's.
 TrainView LoadTrainView(const ImportedView& imported);
+// The same view without its pixels: the channels they will have from the file's header.
+TrainView TrainViewHeader(const ImportedView& imported);
 // The split held out for evaluation: "test" when any view has it, else "val".
 std::string HeldoutSplit(const ImportedDataset& dataset);
 
@@ -25,7 +29,11 @@ bool ForwardFacingCapture(const ImportedDataset& dataset);
 // The training views ("train" split) and held-out views (HeldoutSplit's) of the poses stage's transforms.json
 // (LoadTransformsJson), decoded to 8 bits, with the background its images were composited on; UserError naming
 // a bad file. With `depth_points`, each training view's depth points too (from sparse_points.ply and
-// sparse_tracks.json beside transforms.json; none when the poses stage has no tracks).
-TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points = false);
+// sparse_tracks.json beside transforms.json; none when the poses stage has no tracks). The training views' pixels
+// are left out when they would take more than `photo_bytes` in all (a PhotoWindow then holds some at a time).
+TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points = false,
+                              double photo_bytes = std::numeric_limits<double>::infinity());
+// The training views ("train" split), in the order LoadTrainingData keeps them.
+std::vector<const ImportedView*> TrainingViews(const ImportedDataset& poses);
 
 }  // namespace p2n

@@ -284,3 +284,51 @@ TEST_CASE("train stage: a held-out photo that does not match its camera is named
 }
 
 }  // namespace p2n::testing
+
+namespace p2n::testing {
+
+// Ten training photos of 64 x 48 x 3 bytes (9 KB); 0.06 MB hold six: a window of four and one being read.
+TEST_CASE("train stage: photos beyond train.photo_memory train through a window, a resumed run alike", "[train]") {
+  Config config = SmallStageConfig(100);
+  config.Set("train.photo_memory", 0.06, "test");
+  config.Set("train.eval_interval", 1e6, "test");
+  StageWorkspace whole;
+  whole.runner.Run(whole.workspace, config, Until("train"));
+  const fs::path out = whole.dir / "ws" / "30_train";
+  const nlohmann::json report = ReadJsonFile(out / "train_report.json");
+  CHECK(report["training_views"] == 10);
+  CHECK(report["training_views_in_memory"] == 4);
+  CHECK(report["steps"] == 100);
+  CHECK(std::isfinite(report["heldout_psnr"].get<double>()));
+
+  // Cancelled at a checkpoint and resumed: the window stands where it stood, the same photos train the same model.
+  StageWorkspace resumed;
+  config.Set("train.checkpoint_interval", 0.05, "test");
+  const fs::path checkpoint = resumed.dir / "ws" / "30_train.resume" / "checkpoint.bin";
+  std::thread canceller([&] {
+    while (!fs::exists(checkpoint)) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    RequestCancel();
+  });
+  CHECK_THROWS_AS(resumed.runner.Run(resumed.workspace, config, Until("train")), Cancelled);
+  canceller.join();
+  ResetCancel();
+  resumed.runner.Run(resumed.workspace, config, Until("train"));
+  const fs::path resumed_out = resumed.dir / "ws" / "30_train";
+  CHECK(ReadJsonFile(resumed_out / "train_report.json")["resumed_from_step"].get<int>() > 0);
+  NerfModel first = LoadModel(out / "model.bin"), second = LoadModel(resumed_out / "model.bin");
+  CHECK(first.background == second.background);
+  Encoding<float>* grid = first.field->TrainableEncoding();
+  REQUIRE(grid != nullptr);
+  const std::vector<float> first_grid(grid->params(), grid->params() + grid->num_params());
+  grid = second.field->TrainableEncoding();
+  CHECK(first_grid == std::vector<float>(grid->params(), grid->params() + grid->num_params()));
+
+  SECTION("a budget of fewer than five photos is refused, naming the option") {
+    config.Set("train.photo_memory", 0.03, "test");
+    config.Set("train.seed", 1, "test");
+    CHECK_THROWS_WITH(whole.runner.Run(whole.workspace, config, Until("train")),
+                      Catch::Contains("train.photo_memory is 0.03 MB") && Catch::Contains("raise it"));
+  }
+}
+
+}  // namespace p2n::testing

@@ -8,10 +8,12 @@
 #include <atomic>
 #include <cmath>
 #include <random>
+#include <set>
 #include <stdexcept>
 
 #include "base/file_util.h"
 #include "base/float_image.h"
+#include "base/photo_window.h"
 #include "nerf/appearance.h"
 #include "nerf/camera_refinement.h"
 #include "nerf/ngp_field.h"
@@ -543,6 +545,59 @@ TEST_CASE("the depth loss places the surface where the sparse points say, where 
                                                           << " without");
   CHECK(with_depth < 0.05);
   CHECK(without > 4 * with_depth);
+}
+
+}  // namespace p2n::testing
+
+namespace p2n::testing {
+
+TEST_CASE("rays are drawn from the sampled views only: uniformly, by the error map and through depth points",
+          "[trainer]") {
+  TrainingData data = SphereScene();
+  for (TrainView& view : data.train) view.depth_points = {{10.5f, 20.5f, 2.0f, 0.5f}};
+  std::vector<uint8_t>().swap(data.train[5].pixels);  // not in memory: never drawn, even by default
+  for (const bool error_sampling : {false, true}) {
+    TrainerOptions options = SmallOptions();
+    options.error_sampling = error_sampling;
+    options.depth_weight = 1;
+    Trainer trainer(options, data);
+    CHECK(trainer.sampled_views().size() == data.train.size() - 1);
+    const RayBatch all = trainer.SampleBatch(4096);
+    CHECK(std::count(all.views.begin(), all.views.end(), 5) == 0);
+    CHECK(std::set<int>(all.views.begin(), all.views.end()).size() == data.train.size() - 1);
+
+    trainer.SampleFrom({3, 17});
+    const RayBatch batch = trainer.SampleBatch(4096);
+    CHECK(std::count(batch.views.begin(), batch.views.end(), 3) +
+              std::count(batch.views.begin(), batch.views.end(), 17) ==
+          4096);
+    CHECK(std::count(batch.views.begin(), batch.views.end(), 3) > 1500);  // both, about as often
+    CHECK(std::count(batch.views.begin(), batch.views.end(), 17) > 1500);
+    for (size_t r = 0; r < batch.depth.size(); ++r) {  // a depth ray's target is its view's point
+      if (batch.depth[r].y() > 0) CHECK(batch.depth[r].x() == 2.0f);
+    }
+    CHECK_THROWS_WITH(trainer.SampleFrom({5}), Catch::Contains("has no pixels in memory"));
+  }
+}
+
+TEST_CASE("a window of a third of the photos in memory learns the sphere as well as all of them", "[trainer]") {
+  const TrainingData all = SphereScene();
+  TrainingData data = SphereScene();
+  for (TrainView& view : data.train) std::vector<uint8_t>().swap(view.pixels);
+  const size_t view_bytes = all.train.front().PixelBytes();
+  PhotoWindow window(
+      &data.train, [&all](size_t v) { return all.train[v].pixels; }, 10 * view_bytes, 5);
+  REQUIRE(window.size() == 8);
+  Trainer windowed(SmallOptions(), data), whole(SmallOptions(), all);
+  for (int step = 0; step < 300; ++step) {
+    if (window.MoveTo(windowed.step())) windowed.SampleFrom(window.resident());
+    REQUIRE_FALSE(windowed.Step(step / 300.0).skipped);
+    REQUIRE_FALSE(whole.Step(step / 300.0).skipped);
+  }
+  const double windowed_psnr = Mean(windowed.HeldoutPsnr(0)), whole_psnr = Mean(whole.HeldoutPsnr(0));
+  INFO("held-out PSNR with a window " << windowed_psnr << " dB, with every photo " << whole_psnr << " dB");
+  CHECK(windowed_psnr > 20.0);
+  CHECK(windowed_psnr > whole_psnr - 1.0);
 }
 
 }  // namespace p2n::testing
