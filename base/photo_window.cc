@@ -10,17 +10,20 @@
 
 namespace p2n {
 
-PhotoWindow::PhotoWindow(std::vector<TrainView>* views, Loader load, double bytes, uint64_t seed)
-    : views_(views), load_(std::move(load)) {
+size_t PhotoWindow::WindowSize(const std::vector<TrainView>& views, double bytes) {
   size_t largest = 0;
-  for (const TrainView& view : *views) largest = std::max(largest, view.PixelBytes());
+  for (const TrainView& view : views) largest = std::max(largest, view.PixelBytes());
   const double fit = largest > 0 ? std::floor(bytes / static_cast<double>(largest)) : 0;
-  size_ = static_cast<size_t>(fit * 4 / 5);  // and a quarter of that being read
-  if (views->empty() || size_ < kMinViews) {
-    throw std::invalid_argument(format("{:.1f} MB hold {:.0f} of the largest photos ({:.1f} MB); a window needs {}",
-                                       bytes / 1e6, fit, largest / 1e6, kMinViews + 1));
+  const size_t size = static_cast<size_t>(fit * 4 / 5);  // and a quarter of that being read
+  if (views.empty() || size < kMinViews) {
+    throw std::invalid_argument(format("{:.2f} MB hold {:.0f} of the largest photos ({:.2f} MB); a window needs {}",
+                                       bytes / 1048576, fit, largest / 1048576.0, kMinViews + 1));
   }
-  size_ = std::min(size_, views->size());
+  return std::min(size, views.size());
+}
+
+PhotoWindow::PhotoWindow(std::vector<TrainView>* views, Loader load, double bytes, uint64_t seed)
+    : views_(views), load_(std::move(load)), size_(WindowSize(*views, bytes)) {
   stride_ = std::max<size_t>(1, size_ / 4);
   order_.resize(views->size());
   std::iota(order_.begin(), order_.end(), size_t{0});

@@ -2,9 +2,9 @@
 // Training photos too many for memory: a window over them holds a few at a time, within a byte budget
 // (train.photo_memory). The window runs over the views in a shuffled order (consecutive photos of a capture see
 // the same part of the scene; a shuffled window sees all of it) and moves on by a quarter of its views every
-// kStepsPerMove training steps, the next quarter read on another thread while the field trains. Where the window
-// stands depends on the step alone, so a seed and a step count give the same model and a resumed run reads the
-// photos it would have read.
+// kStepsPerMove training steps, the next quarter read on another thread while the field trains (the train stage
+// reads them from their decoded copy, decoded_photos.h). Where the window stands depends on the step alone, so a
+// seed and a step count give the same model and a resumed run reads the photos it would have read.
 
 #include <cstddef>
 #include <cstdint>
@@ -24,9 +24,11 @@ class PhotoWindow {
   static constexpr int kStepsPerMove = 32;
   static constexpr size_t kMinViews = 4;  // in the window; a fifth of the budget more for the next quarter
 
-  // Over `views` (their pixels released as the window leaves them); std::invalid_argument when `bytes` holds fewer
-  // than kMinViews + 1 of the largest. Nothing is read before MoveTo().
+  // Over `views` (their pixels released as the window leaves them), within `bytes`. Nothing is read before MoveTo().
   PhotoWindow(std::vector<TrainView>* views, Loader load, double bytes, uint64_t seed);
+  // The views a window over `views` within `bytes` holds; std::invalid_argument when `bytes` holds fewer than
+  // kMinViews + 1 of the largest (a fifth of the budget is for the views being read).
+  static size_t WindowSize(const std::vector<TrainView>& views, double bytes);
   ~PhotoWindow();  // waits for a read under way
   PhotoWindow(const PhotoWindow&) = delete;
   PhotoWindow& operator=(const PhotoWindow&) = delete;

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <numeric>
 #include <optional>
 
+#include "base/decoded_photos.h"
 #include "base/errors.h"
 #include "base/file_util.h"
 #include "base/float_image.h"
@@ -18,6 +20,7 @@
 #include "nerf/vanilla_field.h"
 #include "pipeline/cancel.h"
 #include "pipeline/log.h"
+#include "pipeline/progress.h"
 #include "stages/camera_corrections.h"
 #include "stages/fit_checks.h"
 #include "stages/stage_io.h"
@@ -329,27 +332,37 @@ TrainReport WriteTrainReport(const TrainResult& out, Trainer& trainer, const Tra
 }
 
 // A window over the training photos when LoadTrainingData left their pixels out (they would take more than
-// train.photo_memory); null when they are in memory.
+// train.photo_memory), reading them from a file in `folder` they are decoded into first; null when they are in
+// memory.
 std::unique_ptr<PhotoWindow> MakePhotoWindow(const TrainOptions& options, const ImportedDataset& poses,
-                                             TrainingData* data) {
+                                             const fs::path& folder, TrainingData* data) {
   if (!data->train.front().pixels.empty()) return nullptr;
-  double bytes = 0;
-  for (const TrainView& view : data->train) bytes += view.PixelBytes();
-  std::unique_ptr<PhotoWindow> window;
+  std::vector<size_t> sizes;
+  for (const TrainView& view : data->train) sizes.push_back(view.PixelBytes());
+  const double bytes = std::accumulate(sizes.begin(), sizes.end(), 0.0);
+  size_t size = 0;
   try {
-    window = std::make_unique<PhotoWindow>(
-        &data->train, [train = TrainingViews(poses)](size_t v) { return LoadTrainView(*train[v]).pixels; },
-        options.photo_memory * kBytesPerMB, static_cast<uint64_t>(options.seed));
+    size = PhotoWindow::WindowSize(data->train, options.photo_memory * kBytesPerMB);
   } catch (const std::invalid_argument& e) {
     throw UserError(
         format("{} is {} MB: {}; raise it", OptionKey(options, options.photo_memory), options.photo_memory, e.what()));
   }
   LogInfo(
       format("train: the {} training photos would take {:.1f} MB, more than {} ({} MB): {} at a time in memory, "
-             "{} more every {} steps",
+             "read from their decoded copy in {}",
              data->train.size(), bytes / kBytesPerMB, OptionKey(options, options.photo_memory), options.photo_memory,
-             window->size(), window->stride(), PhotoWindow::kStepsPerMove));
-  return window;
+             size, folder.string()));
+  fs::create_directories(folder);
+  const std::vector<const ImportedView*> train = TrainingViews(poses);
+  Progress progress("train: decoding the photos", static_cast<int64_t>(train.size()), "images");
+  auto photos = std::make_shared<const DecodedPhotos>(folder, sizes, [&](size_t v) {
+    std::vector<uint8_t> pixels = LoadTrainView(*train[v]).pixels;
+    progress.Add();
+    return pixels;
+  });
+  return std::make_unique<PhotoWindow>(
+      &data->train, [photos](size_t v) { return photos->Read(v); }, options.photo_memory * kBytesPerMB,
+      static_cast<uint64_t>(options.seed));
 }
 
 }  // namespace
@@ -367,7 +380,7 @@ void TrainStage::Run(StageContext& context) const {
   const double depth_weight = DepthWeight(options, training_views);
   setup.data = LoadTrainingData(poses, depth_weight > 0, options.photo_memory * kBytesPerMB);
   const TrainingData& data = setup.data;
-  const std::unique_ptr<PhotoWindow> window = MakePhotoWindow(options, poses, &setup.data);
+  const std::unique_ptr<PhotoWindow> window = MakePhotoWindow(options, poses, context.resume_dir, &setup.data);
   setup.trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, poses));
   setup.trainer.depth_weight = depth_weight;
   const TrainView* with_alpha = FirstWithAlpha(data.train);

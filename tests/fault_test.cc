@@ -161,6 +161,28 @@ TEST_CASE("faults: a full disk in the splat stage names its file and keeps the t
   CHECK(fs::exists(workspace / "35_splat" / "splats.ply"));
 }
 
+TEST_CASE("faults: a full disk while the training photos are decoded for a window names the folder", "[fault]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), workspace = dir / "ws";
+  std::vector<std::string> until_poses = RunArgs(data, workspace);
+  until_poses.insert(until_poses.end(), {"--until", "poses"});
+  std::string output;
+  REQUIRE(RunCommand(until_poses, &output) == 0);
+  // Ten training photos of 9 KiB: 0.06 MB of train.photo_memory hold six, and their decoded copy takes 90 KiB.
+  std::vector<std::string> limited = {"/bin/bash", "-c", "ulimit -f 16 && exec \"$@\"", "limited"};
+  for (const std::string& arg : RunArgs(data, workspace)) limited.push_back(arg);
+  limited.insert(limited.end(), {"--until", "train", "--train.photo_memory", "0.06"});
+  CHECK(RunCommand(limited, &output) == 1);
+  INFO(output);
+  CHECK_THAT(output, Catch::Contains("decoded photos") && Catch::Contains("30_train.resume") &&
+                         Catch::Contains("File too large") && Catch::Contains("free space"));
+  CHECK(fs::is_empty(workspace / "30_train.resume"));  // the copy had no name: nothing is left of it
+  std::vector<std::string> rerun(limited.begin() + 4, limited.end());
+  REQUIRE(RunCommand(rerun, &output) == 0);
+  CHECK_THAT(output, Catch::Contains("poses: fresh, skipped"));
+  CHECK(ReadJsonFile(workspace / "30_train" / "train_report.json")["training_views_in_memory"] == 4);
+}
+
 TEST_CASE("faults: a full disk in the export stage names its file and keeps the splats and renders", "[fault]") {
   TempDir dir;
   const fs::path data = SmallDataset(dir), workspace = dir / "ws";

@@ -6,7 +6,9 @@
 #include <set>
 #include <stdexcept>
 
+#include "base/decoded_photos.h"
 #include "base/photo_window.h"
+#include "test_util.h"
 
 namespace p2n::testing {
 namespace {
@@ -112,6 +114,28 @@ TEST_CASE("photo window: a budget of fewer than five photos, and a photo that ca
       6 * kViewBytes, 0);
   CHECK(failing.MoveTo(0));
   CHECK_THROWS_WITH(failing.MoveTo(PhotoWindow::kStepsPerMove), "cannot read " + std::to_string(added));
+}
+
+}  // namespace p2n::testing
+
+namespace p2n::testing {
+
+TEST_CASE("decoded photos: each read back as decoded, from a file with no name left in its folder", "[photo_window]") {
+  TempDir dir;
+  const std::vector<size_t> sizes = {10, 0, 300, 7};
+  const DecodedPhotos photos(dir.path(), sizes, [&](size_t i) {
+    std::vector<uint8_t> pixels(sizes[i]);
+    for (size_t k = 0; k < pixels.size(); ++k) pixels[k] = static_cast<uint8_t>(i * 31 + k);
+    return pixels;
+  });
+  CHECK(std::filesystem::is_empty(dir.path()));
+  for (size_t i = 0; i < sizes.size(); ++i) {
+    const std::vector<uint8_t> pixels = photos.Read(i);
+    REQUIRE(pixels.size() == sizes[i]);
+    for (size_t k = 0; k < pixels.size(); ++k) CHECK(pixels[k] == static_cast<uint8_t>(i * 31 + k));
+  }
+  CHECK_THROWS_WITH(DecodedPhotos(dir.path() / "missing", sizes, [](size_t) { return std::vector<uint8_t>(); }),
+                    Catch::Contains("missing") && Catch::Contains("cannot make a file"));
 }
 
 }  // namespace p2n::testing
