@@ -1,5 +1,7 @@
 #include "splat/splat_trainer.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -345,23 +347,34 @@ std::vector<TrainView> HalfSizeViews(const std::vector<TrainView>& views) {
   return half;
 }
 
-std::vector<TrainView> FittedViews(const std::vector<TrainView>& views, int max_side) {
+std::vector<TrainView> FittedViews(const std::vector<TrainView>& views, int max_side,
+                                   const std::function<std::vector<uint8_t>(size_t)>& pixels) {
   int longest = 0;
   for (const TrainView& view : views) longest = std::max({longest, view.camera.width, view.camera.height});
-  if (max_side <= 0 || longest <= max_side) return views;
-  const double scale = static_cast<double>(max_side) / longest;
-  std::vector<TrainView> fitted;
-  for (const TrainView& view : views) {
+  const bool as_they_are = max_side <= 0 || longest <= max_side;
+  if (as_they_are && !pixels) return views;
+  const double scale = as_they_are ? 1.0 : static_cast<double>(max_side) / longest;
+  std::vector<TrainView> fitted(views.size());
+  tbb::parallel_for(size_t{0}, views.size(), [&](size_t i) {
+    const TrainView& view = views[i];
+    std::vector<uint8_t> read;
+    const std::vector<uint8_t>& source_pixels = pixels ? (read = pixels(i)) : view.pixels;
+    if (source_pixels.size() != view.PixelBytes()) throw std::invalid_argument("FittedViews: " + view.name + "'s size");
+    if (as_they_are) {
+      fitted[i] = view;
+      fitted[i].pixels = std::move(read);
+      return;
+    }
     const int width = std::max(1, static_cast<int>(std::lround(view.camera.width * scale)));
     const int height = std::max(1, static_cast<int>(std::lround(view.camera.height * scale)));
     TrainView small{ResizedCamera(view.camera, width, height), view.near, view.far, view.channels, {}, view.name, {}};
     small.pixels.resize(size_t(width) * height * view.channels);
     const cv::Mat source(view.camera.height, view.camera.width, CV_8UC(view.channels),
-                         const_cast<uint8_t*>(view.pixels.data()));
+                         const_cast<uint8_t*>(source_pixels.data()));
     cv::Mat target(height, width, CV_8UC(view.channels), small.pixels.data());
     cv::resize(source, target, target.size(), 0, 0, cv::INTER_AREA);
-    fitted.push_back(std::move(small));
-  }
+    fitted[i] = std::move(small);
+  });
   return fitted;
 }
 

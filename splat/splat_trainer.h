@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <random>
 #include <vector>
 
@@ -124,8 +125,10 @@ class SplatTrainer {
 std::vector<TrainView> HalfSizeViews(const std::vector<TrainView>& views);
 
 // `views` downsized with an area filter, their intrinsics scaled per axis (ResizedCamera), so that the longest side of
-// the largest is `max_side` (0, or all of them smaller: as they are).
-std::vector<TrainView> FittedViews(const std::vector<TrainView>& views, int max_side);
+// the largest is `max_side` (0, or all of them smaller: as they are). With `pixels`, view i's pixels are pixels(i)
+// (its own are absent), read as it is fitted: at most one photo a thread is in memory at full size.
+std::vector<TrainView> FittedViews(const std::vector<TrainView>& views, int max_side,
+                                   const std::function<std::vector<uint8_t>(size_t)>& pixels = {});
 
 // The Gaussians' image of `camera` over `background`: an RGB FloatImage.
 FloatImage RenderSplats(const Gaussians<float>& gaussians, const PinholeCamera& camera,

@@ -12,6 +12,7 @@
 #include "nerf/renderer.h"
 #include "photo2nerf/version.h"
 #include "pipeline/log.h"
+#include "pipeline/progress.h"
 #include "splat/field_init.h"
 #include "splat/similarity.h"
 #include "splat/splat_gltf.h"
@@ -95,6 +96,19 @@ Gaussians<float> GaussiansFromSparseFile(const fs::path& file, const FieldInitOp
   return GaussiansFromSparsePoints(points, rgb, init.max_gaussians, init.sh_degree);
 }
 
+// The training photos of `poses` read into `views` (their cameras as the splats see them), each fitted to `max_side`
+// as it is read (FittedViews).
+std::vector<TrainView> LoadFittedViews(const ImportedDataset& poses, const std::vector<TrainView>& views,
+                                       int max_side) {
+  const std::vector<const ImportedView*> train = TrainingViews(poses);
+  Progress progress("splat: loading the training images", static_cast<int64_t>(train.size()), "images");
+  return FittedViews(views, max_side, [&](size_t v) {
+    std::vector<uint8_t> pixels = LoadTrainView(*train[v]).pixels;
+    progress.Add();
+    return pixels;
+  });
+}
+
 // The splats' world; `place`: the first splats too (a block's part begins from the whole part's instead).
 SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& options, bool place) {
   SplatSetup setup;
@@ -103,7 +117,7 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   const TrainedField trained = ReadTrainedField(train);
   const NerfModel& model = trained.model;
   const ImportedDataset poses = LoadTransformsJson(poses_result.transforms(), context.workspace.root());
-  setup.data = LoadTrainingData(poses);
+  setup.data = LoadTrainingData(poses, false, /*photo_bytes=*/0);  // the training photos' pixels as they are fitted
   setup.background = model.background;
   setup.field_psnr = trained.report.heldout_psnr;
   for (TrainView& view : setup.data.train) {
@@ -141,7 +155,7 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   // Large photos are optimised downsized (splat.max_image_size): more steps on fewer pixels score better at full
   // size (docs/benchmarks.md, splats).
   const int full_width = setup.data.train.front().camera.width;
-  setup.data.train = FittedViews(setup.data.train, options.max_image_size);
+  setup.data.train = LoadFittedViews(poses, setup.data.train, options.max_image_size);
   if (setup.data.train.front().camera.width != full_width) {
     LogInfo(format("splat: optimised on the photos at {}x{} ({} {})", setup.data.train.front().camera.width,
                    setup.data.train.front().camera.height, OptionKey(options, options.max_image_size),

@@ -260,6 +260,20 @@ TEST_CASE("Views fitted to a size: the largest's longest side at the size, each 
   CHECK(odd[0].camera.fy == Approx(large.camera.fy * 0.4));
   CHECK(FittedViews({large}, 40)[0].camera.width == 40);
   CHECK(FittedViews({large}, 0)[0].camera.width == 40);
+
+  // The pixels read as each view is fitted (the views without theirs): the same views.
+  std::vector<TrainView> without = {large, small};
+  for (TrainView& view : without) view.pixels.clear();
+  const auto read = [&](size_t i) { return (i == 0 ? large : small).pixels; };
+  for (const int side : {20, 0}) {
+    const std::vector<TrainView> expected = FittedViews({large, small}, side);
+    const std::vector<TrainView> as_read = FittedViews(without, side, read);
+    REQUIRE(as_read.size() == 2);
+    for (size_t i = 0; i < 2; ++i) {
+      CHECK(as_read[i].camera.width == expected[i].camera.width);
+      CHECK(as_read[i].pixels == expected[i].pixels);
+    }
+  }
 }
 
 TEST_CASE("SSIM of the splats' loss: 1 for the photo itself, its gradient against central differences", "[splat]") {
