@@ -114,7 +114,7 @@ class Trainer {
   Trainer(const TrainerOptions& options, const TrainingData& data);
 
   // Rays are drawn from these training views only (each must have its pixels) until the next call: the ones a
-  // window over photos too many for memory holds (stages/photo_window.h). The error map's draws outside them are
+  // window over photos too many for memory holds (base/photo_window.h). The error map's draws outside them are
   // drawn again (their weights then carry a common factor, the resident views' share of the two distributions).
   // The training views with pixels by default.
   void SampleFrom(std::vector<size_t> views);
