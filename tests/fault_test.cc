@@ -20,6 +20,18 @@ namespace p2n::testing {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
+namespace {
+
+// `args` run under a file-size limit of `kib` KiB (a full disk, as far as writes are concerned).
+std::vector<std::string> WithFileSizeLimit(int kib, const std::vector<std::string>& args) {
+  std::vector<std::string> limited = {"/bin/bash", "-c", "ulimit -f " + std::to_string(kib) + " && exec \"$@\"",
+                                      "limited"};
+  limited.insert(limited.end(), args.begin(), args.end());
+  return limited;
+}
+
+}  // namespace
+
 TEST_CASE("faults: Ctrl-C stops with exit status 130, the stage is incomplete, the next run resumes training",
           "[fault]") {
   TempDir dir;
@@ -125,8 +137,7 @@ TEST_CASE("faults: SIGKILL at many moments, then a rerun, gives the uninterrupte
 TEST_CASE("faults: a file-size limit gives a clear error naming the file and keeps the finished stages", "[fault]") {
   TempDir dir;
   const fs::path data = SmallDataset(dir), workspace = dir / "ws";
-  std::vector<std::string> limited = {"/bin/bash", "-c", "ulimit -f 256 && exec \"$@\"", "limited"};
-  for (const std::string& arg : RunArgs(data, workspace)) limited.push_back(arg);
+  const std::vector<std::string> limited = WithFileSizeLimit(256, RunArgs(data, workspace));
   std::string output;
   CHECK(RunCommand(limited, &output) == 1);  // a user error: the environment, not a bug
   INFO(output);
@@ -147,8 +158,7 @@ TEST_CASE("faults: a full disk in the splat stage names its file and keeps the t
   std::string output;
   REQUIRE(RunCommand(until_train, &output) == 0);
   // 16 KiB: the splat stage of this scene writes about 150 splats, 248 bytes each, in one file.
-  std::vector<std::string> limited = {"/bin/bash", "-c", "ulimit -f 16 && exec \"$@\"", "limited"};
-  for (const std::string& arg : RunArgs(data, workspace)) limited.push_back(arg);
+  const std::vector<std::string> limited = WithFileSizeLimit(16, RunArgs(data, workspace));
   CHECK(RunCommand(limited, &output) == 1);
   INFO(output);
   CHECK_THAT(output, Catch::Contains("35_splat") && Catch::Contains("File too large") && Catch::Contains("free space"));
@@ -169,16 +179,14 @@ TEST_CASE("faults: a full disk while the training photos are decoded for a windo
   std::string output;
   REQUIRE(RunCommand(until_poses, &output) == 0);
   // Ten training photos of 9 KiB: 0.06 MB of train.photo_memory hold six, and their decoded copy takes 90 KiB.
-  std::vector<std::string> limited = {"/bin/bash", "-c", "ulimit -f 16 && exec \"$@\"", "limited"};
-  for (const std::string& arg : RunArgs(data, workspace)) limited.push_back(arg);
-  limited.insert(limited.end(), {"--until", "train", "--train.photo_memory", "0.06"});
-  CHECK(RunCommand(limited, &output) == 1);
+  std::vector<std::string> windowed = RunArgs(data, workspace);
+  windowed.insert(windowed.end(), {"--until", "train", "--train.photo_memory", "0.06"});
+  CHECK(RunCommand(WithFileSizeLimit(16, windowed), &output) == 1);
   INFO(output);
   CHECK_THAT(output, Catch::Contains("decoded photos") && Catch::Contains("30_train.resume") &&
                          Catch::Contains("File too large") && Catch::Contains("free space"));
   CHECK(fs::is_empty(workspace / "30_train.resume"));  // the copy had no name: nothing is left of it
-  std::vector<std::string> rerun(limited.begin() + 4, limited.end());
-  REQUIRE(RunCommand(rerun, &output) == 0);
+  REQUIRE(RunCommand(windowed, &output) == 0);
   CHECK_THAT(output, Catch::Contains("poses: fresh, skipped"));
   CHECK(ReadJsonFile(workspace / "30_train" / "train_report.json")["training_views_in_memory"] == 4);
 }
@@ -191,8 +199,7 @@ TEST_CASE("faults: a full disk in the export stage names its file and keeps the 
   std::string output;
   REQUIRE(RunCommand(until_render, &output) == 0);
   // 16 KiB: the export's first file, mesh.ply, is larger.
-  std::vector<std::string> limited = {"/bin/bash", "-c", "ulimit -f 16 && exec \"$@\"", "limited"};
-  for (const std::string& arg : RunArgs(data, workspace)) limited.push_back(arg);
+  const std::vector<std::string> limited = WithFileSizeLimit(16, RunArgs(data, workspace));
   CHECK(RunCommand(limited, &output) == 1);
   INFO(output);
   CHECK_THAT(output,
