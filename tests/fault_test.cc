@@ -30,6 +30,13 @@ std::vector<std::string> WithFileSizeLimit(int kib, const std::vector<std::strin
   return limited;
 }
 
+// The run's arguments, ending after `stage`.
+std::vector<std::string> RunArgsUntil(const fs::path& data, const fs::path& workspace, const std::string& stage) {
+  std::vector<std::string> args = RunArgs(data, workspace);
+  args.insert(args.end(), {"--until", stage});
+  return args;
+}
+
 }  // namespace
 
 TEST_CASE("faults: Ctrl-C stops with exit status 130, the stage is incomplete, the next run resumes training",
@@ -153,10 +160,8 @@ TEST_CASE("faults: a file-size limit gives a clear error naming the file and kee
 TEST_CASE("faults: a full disk in the splat stage names its file and keeps the trained field", "[fault]") {
   TempDir dir;
   const fs::path data = SmallDataset(dir), workspace = dir / "ws";
-  std::vector<std::string> until_train = RunArgs(data, workspace);
-  until_train.insert(until_train.end(), {"--until", "train"});
   std::string output;
-  REQUIRE(RunCommand(until_train, &output) == 0);
+  REQUIRE(RunCommand(RunArgsUntil(data, workspace, "train"), &output) == 0);
   // 16 KiB: the splat stage of this scene writes about 150 splats, 248 bytes each, in one file.
   const std::vector<std::string> limited = WithFileSizeLimit(16, RunArgs(data, workspace));
   CHECK(RunCommand(limited, &output) == 1);
@@ -174,13 +179,11 @@ TEST_CASE("faults: a full disk in the splat stage names its file and keeps the t
 TEST_CASE("faults: a full disk while the training photos are decoded for a window names the folder", "[fault]") {
   TempDir dir;
   const fs::path data = SmallDataset(dir), workspace = dir / "ws";
-  std::vector<std::string> until_poses = RunArgs(data, workspace);
-  until_poses.insert(until_poses.end(), {"--until", "poses"});
   std::string output;
-  REQUIRE(RunCommand(until_poses, &output) == 0);
+  REQUIRE(RunCommand(RunArgsUntil(data, workspace, "poses"), &output) == 0);
   // Ten training photos of 9 KiB: 0.06 MB of train.photo_memory hold six, and their decoded copy takes 90 KiB.
-  std::vector<std::string> windowed = RunArgs(data, workspace);
-  windowed.insert(windowed.end(), {"--until", "train", "--train.photo_memory", "0.06"});
+  std::vector<std::string> windowed = RunArgsUntil(data, workspace, "train");
+  windowed.insert(windowed.end(), {"--train.photo_memory", "0.06"});
   CHECK(RunCommand(WithFileSizeLimit(16, windowed), &output) == 1);
   INFO(output);
   CHECK_THAT(output, Catch::Contains("decoded photos") && Catch::Contains("30_train.resume") &&
@@ -194,10 +197,8 @@ TEST_CASE("faults: a full disk while the training photos are decoded for a windo
 TEST_CASE("faults: a full disk in the export stage names its file and keeps the splats and renders", "[fault]") {
   TempDir dir;
   const fs::path data = SmallDataset(dir), workspace = dir / "ws";
-  std::vector<std::string> until_render = RunArgs(data, workspace);
-  until_render.insert(until_render.end(), {"--until", "render"});
   std::string output;
-  REQUIRE(RunCommand(until_render, &output) == 0);
+  REQUIRE(RunCommand(RunArgsUntil(data, workspace, "render"), &output) == 0);
   // 16 KiB: the export's first file, mesh.ply, is larger.
   const std::vector<std::string> limited = WithFileSizeLimit(16, RunArgs(data, workspace));
   CHECK(RunCommand(limited, &output) == 1);
