@@ -26,7 +26,10 @@ int RunStageJob(int argc, char** argv) {
   app.add_option("-w,--workspace", workspace_path, "workspace folder, as the submitting run gave it")->required();
   app.add_option("--job", job_file, "the job file it wrote (logs/slurm/STAGE/job.json)")->required();
   std::optional<int> part;
-  app.add_option("--part", part, "one part of the stage's work (an element of the job array its job submitted)");
+  std::string work;
+  CLI::Option* part_option =
+      app.add_option("--part", part, "one part of the stage's work (an element of the job array its job submitted)");
+  part_option->needs(app.add_option("--work", work, "the kind of part (its job array's name)")->needs(part_option));
   if (auto code = Parse(app, OptionRegistry(), argc, argv)) return *code;
 
   const Workspace workspace = Workspace::Open(workspace_path, /*create=*/false);
@@ -42,14 +45,15 @@ int RunStageJob(int argc, char** argv) {
   CheckAllOptions(config);
   const auto thread_limit = ApplyRunOptions(config, workspace.LogDir() / "photo2nerf.log");
   const char* job_id = std::getenv("SLURM_JOB_ID");
-  LogInfo(format("{}: {} in job {} (workspace {})", job.stage, part ? format("part {}", *part) : "working",
+  LogInfo(format("{}: {} in job {} (workspace {})", job.stage, part ? format("{} part {}", work, *part) : "working",
                  job_id != nullptr ? job_id : "?", workspace.root().string()));
-  StageWork work{part, nullptr};
+  StageWork stage_work{part, work, nullptr};
   if (!part && ReadOptions<RunOptions>(config).scheduler == Scheduler::kSlurm) {
-    work.parts = SlurmParts(ReadOptions<SlurmOptions>(config), fs::read_symlink("/proc/self/exe"), workspace, job_file,
-                            job.stage);
+    stage_work.parts = SlurmParts(ReadOptions<SlurmOptions>(config), fs::read_symlink("/proc/self/exe"), workspace,
+                                  job_file, job.stage);
   }
-  const nlohmann::json summary = MakeRunner(workspace.input()).RunWork(workspace, config, job.stage, job.key, work);
+  const nlohmann::json summary =
+      MakeRunner(workspace.input()).RunWork(workspace, config, job.stage, job.key, stage_work);
   if (!part) WriteJsonAtomic(job.summary_path, summary);
   return kExitOk;
 }

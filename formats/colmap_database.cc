@@ -40,9 +40,26 @@ class Statement {
   sqlite3_stmt* statement_ = nullptr;
 };
 
-void Execute(sqlite3* db, const std::filesystem::path& path, const char* sql) {
-  Statement statement(db, path, sql);
+void Execute(sqlite3* db, const std::filesystem::path& path, const std::string& sql) {
+  Statement statement(db, path, sql.c_str());
   statement.Step();
+}
+
+// The largest id of `column` in `table` (0 when empty).
+int64_t MaxId(sqlite3* db, const std::filesystem::path& path, const std::string& table, const std::string& column) {
+  Statement statement(db, path, format("SELECT IFNULL(MAX({}), 0) FROM {}", column, table).c_str());
+  statement.Step();
+  return sqlite3_column_int64(statement.get(), 0);
+}
+
+// Copies every row of `table` from the attached database `part` into the main one, `assignments` applied ("image_id
+// = image_id + 7"): through a temporary table, whatever the columns of this COLMAP version's table.
+void CopyRows(sqlite3* db, const std::filesystem::path& path, const std::string& table,
+              const std::string& assignments) {
+  Execute(db, path, format("CREATE TEMP TABLE copied AS SELECT * FROM part.{}", table));
+  Execute(db, path, format("UPDATE copied SET {}", assignments));
+  Execute(db, path, format("INSERT INTO main.{} SELECT * FROM copied", table));
+  Execute(db, path, "DROP TABLE copied");
 }
 
 }  // namespace
@@ -118,6 +135,26 @@ bool ColmapDatabase::HasMatches(uint32_t image_id1, uint32_t image_id2) const {
   Statement statement(db_, path_, "SELECT 1 FROM matches WHERE pair_id = ?");
   sqlite3_bind_int64(statement.get(), 1, static_cast<sqlite3_int64>(ColmapPairId(image_id1, image_id2)));
   return statement.Step() == SQLITE_ROW;
+}
+
+uint32_t ColmapDatabase::AppendImages(const std::filesystem::path& other, std::optional<uint32_t> camera) {
+  const int64_t images = MaxId(db_, path_, "images", "image_id"), cameras = MaxId(db_, path_, "cameras", "camera_id");
+  {
+    Statement attach(db_, path_, "ATTACH DATABASE ? AS part");
+    sqlite3_bind_text(attach.get(), 1, other.c_str(), -1, SQLITE_TRANSIENT);
+    attach.Step();
+  }
+  Execute(db_, path_, "BEGIN TRANSACTION");
+  if (!camera) CopyRows(db_, path_, "cameras", format("camera_id = camera_id + {}", cameras));
+  CopyRows(db_, path_, "images",
+           format("image_id = image_id + {}, camera_id = {}", images,
+                  camera ? std::to_string(*camera) : format("camera_id + {}", cameras)));
+  for (const char* table : {"keypoints", "descriptors"}) {
+    CopyRows(db_, path_, table, format("image_id = image_id + {}", images));
+  }
+  Execute(db_, path_, "COMMIT");
+  Execute(db_, path_, "DETACH DATABASE part");
+  return camera ? *camera : static_cast<uint32_t>(cameras + 1);
 }
 
 void ColmapDatabase::WriteMatches(const std::vector<std::pair<std::pair<uint32_t, uint32_t>, FeatureMatches>>& pairs) {

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -51,6 +52,12 @@ class ColmapDatabase {
   std::vector<VerifiedPair> VerifiedPairs() const;
   // Whether the pair has a row of raw matches (in either order).
   bool HasMatches(uint32_t image_id1, uint32_t image_id2) const;
+  // Appends the images of the database `other` as COLMAP's feature_extractor wrote it (cameras, images, keypoints,
+  // descriptors: matches are not copied), their ids after this one's, in their order: with their own cameras, or
+  // all on this database's `camera` when given. Returns the id of the first camera they were given. Written for
+  // the blocks of photos extracted apart (sfm stage): a block of a shared camera's photos makes a camera of the same
+  // size as the others' blocks, and the first block's stands for all, as one extraction would make.
+  uint32_t AppendImages(const std::filesystem::path& other, std::optional<uint32_t> camera);
   // Writes the pairs' raw matches (COLMAP's pair id and order: the smaller image id first) in one transaction.
   void WriteMatches(const std::vector<std::pair<std::pair<uint32_t, uint32_t>, FeatureMatches>>& pairs);
 

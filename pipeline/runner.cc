@@ -250,7 +250,7 @@ nlohmann::json Runner::RunWork(const Workspace& workspace, const Config& config,
                            name, context.output_dir.string()));
   }
   if (work.part) {
-    stage.RunPart(context, *work.part);
+    stage.RunPart(context, work.work, *work.part);
   } else {
     context.parts = work.parts;
     stage.Run(context);

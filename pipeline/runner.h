@@ -42,6 +42,7 @@ struct StageRun {
 // with `parts` running its parts.
 struct StageWork {
   std::optional<int> part;
+  std::string work;  // the kind of part
   PartsExecutor parts = nullptr;
 };
 

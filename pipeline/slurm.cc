@@ -69,7 +69,7 @@ void CancelLeftJobs(const fs::path& dir, const fs::path& staging, const std::str
   for (const auto& entry : fs::directory_iterator(dir)) {
     const std::string name = entry.path().filename().string();
     if (name.rfind("submit-", 0) != 0 || entry.path().extension() != ".log") continue;
-    const std::string attempt = entry.path().stem().string().substr(7);  // submit-N.log, submit-parts.log
+    const std::string attempt = entry.path().stem().string().substr(7);  // submit-N.log, submit-WORK.log (parts)
     const std::optional<std::string> id = slurm::JobId(entry.path());
     if (id && !fs::exists(dir / ("exit-" + attempt))) cancelled |= slurm::CancelAndWait(*id, dir, stage);
   }

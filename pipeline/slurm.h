@@ -61,12 +61,12 @@ void RequireSbatch();
 // the nodes) and waits for it.
 StageExecutor SlurmExecutor(const SlurmOptions& options, std::filesystem::path program);
 
-// The PartsExecutor of a stage's job (photo2nerf stage-job; job_file: its job file): every part but the first as an
-// element of a Slurm job array of `program`, the first here. A part whose element is still pending when this job is
-// free is taken back and run here (the cluster may have no room for it beside this job), and so is one whose element
-// ended without finishing; one that failed on its own is the stage's error. Beside the job file:
-//   parts.sh, submit-parts.log    the array's batch script, what sbatch said
-//   part-P.log, exit-part-P       what part P's element printed, its exit code
+// The PartsExecutor of a stage's job (photo2nerf stage-job; job_file: its job file): every part of a kind (WORK) but
+// the first as an element of a Slurm job array of `program`, the first here. A part whose element is still pending when
+// this job is free is taken back and run here (the cluster may have no room for it beside this job), and so is one
+// whose element ended without finishing; one that failed on its own is the stage's error. Beside the job file:
+//   WORK.sh, submit-WORK.log      the array's batch script, what sbatch said
+//   WORK-P.log, exit-WORK-P       what part P's element printed, its exit code
 // A later attempt of the stage's job, or a later run of the stage, cancels an array left running.
 PartsExecutor SlurmParts(const SlurmOptions& options, std::filesystem::path program, const Workspace& workspace,
                          std::filesystem::path job_file, std::string stage);

@@ -19,31 +19,37 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// One submission of a stage's parts: the array's files, its job id, the parts it still runs.
+// One submission of a stage's parts of one kind (`work`): the array's files, its job id, the parts it still runs.
 struct PartArray {
   fs::path dir;  // beside the stage's job file
   std::string stage;
+  std::string work;
   std::string id;
   std::set<int> waiting;
 
   // Where this job's questions to Slurm are logged: not beside the stage's, which the submitting run asks.
   fs::path Queries() const { return dir / "parts"; }
-  fs::path ExitFile(int part) const { return dir / format("exit-part-{}", part); }
-  fs::path Log(int part) const { return dir / format("part-{}.log", part); }
+  fs::path Script() const { return dir / (work + ".sh"); }
+  fs::path SubmitLog() const { return dir / format("submit-{}.log", work); }
+  fs::path ExitFile(int part) const { return dir / format("exit-{}-{}", work, part); }
+  fs::path Log(int part) const { return dir / format("{}-{}.log", work, part); }
+  // What the log says of part `part`.
+  std::string Name(int part) const { return format("{} part {}", work, part); }
 };
 
-// The batch script of an element: photo2nerf stage-job --part, then its exit code into exit-part-<part>.
-void WritePartsScript(const fs::path& script, const fs::path& program, const Workspace& workspace,
-                      const fs::path& job_file, const std::string& stage) {
+// The batch script of an element: photo2nerf stage-job --work --part, then its exit code into its exit file.
+void WritePartsScript(const PartArray& array, const fs::path& program, const Workspace& workspace,
+                      const fs::path& job_file) {
   std::string text = "#!/bin/sh\n";
-  text += format("# Parts of the {} stage of workspace {} as a Slurm job array (written by photo2nerf stage-job).\n",
-                 stage, workspace.root().string());
-  text += QuoteCommand(
-              {program.string(), "stage-job", "-w", workspace.root().string(), "--job", job_file.string(), "--part"}) +
+  text +=
+      format("# Parts ({}) of the {} stage of workspace {} as a Slurm job array (written by photo2nerf stage-job).\n",
+             array.work, array.stage, workspace.root().string());
+  text += QuoteCommand({program.string(), "stage-job", "-w", workspace.root().string(), "--job", job_file.string(),
+                        "--work", array.work, "--part"}) +
           " \"$SLURM_ARRAY_TASK_ID\"\n";
-  text += slurm::WriteExitCode(job_file.parent_path() / "exit-part-", "\"$SLURM_ARRAY_TASK_ID\"");
-  WriteFileAtomic(script, text);
-  fs::permissions(script, fs::perms::owner_exec, fs::perm_options::add);
+  text += slurm::WriteExitCode(array.dir / format("exit-{}-", array.work), "\"$SLURM_ARRAY_TASK_ID\"");
+  WriteFileAtomic(array.Script(), text);
+  fs::permissions(array.Script(), fs::perms::owner_exec, fs::perm_options::add);
 }
 
 // Part `part` has ended in its element with `code`: done, or run here when it was stopped from outside; an error
@@ -52,12 +58,12 @@ void PartEnded(const PartArray& array, int part, int code, const std::function<v
   if (code == kExitOk) return;
   if (code != kExitInterrupted) {
     const std::string message =
-        format("{}: part {} failed in its Slurm job {}_{} (exit code {}): {} (its log: {})", array.stage, part,
+        format("{}: {} failed in its Slurm job {}_{} (exit code {}): {} (its log: {})", array.stage, array.Name(part),
                array.id, part, code, slurm::LastError(array.Log(part)), array.Log(part).string());
     if (code == kExitUserError) throw UserError(message);
     throw ExternalToolError(message);
   }
-  LogWarning(format("{}: part {} was stopped in its Slurm job; running it here", array.stage, part));
+  LogWarning(format("{}: {} was stopped in its Slurm job; running it here", array.stage, array.Name(part)));
   here(part);
 }
 
@@ -95,9 +101,9 @@ void WaitForParts(PartArray& array, const std::function<void(int)>& here) {
         PartEnded(array, part, *code, here);
       } else {
         LogWarning(
-            format("{}: part {} ended in its Slurm job without finishing (cancelled, out of time, or its node "
+            format("{}: {} ended in its Slurm job without finishing (cancelled, out of time, or its node "
                    "lost); running it here",
-                   array.stage, part));
+                   array.stage, array.Name(part)));
         here(part);
       }
     }
@@ -110,7 +116,7 @@ void WaitForParts(PartArray& array, const std::function<void(int)>& here) {
       const std::string& state = element.state;
       // Pending for want of room (not merely not yet looked at by the scheduler).
       if (state == "PENDING" && element.reason != "None" && TakeBack(array, part)) {
-        LogInfo(format("{}: part {} was still waiting for room in Slurm; running it here", array.stage, part));
+        LogInfo(format("{}: {} was still waiting for room in Slurm; running it here", array.stage, array.Name(part)));
         array.waiting.erase(part);
         here(part);
         break;  // ask Slurm again: time has passed
@@ -125,16 +131,15 @@ void WaitForParts(PartArray& array, const std::function<void(int)>& here) {
 PartsExecutor SlurmParts(const SlurmOptions& options, fs::path program, const Workspace& workspace, fs::path job_file,
                          std::string stage) {
   return [options, program = std::move(program), workspace, job_file = std::move(job_file), stage = std::move(stage)](
-             const std::vector<int>& parts, const std::function<void(int)>& here) {
+             const std::string& work, const std::vector<int>& parts, const std::function<void(int)>& here) {
     if (parts.size() < 2) {
       for (const int part : parts) here(part);
       return;
     }
-    PartArray array{job_file.parent_path(), stage, "", std::set<int>(parts.begin() + 1, parts.end())};
-    const fs::path submit_log = array.dir / "submit-parts.log";
+    PartArray array{job_file.parent_path(), stage, work, "", std::set<int>(parts.begin() + 1, parts.end())};
     // An earlier attempt of this stage job may have left its array running: one writer per part.
     fs::create_directories(array.Queries());
-    if (const std::optional<std::string> left = slurm::JobId(submit_log)) {
+    if (const std::optional<std::string> left = slurm::JobId(array.SubmitLog())) {
       slurm::CancelAndWait(*left, array.Queries(), stage);
     }
     std::string indices;
@@ -144,17 +149,18 @@ PartsExecutor SlurmParts(const SlurmOptions& options, fs::path program, const Wo
       fs::remove(array.Log(part), error);
       indices += format("{}{}", indices.empty() ? "" : ",", part);
     }
-    const fs::path script = array.dir / "parts.sh";
-    WritePartsScript(script, program, workspace, job_file, stage);
-    array.id = slurm::Submit(slurm::SbatchCommand(options, workspace, format("p2n-{}-parts", stage),
-                                                  array.dir / "part-%a.log", {"--array=" + indices}, script),
-                             submit_log, format("the parts of stage {}", stage));
-    LogInfo(format("{}: parts {} as Slurm job array {}; part {} here", stage, indices, array.id, parts.front()));
+    WritePartsScript(array, program, workspace, job_file);
+    array.id = slurm::Submit(
+        slurm::SbatchCommand(options, workspace, format("p2n-{}-{}", stage, work),
+                             array.dir / format("{}-%a.log", work), {"--array=" + indices}, array.Script()),
+        array.SubmitLog(), format("the {} parts of stage {}", work, stage));
+    LogInfo(
+        format("{}: {} parts {} as Slurm job array {}; part {} here", stage, work, indices, array.id, parts.front()));
     try {
       here(parts.front());
       WaitForParts(array, here);
     } catch (...) {
-      RunCleanupSubprocess({"scancel", array.id}, submit_log, "scancel");
+      RunCleanupSubprocess({"scancel", array.id}, array.SubmitLog(), "scancel");
       throw;
     }
   };

@@ -21,9 +21,11 @@ namespace p2n {
 
 class Runner;
 
-// Runs `parts` of a stage's work, which need nothing of one another (Stage::RunPart): `here(part)` runs one in this
-// process; a scheduler may run some as jobs of their own instead. Returns once every part has finished.
-using PartsExecutor = std::function<void(const std::vector<int>& parts, const std::function<void(int)>& here)>;
+// Runs `parts` of a stage's work `work`, which need nothing of one another (Stage::RunPart): `here(part)` runs one in
+// this process; a scheduler may run some as jobs of their own instead. Returns once every part has finished. `work`
+// names the kind of part (a stage may hand out several, one kind after another): a word, as in file names.
+using PartsExecutor =
+    std::function<void(const std::string& work, const std::vector<int>& parts, const std::function<void(int)>& here)>;
 
 // What a stage's Run() sees.
 struct StageContext {
@@ -41,9 +43,9 @@ struct StageContext {
 
   // Whether a scheduler runs the parts (each may be a job of its own, at once with the others).
   bool Scheduled() const { return parts != nullptr; }
-  // Runs `parts` by `parts`, or each by `here` in turn when there is no executor.
-  void RunParts(const std::vector<int>& list, const std::function<void(int)>& here) const {
-    if (parts) return parts(list, here);
+  // Runs the parts `list` of `work` by `parts`, or each by `here` in turn when there is no executor.
+  void RunParts(const std::string& work, const std::vector<int>& list, const std::function<void(int)>& here) const {
+    if (parts) return parts(work, list, here);
     for (const int part : list) here(part);
   }
 };
@@ -75,11 +77,11 @@ class Stage {
     return {};
   }
   virtual void Run(StageContext& context) const = 0;
-  // Part `part` of Run()'s work in a process of its own (a scheduler's job): what Run() hands to
+  // Part `part` of Run()'s work `work` in a process of its own (a scheduler's job): what Run() hands to
   // StageContext::RunParts. Only stages that hand out parts have any.
-  virtual void RunPart(StageContext& context, int part) const {
+  virtual void RunPart(StageContext& context, const std::string& work, int part) const {
     (void)context;
-    throw std::logic_error(name() + " has no parts to run (part " + std::to_string(part) + ")");
+    throw std::logic_error(name() + " has no parts to run (" + work + " " + std::to_string(part) + ")");
   }
   // Applies the stage's kCheck thresholds to its complete result in `result_dir`; throws UserError saying what
   // fails. Run() applies the same check to what it makes; the runner calls this on a fresh result, whose

@@ -12,6 +12,9 @@
 
 namespace p2n {
 
+// The kind of the sfm stage's parts that map clusters (StageContext::RunParts).
+inline constexpr const char* kClusterWork = "cluster";
+
 // Cuts the photos of COLMAP's `database` into clusters of at most `max_images`, each grown by up to `overlap` of
 // its neighbours (ClusterImages), and writes cluster k's photo names to ClusterImageList(dir, k), k from 1. Returns
 // the clusters' numbers.

@@ -18,6 +18,7 @@
 #include "pipeline/subprocess.h"
 #include "stages/cluster_mapping.h"
 #include "stages/colmap_flags.h"
+#include "stages/extraction_blocks.h"
 #include "stages/feature_matching.h"
 #include "stages/left_out.h"
 #include "stages/matcher_choice.h"
@@ -136,30 +137,43 @@ struct ColmapRun {
 
   fs::path database() const { return out.database(); }  // always new: the staging folder starts empty
 
-  // One extraction for every photo, or one per camera group when `groups` is not empty.
-  void ExtractFeatures(const std::vector<CameraGroup>& groups) const {
-    const std::vector<std::string> extract = {options.colmap,
-                                              "feature_extractor",
-                                              "--database_path",
-                                              database().string(),
-                                              "--image_path",
-                                              images.string(),
-                                              "--random_seed",
-                                              seed,
-                                              "--ImageReader.camera_model",
-                                              options.camera_model,
-                                              "--ImageReader.single_camera",
-                                              options.single_camera ? "1" : "0",
-                                              flags.extraction_use_gpu,
-                                              "0",
-                                              flags.extraction_num_threads,
-                                              threads,
-                                              flags.extraction_max_image_size,
-                                              std::to_string(options.max_image_size),
-                                              flags.extraction_max_num_features,
-                                              std::to_string(options.max_num_features)};
-    if (groups.empty()) {
-      steps->Run("feature extraction", extract);
+  // COLMAP's feature extraction of the photos of `list` (every photo when empty) into `database`.
+  std::vector<std::string> ExtractCommand(const fs::path& database, const fs::path& list = {}) const {
+    std::vector<std::string> command = {options.colmap,
+                                        "feature_extractor",
+                                        "--database_path",
+                                        database.string(),
+                                        "--image_path",
+                                        images.string(),
+                                        "--random_seed",
+                                        seed,
+                                        "--ImageReader.camera_model",
+                                        options.camera_model,
+                                        "--ImageReader.single_camera",
+                                        options.single_camera ? "1" : "0",
+                                        flags.extraction_use_gpu,
+                                        "0",
+                                        flags.extraction_num_threads,
+                                        threads,
+                                        flags.extraction_max_image_size,
+                                        std::to_string(options.max_image_size),
+                                        flags.extraction_max_num_features,
+                                        std::to_string(options.max_num_features)};
+    if (!list.empty()) command.insert(command.end(), {"--image_list_path", list.string()});
+    return command;
+  }
+
+  // Whether `photos` are extracted in blocks, each a part of the stage (a job of its own under a scheduler).
+  bool ExtractsInBlocks(size_t photos) const {
+    return context->Scheduled() && photos > static_cast<size_t>(options.extraction_block_images);
+  }
+
+  // The features of every photo of `groups` (each group's photos one camera with sfm.single_camera): one extraction
+  // for one group, one a group for several, or in blocks (ExtractsInBlocks) merged.
+  void ExtractFeatures(const std::vector<CameraGroup>& groups, size_t photos) const {
+    if (ExtractsInBlocks(photos)) return ExtractInBlocks(groups);
+    if (groups.size() == 1) {
+      steps->Run("feature extraction", ExtractCommand(database()));
       return;
     }
     for (size_t i = 0; i < groups.size(); ++i) {
@@ -167,10 +181,32 @@ struct ColmapRun {
       std::string lines;
       for (const std::string& name : groups[i].images) lines += name + "\n";
       WriteFileAtomic(list, lines);
-      std::vector<std::string> argv = extract;
-      argv.insert(argv.end(), {"--image_list_path", list.string()});
-      steps->Run(format("feature extraction camera {} of {}", i + 1, groups.size()), argv);
+      steps->Run(format("feature extraction camera {} of {}", i + 1, groups.size()), ExtractCommand(database(), list));
     }
+  }
+
+  // Extraction in blocks of at most sfm.extraction_block_images photos (extraction_blocks.h), merged.
+  void ExtractInBlocks(const std::vector<CameraGroup>& groups) const {
+    const fs::path dir = out.dir / "extraction";
+    fs::remove_all(dir);
+    const std::vector<ExtractionBlock> blocks = PlanExtractionBlocks(groups, options.extraction_block_images);
+    const std::vector<int> parts = WriteExtractionBlocks(blocks, dir);
+    LogInfo(format("sfm: features extracted in {} blocks of at most {} photos, as parts of the stage", parts.size(),
+                   options.extraction_block_images));
+    steps->RunHere("feature extraction",
+                   [&] { context->RunParts(kExtractionWork, parts, [&](int part) { ExtractBlock(dir, part); }); });
+    steps->RunHere("merging features", [&] { MergeExtractionBlocks(blocks, dir, database(), options.single_camera); });
+    fs::remove_all(dir);
+  }
+
+  // Block `part` of the photos extracted into its own database: a part of the stage's work.
+  void ExtractBlock(const fs::path& dir, int part) const {
+    const fs::path database = ExtractionBlockDatabase(dir, part);
+    fs::remove(database);  // what a stopped run of it left
+    fs::remove(database.string() + "-journal");
+    CheckSubprocess(ExtractCommand(database, ExtractionBlockList(dir, part)),
+                    out.logs() / format("feature_extraction_block_{}.log", part),
+                    format("feature extraction of block {}", part));
   }
 
   // A vocabulary tree of the photos' own features, for matching by retrieval (COLMAP's pretrained trees are a
@@ -290,7 +326,8 @@ struct ColmapRun {
     const std::vector<int> parts = PlanClusters(database(), clusters, options.leaf_max_images, overlap);
     LogInfo(format("sfm: {} clusters of at most {} photos (each grown by {}), mapped as parts of the stage",
                    parts.size(), options.leaf_max_images, overlap));
-    steps->RunHere(step, [&] { context->RunParts(parts, [&](int part) { MapCluster(clusters, part); }); });
+    steps->RunHere(step,
+                   [&] { context->RunParts(kClusterWork, parts, [&](int part) { MapCluster(clusters, part); }); });
     steps->AddSteps(static_cast<int>(parts.size()) - 1);
     int merges = 0;
     MergeClusterModels(clusters, out.dir / folder, [&](const fs::path& a, const fs::path& b, const fs::path& into) {
@@ -470,6 +507,7 @@ void SfmOptions::Check() const {
   CheckOption(*this, max_image_size, max_image_size >= 100,
               format("must be at least 100 pixels, not {}", max_image_size));
   CheckOption(*this, max_num_features, max_num_features >= 100, "must be at least 100");
+  CheckOption(*this, extraction_block_images, extraction_block_images >= 1, "must be at least 1");
   CheckOption(*this, hierarchical_min_images, hierarchical_min_images >= 0, "must be 0 (never) or a photo count");
   CheckOption(*this, leaf_max_images, leaf_max_images >= 8, "must be at least 8");
   CheckOption(*this, min_registered, min_registered > 0 && min_registered <= 1, "must be in (0, 1]");
@@ -535,10 +573,16 @@ struct SfmSetup {
   }
 };
 
-void SfmStage::RunPart(StageContext& context, int part) const {
-  const SfmSetup setup(context, format("version_cluster_{}.log", part));
+void SfmStage::RunPart(StageContext& context, const std::string& work, int part) const {
+  if (work != kExtractionWork && work != kClusterWork) Stage::RunPart(context, work, part);
+  const SfmSetup setup(context, format("version_{}_{}.log", work, part));
   StepRunner steps(setup.out.logs(), 1);
-  setup.Colmap(&steps, context).MapCluster(setup.out.dir / "clusters", part);
+  const ColmapRun colmap = setup.Colmap(&steps, context);
+  if (work == kExtractionWork) {
+    colmap.ExtractBlock(setup.out.dir / "extraction", part);
+  } else {
+    colmap.MapCluster(setup.out.dir / "clusters", part);
+  }
 }
 
 void SfmStage::Run(StageContext& context) const {
@@ -567,13 +611,14 @@ void SfmStage::Run(StageContext& context) const {
   LogInfo(format("sfm: COLMAP {}, {} photos, {} matching, features at {} px, the {} mapper", version.ToString(),
                  names.size(), EnumName(matcher), options.max_image_size,
                  hierarchical ? "hierarchical" : "incremental"));
-  // Extraction (one per image size), the vocabulary tree or our matching, COLMAP's matching, mapping, the
-  // triangulation after the hierarchical mapper, the principal point's adjustment, undistortion.
-  StepRunner steps(out.logs(), (options.refine_principal_point ? 6 : 5) + (hierarchical ? 1 : 0) +
-                                   (camera_per_group ? groups.size() - 1 : 0));
+  // The photos as extracted: a group per camera, or all as one.
+  const std::vector<CameraGroup> extracted = camera_per_group ? groups : std::vector<CameraGroup>{{"", names}};
+  // Extraction (one per group, or in blocks and merged), the vocabulary tree or our matching, COLMAP's matching,
+  // mapping, the triangulation after the hierarchical mapper, the principal point's adjustment, undistortion.
+  StepRunner steps(out.logs(), (options.refine_principal_point ? 5 : 4) + (hierarchical ? 1 : 0));
   const ColmapRun colmap = setup.Colmap(&steps, context);
-
-  colmap.ExtractFeatures(camera_per_group ? groups : std::vector<CameraGroup>{});
+  steps.AddSteps(colmap.ExtractsInBlocks(names.size()) ? 2 : static_cast<int>(extracted.size()));
+  colmap.ExtractFeatures(extracted, names.size());
   std::vector<SfmReport::Model> models;
   std::string matching;
   const fs::path chosen = MatchAndMap(colmap, options, names.size(), matcher, &matching, &models);

@@ -257,7 +257,7 @@ Optimised OptimiseBlocks(const SplatRun& run) {
   for (int b = 0; b < start.blocks.count(); ++b) {
     if (!BlockDone(run, b)) pending.push_back(b + 1);
   }
-  run.context.RunParts(pending, [&](int part) { OptimiseBlock(run, start, part - 1); });
+  run.context.RunParts(kBlockWork, pending, [&](int part) { OptimiseBlock(run, start, part - 1); });
 
   std::vector<Gaussians<float>> optimised;
   std::array<double, 3> background{0, 0, 0};

@@ -46,10 +46,14 @@ struct Optimised {
   RunState state;
 };
 
+// The kind of the stage's parts: block b is part b + 1.
+inline constexpr const char* kBlockWork = "block";
+
 // The whole scene's splats optimised at once, resuming from the stage's checkpoint.
 Optimised OptimiseWhole(const SplatRun& run);
 // The splats optimised whole for part of the budget, then each of options.blocks slabs from there for the rest, as
-// parts of the stage's work (StageContext::RunParts: in turn here, or as jobs of a scheduler at once); merged. Each
+// parts of the stage's work (kBlockWork, StageContext::RunParts: in turn here, or as jobs of a scheduler at once);
+// merged. Each
 // part's result is a checkpoint kept until the stage completes, so that a resumed run goes on with the parts left.
 Optimised OptimiseBlocks(const SplatRun& run);
 // Block b's part alone (in a job of its own), from the whole part's checkpoint.

@@ -100,7 +100,7 @@ class SplatStage : public StageOf<SplatResult> {
   std::vector<std::string> upstream() const override { return {PosesResult::kId.name, TrainResult::kId.name}; }
   void Run(StageContext& context) const override;
   // Block `part` (from 1) of splat.blocks (stages/splat_optimisation.h).
-  void RunPart(StageContext& context, int part) const override;
+  void RunPart(StageContext& context, const std::string& work, int part) const override;
 };
 
 }  // namespace p2n

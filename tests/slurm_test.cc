@@ -119,10 +119,10 @@ TEST_CASE("slurm: splat blocks run as a job array beside the stage's job, or in 
   INFO(output);
   REQUIRE(code == 0);
   INFO(ReadText(jobs / "attempt-1.log"));
-  CHECK_THAT(ReadText(jobs / "attempt-1.log"), Catch::Contains("splat: parts 2,3 as Slurm job array"));
-  CHECK_THAT(ReadText(jobs / "part-2.log"),
-             Catch::Contains("splat: part 2 in job") && Catch::Contains("splat: block 2 of 3"));
-  CHECK(ReadText(jobs / "exit-part-2") == "0\n");
+  CHECK_THAT(ReadText(jobs / "attempt-1.log"), Catch::Contains("splat: block parts 2,3 as Slurm job array"));
+  CHECK_THAT(ReadText(jobs / "block-2.log"),
+             Catch::Contains("splat: block part 2 in job") && Catch::Contains("splat: block 2 of 3"));
+  CHECK(ReadText(jobs / "exit-block-2") == "0\n");
   // The same steps and metrics rows; the same picture within 0.2 dB (the jobs have one thread, the local run two).
   nlohmann::json there = ReadJsonFile(report);
   CHECK(there["steps"] == here["steps"]);
@@ -135,39 +135,52 @@ TEST_CASE("slurm: splat blocks run as a job array beside the stage's job, or in 
   INFO(output);
   REQUIRE(code == 0);
   const std::string log = ReadText(jobs / "attempt-1.log");
-  CHECK_THAT(log, Catch::Contains("splat: part 2 was still waiting for room in Slurm; running it here") &&
-                      Catch::Contains("splat: part 3 was still waiting for room in Slurm; running it here") &&
+  CHECK_THAT(log, Catch::Contains("splat: block part 2 was still waiting for room in Slurm; running it here") &&
+                      Catch::Contains("splat: block part 3 was still waiting for room in Slurm; running it here") &&
                       !Catch::Contains("without finishing"));
-  CHECK(!fs::exists(jobs / "part-2.log"));
-  CHECK(!fs::exists(jobs / "part-3.log"));
+  CHECK(!fs::exists(jobs / "block-2.log"));
+  CHECK(!fs::exists(jobs / "block-3.log"));
   there = ReadJsonFile(report);
   CHECK(there["steps"] == here["steps"]);
   CHECK(there["heldout_psnr"].get<double>() == Approx(here["heldout_psnr"].get<double>()).margin(0.05));
 }
 
-// Photos the hierarchical mapper would map, under Slurm: each cluster mapped by COLMAP's incremental mapper as a part
-// of the sfm stage (an element of a job array beside the stage's job), the models merged, triangulated anew and
-// adjusted; every view as near the truth as the local hierarchical mapper's test asks (0.5 deg, 1% of the spread).
-TEST_CASE("slurm: the photos' clusters are mapped as a job array and merged into the true cameras", "[slurm]") {
+// Photos the hierarchical mapper would map, under Slurm: their features extracted in blocks, each a part of the sfm
+// stage (an element of a job array beside the stage's job), and merged; each cluster mapped by COLMAP's incremental
+// mapper as a part, the models merged, triangulated anew and adjusted; every view as near the truth as the local
+// hierarchical mapper's test asks (0.5 deg, 1% of the spread).
+TEST_CASE("slurm: features extracted in blocks and clusters mapped as job arrays, merged into the true cameras",
+          "[slurm]") {
   TempDir dir;
   SyntheticSceneOptions scene;
   scene.num_views = 24;
   WriteSyntheticScene(scene, dir / "photos");
   const fs::path workspace = dir / "ws";
   std::string output;
-  const int code = RunCommand({P2N_BINARY, "run", (dir / "photos").string(), "-w", workspace.string(), "--until",
-                               "poses", "--run.progress", "plain", "--run.scheduler", "slurm", "--slurm.cpus", "1",
-                               "--sfm.hierarchical_min_images", "20", "--sfm.leaf_max_images", "12"},
-                              &output);
+  const int code = RunCommand(
+      {P2N_BINARY, "run", (dir / "photos").string(), "-w", workspace.string(), "--until", "poses", "--run.progress",
+       "plain", "--run.scheduler", "slurm", "--slurm.cpus", "1", "--sfm.extraction_block_images", "10",
+       "--sfm.hierarchical_min_images", "20", "--sfm.leaf_max_images", "12"},
+      &output);
   INFO(output);
   REQUIRE(code == 0);
   const fs::path jobs = JobDir(workspace, "10_sfm"), sfm = workspace / "10_sfm";
   INFO(ReadText(jobs / "attempt-1.log"));
   CHECK_THAT(ReadText(jobs / "attempt-1.log"),
-             Catch::Contains("sfm: 2 clusters of at most 12 photos (each grown by 3)") &&
-                 Catch::Contains("sfm: parts 2 as Slurm job array"));
-  CHECK_THAT(ReadText(jobs / "part-2.log"), Catch::Contains("sfm: part 2 in job"));
-  CHECK(ReadText(jobs / "exit-part-2") == "0\n");
+             Catch::Contains("sfm: features extracted in 3 blocks of at most 10 photos") &&
+                 Catch::Contains("sfm: extraction parts 2,3 as Slurm job array") &&
+                 Catch::Contains("sfm: 2 clusters of at most 12 photos (each grown by 3)") &&
+                 Catch::Contains("sfm: cluster parts 2 as Slurm job array"));
+  for (const char* part : {"extraction-2.log", "extraction-3.log", "cluster-2.log"}) {
+    CHECK_THAT(ReadText(jobs / part), Catch::Contains(" part ") && Catch::Contains(" in job "));
+  }
+  CHECK(ReadText(jobs / "exit-extraction-3") == "0\n");
+  CHECK(ReadText(jobs / "exit-cluster-2") == "0\n");
+  for (const char* block : {"feature_extraction_block_1.log", "feature_extraction_block_3.log"}) {
+    CHECK_THAT(ReadText(sfm / "logs" / block),
+               Catch::StartsWith("$ colmap feature_extractor") && Catch::Contains("--image_list_path"));
+  }
+  CHECK(!fs::exists(sfm / "extraction"));  // the blocks' databases, merged
   for (const char* cluster : {"mapping_cluster_1.log", "mapping_cluster_2.log"}) {
     CHECK_THAT(ReadText(sfm / "logs" / cluster),
                Catch::StartsWith("$ colmap mapper") && Catch::Contains("--image_list_path"));
@@ -177,6 +190,8 @@ TEST_CASE("slurm: the photos' clusters are mapped as a job array and merged into
   const nlohmann::json report = ReadJsonFile(sfm / "sfm_report.json");
   CHECK(report["registered"] == 24);
   CHECK(report["chosen_model"] == "sparse/0");
+  CHECK(report["steps"][0]["step"] == "feature extraction");
+  CHECK(report["steps"][1]["step"] == "merging features");
   CheckPoses(ReadJsonFile(workspace / "20_poses" / "transforms.json"), TruePoses(dir / "photos"), 0.5, 0.01);
 }
 
@@ -193,13 +208,13 @@ TEST_CASE("slurm: a block whose job is cancelled is optimised by the stage's job
   while (!fs::exists(checkpoint) && Clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   REQUIRE(fs::exists(checkpoint));
   std::string ignored;
-  REQUIRE(RunCommand({"scancel", SubmittedJob(jobs / "submit-parts.log") + "_2"}, &ignored) == 0);
+  REQUIRE(RunCommand({"scancel", SubmittedJob(jobs / "submit-block.log") + "_2"}, &ignored) == 0);
   const int code = Wait(run);
   INFO(ReadText(dir / "run.log"));
   REQUIRE(code == 0);
   const std::string job_log = ReadText(jobs / "attempt-1.log");
   INFO(job_log);
-  CHECK_THAT(job_log, Catch::Contains("splat: part 2") && Catch::Contains("running it here"));
+  CHECK_THAT(job_log, Catch::Contains("splat: block part 2") && Catch::Contains("running it here"));
   const nlohmann::json report = ReadJsonFile(workspace / "35_splat" / "splat_report.json");
   CHECK(report["steps"] == 900);
   CHECK(report["resumed_from_step"].get<int>() > 0);  // block 2 went on from its checkpoint

@@ -1,0 +1,170 @@
+// Feature extraction in blocks (the sfm stage's parts under a scheduler): the blocks' plan, and their databases
+// merged into what one extraction writes, with COLMAP itself.
+
+#include <sqlite3.h>
+
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+#include <map>
+#include <set>
+
+#include "base/file_util.h"
+#include "base/format.h"
+#include "nerf/synthetic_scene.h"
+#include "stages/extraction_blocks.h"
+#include "tests/test_util.h"
+
+namespace p2n::testing {
+namespace fs = std::filesystem;
+namespace {
+
+std::vector<std::string> Names(size_t count, const std::string& prefix) {
+  std::vector<std::string> names;
+  for (size_t i = 0; i < count; ++i) names.push_back(prefix + std::to_string(100 + i) + ".png");
+  return names;
+}
+
+// What an extraction wrote of each image, by name: its camera's id, model, size and parameters, its keypoints' and
+// descriptors' bytes.
+struct Extracted {
+  std::string camera;
+  std::string keypoints, descriptors;
+  bool operator==(const Extracted&) const = default;
+};
+std::map<std::string, Extracted> ByName(const fs::path& database) {
+  sqlite3* db = nullptr;
+  REQUIRE(sqlite3_open_v2(database.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK);
+  sqlite3_stmt* statement = nullptr;
+  const char* sql =
+      "SELECT name, cameras.camera_id, model, width, height, params, keypoints.data, descriptors.data FROM images "
+      "JOIN cameras USING (camera_id) JOIN keypoints USING (image_id) JOIN descriptors USING (image_id)";
+  REQUIRE(sqlite3_prepare_v2(db, sql, -1, &statement, nullptr) == SQLITE_OK);
+  const auto blob = [&](int c) {
+    return std::string(static_cast<const char*>(sqlite3_column_blob(statement, c)), sqlite3_column_bytes(statement, c));
+  };
+  std::map<std::string, Extracted> images;
+  while (sqlite3_step(statement) == SQLITE_ROW) {
+    images[reinterpret_cast<const char*>(sqlite3_column_text(statement, 0))] = {
+        format("{} {} {}x{} ", sqlite3_column_int(statement, 1), sqlite3_column_int(statement, 2),
+               sqlite3_column_int(statement, 3), sqlite3_column_int(statement, 4)) +
+            blob(5),
+        blob(6), blob(7)};
+  }
+  sqlite3_finalize(statement);
+  sqlite3_close(db);
+  return images;
+}
+
+// The number of bytes in which `a` and `b` (of one size) differ.
+size_t BytesApart(const std::string& a, const std::string& b) {
+  size_t apart = 0;
+  for (size_t i = 0; i < a.size(); ++i) apart += a[i] != b[i];
+  return apart;
+}
+
+// COLMAP's extraction of the photos in `images` listed in `list` into `database`, one camera for them.
+void Extract(const fs::path& images, const fs::path& list, const fs::path& database) {
+  std::string output;
+  const int code =
+      RunCommand({"colmap", "feature_extractor", "--database_path", database.string(), "--image_path", images.string(),
+                  "--image_list_path", list.string(), "--ImageReader.single_camera", "1", "--SiftExtraction.use_gpu",
+                  "0", "--SiftExtraction.num_threads", "2", "--SiftExtraction.max_num_features", "500"},
+                 &output);
+  INFO(output);
+  REQUIRE(code == 0);
+}
+
+}  // namespace
+
+TEST_CASE("extraction blocks: each group's photos in order, in as few even blocks as fit the limit",
+          "[extraction_blocks]") {
+  const std::vector<CameraGroup> groups = {{"a", Names(10, "a")}, {"b", Names(3, "b")}, {"c", Names(8, "c")}};
+  const std::vector<ExtractionBlock> blocks = PlanExtractionBlocks(groups, 4);
+  std::vector<size_t> sizes, group_of;
+  std::vector<std::string> order;
+  for (const ExtractionBlock& block : blocks) {
+    sizes.push_back(block.images.size());
+    group_of.push_back(block.group);
+    order.insert(order.end(), block.images.begin(), block.images.end());
+  }
+  CHECK(sizes == std::vector<size_t>{3, 3, 4, 3, 4, 4});
+  CHECK(group_of == std::vector<size_t>{0, 0, 0, 1, 2, 2});
+  std::vector<std::string> all = groups[0].images;
+  for (size_t g = 1; g < groups.size(); ++g) all.insert(all.end(), groups[g].images.begin(), groups[g].images.end());
+  CHECK(order == all);
+  CHECK(PlanExtractionBlocks(groups, 100).size() == 3);
+
+  TempDir dir;
+  CHECK(WriteExtractionBlocks(blocks, dir / "x") == std::vector<int>{1, 2, 3, 4, 5, 6});
+  CHECK(ReadTextFile(ExtractionBlockList(dir / "x", 4)) == "b100.png\nb101.png\nb102.png\n");
+}
+
+// Two camera groups (as photos of two cameras), each extracted in two blocks into databases of their own and merged:
+// the same cameras, images, ids, keypoints and descriptors as the per-group extractions into one database.
+TEST_CASE("extraction blocks: the merged databases are what one extraction writes", "[extraction_blocks][colmap]") {
+  if (std::system("colmap help > /dev/null 2>&1") != 0) {
+    WARN("COLMAP is not installed (scripts/install_deps.sh installs it): skipping");
+    return;
+  }
+  TempDir dir;
+  SyntheticSceneOptions scene;
+  scene.num_views = 10;
+  scene.supersampling = 1;
+  WriteSyntheticScene(scene, dir / "photos");
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir / "photos")) {
+    if (entry.path().extension() == ".png") names.push_back(entry.path().filename().string());
+  }
+  std::sort(names.begin(), names.end());
+  REQUIRE(names.size() == 10);
+  const std::vector<CameraGroup> groups = {{"first", {names.begin(), names.begin() + 6}},
+                                           {"second", {names.begin() + 6, names.end()}}};
+  // One extraction a group into one database, as the stage does without a scheduler.
+  for (size_t g = 0; g < groups.size(); ++g) {
+    std::string lines;
+    for (const std::string& name : groups[g].images) lines += name + "\n";
+    WriteText(dir / "group.txt", lines);
+    Extract(dir / "photos", dir / "group.txt", dir / "whole.db");
+  }
+  const std::vector<ExtractionBlock> blocks = PlanExtractionBlocks(groups, 3);
+  REQUIRE(blocks.size() == 4);
+  const std::vector<int> parts = WriteExtractionBlocks(blocks, dir / "blocks");
+  for (const int part : parts) {
+    Extract(dir / "photos", ExtractionBlockList(dir / "blocks", part), ExtractionBlockDatabase(dir / "blocks", part));
+  }
+  MergeExtractionBlocks(blocks, dir / "blocks", dir / "merged.db", /*shared_camera=*/true);
+  // The same images on the same cameras with the same keypoints. COLMAP numbers the images as its threads finish
+  // them, and two of its own extractions differ in some descriptors (about 100 of an image's 100,000 bytes in a
+  // few images): the descriptors agree to 1% of their bytes.
+  const std::map<std::string, Extracted> whole = ByName(dir / "whole.db"), merged = ByName(dir / "merged.db");
+  REQUIRE(merged.size() == names.size());
+  REQUIRE(whole.size() == names.size());
+  std::set<std::string> cameras;
+  for (const auto& [name, image] : whole) {
+    INFO(name);
+    const Extracted& block = merged.at(name);
+    CHECK(block.camera == image.camera);
+    CHECK(block.keypoints == image.keypoints);
+    REQUIRE(block.descriptors.size() == image.descriptors.size());
+    CHECK(BytesApart(block.descriptors, image.descriptors) < image.descriptors.size() / 100);
+    cameras.insert(block.camera);
+  }
+  CHECK(cameras.size() == 2);
+
+  // Without a shared camera each block keeps its own: four cameras, one for each block's images.
+  for (const int part : parts) {
+    Extract(dir / "photos", ExtractionBlockList(dir / "blocks", part), ExtractionBlockDatabase(dir / "blocks", part));
+  }
+  MergeExtractionBlocks(blocks, dir / "blocks", dir / "own.db", /*shared_camera=*/false);
+  const std::map<std::string, Extracted> own = ByName(dir / "own.db");
+  for (size_t k = 0; k < blocks.size(); ++k) {
+    for (const std::string& name : blocks[k].images) {
+      INFO(name);
+      CHECK(own.at(name).camera.substr(0, 2) == format("{} ", k + 1));
+      CHECK(own.at(name).keypoints == whole.at(name).keypoints);
+    }
+  }
+}
+
+}  // namespace p2n::testing
