@@ -69,8 +69,9 @@ uint64_t ColmapPairId(uint32_t image_id1, uint32_t image_id2) {
   return kMaxNumImages * image_id1 + image_id2;
 }
 
-ColmapDatabase::ColmapDatabase(const std::filesystem::path& path) : path_(path) {
-  if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE, nullptr) != SQLITE_OK) {
+ColmapDatabase::ColmapDatabase(const std::filesystem::path& path, bool read_only) : path_(path) {
+  if (sqlite3_open_v2(path.c_str(), &db_, read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE, nullptr) !=
+      SQLITE_OK) {
     const std::string why = db_ != nullptr ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
     throw ExternalToolError(format("cannot open COLMAP's database '{}': {}", path.string(), why));
@@ -137,13 +138,35 @@ bool ColmapDatabase::HasMatches(uint32_t image_id1, uint32_t image_id2) const {
   return statement.Step() == SQLITE_ROW;
 }
 
+void CreateMatchesDatabase(const std::filesystem::path& path) {
+  sqlite3* db = nullptr;
+  // COLMAP 3.8's table (database.cc).
+  const char* sql =
+      "CREATE TABLE matches (pair_id INTEGER PRIMARY KEY NOT NULL, rows INTEGER NOT NULL, cols INTEGER NOT NULL, "
+      "data BLOB)";
+  const bool made =
+      sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) == SQLITE_OK &&
+      sqlite3_exec(db, sql, nullptr, nullptr, nullptr) == SQLITE_OK;
+  const std::string why = made ? "" : db != nullptr ? sqlite3_errmsg(db) : "out of memory";
+  sqlite3_close(db);
+  if (!made) throw ExternalToolError(format("cannot create the database '{}': {}", path.string(), why));
+}
+
+void ColmapDatabase::AppendMatches(const std::filesystem::path& other) {
+  Attach(other);
+  Execute(db_, path_, "INSERT INTO main.matches SELECT * FROM part.matches");
+  Execute(db_, path_, "DETACH DATABASE part");
+}
+
+void ColmapDatabase::Attach(const std::filesystem::path& other) {
+  Statement attach(db_, path_, "ATTACH DATABASE ? AS part");
+  sqlite3_bind_text(attach.get(), 1, other.c_str(), -1, SQLITE_TRANSIENT);
+  attach.Step();
+}
+
 uint32_t ColmapDatabase::AppendImages(const std::filesystem::path& other, std::optional<uint32_t> camera) {
   const int64_t images = MaxId(db_, path_, "images", "image_id"), cameras = MaxId(db_, path_, "cameras", "camera_id");
-  {
-    Statement attach(db_, path_, "ATTACH DATABASE ? AS part");
-    sqlite3_bind_text(attach.get(), 1, other.c_str(), -1, SQLITE_TRANSIENT);
-    attach.Step();
-  }
+  Attach(other);
   Execute(db_, path_, "BEGIN TRANSACTION");
   if (!camera) CopyRows(db_, path_, "cameras", format("camera_id = camera_id + {}", cameras));
   CopyRows(db_, path_, "images",

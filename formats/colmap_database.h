@@ -36,8 +36,9 @@ struct VerifiedPair {
 
 class ColmapDatabase {
  public:
-  // Opens an existing database for reading and writing; ExternalToolError when it cannot.
-  explicit ColmapDatabase(const std::filesystem::path& path);
+  // Opens an existing database for reading and writing, or for reading alone (while others read it too);
+  // ExternalToolError when it cannot.
+  explicit ColmapDatabase(const std::filesystem::path& path, bool read_only = false);
   ~ColmapDatabase();
   ColmapDatabase(const ColmapDatabase&) = delete;
   ColmapDatabase& operator=(const ColmapDatabase&) = delete;
@@ -58,13 +59,21 @@ class ColmapDatabase {
   // the blocks of photos extracted apart (sfm stage): a block of a shared camera's photos makes a camera of the same
   // size as the others' blocks, and the first block's stands for all, as one extraction would make.
   uint32_t AppendImages(const std::filesystem::path& other, std::optional<uint32_t> camera);
+  // Appends the raw matches of the database `other` (of the same images: a block of pairs matched apart).
+  void AppendMatches(const std::filesystem::path& other);
   // Writes the pairs' raw matches (COLMAP's pair id and order: the smaller image id first) in one transaction.
   void WriteMatches(const std::vector<std::pair<std::pair<uint32_t, uint32_t>, FeatureMatches>>& pairs);
 
  private:
+  // Attaches the database `other` as "part".
+  void Attach(const std::filesystem::path& other);
+
   std::filesystem::path path_;
   sqlite3* db_ = nullptr;
 };
+
+// A new database at `path` with COLMAP's table of raw matches alone (for matches made apart, AppendMatches).
+void CreateMatchesDatabase(const std::filesystem::path& path);
 
 // COLMAP's id of an unordered image pair.
 uint64_t ColmapPairId(uint32_t image_id1, uint32_t image_id2);

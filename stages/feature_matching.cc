@@ -147,8 +147,9 @@ std::vector<std::pair<size_t, size_t>> LoopPairs(size_t images, int overlap, siz
   return pairs;
 }
 
-size_t MatchIntoDatabase(const std::filesystem::path& database, const std::vector<std::pair<size_t, size_t>>& pairs) {
-  ColmapDatabase db(database);
+size_t MatchIntoDatabase(const std::filesystem::path& database, const std::vector<std::pair<size_t, size_t>>& pairs,
+                         const std::filesystem::path& into) {
+  ColmapDatabase db(database, /*read_only=*/!into.empty());
   const std::vector<ColmapDatabaseImage> images = db.Images();
   std::vector<std::pair<size_t, size_t>> todo;
   for (const auto& [i, j] : pairs) {
@@ -168,7 +169,11 @@ size_t MatchIntoDatabase(const std::filesystem::path& database, const std::vecto
     results[p] = {{images[i].id, images[j].id}, MatchSiftDescriptors(descriptors.at(i), descriptors.at(j))};
     progress.Add();
   });
-  db.WriteMatches(results);
+  if (into.empty()) {
+    db.WriteMatches(results);
+  } else {
+    ColmapDatabase(into).WriteMatches(results);
+  }
   return todo.size();
 }
 

@@ -40,7 +40,9 @@ std::vector<std::pair<size_t, size_t>> SequentialPairs(size_t images, int overla
 std::vector<std::pair<size_t, size_t>> LoopPairs(size_t images, int overlap, size_t stride);
 
 // Matches the pairs (indices into the database's images in name order) that have no raw matches yet and writes
-// their matches; returns how many pairs it matched. Progress as "sfm: matching descriptors"; Ctrl-C stops it.
-size_t MatchIntoDatabase(const std::filesystem::path& database, const std::vector<std::pair<size_t, size_t>>& pairs);
+// their matches, into `database` or, when given, into `into` (CreateMatchesDatabase: `database` is then only read);
+// returns how many pairs it matched. Progress as "sfm: matching descriptors"; Ctrl-C stops it.
+size_t MatchIntoDatabase(const std::filesystem::path& database, const std::vector<std::pair<size_t, size_t>>& pairs,
+                         const std::filesystem::path& into = {});
 
 }  // namespace p2n

@@ -18,10 +18,10 @@
 #include "pipeline/subprocess.h"
 #include "stages/cluster_mapping.h"
 #include "stages/colmap_flags.h"
-#include "stages/extraction_blocks.h"
 #include "stages/feature_matching.h"
 #include "stages/left_out.h"
 #include "stages/matcher_choice.h"
+#include "stages/sfm_blocks.h"
 #include "stages/stage_reports.h"
 #include "stages/stages.h"
 
@@ -163,15 +163,17 @@ struct ColmapRun {
     return command;
   }
 
-  // Whether `photos` are extracted in blocks, each a part of the stage (a job of its own under a scheduler).
-  bool ExtractsInBlocks(size_t photos) const {
-    return context->Scheduled() && photos > static_cast<size_t>(options.extraction_block_images);
+  // The blocks `photos` are extracted and their pairs matched in, each a part of the stage (a job of its own):
+  // under a scheduler, as many as sfm.block_images asks; else one.
+  size_t Blocks(size_t photos) const {
+    const auto block = static_cast<size_t>(options.block_images);
+    return context->Scheduled() ? (photos + block - 1) / block : 1;
   }
 
   // The features of every photo of `groups` (each group's photos one camera with sfm.single_camera): one extraction
-  // for one group, one a group for several, or in blocks (ExtractsInBlocks) merged.
+  // for one group, one a group for several, or in blocks (Blocks) merged.
   void ExtractFeatures(const std::vector<CameraGroup>& groups, size_t photos) const {
-    if (ExtractsInBlocks(photos)) return ExtractInBlocks(groups);
+    if (Blocks(photos) > 1) return ExtractInBlocks(groups);
     if (groups.size() == 1) {
       steps->Run("feature extraction", ExtractCommand(database()));
       return;
@@ -185,14 +187,14 @@ struct ColmapRun {
     }
   }
 
-  // Extraction in blocks of at most sfm.extraction_block_images photos (extraction_blocks.h), merged.
+  // Extraction in blocks of at most sfm.block_images photos (sfm_blocks.h), merged.
   void ExtractInBlocks(const std::vector<CameraGroup>& groups) const {
     const fs::path dir = out.dir / "extraction";
     fs::remove_all(dir);
-    const std::vector<ExtractionBlock> blocks = PlanExtractionBlocks(groups, options.extraction_block_images);
+    const std::vector<ExtractionBlock> blocks = PlanExtractionBlocks(groups, options.block_images);
     const std::vector<int> parts = WriteExtractionBlocks(blocks, dir);
     LogInfo(format("sfm: features extracted in {} blocks of at most {} photos, as parts of the stage", parts.size(),
-                   options.extraction_block_images));
+                   options.block_images));
     steps->RunHere("feature extraction",
                    [&] { context->RunParts(kExtractionWork, parts, [&](int part) { ExtractBlock(dir, part); }); });
     steps->RunHere("merging features", [&] { MergeExtractionBlocks(blocks, dir, database(), options.single_camera); });
@@ -202,8 +204,7 @@ struct ColmapRun {
   // Block `part` of the photos extracted into its own database: a part of the stage's work.
   void ExtractBlock(const fs::path& dir, int part) const {
     const fs::path database = ExtractionBlockDatabase(dir, part);
-    fs::remove(database);  // what a stopped run of it left
-    fs::remove(database.string() + "-journal");
+    RemoveBlockDatabase(database);
     CheckSubprocess(ExtractCommand(database, ExtractionBlockList(dir, part)),
                     out.logs() / format("feature_extraction_block_{}.log", part),
                     format("feature extraction of block {}", part));
@@ -240,7 +241,11 @@ struct ColmapRun {
                                                              ? ExhaustivePairs(photos)
                                                              : SequentialPairs(photos, options.sequential_overlap);
           pairs.insert(pairs.end(), loops.begin(), loops.end());
-          MatchIntoDatabase(database(), pairs);
+          if (Blocks(photos) > 1) {
+            MatchInBlocks(pairs, Blocks(photos));
+          } else {
+            MatchIntoDatabase(database(), pairs);
+          }
         } catch (const ExternalToolError& e) {
           LogWarning(format("sfm: COLMAP matches the photos itself (slower): {}", e.what()));
         }
@@ -267,6 +272,17 @@ struct ColmapRun {
     }
     steps->Run(name + " matching", match);
     if (!loops.empty()) VerifyPairs("loop matching", loops);
+  }
+
+  // Our matching of `pairs` in `count` blocks of them, each a part of the stage (sfm_blocks.h), merged.
+  void MatchInBlocks(const std::vector<std::pair<size_t, size_t>>& pairs, size_t count) const {
+    const fs::path dir = out.dir / "matching";
+    fs::remove_all(dir);
+    const std::vector<int> parts = WriteMatchingBlocks(pairs, count, dir);
+    LogInfo(format("sfm: {} pairs matched in {} blocks, as parts of the stage", pairs.size(), parts.size()));
+    context->RunParts(kMatchingWork, parts, [&](int part) { MatchBlock(database(), dir, part); });
+    MergeMatchingBlocks(dir, parts, database());
+    fs::remove_all(dir);
   }
 
   // COLMAP's verification of `pairs` (indices into the photos in name order), listed in logs/STEP.txt; it matches
@@ -507,7 +523,7 @@ void SfmOptions::Check() const {
   CheckOption(*this, max_image_size, max_image_size >= 100,
               format("must be at least 100 pixels, not {}", max_image_size));
   CheckOption(*this, max_num_features, max_num_features >= 100, "must be at least 100");
-  CheckOption(*this, extraction_block_images, extraction_block_images >= 1, "must be at least 1");
+  CheckOption(*this, block_images, block_images >= 1, "must be at least 1");
   CheckOption(*this, hierarchical_min_images, hierarchical_min_images >= 0, "must be 0 (never) or a photo count");
   CheckOption(*this, leaf_max_images, leaf_max_images >= 8, "must be at least 8");
   CheckOption(*this, min_registered, min_registered > 0 && min_registered <= 1, "must be in (0, 1]");
@@ -574,14 +590,17 @@ struct SfmSetup {
 };
 
 void SfmStage::RunPart(StageContext& context, const std::string& work, int part) const {
-  if (work != kExtractionWork && work != kClusterWork) Stage::RunPart(context, work, part);
   const SfmSetup setup(context, format("version_{}_{}.log", work, part));
   StepRunner steps(setup.out.logs(), 1);
   const ColmapRun colmap = setup.Colmap(&steps, context);
   if (work == kExtractionWork) {
     colmap.ExtractBlock(setup.out.dir / "extraction", part);
-  } else {
+  } else if (work == kMatchingWork) {
+    MatchBlock(setup.out.database(), setup.out.dir / "matching", part);
+  } else if (work == kClusterWork) {
     colmap.MapCluster(setup.out.dir / "clusters", part);
+  } else {
+    Stage::RunPart(context, work, part);
   }
 }
 
@@ -617,7 +636,7 @@ void SfmStage::Run(StageContext& context) const {
   // mapping, the triangulation after the hierarchical mapper, the principal point's adjustment, undistortion.
   StepRunner steps(out.logs(), (options.refine_principal_point ? 5 : 4) + (hierarchical ? 1 : 0));
   const ColmapRun colmap = setup.Colmap(&steps, context);
-  steps.AddSteps(colmap.ExtractsInBlocks(names.size()) ? 2 : static_cast<int>(extracted.size()));
+  steps.AddSteps(colmap.Blocks(names.size()) > 1 ? 2 : static_cast<int>(extracted.size()));
   colmap.ExtractFeatures(extracted, names.size());
   std::vector<SfmReport::Model> models;
   std::string matching;

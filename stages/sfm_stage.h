@@ -25,7 +25,7 @@ struct SfmOptions {
   int hierarchical_min_images = 500;    // photos from which COLMAP's hierarchical mapper maps them; 0: never
   int leaf_max_images = 200;            // photos in one of its clusters at most
   int max_image_size = 1024;            // longest side for feature extraction, pixels
-  int extraction_block_images = 100;    // photos a scheduler's job extracts features from at most (runtime)
+  int block_images = 100;               // photos a scheduler's job extracts or matches at most (runtime)
   int max_num_features = 2048;          // features per photo at most
   bool refine_principal_point = true;   // a final bundle adjustment that also refines cx, cy
   double min_registered = 0.5;          // fraction of photos that must be registered
@@ -60,9 +60,9 @@ struct SfmOptions {
     v("leaf_max_images", leaf_max_images, "photos in one cluster of the hierarchical mapper at most (8 or more)",
       "images");
     v("max_image_size", max_image_size, "longest image side for feature extraction", "px");
-    v("extraction_block_images", extraction_block_images,
-      "under a scheduler, photos one job extracts features from at most: more are extracted in blocks, each a job of "
-      "its own, and merged (the same features as one extraction)",
+    v("block_images", block_images,
+      "under a scheduler, photos one job extracts features from or matches at most: more are extracted, and their "
+      "pairs matched, in blocks, each a job of its own, and merged (the same features and matches)",
       "images", OptionKind::kRuntime);
     v("max_num_features", max_num_features,
       "features per photo at most (CPU matching costs the square of it; 2048 matched fox in 66 s against 176 s for "
@@ -95,9 +95,9 @@ class SfmStage : public StageOf<SfmResult> {
   // "tool colmap" -> its version: a result made with another COLMAP is stale.
   std::map<std::string, std::string> ExternalInputs(const Workspace& workspace, const Config& config) const override;
   void Run(StageContext& context) const override;
-  // Under a scheduler, features are extracted in blocks of photos (extraction_blocks.h; kExtractionWork: part k
-  // extracts block k), and photos the hierarchical mapper would map are mapped in clusters (cluster_mapping.h;
-  // kClusterWork: part k maps cluster k).
+  // Under a scheduler, features are extracted in blocks of photos and matched in blocks of pairs (sfm_blocks.h;
+  // kExtractionWork, kMatchingWork: part k does block k), and photos the hierarchical mapper would map are mapped in
+  // clusters (cluster_mapping.h; kClusterWork: part k maps cluster k).
   void RunPart(StageContext& context, const std::string& work, int part) const override;
   void CheckResult(const std::filesystem::path& result_dir, const Config& config) const override;
 };

@@ -10,13 +10,18 @@
 #include <random>
 
 #include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
 #include "formats/colmap_database.h"
 #include "stages/descriptor_similarity.h"
 #include "stages/feature_matching.h"
+#include "stages/sfm_blocks.h"
 #include "tests/test_util.h"
 
 using namespace p2n;
 using p2n::testing::TempDir;
+using p2n::testing::WriteText;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -264,4 +269,44 @@ TEST_CASE("COLMAP's database: descriptors read, matches written in its pair orde
   } catch (const ExternalToolError& e) {
     CHECK_THAT(e.what(), Catch::Contains(path.string()) && Catch::Contains("image 4"));
   }
+}
+
+// The sfm stage's matching under a scheduler: the pairs cut into blocks, each matched from the database (read only)
+// into a database of its own, the blocks' matches appended: the same matches as matching them all at once.
+TEST_CASE("descriptor matching in blocks of pairs, merged, stores what matching at once does", "[feature_matching]") {
+  TempDir dir;
+  const auto whole = dir / "whole.db", blocks = dir / "blocks.db";
+  CreateColmapSchema(whole);
+  std::mt19937 rng(5);
+  const SiftDescriptors base = RandomDescriptors(40, &rng);
+  for (int k = 0; k < 6; ++k) {
+    std::vector<int> permutation;
+    AddImage(whole, 6 - k, format("{}.png", k), Shuffled(base, 5 * k, 2.0, &permutation, &rng));
+  }
+  fs::copy_file(whole, blocks);
+  const std::vector<std::pair<size_t, size_t>> pairs = ExhaustivePairs(6);
+  CHECK(MatchIntoDatabase(whole, pairs) == 15);
+
+  const std::vector<int> parts = WriteMatchingBlocks(pairs, 4, dir / "matching");
+  REQUIRE(parts == std::vector<int>{1, 2, 3, 4});
+  CHECK(ReadTextFile(MatchingBlockPairs(dir / "matching", 1)) == "0 1\n0 2\n0 3\n");
+  size_t listed = 0;
+  for (const int part : parts) {
+    const std::string lines = ReadTextFile(MatchingBlockPairs(dir / "matching", part));
+    listed += std::count(lines.begin(), lines.end(), '\n');
+    MatchBlock(blocks, dir / "matching", part);
+  }
+  CHECK(listed == pairs.size());
+  CHECK(!ColmapDatabase(blocks).HasMatches(1, 2));  // the blocks' own databases hold them so far
+  MergeMatchingBlocks(dir / "matching", parts, blocks);
+  for (const auto& [i, j] : pairs) {
+    const uint64_t pair = ColmapPairId(static_cast<uint32_t>(6 - i), static_cast<uint32_t>(6 - j));
+    INFO(i << " " << j);
+    CHECK(StoredMatches(blocks, pair) == StoredMatches(whole, pair));
+    CHECK(StoredMatches(whole, pair).first >= 30);
+  }
+
+  // A damaged list of pairs is named.
+  WriteText(MatchingBlockPairs(dir / "matching", 2), "0 x\n");
+  CHECK_THROWS_WITH(MatchBlock(blocks, dir / "matching", 2), Catch::Contains("pairs.txt"));
 }

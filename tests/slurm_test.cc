@@ -145,23 +145,24 @@ TEST_CASE("slurm: splat blocks run as a job array beside the stage's job, or in 
   CHECK(there["heldout_psnr"].get<double>() == Approx(here["heldout_psnr"].get<double>()).margin(0.05));
 }
 
-// Photos the hierarchical mapper would map, under Slurm: their features extracted in blocks, each a part of the sfm
-// stage (an element of a job array beside the stage's job), and merged; each cluster mapped by COLMAP's incremental
-// mapper as a part, the models merged, triangulated anew and adjusted; every view as near the truth as the local
-// hierarchical mapper's test asks (0.5 deg, 1% of the spread).
-TEST_CASE("slurm: features extracted in blocks and clusters mapped as job arrays, merged into the true cameras",
-          "[slurm]") {
+// Photos the hierarchical mapper would map, under Slurm: their features extracted in blocks and their pairs matched in
+// blocks, each a part of the sfm stage (an element of a job array beside the stage's job), and merged; each cluster
+// mapped by COLMAP's incremental mapper as a part, the models merged, triangulated anew and adjusted; every view as
+// near the truth as the local hierarchical mapper's test asks (0.5 deg, 1% of the spread).
+TEST_CASE(
+    "slurm: features extracted and matched in blocks, clusters mapped, as job arrays, merged into the true cameras",
+    "[slurm]") {
   TempDir dir;
   SyntheticSceneOptions scene;
   scene.num_views = 24;
   WriteSyntheticScene(scene, dir / "photos");
   const fs::path workspace = dir / "ws";
   std::string output;
-  const int code = RunCommand(
-      {P2N_BINARY, "run", (dir / "photos").string(), "-w", workspace.string(), "--until", "poses", "--run.progress",
-       "plain", "--run.scheduler", "slurm", "--slurm.cpus", "1", "--sfm.extraction_block_images", "10",
-       "--sfm.hierarchical_min_images", "20", "--sfm.leaf_max_images", "12"},
-      &output);
+  const int code =
+      RunCommand({P2N_BINARY, "run", (dir / "photos").string(), "-w", workspace.string(), "--until", "poses",
+                  "--run.progress", "plain", "--run.scheduler", "slurm", "--slurm.cpus", "1", "--sfm.block_images",
+                  "10", "--sfm.hierarchical_min_images", "20", "--sfm.leaf_max_images", "12"},
+                 &output);
   INFO(output);
   REQUIRE(code == 0);
   const fs::path jobs = JobDir(workspace, "10_sfm"), sfm = workspace / "10_sfm";
@@ -169,18 +170,22 @@ TEST_CASE("slurm: features extracted in blocks and clusters mapped as job arrays
   CHECK_THAT(ReadText(jobs / "attempt-1.log"),
              Catch::Contains("sfm: features extracted in 3 blocks of at most 10 photos") &&
                  Catch::Contains("sfm: extraction parts 2,3 as Slurm job array") &&
+                 Catch::Contains("sfm: 276 pairs matched in 3 blocks") &&
+                 Catch::Contains("sfm: matching parts 2,3 as Slurm job array") &&
                  Catch::Contains("sfm: 2 clusters of at most 12 photos (each grown by 3)") &&
                  Catch::Contains("sfm: cluster parts 2 as Slurm job array"));
-  for (const char* part : {"extraction-2.log", "extraction-3.log", "cluster-2.log"}) {
+  for (const char* part : {"extraction-2.log", "extraction-3.log", "matching-3.log", "cluster-2.log"}) {
     CHECK_THAT(ReadText(jobs / part), Catch::Contains(" part ") && Catch::Contains(" in job "));
   }
   CHECK(ReadText(jobs / "exit-extraction-3") == "0\n");
+  CHECK(ReadText(jobs / "exit-matching-3") == "0\n");
   CHECK(ReadText(jobs / "exit-cluster-2") == "0\n");
   for (const char* block : {"feature_extraction_block_1.log", "feature_extraction_block_3.log"}) {
     CHECK_THAT(ReadText(sfm / "logs" / block),
                Catch::StartsWith("$ colmap feature_extractor") && Catch::Contains("--image_list_path"));
   }
   CHECK(!fs::exists(sfm / "extraction"));  // the blocks' databases, merged
+  CHECK(!fs::exists(sfm / "matching"));
   for (const char* cluster : {"mapping_cluster_1.log", "mapping_cluster_2.log"}) {
     CHECK_THAT(ReadText(sfm / "logs" / cluster),
                Catch::StartsWith("$ colmap mapper") && Catch::Contains("--image_list_path"));

@@ -12,7 +12,7 @@
 #include "base/file_util.h"
 #include "base/format.h"
 #include "nerf/synthetic_scene.h"
-#include "stages/extraction_blocks.h"
+#include "stages/sfm_blocks.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {
@@ -78,7 +78,7 @@ void Extract(const fs::path& images, const fs::path& list, const fs::path& datab
 }  // namespace
 
 TEST_CASE("extraction blocks: each group's photos in order, in as few even blocks as fit the limit",
-          "[extraction_blocks]") {
+          "[sfm_blocks]") {
   const std::vector<CameraGroup> groups = {{"a", Names(10, "a")}, {"b", Names(3, "b")}, {"c", Names(8, "c")}};
   const std::vector<ExtractionBlock> blocks = PlanExtractionBlocks(groups, 4);
   std::vector<size_t> sizes, group_of;
@@ -102,7 +102,7 @@ TEST_CASE("extraction blocks: each group's photos in order, in as few even block
 
 // Two camera groups (as photos of two cameras), each extracted in two blocks into databases of their own and merged:
 // the same cameras, images, ids, keypoints and descriptors as the per-group extractions into one database.
-TEST_CASE("extraction blocks: the merged databases are what one extraction writes", "[extraction_blocks][colmap]") {
+TEST_CASE("extraction blocks: the merged databases are what one extraction writes", "[sfm_blocks][colmap]") {
   if (std::system("colmap help > /dev/null 2>&1") != 0) {
     WARN("COLMAP is not installed (scripts/install_deps.sh installs it): skipping");
     return;
