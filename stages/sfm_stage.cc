@@ -280,8 +280,13 @@ struct ColmapRun {
     fs::remove_all(dir);
     const std::vector<int> parts = WriteMatchingBlocks(pairs, count, dir);
     LogInfo(format("sfm: {} pairs matched in {} blocks, as parts of the stage", pairs.size(), parts.size()));
-    context->RunParts(kMatchingWork, parts, [&](int part) { MatchBlock(database(), dir, part); });
-    MergeMatchingBlocks(dir, parts, database());
+    try {
+      context->RunParts(kMatchingWork, parts, [&](int part) { MatchBlock(database(), dir, part); });
+      MergeMatchingBlocks(dir, parts, database());
+    } catch (const ExternalToolError&) {
+      fs::remove_all(dir);  // COLMAP matches what is missing (Match): no blocks' databases left in the result
+      throw;
+    }
     fs::remove_all(dir);
   }
 

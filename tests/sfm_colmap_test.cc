@@ -12,12 +12,15 @@
 #include <cstdlib>
 #include <set>
 
+#include "base/errors.h"
 #include "base/file_util.h"
 #include "base/format.h"
 #include "formats/colmap_model.h"
 #include "formats/dataset_import.h"
 #include "formats/sparse_tracks.h"
 #include "nerf/synthetic_scene.h"
+#include "pipeline/log.h"
+#include "pipeline/runner.h"
 #include "stages/stages.h"
 #include "stages/training_data.h"
 #include "tests/pose_truth.h"
@@ -165,6 +168,50 @@ TEST_CASE("the hierarchical mapper maps clusters of the photos and merges them i
   CHECK(report["registered"] == 24);
   CHECK(report["mean_reprojection_error_px"].get<double>() < 1.0);
   CheckPoses(ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json"), TruePoses(dir / "photos"), 0.5, 0.01);
+}
+
+// The sfm stage's blocks under a scheduler, the scheduler here an executor that runs each part in this process and
+// records the kinds: 24 photos in blocks of at most 10 are extracted in 3 blocks and their pairs matched in 3; when the
+// matching parts fail (after writing their databases) COLMAP matches the pairs itself and no block is left behind.
+TEST_CASE("sfm stage in blocks: extraction and matching as parts, a failed matching part left to COLMAP",
+          "[colmap][e2e]") {
+  if (!HaveColmap()) {
+    WARN("COLMAP is not installed (scripts/install_deps.sh installs it): skipping the real-COLMAP test");
+    return;
+  }
+  TempDir dir;
+  SyntheticSceneOptions scene;
+  scene.num_views = 24;
+  WriteSyntheticScene(scene, dir / "photos");
+  Config config = QuietConfig();
+  config.Set("sfm.block_images", 10, "test");
+  Workspace workspace = Workspace::Open(dir / "ws", true);
+  workspace.SetInput(dir / "photos");
+  RunRequest request;
+  request.until = "ingest";
+  const Runner runner = MakeRunner();
+  runner.Run(workspace, config, request);
+  const fs::path staging = workspace.StagingDir("10_sfm");
+  fs::create_directories(staging);
+
+  SetLogFile(dir / "test.log");
+  std::vector<std::string> kinds;
+  StageWork work;
+  work.parts = [&](const std::string& kind, const std::vector<int>& parts, const std::function<void(int)>& here) {
+    kinds.push_back(format("{} {}", kind, parts.size()));
+    for (const int part : parts) here(part);
+    if (kind == "matching") throw ExternalToolError("a matching part failed");
+  };
+  runner.RunWork(workspace, config, "sfm", "key", work);
+  SetLogFile({});
+  CHECK(kinds == std::vector<std::string>{"extraction 3", "matching 3"});
+  const nlohmann::json report = ReadJsonFile(staging / "sfm_report.json");
+  CHECK(report["registered"] == 24);
+  CHECK(report["steps"][1]["step"] == "merging features");
+  CHECK_THAT(ReadTextFile(dir / "test.log"),
+             Catch::Contains("COLMAP matches the photos itself (slower): a matching part failed"));
+  CHECK(!fs::exists(staging / "extraction"));
+  CHECK(!fs::exists(staging / "matching"));
 }
 
 // A messy photo folder (issue 7): the synthetic scene's views stored every way a folder of real photos may hold
