@@ -4,7 +4,7 @@
 // - feature extraction in blocks of photos: the stage's job cuts each camera group's photos into blocks and writes
 //   each one's photo list; each part runs COLMAP's feature_extractor on its list into a database of its own; the
 //   stage's job merges the blocks' databases, in order, into the one a single extraction writes (the same images,
-//   cameras and features);
+//   cameras and keypoints; COLMAP's descriptors differ in a few bytes between any two of its runs);
 // - our descriptor matching in blocks of pairs: each part matches its pairs of the stage's database (read only) into
 //   a database of its own; the stage's job appends their matches to its database.
 
