@@ -39,13 +39,18 @@ Config QuietConfig() {
   return config;
 }
 
-// Runs ingest, sfm and poses on `photos` in `workspace_path`.
-void RunUntilPoses(const fs::path& photos, const fs::path& workspace_path, const Config& config) {
+// Runs the stages up to `until` on `photos` in `workspace_path`.
+void RunUntil(const fs::path& photos, const fs::path& workspace_path, const Config& config, const std::string& until) {
   Workspace workspace = Workspace::Open(workspace_path, true);
   workspace.SetInput(photos);
   RunRequest request;
-  request.until = "poses";
+  request.until = until;
   MakeRunner().Run(workspace, config, request);
+}
+
+// Runs ingest, sfm and poses on `photos` in `workspace_path`.
+void RunUntilPoses(const fs::path& photos, const fs::path& workspace_path, const Config& config) {
+  RunUntil(photos, workspace_path, config, "poses");
 }
 
 // The synthetic scene's 24-view orbit in dir/photos, through ingest, sfm and poses in dir/ws.
@@ -185,12 +190,8 @@ TEST_CASE("sfm stage in blocks: extraction and matching as parts, a failed match
   WriteSyntheticScene(scene, dir / "photos");
   Config config = QuietConfig();
   config.Set("sfm.block_images", 10, "test");
-  Workspace workspace = Workspace::Open(dir / "ws", true);
-  workspace.SetInput(dir / "photos");
-  RunRequest request;
-  request.until = "ingest";
-  const Runner runner = MakeRunner();
-  runner.Run(workspace, config, request);
+  RunUntil(dir / "photos", dir / "ws", config, "ingest");
+  const Workspace workspace = Workspace::Open(dir / "ws", false);
   const fs::path staging = workspace.StagingDir("10_sfm");
   fs::create_directories(staging);
 
@@ -202,7 +203,7 @@ TEST_CASE("sfm stage in blocks: extraction and matching as parts, a failed match
     for (const int part : parts) here(part);
     if (kind == "matching") throw ExternalToolError("a matching part failed");
   };
-  runner.RunWork(workspace, config, "sfm", "key", work);
+  MakeRunner().RunWork(workspace, config, "sfm", "key", work);
   SetLogFile({});
   CHECK(kinds == std::vector<std::string>{"extraction 3", "matching 3"});
   const nlohmann::json report = ReadJsonFile(staging / "sfm_report.json");
