@@ -3,7 +3,8 @@
 # N views (make_synthetic_scene, 320 x 240): the sfm stage alone under GNU time (wall time, peak memory of it and
 # COLMAP), the time of its mapping, triangulation and bundle adjustment steps, the views registered, and the
 # cameras against the scene's true ones (bench/compare_cameras). Under Slurm the feature extraction is in blocks
-# and our descriptor matching in blocks of pairs (sfm.block_images): their times and the merging are printed.
+# and our descriptor matching with COLMAP's verification in blocks of pairs (sfm.block_images): their times, the
+# merging and COLMAP's matcher after them (finding every pair verified) are printed.
 # Usage: bench/mapper_bench.sh OUT N [photo2nerf options]   e.g. bench/mapper_bench.sh /tmp/mapper 300
 # MAPPERS="hierarchical" in the environment runs that mapper alone (default: "incremental hierarchical"); "slurm" is
 # the hierarchical mapper's clusters as parts of the sfm stage's Slurm job (SLURM_CONF set; the stage's job and its
@@ -45,7 +46,7 @@ r = json.load(open(sys.argv[1]))
 times = {s["step"]: s["wall_seconds"] for s in r["steps"]}
 merging = sum(t for k, t in times.items() if k.startswith("merging models"))
 if merging: times["merging"] = merging
-steps = ", ".join(f"{k} {times[k]:.1f} s" for k in ("feature extraction", "merging features", "descriptor matching", "mapping", "merging", "triangulation", "bundle adjustment") if k in times)
+steps = ", ".join(f"{k} {times[k]:.1f} s" for k in ("feature extraction", "merging features", "descriptor matching", "descriptor matching and verification", "exhaustive matching", "sequential matching", "mapping", "merging", "triangulation", "bundle adjustment") if k in times)
 print(steps + "; " + str(r["registered"]) + "/" + str(r["images_given"]) + " registered")' "$ws/10_sfm/sfm_report.json")
   memory="$((kb / 1024)) MB"
   [ "$mapper" = slurm ] && memory="memory in the jobs not measured"

@@ -138,23 +138,43 @@ bool ColmapDatabase::HasMatches(uint32_t image_id1, uint32_t image_id2) const {
   return statement.Step() == SQLITE_ROW;
 }
 
-void CreateMatchesDatabase(const std::filesystem::path& path) {
-  sqlite3* db = nullptr;
-  // COLMAP 3.8's table (database.cc).
-  const char* sql =
-      "CREATE TABLE matches (pair_id INTEGER PRIMARY KEY NOT NULL, rows INTEGER NOT NULL, cols INTEGER NOT NULL, "
-      "data BLOB)";
+void ColmapDatabase::CreateBlock(const std::filesystem::path& database, const std::filesystem::path& path,
+                                 const std::vector<uint32_t>& image_ids) {
+  sqlite3* created = nullptr;
   const bool made =
-      sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) == SQLITE_OK &&
-      sqlite3_exec(db, sql, nullptr, nullptr, nullptr) == SQLITE_OK;
-  const std::string why = made ? "" : db != nullptr ? sqlite3_errmsg(db) : "out of memory";
-  sqlite3_close(db);
+      sqlite3_open_v2(path.c_str(), &created, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) == SQLITE_OK;
+  const std::string why = made ? "" : created != nullptr ? sqlite3_errmsg(created) : "out of memory";
+  sqlite3_close(created);
   if (!made) throw ExternalToolError(format("cannot create the database '{}': {}", path.string(), why));
+  ColmapDatabase block(path);
+  block.Attach(database);
+  Execute(block.db_, path, "BEGIN TRANSACTION");
+  std::vector<std::string> schema;
+  {
+    Statement tables(block.db_, path,
+                     "SELECT sql FROM part.sqlite_master WHERE type IN ('table', 'index') AND sql IS NOT NULL AND "
+                     "name NOT LIKE 'sqlite_%' ORDER BY type DESC");  // tables before their indexes
+    while (tables.Step() == SQLITE_ROW) {
+      schema.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(tables.get(), 0)));
+    }
+  }
+  for (const std::string& sql : schema) Execute(block.db_, path, sql);
+  std::string ids;
+  for (const uint32_t id : image_ids) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
+  Execute(block.db_, path, "INSERT INTO main.cameras SELECT * FROM part.cameras");
+  Execute(block.db_, path, "INSERT INTO main.images SELECT * FROM part.images");
+  Execute(block.db_, path,
+          format("INSERT INTO main.keypoints SELECT * FROM part.keypoints WHERE image_id IN ({})", ids));
+  Execute(block.db_, path, "COMMIT");
+  Execute(block.db_, path, "DETACH DATABASE part");
 }
 
 void ColmapDatabase::AppendMatches(const std::filesystem::path& other) {
   Attach(other);
+  Execute(db_, path_, "BEGIN TRANSACTION");
   Execute(db_, path_, "INSERT INTO main.matches SELECT * FROM part.matches");
+  Execute(db_, path_, "INSERT INTO main.two_view_geometries SELECT * FROM part.two_view_geometries");
+  Execute(db_, path_, "COMMIT");
   Execute(db_, path_, "DETACH DATABASE part");
 }
 

@@ -59,8 +59,14 @@ class ColmapDatabase {
   // the blocks of photos extracted apart (sfm stage): a block of a shared camera's photos makes a camera of the same
   // size as the others' blocks, and the first block's stands for all, as one extraction would make.
   uint32_t AppendImages(const std::filesystem::path& other, std::optional<uint32_t> camera);
-  // Appends the raw matches of the database `other` (of the same images: a block of pairs matched apart).
+  // Appends the raw matches of the database `other` and COLMAP's verification of them (a block of pairs of the
+  // same images matched and verified apart, CreateBlock).
   void AppendMatches(const std::filesystem::path& other);
+  // A new database at `path` with the tables of `database` (COLMAP's, whatever its version), its cameras and
+  // images and the keypoints of the images `image_ids`: what COLMAP needs to verify matches of those images made
+  // apart and written there (AppendMatches).
+  static void CreateBlock(const std::filesystem::path& database, const std::filesystem::path& path,
+                          const std::vector<uint32_t>& image_ids);
   // Writes the pairs' raw matches (COLMAP's pair id and order: the smaller image id first) in one transaction.
   void WriteMatches(const std::vector<std::pair<std::pair<uint32_t, uint32_t>, FeatureMatches>>& pairs);
 
@@ -71,9 +77,6 @@ class ColmapDatabase {
   std::filesystem::path path_;
   sqlite3* db_ = nullptr;
 };
-
-// A new database at `path` with COLMAP's table of raw matches alone (for matches made apart, AppendMatches).
-void CreateMatchesDatabase(const std::filesystem::path& path);
 
 // COLMAP's id of an unordered image pair.
 uint64_t ColmapPairId(uint32_t image_id1, uint32_t image_id2);

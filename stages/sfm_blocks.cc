@@ -2,6 +2,7 @@
 
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include "base/errors.h"
@@ -17,6 +18,16 @@ namespace {
 // Where block b of `count` blocks of `size` items begins (block b: [BlockBegin(b), BlockBegin(b + 1))): sizes
 // differ by one at most.
 size_t BlockBegin(size_t size, size_t count, size_t b) { return size * b / count; }
+
+// The pairs listed in `list` ("i j" lines).
+std::vector<std::pair<size_t, size_t>> ReadPairs(const fs::path& list) {
+  std::istringstream lines(ReadTextFile(list));
+  std::vector<std::pair<size_t, size_t>> pairs;
+  size_t i = 0, j = 0;
+  while (lines >> i >> j) pairs.emplace_back(i, j);
+  if (!lines.eof()) throw InternalError(format("'{}' is not a list of pairs of photos", list.string()));
+  return pairs;
+}
 
 }  // namespace
 
@@ -74,6 +85,8 @@ fs::path MatchingBlockPairs(const fs::path& dir, int part) { return dir / std::t
 
 fs::path MatchingBlockDatabase(const fs::path& dir, int part) { return dir / std::to_string(part) / "matches.db"; }
 
+fs::path MatchingBlockNames(const fs::path& dir, int part) { return dir / std::to_string(part) / "names.txt"; }
+
 std::vector<int> WriteMatchingBlocks(const std::vector<std::pair<size_t, size_t>>& pairs, size_t count,
                                      const fs::path& dir) {
   std::vector<int> parts;
@@ -91,16 +104,29 @@ std::vector<int> WriteMatchingBlocks(const std::vector<std::pair<size_t, size_t>
 }
 
 void MatchBlock(const fs::path& database, const fs::path& dir, int part) {
-  const fs::path list = MatchingBlockPairs(dir, part);
-  std::istringstream lines(ReadTextFile(list));
-  std::vector<std::pair<size_t, size_t>> pairs;
-  size_t i = 0, j = 0;
-  while (lines >> i >> j) pairs.emplace_back(i, j);
-  if (!lines.eof()) throw InternalError(format("'{}' is not a list of pairs of photos", list.string()));
+  const std::vector<std::pair<size_t, size_t>> pairs = ReadPairs(MatchingBlockPairs(dir, part));
+  const std::vector<ColmapDatabaseImage> images = ColmapDatabase(database, /*read_only=*/true).Images();
+  std::set<uint32_t> seen;
+  for (const auto& [a, b] : pairs) {
+    for (const size_t k : {a, b}) {
+      if (k < images.size()) seen.insert(images[k].id);
+    }
+  }
   const fs::path matches = MatchingBlockDatabase(dir, part);
   RemoveBlockDatabase(matches);
-  CreateMatchesDatabase(matches);
+  ColmapDatabase::CreateBlock(database, matches, {seen.begin(), seen.end()});
   MatchIntoDatabase(database, pairs, matches);
+  // The pairs matched here (none the stage's database already held), each once.
+  const ColmapDatabase block(matches, /*read_only=*/true);
+  std::set<uint64_t> listed;
+  std::string names;
+  for (const auto& [a, b] : pairs) {
+    if (a < images.size() && b < images.size() && block.HasMatches(images[a].id, images[b].id) &&
+        listed.insert(ColmapPairId(images[a].id, images[b].id)).second) {
+      names += images[a].name + " " + images[b].name + "\n";
+    }
+  }
+  WriteFileAtomic(MatchingBlockNames(dir, part), names);
 }
 
 void MergeMatchingBlocks(const fs::path& dir, const std::vector<int>& parts, const fs::path& database) {

@@ -6,7 +6,8 @@
 //   stage's job merges the blocks' databases, in order, into the one a single extraction writes (the same images,
 //   cameras and keypoints; COLMAP's descriptors differ in a few bytes between any two of its runs);
 // - our descriptor matching in blocks of pairs: each part matches its pairs of the stage's database (read only) into
-//   a database of its own; the stage's job appends their matches to its database.
+//   a database of its own, which COLMAP's geometric verification of them then reads and writes; the stage's job
+//   appends their matches and verified geometries to its database, where COLMAP finds every pair done.
 
 #include <cstddef>
 #include <filesystem>
@@ -51,13 +52,16 @@ inline constexpr const char* kMatchingWork = "matching";
 // block k's written to MatchingBlockPairs(dir, k), k from 1; returns the blocks' numbers.
 std::vector<int> WriteMatchingBlocks(const std::vector<std::pair<size_t, size_t>>& pairs, size_t count,
                                      const std::filesystem::path& dir);
-// Block `part`'s pairs ("i j" lines), and the database of its matches.
+// Block `part`'s pairs ("i j" lines), the database of its matches, and the list of them by name for COLMAP.
 std::filesystem::path MatchingBlockPairs(const std::filesystem::path& dir, int part);
 std::filesystem::path MatchingBlockDatabase(const std::filesystem::path& dir, int part);
+std::filesystem::path MatchingBlockNames(const std::filesystem::path& dir, int part);
 
-// Block `part`'s pairs of `database`'s photos matched (MatchIntoDatabase) into the block's own database.
+// Block `part`'s pairs of `database`'s photos matched (MatchIntoDatabase) into the block's own database, made with
+// what COLMAP needs to verify them (ColmapDatabase::CreateBlock); writes MatchingBlockNames, the pairs it matched
+// ("a.png b.png" lines: COLMAP's matches_importer verifies them in the block's database).
 void MatchBlock(const std::filesystem::path& database, const std::filesystem::path& dir, int part);
-// The matches of the blocks `parts` appended to `database`.
+// The matches and verified geometries of the blocks `parts` appended to `database`.
 void MergeMatchingBlocks(const std::filesystem::path& dir, const std::vector<int>& parts,
                          const std::filesystem::path& database);
 

@@ -224,8 +224,9 @@ struct ColmapRun {
   }
 
   // COLMAP's matcher finds the raw matches of exhaustive and sequential matching in the database (ours, see
-  // feature_matching.h) and only verifies them; it matches by retrieval itself, and every pair we could not (a
-  // database we cannot read, as another COLMAP version might write it).
+  // feature_matching.h) and only verifies them (in blocks they come verified: MatchInBlocks); it matches by
+  // retrieval itself, and every pair we could not (a database we cannot read, as another COLMAP version might
+  // write it).
   // Sequential matching adds the pairs that close a walk's loops (LoopPairs), which COLMAP verifies from a list.
   void Match(Matcher matcher, size_t photos) const {
     const std::string name = EnumName(matcher);
@@ -235,13 +236,14 @@ struct ColmapRun {
             : std::vector<std::pair<size_t, size_t>>{};
     if (!loops.empty()) steps->AddSteps(1);
     if (matcher != Matcher::kVocabTree) {
-      steps->RunHere("descriptor matching", [&] {
+      const bool in_blocks = Blocks(photos) > 1;
+      steps->RunHere(in_blocks ? "descriptor matching and verification" : "descriptor matching", [&] {
         try {
           std::vector<std::pair<size_t, size_t>> pairs = matcher == Matcher::kExhaustive
                                                              ? ExhaustivePairs(photos)
                                                              : SequentialPairs(photos, options.sequential_overlap);
           pairs.insert(pairs.end(), loops.begin(), loops.end());
-          if (Blocks(photos) > 1) {
+          if (in_blocks) {
             MatchInBlocks(pairs, Blocks(photos));
           } else {
             MatchIntoDatabase(database(), pairs);
@@ -274,20 +276,32 @@ struct ColmapRun {
     if (!loops.empty()) VerifyPairs("loop matching", loops);
   }
 
-  // Our matching of `pairs` in `count` blocks of them, each a part of the stage (sfm_blocks.h), merged.
+  // Our matching and COLMAP's verification of `pairs` in `count` blocks of them, each a part of the stage
+  // (sfm_blocks.h), merged.
   void MatchInBlocks(const std::vector<std::pair<size_t, size_t>>& pairs, size_t count) const {
     const fs::path dir = out.dir / "matching";
     fs::remove_all(dir);
     const std::vector<int> parts = WriteMatchingBlocks(pairs, count, dir);
-    LogInfo(format("sfm: {} pairs matched in {} blocks, as parts of the stage", pairs.size(), parts.size()));
+    LogInfo(
+        format("sfm: {} pairs matched and verified in {} blocks, as parts of the stage", pairs.size(), parts.size()));
     try {
-      context->RunParts(kMatchingWork, parts, [&](int part) { MatchBlock(database(), dir, part); });
+      context->RunParts(kMatchingWork, parts, [&](int part) { MatchBlock(dir, part); });
       MergeMatchingBlocks(dir, parts, database());
     } catch (const ExternalToolError&) {
       fs::remove_all(dir);  // COLMAP matches what is missing (Match): no blocks' databases left in the result
       throw;
     }
     fs::remove_all(dir);
+  }
+
+  // Block `part` of the pairs matched by us and verified by COLMAP in the block's database: a part of the stage's
+  // work.
+  void MatchBlock(const fs::path& dir, int part) const {
+    p2n::MatchBlock(database(), dir, part);
+    CheckSubprocess({options.colmap, "matches_importer", "--database_path", MatchingBlockDatabase(dir, part).string(),
+                     "--match_list_path", MatchingBlockNames(dir, part).string(), "--match_type", "pairs",
+                     "--random_seed", seed, flags.matching_use_gpu, "0", flags.matching_num_threads, threads},
+                    out.logs() / format("verification_block_{}.log", part), format("verification of block {}", part));
   }
 
   // COLMAP's verification of `pairs` (indices into the photos in name order), listed in logs/STEP.txt; it matches
@@ -601,7 +615,7 @@ void SfmStage::RunPart(StageContext& context, const std::string& work, int part)
   if (work == kExtractionWork) {
     colmap.ExtractBlock(setup.out.dir / "extraction", part);
   } else if (work == kMatchingWork) {
-    MatchBlock(setup.out.database(), setup.out.dir / "matching", part);
+    colmap.MatchBlock(setup.out.dir / "matching", part);
   } else if (work == kClusterWork) {
     colmap.MapCluster(setup.out.dir / "clusters", part);
   } else {

@@ -101,7 +101,11 @@ void CreateColmapSchema(const std::filesystem::path& path) {
                        "CREATE TABLE descriptors (image_id INTEGER PRIMARY KEY NOT NULL, rows INTEGER NOT NULL, "
                        "cols INTEGER NOT NULL, data BLOB);"
                        "CREATE TABLE matches (pair_id INTEGER PRIMARY KEY NOT NULL, rows INTEGER NOT NULL, "
-                       "cols INTEGER NOT NULL, data BLOB);",
+                       "cols INTEGER NOT NULL, data BLOB);"
+                       // What the blocks' databases copy (ColmapDatabase::CreateBlock, AppendMatches).
+                       "CREATE TABLE cameras (camera_id INTEGER PRIMARY KEY NOT NULL);"
+                       "CREATE TABLE keypoints (image_id INTEGER PRIMARY KEY NOT NULL, data BLOB);"
+                       "CREATE TABLE two_view_geometries (pair_id INTEGER PRIMARY KEY NOT NULL, rows INTEGER);",
                        nullptr, nullptr, nullptr) == SQLITE_OK);
   sqlite3_close(db);
 }
@@ -297,6 +301,8 @@ TEST_CASE("descriptor matching in blocks of pairs, merged, stores what matching 
     MatchBlock(blocks, dir / "matching", part);
   }
   CHECK(listed == pairs.size());
+  // Each block's pairs by name, for COLMAP's verification in the block's database.
+  CHECK(ReadTextFile(MatchingBlockNames(dir / "matching", 1)) == "0.png 1.png\n0.png 2.png\n0.png 3.png\n");
   CHECK(!ColmapDatabase(blocks).HasMatches(1, 2));  // the blocks' own databases hold them so far
   MergeMatchingBlocks(dir / "matching", parts, blocks);
   for (const auto& [i, j] : pairs) {

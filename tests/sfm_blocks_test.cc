@@ -1,10 +1,11 @@
-// Feature extraction in blocks (the sfm stage's parts under a scheduler): the blocks' plan, and their databases
-// merged into what one extraction writes, with COLMAP itself.
+// Feature extraction and matching in blocks (the sfm stage's parts under a scheduler): the blocks' plan, and their
+// databases merged into what one extraction, or one matching and verification, writes, with COLMAP itself.
 
 #include <sqlite3.h>
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 #include <map>
 #include <set>
@@ -12,6 +13,7 @@
 #include "base/file_util.h"
 #include "base/format.h"
 #include "nerf/synthetic_scene.h"
+#include "stages/feature_matching.h"
 #include "stages/sfm_blocks.h"
 #include "tests/test_util.h"
 
@@ -75,10 +77,69 @@ void Extract(const fs::path& images, const fs::path& list, const fs::path& datab
   REQUIRE(code == 0);
 }
 
+// COLMAP's `matcher` ("exhaustive_matcher", or "matches_importer" with `extra` its list) on `database`, which holds
+// our raw matches: COLMAP verifies them.
+void Verify(const fs::path& database, const std::string& matcher, const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> command = {"colmap",
+                                      matcher,
+                                      "--database_path",
+                                      database.string(),
+                                      "--SiftMatching.use_gpu",
+                                      "0",
+                                      "--SiftMatching.num_threads",
+                                      "2"};
+  command.insert(command.end(), extra.begin(), extra.end());
+  std::string output;
+  const int code = RunCommand(command, &output);
+  INFO(output);
+  REQUIRE(code == 0);
+}
+
+// Each pair's raw matches, inlier matches and configuration after COLMAP's verification, by pair id.
+struct Verified {
+  int matches = 0, inliers = 0, config = 0;
+};
+std::map<int64_t, Verified> VerifiedByPair(const fs::path& database) {
+  sqlite3* db = nullptr;
+  REQUIRE(sqlite3_open_v2(database.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK);
+  sqlite3_stmt* statement = nullptr;
+  const char* sql =
+      "SELECT pair_id, matches.rows, two_view_geometries.rows, config FROM matches JOIN two_view_geometries "
+      "USING (pair_id)";
+  REQUIRE(sqlite3_prepare_v2(db, sql, -1, &statement, nullptr) == SQLITE_OK);
+  std::map<int64_t, Verified> pairs;
+  while (sqlite3_step(statement) == SQLITE_ROW) {
+    pairs[sqlite3_column_int64(statement, 0)] = {sqlite3_column_int(statement, 1), sqlite3_column_int(statement, 2),
+                                                 sqlite3_column_int(statement, 3)};
+  }
+  sqlite3_finalize(statement);
+  sqlite3_close(db);
+  return pairs;
+}
+
+bool HaveColmap() {
+  if (std::system("colmap help > /dev/null 2>&1") == 0) return true;
+  WARN("COLMAP is not installed (scripts/install_deps.sh installs it): skipping");
+  return false;
+}
+
+// The synthetic scene's 10 views in `dir`, their names in order.
+std::vector<std::string> WriteTenViews(const fs::path& dir) {
+  SyntheticSceneOptions scene;
+  scene.num_views = 10;
+  scene.supersampling = 1;
+  WriteSyntheticScene(scene, dir);
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.path().extension() == ".png") names.push_back(entry.path().filename().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
 }  // namespace
 
-TEST_CASE("extraction blocks: each group's photos in order, in as few even blocks as fit the limit",
-          "[sfm_blocks]") {
+TEST_CASE("extraction blocks: each group's photos in order, in as few even blocks as fit the limit", "[sfm_blocks]") {
   const std::vector<CameraGroup> groups = {{"a", Names(10, "a")}, {"b", Names(3, "b")}, {"c", Names(8, "c")}};
   const std::vector<ExtractionBlock> blocks = PlanExtractionBlocks(groups, 4);
   std::vector<size_t> sizes, group_of;
@@ -103,20 +164,9 @@ TEST_CASE("extraction blocks: each group's photos in order, in as few even block
 // Two camera groups (as photos of two cameras), each extracted in two blocks into databases of their own and merged:
 // the same cameras, images, ids, keypoints and descriptors as the per-group extractions into one database.
 TEST_CASE("extraction blocks: the merged databases are what one extraction writes", "[sfm_blocks][colmap]") {
-  if (std::system("colmap help > /dev/null 2>&1") != 0) {
-    WARN("COLMAP is not installed (scripts/install_deps.sh installs it): skipping");
-    return;
-  }
+  if (!HaveColmap()) return;
   TempDir dir;
-  SyntheticSceneOptions scene;
-  scene.num_views = 10;
-  scene.supersampling = 1;
-  WriteSyntheticScene(scene, dir / "photos");
-  std::vector<std::string> names;
-  for (const auto& entry : fs::directory_iterator(dir / "photos")) {
-    if (entry.path().extension() == ".png") names.push_back(entry.path().filename().string());
-  }
-  std::sort(names.begin(), names.end());
+  const std::vector<std::string> names = WriteTenViews(dir / "photos");
   REQUIRE(names.size() == 10);
   const std::vector<CameraGroup> groups = {{"first", {names.begin(), names.begin() + 6}},
                                            {"second", {names.begin() + 6, names.end()}}};
@@ -165,6 +215,47 @@ TEST_CASE("extraction blocks: the merged databases are what one extraction write
       CHECK(own.at(name).keypoints == whole.at(name).keypoints);
     }
   }
+}
+
+// The pairs of 10 photos matched in three blocks, each verified by COLMAP in the block's own database and merged:
+// every pair with the raw matches and, within RANSAC's spread, the verified geometry of matching and verifying them
+// all in the one database.
+TEST_CASE("matching blocks: verified apart by COLMAP, merged, as one verification does", "[sfm_blocks][colmap]") {
+  if (!HaveColmap()) return;
+  TempDir dir;
+  const std::vector<std::string> names = WriteTenViews(dir / "photos");
+  std::string lines;
+  for (const std::string& name : names) lines += name + "\n";
+  WriteText(dir / "all.txt", lines);
+  Extract(dir / "photos", dir / "all.txt", dir / "whole.db");
+  fs::copy_file(dir / "whole.db", dir / "blocks.db");
+  const std::vector<std::pair<size_t, size_t>> pairs = ExhaustivePairs(names.size());
+  MatchIntoDatabase(dir / "whole.db", pairs);
+  Verify(dir / "whole.db", "exhaustive_matcher");
+
+  const std::vector<int> parts = WriteMatchingBlocks(pairs, 3, dir / "matching");
+  for (const int part : parts) {
+    MatchBlock(dir / "blocks.db", dir / "matching", part);
+    Verify(MatchingBlockDatabase(dir / "matching", part), "matches_importer",
+           {"--match_list_path", MatchingBlockNames(dir / "matching", part).string(), "--match_type", "pairs"});
+  }
+  MergeMatchingBlocks(dir / "matching", parts, dir / "blocks.db");
+
+  const std::map<int64_t, Verified> whole = VerifiedByPair(dir / "whole.db"),
+                                    blocks = VerifiedByPair(dir / "blocks.db");
+  CHECK(whole.size() == pairs.size());
+  REQUIRE(blocks.size() == whole.size());
+  size_t verified = 0;
+  for (const auto& [pair, expected] : whole) {
+    INFO("pair " << pair);
+    REQUIRE(blocks.count(pair));
+    const Verified& got = blocks.at(pair);
+    CHECK(got.matches == expected.matches);
+    CHECK(got.config == expected.config);
+    CHECK(std::abs(got.inliers - expected.inliers) <= std::max(5, expected.inliers / 10));
+    verified += got.inliers > 0;
+  }
+  CHECK(verified >= names.size() - 1);  // at least as many as neighbours on the orbit
 }
 
 }  // namespace p2n::testing

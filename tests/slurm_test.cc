@@ -170,7 +170,7 @@ TEST_CASE(
   CHECK_THAT(ReadText(jobs / "attempt-1.log"),
              Catch::Contains("sfm: features extracted in 3 blocks of at most 10 photos") &&
                  Catch::Contains("sfm: extraction parts 2,3 as Slurm job array") &&
-                 Catch::Contains("sfm: 276 pairs matched in 3 blocks") &&
+                 Catch::Contains("sfm: 276 pairs matched and verified in 3 blocks") &&
                  Catch::Contains("sfm: matching parts 2,3 as Slurm job array") &&
                  Catch::Contains("sfm: 2 clusters of at most 12 photos (each grown by 3)") &&
                  Catch::Contains("sfm: cluster parts 2 as Slurm job array"));
@@ -189,6 +189,10 @@ TEST_CASE(
     CHECK_THAT(ReadText(sfm / "logs" / block),
                Catch::StartsWith("$ colmap feature_extractor") && Catch::Contains("--image_list_path"));
   }
+  for (const char* block : {"verification_block_1.log", "verification_block_3.log"}) {
+    CHECK_THAT(ReadText(sfm / "logs" / block),
+               Catch::StartsWith("$ colmap matches_importer") && Catch::Contains("--match_list_path"));
+  }
   CHECK(!fs::exists(sfm / "extraction"));  // the blocks' databases, merged
   CHECK(!fs::exists(sfm / "matching"));
   for (const char* cluster : {"mapping_cluster_1.log", "mapping_cluster_2.log"}) {
@@ -202,6 +206,7 @@ TEST_CASE(
   CHECK(report["chosen_model"] == "sparse/0");
   CHECK(report["steps"][0]["step"] == "feature extraction");
   CHECK(report["steps"][1]["step"] == "merging features");
+  CHECK(report["steps"][2]["step"] == "descriptor matching and verification");
   CheckPoses(ReadJsonFile(workspace / "20_poses" / "transforms.json"), TruePoses(dir / "photos"), 0.5, 0.01);
 }
 
