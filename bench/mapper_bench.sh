@@ -46,7 +46,7 @@ r = json.load(open(sys.argv[1]))
 times = {s["step"]: s["wall_seconds"] for s in r["steps"]}
 merging = sum(t for k, t in times.items() if k.startswith("merging models"))
 if merging: times["merging"] = merging
-steps = ", ".join(f"{k} {times[k]:.1f} s" for k in ("feature extraction", "merging features", "descriptor matching", "descriptor matching and verification", "exhaustive matching", "sequential matching", "mapping", "merging", "triangulation", "bundle adjustment") if k in times)
+steps = ", ".join(f"{k} {times[k]:.1f} s" for k in ("feature extraction", "merging features", "descriptor matching", "descriptor matching and verification", "exhaustive matching", "sequential matching", "loop matching", "mapping", "merging", "triangulation", "bundle adjustment") if k in times)
 print(steps + "; " + str(r["registered"]) + "/" + str(r["images_given"]) + " registered")' "$ws/10_sfm/sfm_report.json")
   memory="$((kb / 1024)) MB"
   [ "$mapper" = slurm ] && memory="memory in the jobs not measured"
