@@ -5,24 +5,32 @@
 # cameras against the scene's true ones (bench/compare_cameras). Under Slurm the feature extraction is in blocks
 # and our descriptor matching with COLMAP's verification in blocks of pairs (sfm.block_images): their times, the
 # merging and COLMAP's matcher after them (finding every pair verified) are printed.
-# Usage: bench/mapper_bench.sh OUT N [photo2nerf options]   e.g. bench/mapper_bench.sh /tmp/mapper 300
+# Usage: bench/mapper_bench.sh OUT N|PHOTOS [photo2nerf options]   e.g. bench/mapper_bench.sh /tmp/mapper 300
+# (PHOTOS: a folder of photos with the true cameras in a transforms.json beside it, as ../shared/data/fox/images)
 # MAPPERS="hierarchical" in the environment runs that mapper alone (default: "incremental hierarchical"); "slurm" is
 # the hierarchical mapper's clusters as parts of the sfm stage's Slurm job (SLURM_CONF set; the stage's job and its
-# array's elements: their memory is not measured, only the submitting process's).
+# array's elements: their memory is not measured, only the submitting process's). P2N in the environment names
+# another photo2nerf program to measure (an earlier build's copy).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:?usage: bench/mapper_bench.sh OUT N [photo2nerf options]}
 n=${2:?usage: bench/mapper_bench.sh OUT N [photo2nerf options]}
 shift 2
-bin=$PWD/build/cli/photo2nerf
+bin=${P2N:-$PWD/build/cli/photo2nerf}
 compare=$PWD/build/bench/compare_cameras
 [ -x "$bin" ] && [ -x "$compare" ] || { echo "build first: $bin or $compare is missing" >&2; exit 1; }
 photos=$out/photos_$n
-if [ ! -d "$photos" ]; then
+reference=$out/scene_$n/ground_truth_cameras.json
+if [ -d "$n" ]; then  # a folder of photos, its cameras' truth in the transforms.json beside it (fox's layout)
+  photos=$(realpath "$n")
+  reference=$(dirname "$photos")/transforms.json
+  n=$(find "$photos" -maxdepth 1 -type f | wc -l)
+elif [ ! -d "$photos" ]; then
   build/examples/make_synthetic_scene "$out/scene_$n" "$n" > /dev/null
   mkdir -p "$photos"
   mv "$out/scene_$n"/*.png "$photos/"
 fi
+mkdir -p "$out"
 
 for mapper in ${MAPPERS:-incremental hierarchical}; do
   ws=$out/ws_${n}_$mapper
@@ -46,10 +54,10 @@ r = json.load(open(sys.argv[1]))
 times = {s["step"]: s["wall_seconds"] for s in r["steps"]}
 merging = sum(t for k, t in times.items() if k.startswith("merging models"))
 if merging: times["merging"] = merging
-steps = ", ".join(f"{k} {times[k]:.1f} s" for k in ("feature extraction", "merging features", "descriptor matching", "descriptor matching and verification", "exhaustive matching", "sequential matching", "loop matching", "mapping", "merging", "triangulation", "bundle adjustment") if k in times)
+steps = ", ".join(f"{k} {times[k]:.1f} s" for k in ("feature extraction", "merging features", "descriptor matching", "descriptor matching and verification", "vocabulary tree", "retrieval", "exhaustive matching", "sequential matching", "vocab_tree matching", "loop matching", "mapping", "merging", "triangulation", "bundle adjustment") if k in times)
 print(steps + "; " + str(r["registered"]) + "/" + str(r["images_given"]) + " registered")' "$ws/10_sfm/sfm_report.json")
   memory="$((kb / 1024)) MB"
   [ "$mapper" = slurm ] && memory="memory in the jobs not measured"
   echo "$mapper: sfm $seconds s, $memory; $steps"
-  "$compare" "$ws/20_poses/transforms.json" "$out/scene_$n/ground_truth_cameras.json" | grep -E "rotations aligned|centre error"
+  "$compare" "$ws/20_poses/transforms.json" "$reference" | grep -E "rotations aligned|centre error"
 done

@@ -30,12 +30,12 @@ struct EnumNames<Matcher> {
 // still read as a sequence.
 bool LooksLikeFrameSequence(const std::vector<std::string>& names);
 
-// Up to this many unordered photos, exhaustive matching finds every pair for less than retrieval costs: ours
-// (feature_matching.h) takes about 11 ms per pair and core at fox's 2,668 features with VNNI (its 1,225 pairs: 6.9 s
-// on 2 cores; 30 ms with a float product), COLMAP's verification about 6 ms, COLMAP's own matching (its retrieval
-// matcher) about 250 ms (fox's 536 sequential pairs: 66 s), so by matching and verification exhaustive stays cheaper
-// up to about 500 photos (20 neighbours a photo); mapping n^2 / 2 pairs is measured up to 64 photos only, hence the
-// margin. Beyond, exhaustive grows with the square of the photos and retrieval linearly.
+// Up to this many unordered photos, exhaustive matching finds every pair for little: ours (feature_matching.h) takes
+// about 11 ms per pair and core at fox's 2,668 features with VNNI (its 1,225 pairs: 6.9 s on 2 cores; 30 ms with a
+// float product), COLMAP's verification about 6 ms. Retrieval's pairs (20 neighbours a photo, retrieval.h) cost as
+// much each, after a vocabulary tree built and queried, and miss some; COLMAP's own matcher, which matched them
+// until then, took about 250 ms a pair (fox's 536 sequential pairs: 66 s). Mapping n^2 / 2 pairs is measured up to
+// 64 photos only, hence the margin. Beyond, exhaustive grows with the square of the photos and retrieval linearly.
 inline constexpr int kRetrievalMinImages = 100;
 
 // The frames of one video are matched exhaustively up to this many times `exhaustive_max_images`: a frame carries

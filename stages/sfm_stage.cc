@@ -21,6 +21,7 @@
 #include "stages/feature_matching.h"
 #include "stages/left_out.h"
 #include "stages/matcher_choice.h"
+#include "stages/retrieval.h"
 #include "stages/sfm_blocks.h"
 #include "stages/stage_reports.h"
 #include "stages/stages.h"
@@ -219,14 +220,15 @@ struct ColmapRun {
                {options.colmap, "vocab_tree_builder", "--database_path", database().string(), "--vocab_tree_path",
                 tree.string(), "--num_visual_words", std::to_string(words), "--branching",
                 std::to_string(kTreeBranching), "--num_iterations", std::to_string(kTreeIterations), "--max_num_images",
-                std::to_string(kTreeMaxImages), "--random_seed", seed});
+                std::to_string(std::min<size_t>(kTreeMaxImages, photos)),  // COLMAP aborts when it is above them
+                "--random_seed", seed});
     return tree;
   }
 
-  // COLMAP's matcher finds the raw matches of exhaustive and sequential matching in the database (ours, see
-  // feature_matching.h) and only verifies them (in blocks they come verified: MatchInBlocks); it matches by
-  // retrieval itself, and every pair we could not (a database we cannot read, as another COLMAP version might
-  // write it).
+  // Our descriptor matching (feature_matching.h) of the pairs of exhaustive or sequential matching, or of those
+  // COLMAP's retrieval finds (RetrievePairs), then COLMAP's verification of them (in blocks they come verified:
+  // MatchInBlocks). COLMAP matches every pair we could not (a database we cannot read, as another COLMAP version
+  // might write it), and by retrieval itself when its retrieval's answer cannot be read.
   // Sequential matching adds the pairs that close a walk's loops (LoopPairs), which COLMAP verifies from a list.
   void Match(Matcher matcher, size_t photos) const {
     const std::string name = EnumName(matcher);
@@ -235,23 +237,32 @@ struct ColmapRun {
             ? LoopPairs(photos, options.sequential_overlap, std::max(1, options.sequential_overlap / 2))
             : std::vector<std::pair<size_t, size_t>>{};
     if (!loops.empty()) steps->AddSteps(1);
-    if (matcher != Matcher::kVocabTree) {
-      const bool in_blocks = Blocks(photos) > 1;
-      steps->RunHere(in_blocks ? "descriptor matching and verification" : "descriptor matching", [&] {
-        try {
-          std::vector<std::pair<size_t, size_t>> pairs = matcher == Matcher::kExhaustive
-                                                             ? ExhaustivePairs(photos)
-                                                             : SequentialPairs(photos, options.sequential_overlap);
-          pairs.insert(pairs.end(), loops.begin(), loops.end());
-          if (in_blocks) {
-            MatchInBlocks(pairs, Blocks(photos));
-          } else {
-            MatchIntoDatabase(database(), pairs);
-          }
-        } catch (const ExternalToolError& e) {
-          LogWarning(format("sfm: COLMAP matches the photos itself (slower): {}", e.what()));
+    fs::path tree;
+    std::vector<std::pair<size_t, size_t>> pairs;
+    if (matcher == Matcher::kVocabTree) {
+      steps->AddSteps(2);  // the retrieval and our matching, beside the tree and COLMAP's matching
+      tree = BuildVocabularyTree(photos);
+      pairs = RetrievePairs(tree);
+    } else {
+      pairs = matcher == Matcher::kExhaustive ? ExhaustivePairs(photos)
+                                              : SequentialPairs(photos, options.sequential_overlap);
+      pairs.insert(pairs.end(), loops.begin(), loops.end());
+    }
+    const bool in_blocks = Blocks(photos) > 1;
+    steps->RunHere(in_blocks ? "descriptor matching and verification" : "descriptor matching", [&] {
+      try {
+        if (in_blocks && !pairs.empty()) {
+          MatchInBlocks(pairs, Blocks(photos));
+        } else {
+          MatchIntoDatabase(database(), pairs);
         }
-      });
+      } catch (const ExternalToolError& e) {
+        LogWarning(format("sfm: COLMAP matches the photos itself (slower): {}", e.what()));
+      }
+    });
+    if (matcher == Matcher::kVocabTree && !pairs.empty()) {
+      VerifyPairs(name + " matching", pairs);
+      return;
     }
     std::vector<std::string> match = {options.colmap,
                                       name + "_matcher",
@@ -268,12 +279,30 @@ struct ColmapRun {
                                  "--SequentialMatching.loop_detection", "0"});
     }
     if (matcher == Matcher::kVocabTree) {
-      const fs::path tree = BuildVocabularyTree(photos);
       match.insert(match.end(), {"--VocabTreeMatching.vocab_tree_path", tree.string(), "--VocabTreeMatching.num_images",
                                  std::to_string(options.retrieval_neighbours + 1)});  // the photo itself comes first
     }
     steps->Run(name + " matching", match);
     if (!loops.empty()) VerifyPairs("loop matching", loops);
+  }
+
+  // Each photo paired with its sfm.retrieval_neighbours most similar photos by COLMAP's retrieval in `tree`
+  // (retrieval.h), as indices in name order; none when its answer cannot be read (COLMAP's matcher then retrieves
+  // and matches itself).
+  std::vector<std::pair<size_t, size_t>> RetrievePairs(const fs::path& tree) const {
+    const fs::path log = steps->Run(
+        "retrieval",
+        {options.colmap, "vocab_tree_retriever", "--database_path", database().string(), "--vocab_tree_path",
+         tree.string(), "--num_images", std::to_string(options.retrieval_neighbours + 1), "--random_seed", seed},
+        /*allow_failure=*/true);
+    try {
+      if (!steps->last_ok())
+        throw ExternalToolError(format("COLMAP's vocab_tree_retriever failed (log: {})", log.string()));
+      return RetrievedPairs(ReadTextFile(log), ColmapDatabase(database(), /*read_only=*/true).Images());
+    } catch (const ExternalToolError& e) {
+      LogWarning(format("sfm: COLMAP retrieves and matches the photos itself (slower): {}", e.what()));
+      return {};
+    }
   }
 
   // Our matching and COLMAP's verification of `pairs` in `count` blocks of them, each a part of the stage

@@ -1,13 +1,15 @@
 // sfm.matcher auto: numbered sequences are matched sequentially, anything else by retrieval, small sets
-// exhaustively; and the matcher a failed first try adds.
+// exhaustively; the matcher a failed first try adds; retrieval's answer read as pairs.
 
 #include <catch2/catch.hpp>
 
 #include <algorithm>
 #include <random>
 
+#include "base/errors.h"
 #include "base/format.h"
 #include "stages/matcher_choice.h"
+#include "stages/retrieval.h"
 
 namespace p2n::testing {
 namespace {
@@ -70,6 +72,34 @@ TEST_CASE("matcher choice: a failed first matching adds the other kind once", "[
   CHECK(RetryMatcher(Matcher::kSequential, 150) == Matcher::kVocabTree);
   CHECK(RetryMatcher(Matcher::kVocabTree, 150) == Matcher::kSequential);
   CHECK_FALSE(RetryMatcher(Matcher::kExhaustive, 30));  // its pairs contain every other matcher's
+}
+
+// COLMAP's vocab_tree_retriever's printed answer (3.8's format) as pairs of photos in name order: the photo itself
+// and pairs named twice left out, a name holding " [" read whole, ids against name order (ids 3, 1, 2 for a, b, c).
+TEST_CASE("retrieval: COLMAP's answer read as pairs of photos in name order", "[sfm]") {
+  const std::vector<ColmapDatabaseImage> images = {{3, "a.jpg"}, {1, "b [2].jpg"}, {2, "c.jpg"}, {4, "d.jpg"}};
+  const std::string answer =
+      "$ colmap vocab_tree_retriever --database_path db\n"
+      "Indexing image [1/4] in 0.010s\n"
+      "Querying for image b [2].jpg [1/4] in 0.002s\n"
+      "  image_id=1, image_name=b [2].jpg, score=0.9\n"
+      "  image_id=3, image_name=a.jpg, score=0.5\n"
+      "  image_id=2, image_name=c.jpg, score=0.1\n"
+      "Querying for image a.jpg [2/4] in 0.002s\n"
+      "  image_id=3, image_name=a.jpg, score=0.9\n"
+      "  image_id=1, image_name=b [2].jpg, score=0.5\n"
+      "  image_id=4, image_name=d.jpg, score=0.4\n"
+      "Querying for image d.jpg [3/4] in 0.002s\n";
+  using Pairs = std::vector<std::pair<size_t, size_t>>;
+  CHECK(RetrievedPairs(answer, images) == Pairs{{0, 1}, {1, 2}, {0, 3}});
+  CHECK(RetrievedPairs("", images).empty());
+
+  // An answer about other photos is refused, naming the line.
+  CHECK_THROWS_AS(RetrievedPairs("Querying for image e.jpg [1/1] in 0.1s\n", images), ExternalToolError);
+  CHECK_THROWS_WITH(RetrievedPairs("Querying for image a.jpg [1/4]\n  image_id=9, image_name=x, score=1\n", images),
+                    Catch::Contains("image_id=9"));
+  CHECK_THROWS_AS(RetrievedPairs("  image_id=1, image_name=b [2].jpg, score=1\n", images), ExternalToolError);
+  CHECK_THROWS_AS(RetrievedPairs("Querying for image a.jpg [1/4]\n  image_id=x\n", images), ExternalToolError);
 }
 
 }  // namespace p2n::testing

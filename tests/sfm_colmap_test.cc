@@ -9,6 +9,7 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <set>
 
@@ -146,6 +147,38 @@ TEST_CASE("sequential matching closes an orbit's loop", "[colmap][e2e]") {
   // The worst camera within a degree: COLMAP's threads put it at 0.51 once (0.3 to 0.5 otherwise); a loop left open
   // bends the orbit by tens of degrees.
   CheckPoses(ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json"), TruePoses(dir / "photos"), 1.0, 0.01);
+}
+
+// Matching by retrieval: COLMAP's vocabulary tree of the 24 views' features finds each view's 6 most alike views, we
+// match those pairs and COLMAP verifies them; every camera as exact as exhaustive matching's test asks.
+TEST_CASE("retrieval matching: the views COLMAP finds alike, matched by us, give the true cameras", "[colmap][e2e]") {
+  if (!HaveColmap()) {
+    WARN("COLMAP is not installed (scripts/install_deps.sh installs it): skipping the real-COLMAP test");
+    return;
+  }
+  TempDir dir;
+  Config config = QuietConfig();
+  config.Set("sfm.matcher", "vocab_tree", "test");
+  config.Set("sfm.retrieval_neighbours", 6, "test");
+  OrbitUntilPoses(dir.path(), config);
+
+  const fs::path sfm = dir / "ws" / "10_sfm";
+  const nlohmann::json report = ReadJsonFile(sfm / "sfm_report.json");
+  CHECK(report["matcher"] == "vocab_tree");
+  std::vector<std::string> steps;
+  for (const nlohmann::json& step : report["steps"]) steps.push_back(step["step"]);
+  CHECK(std::vector<std::string>(steps.begin(), steps.begin() + 5) ==
+        std::vector<std::string>{"feature extraction", "vocabulary tree", "retrieval", "descriptor matching",
+                                 "vocab_tree matching"});
+  CHECK_THAT(ReadTextFile(sfm / "logs" / "retrieval.log"),
+             Catch::StartsWith("$ colmap vocab_tree_retriever") && Catch::Contains("--num_images 7"));
+  // COLMAP verified our pairs from their list: 24 views with 6 neighbours each, a pair found from both ends once.
+  const std::string pairs = ReadTextFile(sfm / "logs" / "vocab_tree_matching.txt");
+  const auto listed = std::count(pairs.begin(), pairs.end(), '\n');
+  CHECK(listed >= 24 * 6 / 2);
+  CHECK(listed <= 24 * 6);
+  CHECK(report["registered"] == 24);
+  CheckPoses(ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json"), TruePoses(dir / "photos"), 0.5, 0.01);
 }
 
 // COLMAP's hierarchical mapper (issue 57), on clusters of at most 12 of the 24 views (grown by 3 photos): they are
