@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <functional>
 #include <map>
 #include <set>
 
@@ -27,6 +28,17 @@ std::vector<std::string> Names(size_t count, const std::string& prefix) {
   return names;
 }
 
+// Calls `row` with each row of `sql`'s answer from `database` (read only).
+void ForEachRow(const fs::path& database, const char* sql, const std::function<void(sqlite3_stmt*)>& row) {
+  sqlite3* db = nullptr;
+  REQUIRE(sqlite3_open_v2(database.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK);
+  sqlite3_stmt* statement = nullptr;
+  REQUIRE(sqlite3_prepare_v2(db, sql, -1, &statement, nullptr) == SQLITE_OK);
+  while (sqlite3_step(statement) == SQLITE_ROW) row(statement);
+  sqlite3_finalize(statement);
+  sqlite3_close(db);
+}
+
 // What an extraction wrote of each image, by name: its camera's id, model, size and parameters, its keypoints' and
 // descriptors' bytes.
 struct Extracted {
@@ -35,26 +47,21 @@ struct Extracted {
   bool operator==(const Extracted&) const = default;
 };
 std::map<std::string, Extracted> ByName(const fs::path& database) {
-  sqlite3* db = nullptr;
-  REQUIRE(sqlite3_open_v2(database.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK);
-  sqlite3_stmt* statement = nullptr;
   const char* sql =
       "SELECT name, cameras.camera_id, model, width, height, params, keypoints.data, descriptors.data FROM images "
       "JOIN cameras USING (camera_id) JOIN keypoints USING (image_id) JOIN descriptors USING (image_id)";
-  REQUIRE(sqlite3_prepare_v2(db, sql, -1, &statement, nullptr) == SQLITE_OK);
-  const auto blob = [&](int c) {
-    return std::string(static_cast<const char*>(sqlite3_column_blob(statement, c)), sqlite3_column_bytes(statement, c));
-  };
   std::map<std::string, Extracted> images;
-  while (sqlite3_step(statement) == SQLITE_ROW) {
+  ForEachRow(database, sql, [&](sqlite3_stmt* statement) {
+    const auto blob = [&](int c) {
+      return std::string(static_cast<const char*>(sqlite3_column_blob(statement, c)),
+                         sqlite3_column_bytes(statement, c));
+    };
     images[reinterpret_cast<const char*>(sqlite3_column_text(statement, 0))] = {
         format("{} {} {}x{} ", sqlite3_column_int(statement, 1), sqlite3_column_int(statement, 2),
                sqlite3_column_int(statement, 3), sqlite3_column_int(statement, 4)) +
             blob(5),
         blob(6), blob(7)};
-  }
-  sqlite3_finalize(statement);
-  sqlite3_close(db);
+  });
   return images;
 }
 
@@ -100,20 +107,14 @@ struct Verified {
   int matches = 0, inliers = 0, config = 0;
 };
 std::map<int64_t, Verified> VerifiedByPair(const fs::path& database) {
-  sqlite3* db = nullptr;
-  REQUIRE(sqlite3_open_v2(database.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK);
-  sqlite3_stmt* statement = nullptr;
   const char* sql =
       "SELECT pair_id, matches.rows, two_view_geometries.rows, config FROM matches JOIN two_view_geometries "
       "USING (pair_id)";
-  REQUIRE(sqlite3_prepare_v2(db, sql, -1, &statement, nullptr) == SQLITE_OK);
   std::map<int64_t, Verified> pairs;
-  while (sqlite3_step(statement) == SQLITE_ROW) {
+  ForEachRow(database, sql, [&](sqlite3_stmt* statement) {
     pairs[sqlite3_column_int64(statement, 0)] = {sqlite3_column_int(statement, 1), sqlite3_column_int(statement, 2),
                                                  sqlite3_column_int(statement, 3)};
-  }
-  sqlite3_finalize(statement);
-  sqlite3_close(db);
+  });
   return pairs;
 }
 
