@@ -163,6 +163,7 @@ void ColmapDatabase::CreateBlock(const std::filesystem::path& database, const st
   for (const uint32_t id : image_ids) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
   Execute(block.db_, path, "INSERT INTO main.cameras SELECT * FROM part.cameras");
   Execute(block.db_, path, "INSERT INTO main.images SELECT * FROM part.images");
+  Execute(block.db_, path, "UPDATE main.images SET name = image_id");  // COLMAP's lists of pairs split names at spaces
   Execute(block.db_, path,
           format("INSERT INTO main.keypoints SELECT * FROM part.keypoints WHERE image_id IN ({})", ids));
   Execute(block.db_, path, "COMMIT");

@@ -62,9 +62,9 @@ class ColmapDatabase {
   // Appends the raw matches of the database `other` and COLMAP's verification of them (a block of pairs of the
   // same images matched and verified apart, CreateBlock).
   void AppendMatches(const std::filesystem::path& other);
-  // A new database at `path` with the tables of `database` (COLMAP's, whatever its version), its cameras and
-  // images and the keypoints of the images `image_ids`: what COLMAP needs to verify matches of those images made
-  // apart and written there (AppendMatches).
+  // A new database at `path` with the tables of `database` (COLMAP's, whatever its version), its cameras, its
+  // images named by their ids, and the keypoints of the images `image_ids`: what COLMAP needs to verify matches of
+  // those images made apart and written there (AppendMatches), listed by the ids (which hold no spaces).
   static void CreateBlock(const std::filesystem::path& database, const std::filesystem::path& path,
                           const std::vector<uint32_t>& image_ids);
   // Writes the pairs' raw matches (COLMAP's pair id and order: the smaller image id first) in one transaction.

@@ -123,7 +123,7 @@ void MatchBlock(const fs::path& database, const fs::path& dir, int part) {
   for (const auto& [a, b] : pairs) {
     if (a < images.size() && b < images.size() && block.HasMatches(images[a].id, images[b].id) &&
         listed.insert(ColmapPairId(images[a].id, images[b].id)).second) {
-      names += images[a].name + " " + images[b].name + "\n";
+      names += format("{} {}\n", images[a].id, images[b].id);  // the block database's names (CreateBlock)
     }
   }
   WriteFileAtomic(MatchingBlockNames(dir, part), names);

@@ -59,7 +59,7 @@ std::filesystem::path MatchingBlockNames(const std::filesystem::path& dir, int p
 
 // Block `part`'s pairs of `database`'s photos matched (MatchIntoDatabase) into the block's own database, made with
 // what COLMAP needs to verify them (ColmapDatabase::CreateBlock); writes MatchingBlockNames, the pairs it matched
-// ("a.png b.png" lines: COLMAP's matches_importer verifies them in the block's database).
+// by the block database's names, the ids ("5 7" lines: COLMAP's matches_importer verifies them there).
 void MatchBlock(const std::filesystem::path& database, const std::filesystem::path& dir, int part);
 // The matches and verified geometries of the blocks `parts` appended to `database`.
 void MergeMatchingBlocks(const std::filesystem::path& dir, const std::vector<int>& parts,

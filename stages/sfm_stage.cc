@@ -227,8 +227,9 @@ struct ColmapRun {
 
   // Our descriptor matching (feature_matching.h) of the pairs of exhaustive or sequential matching, or of those
   // COLMAP's retrieval finds (RetrievePairs), then COLMAP's verification of them (in blocks they come verified:
-  // MatchInBlocks). COLMAP matches every pair we could not (a database we cannot read, as another COLMAP version
-  // might write it), and by retrieval itself when its retrieval's answer cannot be read.
+  // MatchInBlocks, which retrieval's pairs always take). COLMAP matches every pair we could not (a database we
+  // cannot read, as another COLMAP version might write it), and by retrieval itself when its retrieval's answer
+  // cannot be read.
   // Sequential matching adds the pairs that close a walk's loops (LoopPairs), which COLMAP verifies from a list.
   void Match(Matcher matcher, size_t photos) const {
     const std::string name = EnumName(matcher);
@@ -240,7 +241,7 @@ struct ColmapRun {
     fs::path tree;
     std::vector<std::pair<size_t, size_t>> pairs;
     if (matcher == Matcher::kVocabTree) {
-      steps->AddSteps(2);  // the retrieval and our matching, beside the tree and COLMAP's matching
+      steps->AddSteps(1);  // the retrieval, beside the tree and the matching
       tree = BuildVocabularyTree(photos);
       pairs = RetrievePairs(tree);
     } else {
@@ -248,11 +249,15 @@ struct ColmapRun {
                                               : SequentialPairs(photos, options.sequential_overlap);
       pairs.insert(pairs.end(), loops.begin(), loops.end());
     }
-    const bool in_blocks = Blocks(photos) > 1;
+    // Retrieval's pairs are verified in a block's database here too: COLMAP reads them from a list, and the ids
+    // there hold no spaces where names may.
+    const bool in_blocks = Blocks(photos) > 1 || (matcher == Matcher::kVocabTree && !pairs.empty());
+    bool verified = false;
     steps->RunHere(in_blocks ? "descriptor matching and verification" : "descriptor matching", [&] {
       try {
-        if (in_blocks && !pairs.empty()) {
+        if (in_blocks) {
           MatchInBlocks(pairs, Blocks(photos));
+          verified = true;
         } else {
           MatchIntoDatabase(database(), pairs);
         }
@@ -260,10 +265,8 @@ struct ColmapRun {
         LogWarning(format("sfm: COLMAP matches the photos itself (slower): {}", e.what()));
       }
     });
-    if (matcher == Matcher::kVocabTree && !pairs.empty()) {
-      VerifyPairs(name + " matching", pairs);
-      return;
-    }
+    if (matcher == Matcher::kVocabTree && verified) return;
+    if (matcher == Matcher::kVocabTree) steps->AddSteps(1);  // COLMAP's matcher after ours
     std::vector<std::string> match = {options.colmap,
                                       name + "_matcher",
                                       "--database_path",

@@ -302,7 +302,7 @@ TEST_CASE("descriptor matching in blocks of pairs, merged, stores what matching 
   }
   CHECK(listed == pairs.size());
   // Each block's pairs by name, for COLMAP's verification in the block's database.
-  CHECK(ReadTextFile(MatchingBlockNames(dir / "matching", 1)) == "0.png 1.png\n0.png 2.png\n0.png 3.png\n");
+  CHECK(ReadTextFile(MatchingBlockNames(dir / "matching", 1)) == "6 5\n6 4\n6 3\n");  // ids: k.png is 6 - k
   CHECK(!ColmapDatabase(blocks).HasMatches(1, 2));  // the blocks' own databases hold them so far
   MergeMatchingBlocks(dir / "matching", parts, blocks);
   for (const auto& [i, j] : pairs) {

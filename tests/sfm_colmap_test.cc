@@ -16,6 +16,7 @@
 #include "base/errors.h"
 #include "base/file_util.h"
 #include "base/format.h"
+#include "formats/colmap_database.h"
 #include "formats/colmap_model.h"
 #include "formats/dataset_import.h"
 #include "formats/sparse_tracks.h"
@@ -150,7 +151,8 @@ TEST_CASE("sequential matching closes an orbit's loop", "[colmap][e2e]") {
 }
 
 // Matching by retrieval: COLMAP's vocabulary tree of the 24 views' features finds each view's 6 most alike views, we
-// match those pairs and COLMAP verifies them; every camera as exact as exhaustive matching's test asks.
+// match those pairs and COLMAP verifies them (in a block's database, as under a scheduler); every camera as exact as
+// exhaustive matching's test asks.
 TEST_CASE("retrieval matching: the views COLMAP finds alike, matched by us, give the true cameras", "[colmap][e2e]") {
   if (!HaveColmap()) {
     WARN("COLMAP is not installed (scripts/install_deps.sh installs it): skipping the real-COLMAP test");
@@ -168,15 +170,17 @@ TEST_CASE("retrieval matching: the views COLMAP finds alike, matched by us, give
   std::vector<std::string> steps;
   for (const nlohmann::json& step : report["steps"]) steps.push_back(step["step"]);
   CHECK(std::vector<std::string>(steps.begin(), steps.begin() + 5) ==
-        std::vector<std::string>{"feature extraction", "vocabulary tree", "retrieval", "descriptor matching",
-                                 "vocab_tree matching"});
+        std::vector<std::string>{"feature extraction", "vocabulary tree", "retrieval",
+                                 "descriptor matching and verification", "mapping"});
   CHECK_THAT(ReadTextFile(sfm / "logs" / "retrieval.log"),
              Catch::StartsWith("$ colmap vocab_tree_retriever") && Catch::Contains("--num_images 7"));
-  // COLMAP verified our pairs from their list: 24 views with 6 neighbours each, a pair found from both ends once.
-  const std::string pairs = ReadTextFile(sfm / "logs" / "vocab_tree_matching.txt");
-  const auto listed = std::count(pairs.begin(), pairs.end(), '\n');
-  CHECK(listed >= 24 * 6 / 2);
-  CHECK(listed <= 24 * 6);
+  // COLMAP verified our pairs in a block's database, listed by ids: 24 views with 6 neighbours each, a pair found
+  // from both ends once; those with inliers at least each view's neighbours on the orbit.
+  CHECK_THAT(ReadTextFile(sfm / "logs" / "verification_block_1.log"), Catch::StartsWith("$ colmap matches_importer"));
+  CHECK(!fs::exists(sfm / "matching"));
+  const std::vector<VerifiedPair> verified = ColmapDatabase(sfm / "database.db").VerifiedPairs();
+  CHECK(verified.size() >= 24);
+  CHECK(verified.size() <= 24 * 6);
   CHECK(report["registered"] == 24);
   CheckPoses(ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json"), TruePoses(dir / "photos"), 0.5, 0.01);
 }
