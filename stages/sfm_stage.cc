@@ -227,17 +227,15 @@ struct ColmapRun {
 
   // Our descriptor matching (feature_matching.h) of the pairs of exhaustive or sequential matching, or of those
   // COLMAP's retrieval finds (RetrievePairs), then COLMAP's verification of them (in blocks they come verified:
-  // MatchInBlocks, which retrieval's pairs always take). COLMAP matches every pair we could not (a database we
-  // cannot read, as another COLMAP version might write it), and by retrieval itself when its retrieval's answer
-  // cannot be read.
-  // Sequential matching adds the pairs that close a walk's loops (LoopPairs), which COLMAP verifies from a list.
+  // MatchInBlocks, which retrieval's pairs and sequential matching's with the pairs that close a walk's loops,
+  // LoopPairs, always take). COLMAP matches every pair we could not (a database we cannot read, as another COLMAP
+  // version might write it), and by retrieval itself when its retrieval's answer cannot be read.
   void Match(Matcher matcher, size_t photos) const {
     const std::string name = EnumName(matcher);
     const std::vector<std::pair<size_t, size_t>> loops =
         matcher == Matcher::kSequential
             ? LoopPairs(photos, options.sequential_overlap, std::max(1, options.sequential_overlap / 2))
             : std::vector<std::pair<size_t, size_t>>{};
-    if (!loops.empty()) steps->AddSteps(1);
     fs::path tree;
     std::vector<std::pair<size_t, size_t>> pairs;
     if (matcher == Matcher::kVocabTree) {
@@ -249,9 +247,9 @@ struct ColmapRun {
                                               : SequentialPairs(photos, options.sequential_overlap);
       pairs.insert(pairs.end(), loops.begin(), loops.end());
     }
-    // Retrieval's pairs are verified in a block's database here too: COLMAP reads them from a list, and the ids
-    // there hold no spaces where names may.
-    const bool in_blocks = Blocks(photos) > 1 || (matcher == Matcher::kVocabTree && !pairs.empty());
+    // Pairs COLMAP's matcher would not make (retrieval's, the loops) are verified in a block's database here too:
+    // COLMAP reads them from a list, and the ids there hold no spaces where names may.
+    const bool in_blocks = Blocks(photos) > 1 || (matcher == Matcher::kVocabTree && !pairs.empty()) || !loops.empty();
     bool verified = false;
     steps->RunHere(in_blocks ? "descriptor matching and verification" : "descriptor matching", [&] {
       try {
@@ -286,7 +284,10 @@ struct ColmapRun {
                                  std::to_string(options.retrieval_neighbours + 1)});  // the photo itself comes first
     }
     steps->Run(name + " matching", match);
-    if (!loops.empty()) VerifyPairs("loop matching", loops);
+    if (!loops.empty() && !verified) {
+      steps->AddSteps(1);
+      VerifyPairs("loop matching", loops);
+    }
   }
 
   // Each photo paired with its sfm.retrieval_neighbours most similar photos by COLMAP's retrieval in `tree`
@@ -337,7 +338,8 @@ struct ColmapRun {
   }
 
   // COLMAP's verification of `pairs` (indices into the photos in name order), listed in logs/STEP.txt; it matches
-  // any pair whose raw matches the database lacks.
+  // any pair whose raw matches the database lacks. Only when our matching failed: the list names photos, and a
+  // name holding a space is lost.
   void VerifyPairs(const std::string& step, const std::vector<std::pair<size_t, size_t>>& pairs) const {
     const std::vector<std::string> names = ImageNames(images);
     std::string lines;
