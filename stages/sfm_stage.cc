@@ -64,6 +64,14 @@ std::string Advice() {
                 OptionKey(&SfmOptions::max_image_size));
 }
 
+// Runs a COLMAP command with its log, glog's messages in it too (COLMAP otherwise leaves a file in the temporary
+// folder at every run). Failures throw ExternalToolError, unless `allow_failure`.
+SubprocessResult RunColmap(std::vector<std::string> argv, const fs::path& log, const std::string& step,
+                           bool allow_failure = false) {
+  argv.insert(argv.end(), {"--log_to_stderr", "1"});
+  return allow_failure ? RunSubprocess(argv, log, step) : CheckSubprocess(argv, log, step);
+}
+
 // Runs the COLMAP steps in order with their own logs and timings.
 class StepRunner {
  public:
@@ -76,7 +84,7 @@ class StepRunner {
   fs::path Run(const std::string& step, const std::vector<std::string>& argv, bool allow_failure = false) {
     Announce(step);
     const fs::path log = log_dir_ / (FileStem(step) + ".log");
-    const SubprocessResult result = allow_failure ? RunSubprocess(argv, log, step) : CheckSubprocess(argv, log, step);
+    const SubprocessResult result = RunColmap(argv, log, step, allow_failure);
     last_ok_ = result.signal == 0 && result.exit_code == 0;
     timings_.push_back({step, fs::relative(log, log_dir_.parent_path()).string(), result.wall_seconds});
     ThrowIfCancelled();
@@ -206,7 +214,7 @@ struct ColmapRun {
   void ExtractBlock(const fs::path& dir, int part) const {
     const fs::path database = ExtractionBlockDatabase(dir, part);
     RemoveBlockDatabase(database);
-    CheckSubprocess(ExtractCommand(database, ExtractionBlockList(dir, part)),
+    RunColmap(ExtractCommand(database, ExtractionBlockList(dir, part)),
                     out.logs() / format("feature_extraction_block_{}.log", part),
                     format("feature extraction of block {}", part));
   }
@@ -331,10 +339,10 @@ struct ColmapRun {
   // work.
   void MatchBlock(const fs::path& dir, int part) const {
     p2n::MatchBlock(database(), dir, part);
-    CheckSubprocess({options.colmap, "matches_importer", "--database_path", MatchingBlockDatabase(dir, part).string(),
-                     "--match_list_path", MatchingBlockNames(dir, part).string(), "--match_type", "pairs",
-                     "--random_seed", seed, flags.matching_use_gpu, "0", flags.matching_num_threads, threads},
-                    out.logs() / format("verification_block_{}.log", part), format("verification of block {}", part));
+    RunColmap({options.colmap, "matches_importer", "--database_path", MatchingBlockDatabase(dir, part).string(),
+               "--match_list_path", MatchingBlockNames(dir, part).string(), "--match_type", "pairs", "--random_seed",
+               seed, flags.matching_use_gpu, "0", flags.matching_num_threads, threads},
+              out.logs() / format("verification_block_{}.log", part), format("verification of block {}", part));
   }
 
   // COLMAP's verification of `pairs` (indices into the photos in name order), listed in logs/STEP.txt; it matches
@@ -380,7 +388,7 @@ struct ColmapRun {
     std::vector<std::string> command = MapperCommand(false, models);
     command.insert(command.end(), {"--image_list_path", ClusterImageList(clusters, part).string()});
     const fs::path log = out.logs() / format("mapping_cluster_{}.log", part);
-    const SubprocessResult result = RunSubprocess(command, log, format("mapping cluster {}", part));
+    const SubprocessResult result = RunColmap(command, log, format("mapping cluster {}", part), /*allow_failure=*/true);
     if (result.signal != 0 || result.exit_code != 0) {
       LogWarning(format("sfm: COLMAP's mapper failed on cluster {} of the photos; log: {}", part, log.string()));
     }
