@@ -215,8 +215,8 @@ struct ColmapRun {
     const fs::path database = ExtractionBlockDatabase(dir, part);
     RemoveBlockDatabase(database);
     RunColmap(ExtractCommand(database, ExtractionBlockList(dir, part)),
-                    out.logs() / format("feature_extraction_block_{}.log", part),
-                    format("feature extraction of block {}", part));
+              out.logs() / format("feature_extraction_block_{}.log", part),
+              format("feature extraction of block {}", part));
   }
 
   // A vocabulary tree of the photos' own features, for matching by retrieval (COLMAP's pretrained trees are a
@@ -239,7 +239,6 @@ struct ColmapRun {
   // LoopPairs, always take). COLMAP matches every pair we could not (a database we cannot read, as another COLMAP
   // version might write it), and by retrieval itself when its retrieval's answer cannot be read.
   void Match(Matcher matcher, size_t photos) const {
-    const std::string name = EnumName(matcher);
     const std::vector<std::pair<size_t, size_t>> loops =
         matcher == Matcher::kSequential
             ? LoopPairs(photos, options.sequential_overlap, std::max(1, options.sequential_overlap / 2))
@@ -273,29 +272,36 @@ struct ColmapRun {
     });
     if (matcher == Matcher::kVocabTree && verified) return;
     if (matcher == Matcher::kVocabTree) steps->AddSteps(1);  // COLMAP's matcher after ours
-    std::vector<std::string> match = {options.colmap,
-                                      name + "_matcher",
-                                      "--database_path",
-                                      database().string(),
-                                      "--random_seed",
-                                      seed,
-                                      flags.matching_use_gpu,
-                                      "0",
-                                      flags.matching_num_threads,
-                                      threads};
-    if (matcher == Matcher::kSequential) {
-      match.insert(match.end(), {"--SequentialMatching.overlap", std::to_string(options.sequential_overlap),
-                                 "--SequentialMatching.loop_detection", "0"});
-    }
-    if (matcher == Matcher::kVocabTree) {
-      match.insert(match.end(), {"--VocabTreeMatching.vocab_tree_path", tree.string(), "--VocabTreeMatching.num_images",
-                                 std::to_string(options.retrieval_neighbours + 1)});  // the photo itself comes first
-    }
-    steps->Run(name + " matching", match);
+    steps->Run(std::string(EnumName(matcher)) + " matching", MatcherCommand(matcher, tree));
     if (!loops.empty() && !verified) {
       steps->AddSteps(1);
       VerifyPairs("loop matching", loops);
     }
+  }
+
+  // COLMAP's own matcher of kind `matcher` (by retrieval in `tree` for vocab_tree): it matches what the database
+  // lacks and verifies what is not verified.
+  std::vector<std::string> MatcherCommand(Matcher matcher, const fs::path& tree) const {
+    std::vector<std::string> command = {options.colmap,
+                                        std::string(EnumName(matcher)) + "_matcher",
+                                        "--database_path",
+                                        database().string(),
+                                        "--random_seed",
+                                        seed,
+                                        flags.matching_use_gpu,
+                                        "0",
+                                        flags.matching_num_threads,
+                                        threads};
+    if (matcher == Matcher::kSequential) {
+      command.insert(command.end(), {"--SequentialMatching.overlap", std::to_string(options.sequential_overlap),
+                                     "--SequentialMatching.loop_detection", "0"});
+    }
+    if (matcher == Matcher::kVocabTree) {
+      command.insert(command.end(),
+                     {"--VocabTreeMatching.vocab_tree_path", tree.string(), "--VocabTreeMatching.num_images",
+                      std::to_string(options.retrieval_neighbours + 1)});  // the photo itself comes first
+    }
+    return command;
   }
 
   // Each photo paired with its sfm.retrieval_neighbours most similar photos by COLMAP's retrieval in `tree`
