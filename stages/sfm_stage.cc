@@ -46,10 +46,12 @@ constexpr const char* kMapperTuning[] = {"--Mapper.ba_global_function_tolerance"
 // The clusters' models are aligned on the points whose reprojection errors stay under this (pixels): COLMAP's
 // model_merger's 64 admits alignments that bend the merged model by degrees where its mapper's own 4 does not.
 constexpr const char* kMergeMaxReprojectionError = "4";
-// The vocabulary tree, built from the photos themselves: a word per 64 features at most, clustered from up to 30
-// photos with a narrower, shallower k-means than COLMAP's defaults (branching 256, 11 iterations, every photo),
-// which took 175 s for fox's 50 photos on 2 cores; these settings took a third of that.
-constexpr size_t kFeaturesPerWord = 64;
+// The vocabulary tree, built from the photos themselves: a word per 64 features, clustered from up to 30 photos
+// with a narrower, shallower k-means than COLMAP's defaults (branching 256, 11 iterations, every photo), which
+// were three times slower on fox's 50 photos. At most 999 words: FLANN, which COLMAP searches the words with,
+// tunes its index of 1,000 words or more by trial searches that cost more than all the rest of the retrieval,
+// and searches fewer linearly (docs/benchmarks.md, "The vocabulary tree's words").
+constexpr size_t kFeaturesPerWord = 64, kMinWords = 256, kMaxWords = 999;
 constexpr int kTreeBranching = 16, kTreeIterations = 5, kTreeMaxImages = 30;
 
 // Whether `photos` are mapped by COLMAP's hierarchical mapper (sfm.hierarchical_min_images).
@@ -223,7 +225,7 @@ struct ColmapRun {
   // download away; a few hundred photos' features are plenty to cluster).
   fs::path BuildVocabularyTree(size_t photos) const {
     const fs::path tree = out.vocab_tree();
-    const size_t words = std::clamp<size_t>(photos * options.max_num_features / kFeaturesPerWord, 256, 65536);
+    const size_t words = std::clamp<size_t>(photos * options.max_num_features / kFeaturesPerWord, kMinWords, kMaxWords);
     steps->Run("vocabulary tree",
                {options.colmap, "vocab_tree_builder", "--database_path", database().string(), "--vocab_tree_path",
                 tree.string(), "--num_visual_words", std::to_string(words), "--branching",
