@@ -49,7 +49,13 @@ std::vector<std::string> SbatchCommand(const SlurmOptions& options, const Worksp
   std::vector<std::string> argv = {"sbatch", "--parsable", "--job-name=" + name, "--chdir=" + workspace.root().string(),
                                    "--output=" + output.string()};
   if (!options.partition.empty()) argv.push_back("--partition=" + options.partition);
-  argv.push_back(options.cpus > 0 ? format("--cpus-per-task={}", options.cpus) : "--exclusive");
+  // A whole node with all its memory (--exclusive alone gives a cluster's default memory a CPU, which may be less);
+  // with some CPUs the cluster's default memory for them, unless the further arguments ask for more (they come later).
+  if (options.cpus > 0) {
+    argv.push_back(format("--cpus-per-task={}", options.cpus));
+  } else {
+    argv.insert(argv.end(), {"--exclusive", "--mem=0"});
+  }
   for (std::string& word : SplitSpaces(options.sbatch_args)) argv.push_back(std::move(word));
   argv.insert(argv.end(), extra.begin(), extra.end());
   argv.push_back(script.string());

@@ -134,6 +134,7 @@ TEST_CASE("slurm: splat blocks run as a job array beside the stage's job, or in 
   code = RunCommand(splat, &output);
   INFO(output);
   REQUIRE(code == 0);
+  CHECK_THAT(ReadText(jobs / "submit-1.log"), Catch::Contains("--exclusive --mem=0"));  // all the node's memory
   const std::string log = ReadText(jobs / "attempt-1.log");
   CHECK_THAT(log, Catch::Contains("splat: block part 2 was still waiting for room in Slurm; running it here") &&
                       Catch::Contains("splat: block part 3 was still waiting for room in Slurm; running it here") &&
