@@ -177,7 +177,9 @@ TEST_CASE("sequential matching closes an orbit's loop", "[colmap][e2e]") {
 
 // Matching by retrieval: COLMAP's vocabulary tree of the 24 views' features finds each view's 6 most alike views, we
 // match those pairs and COLMAP verifies them (in a block's database, as under a scheduler); every camera as exact as
-// exhaustive matching's test asks.
+// exhaustive matching's test asks. Without the principal point's refinement: with 6 pairs a view it rotates every
+// camera by up to 0.7 degrees in some runs (the worst camera from 0.14 to 0.72 degrees over 17 runs), where pairs
+// missed would bend the orbit by degrees or leave views out.
 TEST_CASE("retrieval matching: the views COLMAP finds alike, matched by us, give the true cameras", "[colmap][e2e]") {
   if (!HaveColmap()) {
     WARN("COLMAP is not installed (scripts/install_deps.sh installs it): skipping the real-COLMAP test");
@@ -187,6 +189,7 @@ TEST_CASE("retrieval matching: the views COLMAP finds alike, matched by us, give
   Config config = QuietConfig();
   config.Set("sfm.matcher", "vocab_tree", "test");
   config.Set("sfm.retrieval_neighbours", 6, "test");
+  config.Set("sfm.refine_principal_point", false, "test");
   OrbitUntilPoses(dir.path(), config);
 
   const fs::path sfm = dir / "ws" / "10_sfm";
