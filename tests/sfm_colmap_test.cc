@@ -145,12 +145,11 @@ TEST_CASE("sequential matching closes an orbit's loop", "[colmap][e2e]") {
   config.Set("sfm.matcher", "sequential", "test");
   config.Set("sfm.sequential_overlap", 4, "test");
   // COLMAP's glog messages go into the steps' logs, no file of them into the temporary folder (glog's TMPDIR).
-  const char* tmpdir = std::getenv("TMPDIR");
-  const std::string user_tmpdir = tmpdir != nullptr ? tmpdir : "";
   fs::create_directories(dir / "tmp");
-  ::setenv("TMPDIR", (dir / "tmp").c_str(), 1);
-  OrbitUntilPoses(dir.path(), config, /*spaced=*/true);
-  tmpdir != nullptr ? ::setenv("TMPDIR", user_tmpdir.c_str(), 1) : ::unsetenv("TMPDIR");
+  {
+    const ScopedEnv tmpdir("TMPDIR", (dir / "tmp").string());
+    OrbitUntilPoses(dir.path(), config, /*spaced=*/true);
+  }
   for (const fs::directory_entry& entry : fs::directory_iterator(dir / "tmp")) {
     CHECK_FALSE(entry.path().filename().string().starts_with("colmap"));
   }

@@ -1,7 +1,9 @@
 #pragma once
-// Helpers shared by the tests: a temporary folder removed at the end, small file utilities.
+// Helpers shared by the tests: a temporary folder removed at the end, an environment variable set for a scope,
+// small file utilities.
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,6 +20,20 @@ class TempDir {
 
  private:
   std::filesystem::path path_;
+};
+
+// Sets an environment variable for its lifetime; the old value (or its absence) comes back at its end, whatever
+// ends the scope.
+class ScopedEnv {
+ public:
+  ScopedEnv(const std::string& name, const std::string& value);
+  ~ScopedEnv();
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+ private:
+  std::string name_;
+  std::optional<std::string> old_;
 };
 
 void WriteText(const std::filesystem::path& path, const std::string& text);
