@@ -21,7 +21,7 @@
 namespace p2n {
 namespace {
 
-constexpr size_t kChunkRays = 64;
+constexpr size_t kTrainingChunkRays = 64;
 constexpr float kHuberDelta = 0.1f;
 // The colour transforms learn at this share of the field's rate: Adam moves every parameter by about its rate a
 // step, and at the field's a photo's gain wanders by a percent a step.
@@ -327,8 +327,8 @@ float Trainer::DepthLoss(float depth, const Eigen::Vector2f& target, size_t rays
 
 void Trainer::MarchChunk(const RayBatch& batch, const std::vector<Ray>& rays, size_t c, Chunk* chunk) const {
   std::mt19937_64 random(MixSeed(options_.seed, step_, 2 + c));
-  chunk->first = c * kChunkRays;
-  chunk->count = std::min(rays.size(), chunk->first + kChunkRays) - chunk->first;
+  chunk->first = c * kTrainingChunkRays;
+  chunk->count = std::min(rays.size(), chunk->first + kTrainingChunkRays) - chunk->first;
   std::vector<std::vector<MarchSample>> samples(chunk->count);
   chunk->offsets.assign(chunk->count + 1, 0);
   for (size_t r = 0; r < chunk->count; ++r) {
@@ -535,7 +535,7 @@ StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
     }
   }
   const std::vector<Ray>& rays = refine ? corrected : batch.rays;
-  std::vector<Chunk> chunks((rays.size() + kChunkRays - 1) / kChunkRays);
+  std::vector<Chunk> chunks((rays.size() + kTrainingChunkRays - 1) / kTrainingChunkRays);
   // 1. March the rays through the occupancy grid; 2. the hash grid's encoding of the whole batch at once (level by
   // level: see HashGridEncoding::Forward); 3. the networks, compositing and the gradients, chunk by chunk.
   tbb::parallel_for(size_t{0}, chunks.size(), [&](size_t c) {

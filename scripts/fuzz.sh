@@ -12,8 +12,8 @@ if ! dpkg-query -W -f='${Status}' clang libclang-rt-14-dev 2>/dev/null | grep -q
 fi
 flags="-O1 -gline-tables-only -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
 cmake -S . -B build-fuzz -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=None -DP2N_NATIVE=OFF \
-  -DP2N_BUILD_TESTS=OFF -DP2N_FUZZ=ON -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
-  > /dev/null
+  -DCMAKE_UNITY_BUILD=ON -DP2N_BUILD_TESTS=OFF -DP2N_FUZZ=ON -DCMAKE_CXX_FLAGS="$flags" \
+  -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" > /dev/null
 targets=(colmap_database colmap_model image manifest mesh_glb model npy ply ply_write sparse_tracks splat_gltf splat_ply spz stage_job stage_reports train_report transforms video)
 cmake --build build-fuzz -j"$(nproc)" --target "${targets[@]/%/_fuzz}"
 mkdir -p build-fuzz/artifacts

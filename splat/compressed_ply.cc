@@ -12,7 +12,6 @@
 namespace p2n {
 namespace {
 
-constexpr float kShC0 = 0.28209479177387814f;
 constexpr float kMaxLogScale = 20;  // beyond it a chunk's bounds would lose every other splat's precision
 
 // Gaussian indices in the order of a 30-bit Morton code of their positions in the bounding box.
@@ -94,7 +93,7 @@ void WriteChunk(const Gaussians<float>& g, const size_t* index, size_t count, st
     for (int a = 0; a < 3; ++a) {
       v[a] = std::isfinite(g.positions[3 * i + a]) ? g.positions[3 * i + a] : 0;
       v[3 + a] = std::clamp(g.log_scales[3 * i + a], -kMaxLogScale, kMaxLogScale);
-      v[6 + a] = g.sh_dc[3 * i + a] * kShC0 + 0.5f;
+      v[6 + a] = g.sh_dc[3 * i + a] * float(kShC0) + 0.5f;
     }
     for (int k = 0; k < 9; ++k) {
       if (!std::isfinite(v[k])) v[k] = 0;
