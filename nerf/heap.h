@@ -2,7 +2,7 @@
 // Training and rendering allocate and free matrices of a few MB in every step. By default glibc maps each from the
 // kernel and returns it when freed, so every step faults its pages in again (a tenth of a training step on fox, half
 // of throughput_bench's whole field): keep such blocks in the heap (up to the largest threshold glibc allows) and
-// keep freed memory. Every program that trains or renders calls this first.
+// keep freed memory. Every program that trains or renders calls this first, the test programs too.
 
 #include <malloc.h>
 
