@@ -2,6 +2,7 @@
 // The two error channels of DESIGN.md §5, plus the external-tool and cancellation cases.
 // Library code throws these; only cli/main.cc turns them into exit codes.
 
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 
@@ -41,6 +42,10 @@ inline constexpr int kExitInternalError = 3;
 inline constexpr int kExitInterrupted = 130;
 
 [[noreturn]] void ThrowInternalError(const char* file, int line, const std::string& message);
+
+// A UserError for a file we read: "'FILE': FIELD PROBLEM", where the problem says what is wrong (and what to do).
+[[noreturn]] void ThrowBadField(const std::filesystem::path& file, const std::string& field,
+                                const std::string& problem);
 
 }  // namespace p2n
 

@@ -18,10 +18,6 @@ namespace {
 
 const char* kBlenderSplits[] = {"train", "val", "test"};
 
-[[noreturn]] void BadDataset(const fs::path& file, const std::string& field, const std::string& problem) {
-  throw UserError(format("'{}': {} {}", file.string(), field, problem));
-}
-
 // One transforms.json (instant-ngp, nerfstudio, or one Blender split) into views.
 TransformsMeta AddTransforms(const fs::path& root, const fs::path& file, const std::string& split,
                              ImportedDataset* out) {
@@ -85,7 +81,7 @@ void AddLlffPoints(const fs::path& root, ImportedDataset* out) {
   std::set<uint32_t> ids;
   for (const auto& [id, point] : points) {
     if (!point.xyz.allFinite() || !std::isfinite(point.error))
-      BadDataset(file, format("point {}", id), "is not finite");
+      ThrowBadField(file, format("point {}", id), "is not finite");
     for (const auto& [image, unused] : point.track) ids.insert(image);
   }
   std::map<uint32_t, size_t> view_of;
@@ -105,7 +101,7 @@ void LoadLlff(const fs::path& root, ImportedDataset* out) {
   const fs::path file = root / "poses_bounds.npy";
   const NpyArray poses = ReadNpy(file);
   out->files.push_back(file);
-  if (poses.shape.size() != 2 || poses.shape[1] != 17) BadDataset(file, "the array", "must have shape (N, 17)");
+  if (poses.shape.size() != 2 || poses.shape[1] != 17) ThrowBadField(file, "the array", "must have shape (N, 17)");
   // The image folder: images/ at full size, else the largest downsampled one (images_4, images_8, ...).
   fs::path images;
   for (const char* name : {"images", "images_2", "images_4", "images_8", "images_16"}) {
@@ -114,7 +110,7 @@ void LoadLlff(const fs::path& root, ImportedDataset* out) {
       break;
     }
   }
-  if (images.empty()) BadDataset(root, "the LLFF dataset", "has no images/ or images_N/ folder");
+  if (images.empty()) ThrowBadField(root, "the LLFF dataset", "has no images/ or images_N/ folder");
   std::vector<fs::path> files;
   for (const fs::directory_entry& entry : fs::directory_iterator(images)) {
     const std::string extension = LowerExtension(entry.path());
@@ -122,8 +118,8 @@ void LoadLlff(const fs::path& root, ImportedDataset* out) {
   }
   std::sort(files.begin(), files.end());
   if (files.size() != poses.shape[0]) {
-    BadDataset(file, "the array",
-               format("has {} poses but {} holds {} images", poses.shape[0], images.string(), files.size()));
+    ThrowBadField(file, "the array",
+                  format("has {} poses but {} holds {} images", poses.shape[0], images.string(), files.size()));
   }
   for (size_t i = 0; i < files.size(); ++i) {
     const double* row = poses.values.data() + 17 * i;
@@ -134,7 +130,7 @@ void LoadLlff(const fs::path& root, ImportedDataset* out) {
     }
     std::string error;
     const ImageFileHeader header = ReadImageHeader(files[i], &error);
-    if (!error.empty()) BadDataset(files[i], "the image", "cannot be read: " + error);
+    if (!error.empty()) ThrowBadField(files[i], "the image", "cannot be read: " + error);
     const int width = header.width, height = header.height;
     const double factor = m(1, 4) / width;  // full-resolution width over this folder's
     ImportedView view;
@@ -169,10 +165,10 @@ void LoadColmapProject(const fs::path& root, ImportedDataset* out) {
     ImportedView view;
     view.source = (root / "images" / image.name).lexically_normal();
     if (!IsInside(root, view.source))
-      BadDataset(sparse, format("image {}", id),
-                 format("names 'images/{}', outside the dataset folder; refused", image.name));
+      ThrowBadField(sparse, format("image {}", id),
+                    format("names 'images/{}', outside the dataset folder; refused", image.name));
     if (!fs::exists(view.source))
-      BadDataset(sparse, format("image {}", id), format("names '{}', which is not there", view.source.string()));
+      ThrowBadField(sparse, format("image {}", id), format("names '{}', which is not there", view.source.string()));
     PinholeCamera& camera = view.view.camera;
     camera = PinholeFromColmap(colmap, &view.view.distortion);
     camera.world_from_cam = WorldFromOpenGlCamera(image.cam_from_world_rotation, image.cam_from_world_translation);
@@ -190,19 +186,19 @@ void LoadNpz(const fs::path& file, ImportedDataset* out) {
   out->files.push_back(file);
   const auto get = [&](const std::string& name) -> const NpyArray& {
     const auto it = arrays.find(name);
-    if (it == arrays.end()) BadDataset(file, name, "is missing");
+    if (it == arrays.end()) ThrowBadField(file, name, "is missing");
     return it->second;
   };
   const NpyArray& focal = get("focal");
-  if (focal.size() != 1 || !(focal.values[0] > 0)) BadDataset(file, "focal", "must be one positive number");
+  if (focal.size() != 1 || !(focal.values[0] > 0)) ThrowBadField(file, "focal", "must be one positive number");
   for (const char* split : {"train", "val"}) {
     const NpyArray& images = get(std::string("images_") + split);
     const NpyArray& poses = get(std::string("c2ws_") + split);
     if (images.shape.size() != 4 || (images.shape[3] != 3 && images.shape[3] != 4)) {
-      BadDataset(file, std::string("images_") + split, "must have shape (N, H, W, 3 or 4)");
+      ThrowBadField(file, std::string("images_") + split, "must have shape (N, H, W, 3 or 4)");
     }
     if (poses.shape != std::vector<size_t>{images.shape[0], 4, 4}) {
-      BadDataset(file, std::string("c2ws_") + split, "must have shape (N, 4, 4) with one pose per image");
+      ThrowBadField(file, std::string("c2ws_") + split, "must have shape (N, 4, 4) with one pose per image");
     }
     const int height = static_cast<int>(images.shape[1]), width = static_cast<int>(images.shape[2]);
     const int channels = static_cast<int>(images.shape[3]);

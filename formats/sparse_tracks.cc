@@ -14,7 +14,7 @@ namespace fs = std::filesystem;
 namespace {
 
 [[noreturn]] void BadTracks(const fs::path& file, const std::string& field, const std::string& problem) {
-  throw UserError(format("'{}': {} {}; rerun the poses stage", file.string(), field, problem));
+  ThrowBadField(file, field, problem + "; rerun the poses stage");
 }
 
 }  // namespace

@@ -20,10 +20,6 @@ constexpr double kUnitCubeRadius = 1.7320508075688772;  // half the diagonal of 
 constexpr double kRotationTolerance = 1e-3;
 const char* const kDistortionKeys[] = {"k1", "k2", "p1", "p2"};
 
-[[noreturn]] void BadTransforms(const fs::path& file, const std::string& field, const std::string& problem) {
-  throw UserError(format("'{}': {} {}", file.string(), field, problem));
-}
-
 nlohmann::json MatrixJson(const Eigen::MatrixXd& m) {
   nlohmann::json rows = nlohmann::json::array();
   for (Eigen::Index r = 0; r < m.rows(); ++r) {
@@ -37,11 +33,11 @@ nlohmann::json MatrixJson(const Eigen::MatrixXd& m) {
 // A 4x4 or 3x4 matrix (the fourth row then 0 0 0 1).
 Eigen::Matrix4d Matrix(const nlohmann::json& rows, const fs::path& file, const std::string& field) {
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-  if (!rows.is_array() || rows.size() < 3) BadTransforms(file, field, "is not a 4x4 (or 3x4) matrix");
+  if (!rows.is_array() || rows.size() < 3) ThrowBadField(file, field, "is not a 4x4 (or 3x4) matrix");
   for (size_t r = 0; r < rows.size() && r < 4; ++r) {
-    if (!rows[r].is_array() || rows[r].size() != 4) BadTransforms(file, field, "is not a 4x4 (or 3x4) matrix");
+    if (!rows[r].is_array() || rows[r].size() != 4) ThrowBadField(file, field, "is not a 4x4 (or 3x4) matrix");
     for (int c = 0; c < 4; ++c) {
-      if (!rows[r][c].is_number()) BadTransforms(file, field, "holds something that is not a number");
+      if (!rows[r][c].is_number()) ThrowBadField(file, field, "holds something that is not a number");
       m(r, c) = rows[r][c].get<double>();
     }
   }
@@ -52,7 +48,7 @@ Eigen::Matrix4d Matrix(const nlohmann::json& rows, const fs::path& file, const s
 int Pixels(const nlohmann::json& value, const fs::path& file, const std::string& field) {
   const double pixels = value.is_number() ? value.get<double>() : 0.0;
   if (!(pixels >= 1 && pixels <= kMaxImageSide && pixels == std::floor(pixels)))
-    BadTransforms(file, field,
+    ThrowBadField(file, field,
                   format("must be a whole number of pixels, 1 to {}, not {}", kMaxImageSide, value.dump()));
   return static_cast<int>(pixels);
 }
@@ -111,18 +107,18 @@ std::optional<CameraView> ReadFrame(const nlohmann::json& json, size_t i, const 
                                     const std::string& split) {
   const nlohmann::json& frame = json["frames"][i];
   const std::string field = format("frames[{}]", i);
-  if (!frame.is_object()) BadTransforms(file, field, "is not an object");
+  if (!frame.is_object()) ThrowBadField(file, field, "is not an object");
   const auto value = [&](const char* key) -> const nlohmann::json* {
     if (frame.contains(key)) return &frame[key];
     if (json.contains(key)) return &json[key];
     return nullptr;
   };
   if (!frame.contains("file_path") || !frame["file_path"].is_string())
-    BadTransforms(file, field + ".file_path", "is missing");
+    ThrowBadField(file, field + ".file_path", "is missing");
   CameraView view;
   view.file_path = frame["file_path"].get<std::string>();
   if (fs::path(view.file_path).is_absolute() || !IsInside(root, TransformsFile::ImagePath(file, view))) {
-    BadTransforms(file, field + ".file_path",
+    ThrowBadField(file, field + ".file_path",
                   format("points outside the dataset folder ('{}'); refused", view.file_path));
   }
   fs::path image = TransformsFile::ImagePath(file, view);
@@ -146,7 +142,7 @@ std::optional<CameraView> ReadFrame(const nlohmann::json& json, size_t i, const 
   } else if (value("camera_angle_x")) {
     camera.fx = camera.fy = 0.5 * camera.width / std::tan(0.5 * value("camera_angle_x")->get<double>());
   } else {
-    BadTransforms(file, field, "has no focal length (fl_x or camera_angle_x)");
+    ThrowBadField(file, field, "has no focal length (fl_x or camera_angle_x)");
   }
   camera.cx = value("cx") ? value("cx")->get<double>() : 0.5 * camera.width;
   camera.cy = value("cy") ? value("cy")->get<double>() : 0.5 * camera.height;
@@ -170,17 +166,17 @@ TransformsMeta ReadMeta(const nlohmann::json& json, const fs::path& file) {
     const std::string kind = json["dataset"].value("kind", "");
     meta.dataset_kind = EnumFromName<DatasetKind>(kind);
     if (!meta.dataset_kind)
-      BadTransforms(file, "dataset.kind", format("is '{}', not {}", kind, EnumNamesText<DatasetKind>()));
+      ThrowBadField(file, "dataset.kind", format("is '{}', not {}", kind, EnumNamesText<DatasetKind>()));
     meta.dataset_path = json["dataset"].value("path", "");
   }
   if (json.contains("background") && !json["background"].is_null()) {
     const nlohmann::json& rgb = json["background"];
     if (!rgb.is_array() || rgb.size() != 3)
-      BadTransforms(file, "background", "must be three numbers (red, green, blue)");
+      ThrowBadField(file, "background", "must be three numbers (red, green, blue)");
     meta.background = rgb.get<std::array<float, 3>>();
   }
   if (json.contains("heldout_rule")) {
-    if (!json["heldout_rule"].is_string()) BadTransforms(file, "heldout_rule", "must be a string");
+    if (!json["heldout_rule"].is_string()) ThrowBadField(file, "heldout_rule", "must be a string");
     meta.heldout_rule = json["heldout_rule"].get<std::string>();
   }
   meta.frame = json.value("frame", "");
@@ -190,8 +186,8 @@ TransformsMeta ReadMeta(const nlohmann::json& json, const fs::path& file) {
 
 TransformsFile ReadUnchecked(const fs::path& file, const fs::path& root, const std::string& split) {
   const nlohmann::json json = ReadJsonFile(file);
-  if (!json.is_object()) BadTransforms(file, "the file", "is not a JSON object");
-  if (!json.contains("frames") || !json["frames"].is_array()) BadTransforms(file, "frames", "is missing");
+  if (!json.is_object()) ThrowBadField(file, "the file", "is not a JSON object");
+  if (!json.contains("frames") || !json["frames"].is_array()) ThrowBadField(file, "frames", "is missing");
   TransformsFile out;
   out.meta = ReadMeta(json, file);
   size_t missing = 0;
@@ -213,16 +209,16 @@ TransformsFile ReadUnchecked(const fs::path& file, const fs::path& root, const s
 }  // namespace
 
 void CheckCamera(const PinholeCamera& camera, const fs::path& file, const std::string& field) {
-  if (!camera.world_from_cam.allFinite()) BadTransforms(file, field, "has a camera pose that is not finite");
+  if (!camera.world_from_cam.allFinite()) ThrowBadField(file, field, "has a camera pose that is not finite");
   const Eigen::Matrix3d r = camera.world_from_cam.topLeftCorner<3, 3>();
   if ((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() > kRotationTolerance || r.determinant() < 0) {
-    BadTransforms(file, field, "has a camera rotation that is not orthonormal (a scaled or mirrored matrix?)");
+    ThrowBadField(file, field, "has a camera rotation that is not orthonormal (a scaled or mirrored matrix?)");
   }
   if (!(camera.fx > 0) || !(camera.fy > 0) || !std::isfinite(camera.fx) || !std::isfinite(camera.fy) ||
       !std::isfinite(camera.cx) || !std::isfinite(camera.cy)) {
-    BadTransforms(file, field, "has a focal length that is not a positive number");
+    ThrowBadField(file, field, "has a focal length that is not a positive number");
   }
-  if (camera.width <= 0 || camera.height <= 0) BadTransforms(file, field, "has no image size");
+  if (camera.width <= 0 || camera.height <= 0) ThrowBadField(file, field, "has no image size");
 }
 
 void TransformsFile::Write(const fs::path& file) const {

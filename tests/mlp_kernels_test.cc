@@ -12,7 +12,7 @@ using namespace p2n;
 
 namespace {
 
-Eigen::MatrixXf Uniform(Eigen::Index rows, Eigen::Index cols, std::mt19937* rng) {
+Eigen::MatrixXf UniformMatrix(Eigen::Index rows, Eigen::Index cols, std::mt19937* rng) {
   std::uniform_real_distribution<float> uniform(-1, 1);
   Eigen::MatrixXf m(rows, cols);
   for (float& v : m.reshaped()) v = uniform(*rng);
@@ -40,9 +40,9 @@ TEST_CASE("mlp kernels: a layer's forward pass, input gradient and parameter gra
   for (const Shape shape : {Shape{64, 32, 1000}, Shape{3, 31, 7}, Shape{16, 64, 300}, Shape{80, 5, 13}, Shape{9, 64, 1},
                             Shape{64, 64, 517}}) {
     INFO("m " << shape.m << ", k " << shape.k << ", n " << shape.n);
-    const Eigen::MatrixXf w = Uniform(shape.m, shape.k, &rng), x = Uniform(shape.k, shape.n, &rng),
-                          dy = Uniform(shape.m, shape.n, &rng);
-    const Eigen::VectorXf b = Uniform(shape.m, 1, &rng);
+    const Eigen::MatrixXf w = UniformMatrix(shape.m, shape.k, &rng), x = UniformMatrix(shape.k, shape.n, &rng),
+                          dy = UniformMatrix(shape.m, shape.n, &rng);
+    const Eigen::VectorXf b = UniformMatrix(shape.m, 1, &rng);
     const Eigen::MatrixXd wd = w.cast<double>(), xd = x.cast<double>(), dyd = dy.cast<double>();
 
     const Eigen::MatrixXd affine = (wd * xd).colwise() + b.cast<double>();
@@ -62,8 +62,8 @@ TEST_CASE("mlp kernels: a layer's forward pass, input gradient and parameter gra
     CHECK((x.array() > 0 || dx.array() == 0).all());
 
     // Added to what is there.
-    const Eigen::MatrixXf w0 = Uniform(shape.m, shape.k, &rng);
-    const Eigen::VectorXf b0 = Uniform(shape.m, 1, &rng);
+    const Eigen::MatrixXf w0 = UniformMatrix(shape.m, shape.k, &rng);
+    const Eigen::VectorXf b0 = UniformMatrix(shape.m, 1, &rng);
     Eigen::MatrixXf dw = w0;
     Eigen::VectorXf db = b0;
     mlp_kernels::AddLayerGradient(dy.data(), shape.m, x.data(), shape.k, shape.n, dw.data(), db.data());

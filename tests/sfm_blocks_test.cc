@@ -22,7 +22,7 @@ namespace p2n::testing {
 namespace fs = std::filesystem;
 namespace {
 
-std::vector<std::string> Names(size_t count, const std::string& prefix) {
+std::vector<std::string> PhotoNames(size_t count, const std::string& prefix) {
   std::vector<std::string> names;
   for (size_t i = 0; i < count; ++i) names.push_back(prefix + std::to_string(100 + i) + ".png");
   return names;
@@ -141,7 +141,8 @@ std::vector<std::string> WriteTenViews(const fs::path& dir) {
 }  // namespace
 
 TEST_CASE("extraction blocks: each group's photos in order, in as few even blocks as fit the limit", "[sfm_blocks]") {
-  const std::vector<CameraGroup> groups = {{"a", Names(10, "a")}, {"b", Names(3, "b")}, {"c", Names(8, "c")}};
+  const std::vector<CameraGroup> groups = {
+      {"a", PhotoNames(10, "a")}, {"b", PhotoNames(3, "b")}, {"c", PhotoNames(8, "c")}};
   const std::vector<ExtractionBlock> blocks = PlanExtractionBlocks(groups, 4);
   std::vector<size_t> sizes, group_of;
   std::vector<std::string> order;

@@ -15,7 +15,7 @@ namespace p2n::testing {
 namespace {
 
 // A ray of n equal segments over [0, length) with the given density and colour per segment.
-SegmentRay Uniform(size_t n, double length, double density, const std::array<double, 3>& colour) {
+SegmentRay UniformRay(size_t n, double length, double density, const std::array<double, 3>& colour) {
   SegmentRay ray;
   for (size_t i = 0; i < n; ++i) {
     ray.sigma.push_back(density);
@@ -34,7 +34,7 @@ const double kBlack[3] = {0, 0, 0};
 TEST_CASE("constant density over length d gives opacity 1 - exp(-sigma d), at any sampling", "[render]") {
   for (const size_t n : {1u, 7u, 64u, 4096u}) {
     for (const double sigma : {0.0, 1e-3, 0.7, 5.0, 1e3}) {
-      const SegmentRay ray = Uniform(n, 2.0, sigma, {0.2, 0.4, 0.6});
+      const SegmentRay ray = UniformRay(n, 2.0, sigma, {0.2, 0.4, 0.6});
       const CompositeResult<double> result = Composite(ray.segments(), kBlack, 0.0);
       const double opacity = 1 - std::exp(-sigma * 2.0);
       CHECK(result.opacity == Approx(opacity).margin(1e-12));
@@ -46,7 +46,7 @@ TEST_CASE("constant density over length d gives opacity 1 - exp(-sigma d), at an
 TEST_CASE("the median depth is the sample where the opacity first reaches one half", "[render]") {
   // Constant density: the opacity reaches 1/2 at t = ln 2 / sigma; the sample there is the one whose segment
   // holds it (segments of 0.01 from 0).
-  const SegmentRay ray = Uniform(400, 4.0, 1.0, {1, 1, 1});
+  const SegmentRay ray = UniformRay(400, 4.0, 1.0, {1, 1, 1});
   const CompositeResult<double> result = Composite(ray.segments(), kBlack, 0.0);
   CHECK(result.median_depth == Approx(std::log(2.0)).margin(0.01));
   // Haze (opacity 0.2) in front of a wall: the expected depth is pulled forward, the median is at the wall.
@@ -59,12 +59,12 @@ TEST_CASE("the median depth is the sample where the opacity first reaches one ha
   CHECK(wall.median_depth == 3.0);
   CHECK(wall.depth / wall.opacity < 2.7);
   // Never half opaque: none.
-  CHECK(Composite(Uniform(10, 1.0, 0.1, {1, 1, 1}).segments(), kBlack, 0.0).median_depth == -1.0);
+  CHECK(Composite(UniformRay(10, 1.0, 0.1, {1, 1, 1}).segments(), kBlack, 0.0).median_depth == -1.0);
 }
 
 TEST_CASE("a ray through empty space returns the background exactly", "[render]") {
   const double background[3] = {0.25, 0.5, 0.75};
-  const SegmentRay ray = Uniform(100, 3.0, 0.0, {1, 0, 0});
+  const SegmentRay ray = UniformRay(100, 3.0, 0.0, {1, 0, 0});
   const CompositeResult<double> result = Composite(ray.segments(), background, 1e-4);
   CHECK(result.rgb[0] == 0.25);
   CHECK(result.rgb[1] == 0.5);
@@ -79,7 +79,7 @@ TEST_CASE("densities 0..1e8 and step sizes 1e-9..1e3 give finite results in [0, 
   for (const double sigma : {0.0, 1e-9, 1.0, 1e4, 1e8}) {
     for (const double step : {1e-9, 1e-6, 1e-2, 1.0, 1e3}) {
       for (const size_t n : {1u, 2u, 1000u}) {
-        const SegmentRay ray = Uniform(n, step * n, sigma, {1, 1, 1});
+        const SegmentRay ray = UniformRay(n, step * n, sigma, {1, 1, 1});
         const CompositeResult<double> result = Composite(ray.segments(), kBlack, 1e-4);
         INFO("sigma " << sigma << " step " << step << " n " << n);
         CHECK(std::isfinite(result.rgb[0]));
@@ -94,7 +94,7 @@ TEST_CASE("densities 0..1e8 and step sizes 1e-9..1e3 give finite results in [0, 
     }
   }
   // Negative and NaN densities count as empty space.
-  SegmentRay ray = Uniform(3, 1.0, -5.0, {1, 0, 0});
+  SegmentRay ray = UniformRay(3, 1.0, -5.0, {1, 0, 0});
   ray.sigma[1] = std::nan("");
   CHECK(Composite(ray.segments(), kWhite, 0.0).rgb[1] == 1.0);
 }
@@ -143,7 +143,7 @@ TEST_CASE("a thin stiff slab (sigma 1e6) composites exactly at every step size, 
 
 TEST_CASE("early termination stops once the ray is opaque, and changes the colour by at most the threshold",
           "[render]") {
-  const SegmentRay ray = Uniform(1000, 10.0, 5.0, {0.3, 0.6, 0.9});
+  const SegmentRay ray = UniformRay(1000, 10.0, 5.0, {0.3, 0.6, 0.9});
   const CompositeResult<double> full = Composite(ray.segments(), kWhite, 0.0);
   const CompositeResult<double> early = Composite(ray.segments(), kWhite, 1e-4);
   CHECK(early.used < 250);
