@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Error against run time of training: trains on DATASET for BUDGET seconds with each preset (and field) given,
 # evaluating the held-out views every 15 s of training, and writes OUT/curves.csv (held-out PSNR at 15 s, 30 s,
-# 60 s, 2, 5 and 10 min, as far as the budget goes), OUT/<run>/metrics.csv, train_report.json and a plot
+# 60 s, 2, 5, 10 and 15 min, as far as the budget goes), OUT/<run>/metrics.csv, train_report.json and a plot
 # OUT/curves.png. Peak memory (max RSS) of each run goes into OUT/<run>/time.txt. Every run trains on a copy of one
 # workspace made up to its poses (OUT/ws_poses): the same cameras for each, structure from motion run once.
 #
