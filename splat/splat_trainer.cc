@@ -107,9 +107,11 @@ void SplatTrainer::RemapAdams(const std::vector<int64_t>& sources) {
   });
 }
 
-void SplatTrainer::SetViews(const std::vector<TrainView>* views) {
+void SplatTrainer::SetViews(const std::vector<TrainView>* views, double scale) {
   if (views->size() != scene_.views->size()) throw std::invalid_argument("SplatTrainer::SetViews: other views");
+  if (!(scale > 0 && scale <= 1)) throw std::invalid_argument("SplatTrainer::SetViews: a scale not in (0, 1]");
   scene_.views = views;
+  view_scale_ = scale;
 }
 
 const TrainView& SplatTrainer::NextView() {
@@ -128,6 +130,7 @@ double SplatTrainer::Step() {
   RasterOptions raster;
   raster.projection.near = scene_.near;
   raster.projection.sh_degree = ShDegree();
+  raster.projection.dilation *= view_scale_ * view_scale_;
   for (int c = 0; c < 3; ++c) raster.background[c] = background_[c];
   const Gaussians<float>* drawn = &gaussians_;
   if (scene_.context != nullptr) {

@@ -70,9 +70,11 @@ class SplatTrainer {
 
   // One step on the next training view (each view once per epoch, in a random order); returns its loss.
   double Step();
-  // Trains on `views` from the next step on: the same views in the same order, at another size (the coarse
-  // first part of an optimisation).
-  void SetViews(const std::vector<TrainView>* views);
+  // Trains on `views` from the next step on: the same views in the same order at `scale` times the size they are
+  // shown at (the coarse first part of an optimisation). The splats' dilation (a pixel's footprint) is scaled with
+  // them, a pixel of the shown size's, so that they learn the look they have there: with a pixel of the smaller
+  // views', thin splats widened by it would be thinner, and the picture eroded, where it is shown.
+  void SetViews(const std::vector<TrainView>* views, double scale = 1);
   // The share of the run done (0..1) from the next step on; without it, step / options.steps. A run bounded by
   // time sets it from its clock, so that densification ends halfway through whatever number of steps the time
   // buys, and the Gaussians it adds are optimised before the end.
@@ -113,7 +115,8 @@ class SplatTrainer {
   Rasterizer<float> rasterizer_;
   SsimLoss ssim_;
   int step_ = 0;
-  double progress_ = -1;  // SetProgress's share; negative: by steps
+  double progress_ = -1;   // SetProgress's share; negative: by steps
+  double view_scale_ = 1;  // SetViews's scale
   std::mt19937_64 random_;
   std::vector<size_t> order_;  // this epoch's views; the next is order_.back()
   std::vector<float> screen_gradient_sum_;

@@ -65,7 +65,8 @@ void OptimiseUntilDone(const SplatRun& run, SplatTrainer& trainer, const std::ve
   const std::vector<TrainView> coarse = options.coarse > 0 ? HalfSizeViews(views) : std::vector<TrainView>{};
   const auto step = [&](double share) -> std::optional<double> {
     const double progress = part.from + share * width;
-    trainer.SetViews(!coarse.empty() && progress < options.coarse ? &coarse : &views);
+    const bool in_coarse = !coarse.empty() && progress < options.coarse;
+    trainer.SetViews(in_coarse ? &coarse : &views, in_coarse ? 0.5 : 1.0);
     trainer.SetProgress(progress);
     return trainer.Step();
   };
