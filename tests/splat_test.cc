@@ -65,6 +65,16 @@ std::vector<TrainView> ViewsOf(const Gaussians<float>& truth, int count,
   return views;
 }
 
+// `truth` with its means moved and its colours changed at random: splats to optimise back towards it.
+Gaussians<float> Disturbed(const Gaussians<float>& truth) {
+  Gaussians<float> start = truth;
+  std::mt19937_64 random(6);
+  std::normal_distribution<float> noise(0, 1);
+  for (float& v : start.positions) v += 0.05f * noise(random);
+  for (float& v : start.sh_dc) v += 1.0f * noise(random);
+  return start;
+}
+
 // The mean PSNR of `splats` over white in `views`.
 double MeanPsnr(const Gaussians<float>& splats, const std::vector<TrainView>& views) {
   double sum = 0;
@@ -315,11 +325,7 @@ TEST_CASE("SSIM of the splats' loss: 1 for the photo itself, its gradient agains
 TEST_CASE("Splat optimisation fits photos, and a resumed run continues as an uninterrupted one", "[splat]") {
   const Gaussians<float> truth = RandomSplats(30, 0, 5);
   const std::vector<TrainView> views = ViewsOf(truth, 8);
-  Gaussians<float> start = truth;
-  std::mt19937_64 random(6);
-  std::normal_distribution<float> noise(0, 1);
-  for (float& v : start.positions) v += 0.05f * noise(random);
-  for (float& v : start.sh_dc) v += 1.0f * noise(random);
+  const Gaussians<float> start = Disturbed(truth);
   const SplatScene scene{&views, {1, 1, 1}, 2.5, 0.01};
   SplatTrainerOptions options;
   options.steps = 160;
@@ -350,11 +356,7 @@ TEST_CASE("Splats optimised on the photos at half size look as they should at fu
   const Gaussians<float> truth = RandomSplats(30, 0, 5);
   const std::vector<TrainView> views = ViewsOf(truth, 8, {1, 1, 1}, Eigen::Vector3d::Zero(), 64);
   const std::vector<TrainView> half = HalfSizeViews(views);
-  Gaussians<float> start = truth;
-  std::mt19937_64 random(6);
-  std::normal_distribution<float> noise(0, 1);
-  for (float& v : start.positions) v += 0.05f * noise(random);
-  for (float& v : start.sh_dc) v += 1.0f * noise(random);
+  const Gaussians<float> start = Disturbed(truth);
   const SplatScene scene{&views, {1, 1, 1}, 2.5, 0.01};
   SplatTrainerOptions options;
   options.steps = 160;
