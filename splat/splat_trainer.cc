@@ -210,6 +210,24 @@ void SplatTrainer::StepBackground(const std::vector<float>& d_rgb) {
   for (float& value : background_) value = std::clamp(value, 0.0f, 1.0f);
 }
 
+// The Gaussians whose mean screen-space gradient reaches the threshold, at most `room` of them (each adds one
+// Gaussian): where the cap leaves room for some only, those the loss pulls hardest. In the order of the Gaussians.
+std::vector<size_t> SplatTrainer::DensifyCandidates(size_t room) const {
+  std::vector<size_t> candidates;
+  std::vector<float> mean(gaussians_.size(), 0);
+  for (size_t i = 0; i < gaussians_.size(); ++i) {
+    if (screen_gradient_count_[i] > 0) mean[i] = screen_gradient_sum_[i] / screen_gradient_count_[i];
+    if (screen_gradient_count_[i] > 0 && mean[i] >= options_.densify_gradient) candidates.push_back(i);
+  }
+  if (candidates.size() > room) {
+    std::nth_element(candidates.begin(), candidates.begin() + room, candidates.end(),
+                     [&](size_t a, size_t b) { return mean[a] > mean[b] || (mean[a] == mean[b] && a < b); });
+    candidates.resize(room);
+    std::sort(candidates.begin(), candidates.end());
+  }
+  return candidates;
+}
+
 void SplatTrainer::Densify() {
   const size_t n = gaussians_.size();
   const double dense_scale = options_.dense_fraction * scene_.extent;
@@ -217,17 +235,11 @@ void SplatTrainer::Densify() {
   Gaussians<float> added;
   added.sh_degree = gaussians_.sh_degree;
   std::vector<bool> keep(n, true);
-  size_t budget = options_.max_gaussians > n ? options_.max_gaussians - n : 0;
-  for (size_t i = 0; i < n && budget > 0; ++i) {
-    if (screen_gradient_count_[i] == 0 ||
-        screen_gradient_sum_[i] / screen_gradient_count_[i] < options_.densify_gradient) {
-      continue;
-    }
+  for (const size_t i : DensifyCandidates(options_.max_gaussians > n ? options_.max_gaussians - n : 0)) {
     const float* log_scale = &gaussians_.log_scales[3 * i];
     const float largest = std::exp(std::max({log_scale[0], log_scale[1], log_scale[2]}));
     if (largest <= dense_scale) {  // small: a copy, which the next steps pull apart
       added.Append(gaussians_, i);
-      --budget;
       continue;
     }
     // Large: two Gaussians drawn from it, each 1/1.6 of its size; the original goes.
@@ -247,7 +259,6 @@ void SplatTrainer::Densify() {
       }
     }
     keep[i] = false;
-    budget = budget > 0 ? budget - 1 : 0;
   }
   for (size_t i = 0; i < n; ++i) {
     if (Sigmoid(gaussians_.opacity_logits[i]) < options_.prune_opacity) keep[i] = false;

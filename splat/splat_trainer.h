@@ -95,6 +95,7 @@ class SplatTrainer {
   void Load(BinaryReader* reader);
 
  private:
+  std::vector<size_t> DensifyCandidates(size_t room) const;
   double StepShare() const;  // step / options.steps, at most 1
   double Progress() const;
   double PositionLearningRate() const;

@@ -96,8 +96,8 @@ class SplatStage : public StageOf<SplatResult> {
   // 2: the SSIM term; 3: placed from at most 2 M pixels (the export's renders); 4: the background learnt (auto);
   // 5: optimised on photos of at most splat.max_image_size (halved); 6: downsized to it with an area filter
   // 7: a background the import knows stays fixed (auto); 8: splats.spz beside splats.ply; 9: and splats.glb;
-  // 10: the coarse part's dilation a full-size pixel's
-  int format_version() const override { return 10; }
+  // 10: the coarse part's dilation a full-size pixel's; 11: densification under the cap by the largest gradients
+  int format_version() const override { return 11; }
   std::vector<std::string> upstream() const override { return {PosesResult::kId.name, TrainResult::kId.name}; }
   void Run(StageContext& context) const override;
   // Block `part` (from 1) of splat.blocks (stages/splat_optimisation.h).

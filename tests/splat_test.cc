@@ -391,6 +391,35 @@ TEST_CASE("Densification ends at the share of the run its owner sets, whatever t
   CHECK(size_after_ten_steps(0.6) == start.size());  // past densify_until (0.5): neither added nor pruned
 }
 
+TEST_CASE("Densification with room for some of its candidates only adds copies of those the loss pulls hardest",
+          "[splat]") {
+  const Gaussians<float> truth = RandomSplats(12, 0, 5);
+  const std::vector<TrainView> views = ViewsOf(truth, 8);
+  Gaussians<float> start = truth;
+  const int moved = 3;  // the last three, far from where the photos show them: the loss pulls their means hardest
+  for (size_t i = start.size() - moved; i < start.size(); ++i) start.positions[3 * i + 2] += 0.3f;
+  const SplatScene scene{&views, {1, 1, 1}, 2.5, 0.01};
+  SplatTrainerOptions options;
+  options.densify_from = options.densify_interval = 8;
+  options.densify_gradient = 1e-12;  // every splat drawn is a candidate
+  options.dense_fraction = 1;        // every candidate is copied (none split)
+  options.max_gaussians = start.size() + moved;
+  SplatTrainer trainer(start, scene, options);
+  for (int s = 0; s < 8; ++s) trainer.Step();
+  const Gaussians<float>& after = trainer.gaussians();
+  REQUIRE(after.size() == start.size() + moved);  // none pruned; as many copies as there was room for
+  for (size_t k = start.size(); k < after.size(); ++k) {
+    size_t source = start.size();
+    for (size_t i = 0; i < start.size(); ++i) {
+      if (after.positions[3 * i] == after.positions[3 * k] && after.positions[3 * i + 2] == after.positions[3 * k + 2])
+        source = i;
+    }
+    INFO("copy " << k << " of splat " << source);
+    CHECK(source >= start.size() - moved);
+    CHECK(source < start.size());
+  }
+}
+
 TEST_CASE("Splat optimisation learns the colour behind the splats from photos without alpha, and resumes it",
           "[splat]") {
   const Gaussians<float> truth = RandomSplats(30, 0, 5);
