@@ -67,7 +67,8 @@ struct SplatOptions {
       "for the other half each, every block on the training views that see it with the others drawn as the whole "
       "optimisation left them, then merged: for scenes too large for one optimisation in the time; 1: whole");
     v("coarse", coarse,
-      "share of the optimisation time spent on the photos at half size (four times the steps; coarse to fine)");
+      "share of the optimisation time spent on the photos at half size (four times the steps; coarse to fine), "
+      "ending sooner after 40 passes over the training photos");
     v("max_image_size", max_image_size,
       "longest side of the photos the splats are optimised on: larger ones are downsized to it with an area filter "
       "(the coarse share at half that); held-out views are scored at their own size; 0: as they are",
@@ -96,8 +97,9 @@ class SplatStage : public StageOf<SplatResult> {
   // 2: the SSIM term; 3: placed from at most 2 M pixels (the export's renders); 4: the background learnt (auto);
   // 5: optimised on photos of at most splat.max_image_size (halved); 6: downsized to it with an area filter
   // 7: a background the import knows stays fixed (auto); 8: splats.spz beside splats.ply; 9: and splats.glb;
-  // 10: the coarse part's dilation a full-size pixel's; 11: densification under the cap by the largest gradients
-  int format_version() const override { return 11; }
+  // 10: the coarse part's dilation a full-size pixel's; 11: densification under the cap by the largest gradients;
+  // 12: the coarse part at most 40 passes
+  int format_version() const override { return 12; }
   std::vector<std::string> upstream() const override { return {PosesResult::kId.name, TrainResult::kId.name}; }
   void Run(StageContext& context) const override;
   // Block `part` (from 1) of splat.blocks (stages/splat_optimisation.h).
