@@ -216,8 +216,9 @@ std::vector<size_t> SplatTrainer::DensifyCandidates(size_t room) const {
   std::vector<size_t> candidates;
   std::vector<float> mean(gaussians_.size(), 0);
   for (size_t i = 0; i < gaussians_.size(); ++i) {
-    if (screen_gradient_count_[i] > 0) mean[i] = screen_gradient_sum_[i] / screen_gradient_count_[i];
-    if (screen_gradient_count_[i] > 0 && mean[i] >= options_.densify_gradient) candidates.push_back(i);
+    if (screen_gradient_count_[i] == 0) continue;
+    mean[i] = screen_gradient_sum_[i] / screen_gradient_count_[i];
+    if (mean[i] >= options_.densify_gradient) candidates.push_back(i);
   }
   if (candidates.size() > room) {
     std::nth_element(candidates.begin(), candidates.begin() + room, candidates.end(),
