@@ -74,7 +74,7 @@ class SplatTrainer {
   // shown at (the coarse first part of an optimisation). The splats' dilation (a pixel's footprint) is scaled with
   // them, a pixel of the shown size's, so that they learn the look they have there: with a pixel of the smaller
   // views', thin splats widened by it would be thinner, and the picture eroded, where it is shown.
-  void SetViews(const std::vector<TrainView>* views, double scale = 1);
+  void SetViews(const std::vector<TrainView>* views, double scale);
   // The share of the run done (0..1) from the next step on; without it, step / options.steps. A run bounded by
   // time sets it from its clock, so that densification ends halfway through whatever number of steps the time
   // buys, and the Gaussians it adds are optimised before the end.
