@@ -43,6 +43,13 @@ void AddMetricsRow(int steps, double seconds, size_t splats, const Scores& score
   state->metrics += format("{:.3f},{},{},{:.6g},{:.4f}\n", seconds, steps, splats, loss, Mean(scores.psnr));
 }
 
+// 40 passes: by then the splats have learnt what the half size shows, and a long run's rest is better spent at full
+// size.
+bool InCoarsePart(double coarse_share, double progress, int steps, size_t train_views) {
+  constexpr int kCoarsePasses = 40;
+  return progress < coarse_share && static_cast<size_t>(steps) < kCoarsePasses * train_views;
+}
+
 namespace {
 
 // A part of the optimisation: its share of the run (from, to: of the budget, of densification's schedule) and the
@@ -51,11 +58,6 @@ struct Part {
   double from = 0, to = 1;
   int start_step = 0;
 };
-
-// The coarse part ends after so many passes over the training views if its share of the budget has not ended it:
-// by then the splats have learnt what the half size shows (docs/benchmarks.md, splats), and a long run's rest is
-// better spent at full size.
-constexpr int kCoarsePasses = 40;
 
 // Optimises on `views` until the part's share of the budget (seconds, else steps) is spent: a metrics row (its
 // steps and seconds the part's own) at every evaluation but the last (the caller's final evaluation makes it),
@@ -68,10 +70,10 @@ void OptimiseUntilDone(const SplatRun& run, SplatTrainer& trainer, const std::ve
   const RunLoop loop{SplatResult::kId.name,      run.budget * width, steps, options.eval_interval, 1, false,
                      options.checkpoint_interval};
   const std::vector<TrainView> coarse = options.coarse > 0 ? HalfSizeViews(views) : std::vector<TrainView>{};
-  const int coarse_steps = kCoarsePasses * static_cast<int>(run.setup.data.train.size());
   const auto step = [&](double share) -> std::optional<double> {
     const double progress = part.from + share * width;
-    const bool in_coarse = !coarse.empty() && progress < options.coarse && trainer.step() < coarse_steps;
+    const bool in_coarse =
+        !coarse.empty() && InCoarsePart(options.coarse, progress, trainer.step(), run.setup.data.train.size());
     trainer.SetViews(in_coarse ? &coarse : &views, in_coarse ? 0.5 : 1.0);
     trainer.SetProgress(progress);
     return trainer.Step();

@@ -15,6 +15,7 @@
 #include "splat/splat_ply.h"
 #include "splat/spz.h"
 #include "stage_fixtures.h"
+#include "stages/splat_optimisation.h"
 
 namespace p2n::testing {
 namespace fs = std::filesystem;
@@ -61,6 +62,20 @@ TEST_CASE("splat stage: splats where the scene is, scored on the held-out views,
   }
   mean /= static_cast<double>(splats.size());
   CHECK((mean - frame.translation).norm() < 1.5 * frame.Scale());
+}
+
+TEST_CASE("splat stage: the coarse part ends at its share of the budget or after 40 passes over the photos",
+          "[splat]") {
+  // 17 photos: 680 steps make 40 passes.
+  CHECK(InCoarsePart(0.75, 0.1, 0, 17));
+  CHECK(InCoarsePart(0.75, 0.1, 679, 17));
+  CHECK_FALSE(InCoarsePart(0.75, 0.1, 680, 17));
+  CHECK_FALSE(InCoarsePart(0.75, 0.75, 10, 17));
+  // Many photos: the share ends it first.
+  CHECK(InCoarsePart(0.75, 0.74, 3000, 100));
+  CHECK_FALSE(InCoarsePart(0.75, 0.76, 3000, 100));
+  // No coarse part.
+  CHECK_FALSE(InCoarsePart(0, 0, 0, 17));
 }
 
 TEST_CASE("splat stage: splat.blocks optimises whole, then each block, merged into one set of splats", "[splat]") {
