@@ -55,6 +55,12 @@ double SplatTimeBudget(const SplatOptions& options, PresetName train_preset) {
   return train_preset == PresetName::kQuality ? 480 : 180;
 }
 
+int SplatScheduleSteps(double budget) {
+  constexpr int kSteps = 2000;
+  constexpr double kSeconds = 320;  // the budget up to which the schedule is kSteps long
+  return budget > kSeconds ? static_cast<int>(std::lround(kSteps * budget / kSeconds)) : kSteps;
+}
+
 namespace {
 
 constexpr size_t kPixelsPerSplat = 64;
@@ -238,6 +244,7 @@ SplatRun MakeSplatRun(const SplatSetup& setup, const SplatOptions& options, cons
   run.trainer.seed = static_cast<uint64_t>(options.seed);
   run.trainer.max_gaussians = 2 * static_cast<size_t>(options.max_gaussians);
   run.trainer.ssim_weight = options.ssim_weight;
+  run.trainer.steps = SplatScheduleSteps(budget);
   return run;
 }
 

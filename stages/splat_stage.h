@@ -52,7 +52,9 @@ struct SplatOptions {
   void Visit(V& v) {
     v("enabled", enabled, "bake the trained field into 3D Gaussian splats (splats.ply, for live viewing)");
     v("time_budget", time_budget,
-      "optimisation time of the splats; 0: by the training preset (fast 30, default 180, quality 480)", "s");
+      "optimisation time of the splats; 0: by the training preset (fast 30, default 180, quality 480); above 320 s "
+      "the means' learning rate decays over proportionally more steps",
+      "s");
     v("steps", steps, "stop after this many steps (one training photo each); 0: no step limit", "steps");
     v("sh_degree", sh_degree, "spherical-harmonics degree of the splats' colours (0: one colour each)");
     v("init", init,
@@ -91,6 +93,10 @@ struct SplatOptions {
 
 // splat.time_budget, or the training preset's share when it is 0.
 double SplatTimeBudget(const SplatOptions& options, PresetName train_preset);
+// The steps over which the means' learning rate decays (SplatTrainerOptions::steps) in a run of `budget` seconds (0:
+// bounded by steps): 2,000, stretched in proportion by a budget above 320 s (480 s: 3,000), whose many steps would
+// otherwise spend their last part at the final rate (docs/benchmarks.md, splats).
+int SplatScheduleSteps(double budget);
 
 class SplatStage : public StageOf<SplatResult> {
  public:
@@ -98,8 +104,8 @@ class SplatStage : public StageOf<SplatResult> {
   // 5: optimised on photos of at most splat.max_image_size (halved); 6: downsized to it with an area filter
   // 7: a background the import knows stays fixed (auto); 8: splats.spz beside splats.ply; 9: and splats.glb;
   // 10: the coarse part's dilation a full-size pixel's; 11: densification under the cap by the largest gradients;
-  // 12: the coarse part at most 40 passes
-  int format_version() const override { return 12; }
+  // 12: the coarse part at most 40 passes; 13: the means' schedule stretched by a budget above 320 s
+  int format_version() const override { return 13; }
   std::vector<std::string> upstream() const override { return {PosesResult::kId.name, TrainResult::kId.name}; }
   void Run(StageContext& context) const override;
   // Block `part` (from 1) of splat.blocks (stages/splat_optimisation.h).

@@ -78,6 +78,13 @@ TEST_CASE("splat stage: the coarse part ends at its share of the budget or after
   CHECK_FALSE(InCoarsePart(0, 0, 0, 17));
 }
 
+TEST_CASE("splat stage: the means' schedule is 2,000 steps, stretched in proportion by a budget above 320 s",
+          "[splat]") {
+  for (const double budget : {0.0, 30.0, 180.0, 320.0}) CHECK(SplatScheduleSteps(budget) == 2000);
+  CHECK(SplatScheduleSteps(480) == 3000);
+  CHECK(SplatScheduleSteps(960) == 6000);
+}
+
 TEST_CASE("splat stage: splat.blocks optimises whole, then each block, merged into one set of splats", "[splat]") {
   StageWorkspace setup;
   Config config = SmallStageConfig(150);
