@@ -56,9 +56,9 @@ double SplatTimeBudget(const SplatOptions& options, PresetName train_preset) {
 }
 
 int SplatScheduleSteps(double budget) {
-  constexpr int kSteps = 2000;
-  constexpr double kSeconds = 320;  // the budget up to which the schedule is kSteps long
-  return budget > kSeconds ? static_cast<int>(std::lround(kSteps * budget / kSeconds)) : kSteps;
+  const int steps = SplatTrainerOptions{}.steps;
+  constexpr double kSeconds = 320;  // the budget up to which the schedule is the trainer's own
+  return budget > kSeconds ? static_cast<int>(std::lround(steps * budget / kSeconds)) : steps;
 }
 
 namespace {
