@@ -5,6 +5,8 @@
 // instructions whether or not the auto-vectoriser sees it. Masks are the lane-wise comparisons' results (all bits
 // set or none).
 
+#include <immintrin.h>
+
 #include <cmath>
 #include <cstdint>
 #include <type_traits>
@@ -65,8 +67,14 @@ inline T Sum(V<T> v) {
   return sum;
 }
 
+// One test instruction where the mask fills a register (GCC reduces a mask lane by lane otherwise).
 template <typename T>
 inline bool Any(M<T> mask) {
+#if defined(__AVX512F__)
+  if constexpr (sizeof(M<T>) == 64) return _mm512_test_epi32_mask((__m512i)mask, (__m512i)mask) != 0;
+#elif defined(__AVX__)
+  if constexpr (sizeof(M<T>) == 32) return !_mm256_testz_si256((__m256i)mask, (__m256i)mask);
+#endif
   for (int l = 0; l < kLanes; ++l) {
     if (mask[l]) return true;
   }

@@ -152,15 +152,16 @@ template <typename T>
 void BackwardSplat(const Splat2D<T>& s, size_t e, V<T> px, T py, RowBackward<T>* row, LaneGradient<T>* g) {
   const Footprint<T> f(s, px, py);
   const M<T> valid = f.drawn & (static_cast<Lane<T>>(e) < row->count);
-  const V<T> one_minus = 1 - f.alpha;
-  const V<T> transmittance = lanes::Select<T>(valid, row->transmittance / one_minus, row->transmittance);
+  if (!lanes::Any<T>(valid)) return;  // blended at none of the lanes: it changes neither their state nor its gradient
+  const V<T> inverse = 1 / (1 - f.alpha);  // one division, used twice
+  const V<T> transmittance = lanes::Select<T>(valid, row->transmittance * inverse, row->transmittance);
   row->transmittance = transmittance;
   const V<T> la = row->last_alpha;
   const V<T> br = la * row->last_red + (1 - la) * row->behind_red;
   const V<T> bg = la * row->last_green + (1 - la) * row->behind_green;
   const V<T> bb = la * row->last_blue + (1 - la) * row->behind_blue;
   V<T> d_alpha = (s.rgb[0] - br) * row->g_red + (s.rgb[1] - bg) * row->g_green + (s.rgb[2] - bb) * row->g_blue;
-  d_alpha = d_alpha * transmittance - row->final_transmittance / one_minus * row->background_dot;
+  d_alpha = d_alpha * transmittance - row->final_transmittance * inverse * row->background_dot;
   row->behind_red = lanes::Select<T>(valid, br, row->behind_red);
   row->behind_green = lanes::Select<T>(valid, bg, row->behind_green);
   row->behind_blue = lanes::Select<T>(valid, bb, row->behind_blue);

@@ -245,6 +245,58 @@ TEST_CASE("The rasterizer's gradients are the same whatever the number of thread
   }
 }
 
+TEST_CASE("The float rasterizer (its vector exponential and lane tests) agrees with the double one", "[splat]") {
+  // Many tiles and overlapping splats, so that strips end early, skip splats and stop at the transmittance floor.
+  const PinholeCamera camera = LookingAtOrigin(160, 128, 150, {0.4, 0.3, 3});
+  RasterOptions options;
+  options.background = {0.2, 0.5, 0.7};
+  const Gaussians<double> g = RandomGaussians(300, 1, 7);
+  Gaussians<float> f;
+  f.sh_degree = g.sh_degree;
+  f.Resize(g.size());
+  std::vector<const std::vector<double>*> from;
+  g.ForEachArray([&](const std::vector<double>& values, int) { from.push_back(&values); });
+  size_t array = 0;
+  f.ForEachArray([&](std::vector<float>& values, int) {
+    const std::vector<double>& source = *from.at(array++);
+    values.assign(source.begin(), source.end());
+  });
+  std::mt19937_64 random(13);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  std::vector<double> weights(160 * 128 * 3);
+  for (double& w : weights) w = uniform(random);
+  const std::vector<float> float_weights(weights.begin(), weights.end());
+
+  Rasterizer<double> exact;
+  exact.Forward(g, camera, options);
+  Rasterizer<float> fast;
+  fast.Forward(f, camera, options);
+  double worst = 0;
+  for (size_t k = 0; k < weights.size(); ++k) worst = std::max(worst, std::abs(exact.rgb()[k] - fast.rgb()[k]));
+  CHECK(worst < 1e-4);
+
+  Gaussians<double> exact_grads = g;
+  exact_grads.SetZero();
+  exact.Backward(weights, &exact_grads);
+  Gaussians<float> fast_grads = f;
+  fast_grads.SetZero();
+  fast.Backward(float_weights, &fast_grads);
+  std::vector<const std::vector<double>*> expected;
+  exact_grads.ForEachArray([&](const std::vector<double>& values, int) { expected.push_back(&values); });
+  array = 0;
+  fast_grads.ForEachArray([&](const std::vector<float>& values, int) {
+    const std::vector<double>& want = *expected.at(array++);
+    double difference = 0, norm = 0;
+    for (size_t k = 0; k < want.size(); ++k) {
+      difference += (values[k] - want[k]) * (values[k] - want[k]);
+      norm += want[k] * want[k];
+    }
+    INFO("array " << array - 1);
+    CHECK(norm > 0);
+    CHECK(std::sqrt(difference) <= 1e-3 * std::sqrt(norm));
+  });
+}
+
 TEST_CASE("Degenerate splats render and differentiate to finite values", "[splat]") {
   const PinholeCamera camera = LookingAtOrigin(32, 32, 30, {0, 0, 3});
   Gaussians<double> g = RandomGaussians(8, 3, 21);
