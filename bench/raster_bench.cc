@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
   options.projection.near = report.near;
   for (int c = 0; c < 3; ++c) options.background[c] = report.background[c];
 
-  std::vector<double> forward, backward;
+  std::vector<double> forward, backward, entries;
   double mean_sum = 0, opacity_sum = 0, colour_sum = 0;
   p2n::Rasterizer<float> rasterizer;
   p2n::Gaussians<float> grads;
@@ -61,6 +61,7 @@ int main(int argc, char** argv) {
       auto start = std::chrono::steady_clock::now();
       rasterizer.Forward(gaussians, view.camera, options);
       forward.push_back(Seconds(start));
+      entries.push_back(static_cast<double>(rasterizer.tile_entries()));
       std::vector<float> d_rgb(rasterizer.rgb().size());
       for (size_t i = 0; i < d_rgb.size(); ++i) {
         d_rgb[i] = (rasterizer.rgb()[i] > photo.pixels[i] ? 1.0f : -1.0f) / static_cast<float>(d_rgb.size());
@@ -75,9 +76,9 @@ int main(int argc, char** argv) {
       for (const float g : grads.sh_dc) colour_sum += std::abs(g);
     }
   }
-  std::printf("%zu splats, %zu views %dx%d: forward %.4f s, backward %.4f s a view (medians)\n", gaussians.size(),
-              data.train.size(), data.train[0].camera.width, data.train[0].camera.height, Median(forward),
-              Median(backward));
+  std::printf("%zu splats, %zu views %dx%d, %.0f tile entries: forward %.4f s, backward %.4f s a view (medians)\n",
+              gaussians.size(), data.train.size(), data.train[0].camera.width, data.train[0].camera.height,
+              Median(entries), Median(forward), Median(backward));
   std::printf("sums of |gradient|: means %.6e, opacities %.6e, colours %.6e\n", mean_sum, opacity_sum, colour_sum);
   return 0;
 }

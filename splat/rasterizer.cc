@@ -3,7 +3,6 @@
 #include "splat/lanes.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -11,6 +10,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <span>
 #include <type_traits>
 
 namespace p2n {
@@ -29,26 +29,9 @@ using M = lanes::M<T>;
 template <typename T>
 using Lane = std::remove_reference_t<decltype(M<T>{}[0])>;  // a mask lane's integer type
 
-// A splat in a tile's list: it and the box outside which it is blended nowhere (Rasterizer::boxes_).
-template <typename T>
-struct TileSplat {
-  Splat2D<T> s;
-  std::array<T, 4> box;  // x0, x1, y0, y1 (pixels)
-
-  // Whether it can be blended at a pixel of the strip whose pixel centres run from (x, y) to (x_last, y).
-  bool Reaches(T x, T x_last, T y) const { return y >= box[2] && y <= box[3] && x_last >= box[0] && x <= box[1]; }
-};
-
 // A tile's splats, front to back, copied together for the row loops.
 template <typename T>
-using TileSplats = std::vector<TileSplat<T>>;
-
-template <typename T>
-void Gather(const std::vector<Splat2D<T>>& splats, const std::vector<std::array<T, 4>>& boxes, const uint32_t* ids,
-            size_t n, TileSplats<T>* tile) {
-  tile->resize(n);
-  for (size_t e = 0; e < n; ++e) (*tile)[e] = {splats[ids[e]], boxes[ids[e]]};
-}
+using TileSplats = std::span<const TileSplat<T>>;
 
 // The half width and height (pixels) of the box outside which splat `s` is never blended; false when it is
 // blended nowhere. Footprint blends a pixel only where opacity e^(-m^2 / 2) >= kMinAlpha, m being the pixel's
@@ -94,7 +77,7 @@ struct RowForward {
 
 // Blends the tile's splats front to back into the strip of pixels (x0 + lane, py), the first `lanes` of them.
 template <typename T>
-void BlendRow(const TileSplats<T>& splats, T x0, T py, int lanes, RowForward<T>* row) {
+void BlendRow(TileSplats<T> splats, T x0, T py, int lanes, RowForward<T>* row) {
   const V<T> px = x0 + lanes::Iota<T>();
   row->transmittance = lanes::Splat(T(1));
   row->red = row->green = row->blue = row->depth = V<T>{};
@@ -289,12 +272,12 @@ void Rasterizer<T>::Blend() {
   depth_.resize(static_cast<size_t>(width) * height);
   contributors_.resize(static_cast<size_t>(width) * height);
   const T background[3] = {T(options_.background[0]), T(options_.background[1]), T(options_.background[2])};
-  tbb::enumerable_thread_specific<TileSplats<T>> local;
+  tile_splats_.resize(entries_.size());
   tbb::parallel_for(0, tiles_x_ * tiles_y_, [&](int tile) {
     const int tx = tile % tiles_x_, ty = tile / tiles_x_, x0 = tx * kSplatTileSize;
-    const size_t begin = tile_begin_[tile];
-    TileSplats<T>& splats = local.local();
-    Gather(splats_, boxes_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
+    const size_t begin = tile_begin_[tile], end = tile_begin_[tile + 1];
+    for (size_t e = begin; e < end; ++e) tile_splats_[e] = {splats_[entries_[e]], boxes_[entries_[e]]};
+    const TileSplats<T> splats(tile_splats_.data() + begin, end - begin);
     RowForward<T> row;
     for (int y = ty * kSplatTileSize; y < std::min(height, (ty + 1) * kSplatTileSize); ++y) {
       for (int xs = x0; xs < std::min(width, x0 + kSplatTileSize); xs += kLanes) {
@@ -321,12 +304,10 @@ void Rasterizer<T>::Backward(const std::vector<T>& d_rgb, Gaussians<T>* grads, s
   const size_t n = gaussians_->size();
   entry_grads_.resize(entries_.size());
   const T background[3] = {T(options_.background[0]), T(options_.background[1]), T(options_.background[2])};
-  tbb::enumerable_thread_specific<TileSplats<T>> tile_splats;
   tbb::parallel_for(0, tiles_x_ * tiles_y_, [&](int tile) {
     const int tx = tile % tiles_x_, ty = tile / tiles_x_, x0 = tx * kSplatTileSize;
     const size_t begin = tile_begin_[tile];
-    TileSplats<T>& splats = tile_splats.local();
-    Gather(splats_, boxes_, entries_.data() + begin, tile_begin_[tile + 1] - begin, &splats);
+    const TileSplat<T>* splats = tile_splats_.data() + begin;
     // Every strip of the tile at once, back to front: each splat's gradient is summed over the tile in lanes, then
     // kept for the tile's entry (summed over the splat's tiles below, in their order). Strip s is row s / kStrips,
     // pixels from x0 + kLanes (s % kStrips).

@@ -5,7 +5,9 @@
 // blend front to back per pixel: alpha = min(0.99, opacity · exp(-½ dᵀ Σ₂⁻¹ d)), skipping alpha < 1/255 and
 // stopping before the transmittance falls below 1e-4; the background fills what remains. Backward: each pixel
 // walks its list again back to front from its last contributor, recovering the transmittance by division. Both
-// take a strip of a tile's row at a time, passing over the splats whose box misses it. Tiles are TBB tasks.
+// take a strip of a tile's row at a time, passing over the splats whose box misses it, and read the tile's splats
+// from one copy in list order (the forward makes it, 56 bytes an entry in float, and Backward reuses it). Tiles are
+// TBB tasks.
 
 #include <array>
 #include <vector>
@@ -17,6 +19,16 @@
 namespace p2n {
 
 inline constexpr int kSplatTileSize = 16;
+
+// A splat in a tile's list: it and the box outside which it is blended nowhere.
+template <typename T>
+struct TileSplat {
+  Splat2D<T> s;
+  std::array<T, 4> box;  // x0, x1, y0, y1 (pixels)
+
+  // Whether it can be blended at a pixel of the strip whose pixel centres run from (x, y) to (x_last, y).
+  bool Reaches(T x, T x_last, T y) const { return y >= box[2] && y <= box[3] && x_last >= box[0] && x <= box[1]; }
+};
 
 struct RasterOptions {
   ProjectionOptions projection;
@@ -69,8 +81,9 @@ class Rasterizer {
   std::vector<Rect> blended_;            // within those, the tiles where it can be blended: those it is listed in
   std::vector<std::array<T, 4>> boxes_;  // x0, x1, y0, y1: the box (pixels) outside which it is not blended
   size_t drawn_ = 0;
-  std::vector<size_t> tile_begin_;  // tiles_x · tiles_y + 1 offsets into entries_
-  std::vector<uint32_t> entries_;   // Gaussian indices, each tile's sorted front to back
+  std::vector<size_t> tile_begin_;         // tiles_x · tiles_y + 1 offsets into entries_
+  std::vector<uint32_t> entries_;          // Gaussian indices, each tile's sorted front to back
+  std::vector<TileSplat<T>> tile_splats_;  // entries_' splats and boxes, copied for the blend and Backward
   std::vector<T> rgb_, transmittance_, depth_;
   std::vector<uint32_t> contributors_;  // per pixel: entries of its tile up to and including its last blended
   // Backward's, kept between calls for their memory: each tile entry's gradient, and the entries by splat
