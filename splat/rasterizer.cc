@@ -84,60 +84,32 @@ void BoxRows(const TileSplat<T>& t, int y0, int rows, int* first, int* end) {
   *end = static_cast<int>(std::clamp(bottom + 1, T(0), T(rows)));
 }
 
-// Blends splat `s` (the tile's e-th) into the strip of pixels (px[lane], py) behind those before it.
+// Blends the tile's splats front to back into the strip of pixels (x0 + lane, py), the first `lanes` of them.
 template <typename T>
-void BlendSplat(const Splat2D<T>& s, size_t e, V<T> px, T py, RowForward<T>* row) {
-  const Footprint<T> f(s, px, py);
-  const M<T> valid = f.drawn & row->active;
-  const V<T> next = row->transmittance * (1 - f.alpha);
-  const M<T> stop = valid & (next < T(kMinTransmittance));
-  const M<T> use = valid & ~stop;
-  const V<T> w = lanes::Select<T>(use, f.alpha * row->transmittance, V<T>{});
-  row->red += w * s.rgb[0];
-  row->green += w * s.rgb[1];
-  row->blue += w * s.rgb[2];
-  row->depth += w * s.depth;
-  row->transmittance = lanes::Select<T>(use, next, row->transmittance);
-  row->count = use ? M<T>{} + static_cast<Lane<T>>(e + 1) : row->count;
-  row->active &= ~stop;
-}
-
-// Blends a tile's splats front to back into its pixels, the tile's rows from y0, its strips from x0; each strip
-// stops when its last lane's transmittance would fall below the threshold, the tile when every strip has.
-template <typename T>
-void BlendTile(TileSplats<T> splats, int x0, int y0, int width, int height,
-               std::array<RowForward<T>, kSplatTileSize * kStrips>* strip) {
-  const int rows = std::min(kSplatTileSize, height - y0);
-  const int strips = std::min(kStrips, (width - x0 + kLanes - 1) / kLanes);
-  for (int i = 0; i < kSplatTileSize * kStrips; ++i) {
-    RowForward<T>& row = (*strip)[i];
-    row.transmittance = lanes::Splat(T(1));
-    row.red = row.green = row.blue = row.depth = V<T>{};
-    row.active = lanes::Iota<T>() < T(width - x0 - (i % kStrips) * kLanes);
-    if (i / kStrips >= rows) row.active = M<T>{};
-    row.count = M<T>{};
-  }
-  std::array<bool, kSplatTileSize * kStrips> live;
-  int live_strips = 0;
-  for (int i = 0; i < kSplatTileSize * kStrips; ++i) live_strips += live[i] = lanes::Any<T>((*strip)[i].active);
-  std::array<T, kStrips> strip_x;  // the strips' first pixel centres
-  std::array<V<T>, kStrips> px;
-  for (int k = 0; k < kStrips; ++k) {
-    strip_x[k] = T(x0 + k * kLanes) + T(0.5);
-    px[k] = strip_x[k] + lanes::Iota<T>();
-  }
-  for (size_t e = 0; e < splats.size() && live_strips > 0; ++e) {
-    int first, end;
-    BoxRows(splats[e], y0, rows, &first, &end);
-    for (int r = first; r < end; ++r) {
-      const T py = T(y0 + r) + T(0.5);
-      for (int k = 0; k < strips; ++k) {
-        const int i = r * kStrips + k;
-        if (!live[i] || !splats[e].Reaches(strip_x[k], strip_x[k] + T(kLanes - 1), py)) continue;
-        BlendSplat(splats[e].s, e, px[k], py, &(*strip)[i]);
-        if (!lanes::Any<T>((*strip)[i].active)) live[i] = false, --live_strips;
-      }
-    }
+void BlendRow(TileSplats<T> splats, T x0, T py, int lanes, RowForward<T>* row) {
+  const V<T> px = x0 + lanes::Iota<T>();
+  row->transmittance = lanes::Splat(T(1));
+  row->red = row->green = row->blue = row->depth = V<T>{};
+  row->active = lanes::Iota<T>() < T(lanes);
+  row->count = M<T>{};
+  const T x_last = x0 + T(kLanes - 1);
+  for (size_t e = 0; e < splats.size(); ++e) {
+    if (!splats[e].Reaches(x0, x_last, py)) continue;
+    const Splat2D<T>& s = splats[e].s;
+    const Footprint<T> f(s, px, py);
+    const M<T> valid = f.drawn & row->active;
+    const V<T> next = row->transmittance * (1 - f.alpha);
+    const M<T> stop = valid & (next < T(kMinTransmittance));
+    const M<T> use = valid & ~stop;
+    const V<T> w = lanes::Select<T>(use, f.alpha * row->transmittance, V<T>{});
+    row->red += w * s.rgb[0];
+    row->green += w * s.rgb[1];
+    row->blue += w * s.rgb[2];
+    row->depth += w * s.depth;
+    row->transmittance = lanes::Select<T>(use, next, row->transmittance);
+    row->count = use ? M<T>{} + static_cast<Lane<T>>(e + 1) : row->count;
+    row->active &= ~stop;
+    if (!lanes::Any<T>(row->active)) break;
   }
 }
 
@@ -311,15 +283,16 @@ void Rasterizer<T>::Blend() {
   const T background[3] = {T(options_.background[0]), T(options_.background[1]), T(options_.background[2])};
   tile_splats_.resize(entries_.size());
   tbb::parallel_for(0, tiles_x_ * tiles_y_, [&](int tile) {
-    const int x0 = tile % tiles_x_ * kSplatTileSize, y0 = tile / tiles_x_ * kSplatTileSize;
+    const int tx = tile % tiles_x_, ty = tile / tiles_x_, x0 = tx * kSplatTileSize;
     const size_t begin = tile_begin_[tile], end = tile_begin_[tile + 1];
     for (size_t e = begin; e < end; ++e) tile_splats_[e] = {splats_[entries_[e]], boxes_[entries_[e]]};
-    std::array<RowForward<T>, kSplatTileSize * kStrips> strip;
-    BlendTile<T>({tile_splats_.data() + begin, end - begin}, x0, y0, width, height, &strip);
-    for (int y = y0; y < std::min(height, y0 + kSplatTileSize); ++y) {
+    const TileSplats<T> splats(tile_splats_.data() + begin, end - begin);
+    RowForward<T> row;
+    for (int y = ty * kSplatTileSize; y < std::min(height, (ty + 1) * kSplatTileSize); ++y) {
       for (int xs = x0; xs < std::min(width, x0 + kSplatTileSize); xs += kLanes) {
-        const RowForward<T>& row = strip[(y - y0) * kStrips + (xs - x0) / kLanes];
-        for (int l = 0; l < std::min(kLanes, width - xs); ++l) {
+        const int lanes = std::min(kLanes, width - xs);
+        BlendRow(splats, T(xs) + T(0.5), T(y) + T(0.5), lanes, &row);
+        for (int l = 0; l < lanes; ++l) {
           const size_t pixel = static_cast<size_t>(y) * width + xs + l;
           const T t = row.transmittance[l];
           rgb_[3 * pixel] = row.red[l] + t * background[0];
