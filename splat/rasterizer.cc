@@ -29,7 +29,7 @@ using M = lanes::M<T>;
 template <typename T>
 using Lane = std::remove_reference_t<decltype(M<T>{}[0])>;  // a mask lane's integer type
 
-// A tile's splats, front to back, copied together for the row loops.
+// A tile's splats, front to back: its part of the copy the forward makes (Rasterizer::tile_splats_).
 template <typename T>
 using TileSplats = std::span<const TileSplat<T>>;
 
