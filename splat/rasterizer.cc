@@ -75,15 +75,6 @@ struct RowForward {
   M<T> count;   // splats up to and including the last blended
 };
 
-// The rows [*first, *end) of a tile (its first pixel row y0, `rows` rows) within which `t` can be blended: those
-// whose centre lies in its box, and one either side against rounding (Reaches decides those).
-template <typename T>
-void BoxRows(const TileSplat<T>& t, int y0, int rows, int* first, int* end) {
-  const T top = std::floor(t.box[2] - T(y0) - T(0.5)), bottom = std::ceil(t.box[3] - T(y0) - T(0.5));
-  *first = static_cast<int>(std::clamp(top, T(0), T(rows)));
-  *end = static_cast<int>(std::clamp(bottom + 1, T(0), T(rows)));
-}
-
 // Blends the tile's splats front to back into the strip of pixels (x0 + lane, py), the first `lanes` of them.
 template <typename T>
 void BlendRow(TileSplats<T> splats, T x0, T py, int lanes, RowForward<T>* row) {
@@ -111,6 +102,15 @@ void BlendRow(TileSplats<T> splats, T x0, T py, int lanes, RowForward<T>* row) {
     row->active &= ~stop;
     if (!lanes::Any<T>(row->active)) break;
   }
+}
+
+// The rows [*first, *end) of a tile (its first pixel row y0, `rows` rows) within which `t` can be blended: those
+// whose centre lies in its box, and one either side against rounding (Reaches decides those).
+template <typename T>
+void BoxRows(const TileSplat<T>& t, int y0, int rows, int* first, int* end) {
+  const T top = std::floor(t.box[2] - T(y0) - T(0.5)), bottom = std::ceil(t.box[3] - T(y0) - T(0.5));
+  *first = static_cast<int>(std::clamp(top, T(0), T(rows)));
+  *end = static_cast<int>(std::clamp(bottom + 1, T(0), T(rows)));
 }
 
 // A strip's backward pass: each lane walks its splats back to front from its last contributor.
