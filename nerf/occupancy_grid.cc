@@ -57,6 +57,30 @@ OccupancyGrid::OccupancyGrid(int resolution, std::vector<uint8_t> bits) : Occupa
   BuildBlocks();
 }
 
+OccupancyGrid OccupancyGrid::Merge(const std::vector<const OccupancyGrid*>& grids,
+                                   const std::function<int(const Eigen::Vector3d& centre)>& owner) {
+  if (grids.empty()) throw std::invalid_argument("OccupancyGrid::Merge: no grids");
+  const int resolution = grids.front()->resolution_;
+  for (const OccupancyGrid* grid : grids) {
+    if (grid->resolution_ != resolution) throw std::invalid_argument("OccupancyGrid::Merge: the resolutions differ");
+  }
+  OccupancyGrid merged(resolution, Unbuilt{});
+  std::fill(merged.bits_.begin(), merged.bits_.end(), 0);
+  for (int z = 0; z < resolution; ++z) {
+    for (int y = 0; y < resolution; ++y) {
+      for (int x = 0; x < resolution; ++x) {
+        const Eigen::Vector3d centre = (Eigen::Vector3d(x, y, z) + Eigen::Vector3d::Constant(0.5)) / resolution;
+        const OccupancyGrid& from = *grids.at(owner(centre));
+        const size_t cell = merged.CellIndex(x, y, z);
+        merged.densities_[cell] = from.densities_[cell];
+        if ((from.bits_[cell / 8] >> (cell % 8)) & 1) merged.bits_[cell / 8] |= uint8_t(1u << (cell % 8));
+      }
+    }
+  }
+  merged.BuildBlocks();
+  return merged;
+}
+
 void OccupancyGrid::MarkAllOccupied() {
   std::fill(bits_.begin(), bits_.end(), 0xff);
   BuildBlocks();

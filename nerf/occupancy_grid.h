@@ -35,6 +35,10 @@ class OccupancyGrid {
   // the value exceeds `threshold`, or the mean value when that is lower (a young field's densities are all
   // small: the cells above the mean are its best guess). A cell never evaluated counts as occupied.
   void Update(const DensityFunction& density, float threshold, float decay, uint64_t seed, size_t cells = 0);
+  // One grid from several of one resolution: each cell's value and bit from grids[owner(its centre)] (a field by
+  // blocks' grid, from its blocks'); std::invalid_argument when there are none or their resolutions differ.
+  static OccupancyGrid Merge(const std::vector<const OccupancyGrid*>& grids,
+                             const std::function<int(const Eigen::Vector3d& centre)>& owner);
   // Marks every cell occupied (the start of training: nothing is known yet).
   void MarkAllOccupied();
   // The mean value of the cells evaluated so far (0 when none).

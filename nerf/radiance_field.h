@@ -2,7 +2,8 @@
 // The interface the trainer and the renderer use for any radiance field: points in the unit cube and view
 // directions in, density and colour out, with gradients. A field's parameters are dense blocks (MLP weights,
 // updated by dense Adam) and at most one trainable encoding (a hash grid, updated sparsely). Fields are made
-// from their JSON config ("otype": "NgpField" or "VanillaField"), which Config() prints in full.
+// from their JSON config ("otype": "NgpField", "VanillaField", or "BlockedField" for a field by blocks), which
+// Config() prints in full.
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>

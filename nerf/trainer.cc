@@ -522,7 +522,13 @@ std::string Trainer::GradientProblem(const StepResult& result, const std::vector
   return "";
 }
 
+void Trainer::AdoptModel(NerfModel model) {
+  model_ = std::move(model);
+  adopted_ = true;
+}
+
 StepResult Trainer::StepOnBatch(const RayBatch& batch, double progress) {
+  if (adopted_) throw std::logic_error("Trainer: no step after AdoptModel(): its model was trained elsewhere");
   RadianceField<float>& field = *model_.field;
   // The grid's gradient is zero here: Adam zeroes the entries it used, and a skipped step writes none.
   Encoding<float>* grid = field.TrainableEncoding();

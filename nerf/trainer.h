@@ -148,6 +148,9 @@ class Trainer {
 
   const NerfModel& model() const { return model_; }
   NerfModel& model() { return model_; }
+  // Puts `model`, trained elsewhere (a field by blocks' composite, nerf/blocked_field.h), in place of this trainer's,
+  // for its evaluations and reports; no step may follow (std::logic_error).
+  void AdoptModel(NerfModel model);
   int step() const { return step_; }
   int skipped_steps() const { return skipped_; }
 
@@ -203,6 +206,7 @@ class Trainer {
   size_t dense_count_ = 0;
   int step_ = 0;
   int skipped_ = 0;
+  bool adopted_ = false;  // AdoptModel() was called
   double samples_per_ray_ = 0;                               // running mean, for the batch size
   std::vector<size_t> sampled_;                              // the training views rays are drawn from
   std::vector<char> is_sampled_;                             // for each training view, whether it is in sampled_

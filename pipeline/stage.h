@@ -28,6 +28,9 @@ using PartsExecutor =
     std::function<void(const std::string& work, const std::vector<int>& parts, const std::function<void(int)>& here)>;
 
 // What a stage's Run() sees.
+// The kind of part of the stages that work by spatial blocks (splat.blocks, train.blocks): block b is part b + 1.
+inline constexpr const char* kBlockWork = "block";
+
 struct StageContext {
   std::filesystem::path output_dir;  // the staging folder to write into
   const Workspace& workspace;

@@ -51,9 +51,6 @@ struct Optimised {
 // `train_views` training views are made, whichever comes first (docs/benchmarks.md, splats).
 bool InCoarsePart(double coarse_share, double progress, int steps, size_t train_views);
 
-// The kind of the stage's parts: block b is part b + 1.
-inline constexpr const char* kBlockWork = "block";
-
 // The whole scene's splats optimised at once, resuming from the stage's checkpoint.
 Optimised OptimiseWhole(const SplatRun& run);
 // The splats optimised whole for part of the budget, then each of options.blocks slabs from there for the rest, as

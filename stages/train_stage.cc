@@ -3,48 +3,31 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
-#include <numeric>
 #include <optional>
 
-#include "base/decoded_photos.h"
 #include "base/errors.h"
 #include "base/file_util.h"
 #include "base/float_image.h"
 #include "base/format.h"
-#include "base/photo_window.h"
 #include "formats/dataset_import.h"
 #include "nerf/appearance.h"
 #include "nerf/ngp_field.h"
 #include "nerf/plot.h"
 #include "nerf/renderer.h"
 #include "nerf/vanilla_field.h"
-#include "pipeline/cancel.h"
 #include "pipeline/log.h"
-#include "pipeline/progress.h"
 #include "stages/camera_corrections.h"
 #include "stages/fit_checks.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"
 #include "stages/timed_run.h"
+#include "stages/train_blocks.h"
 #include "stages/train_presets.h"
 #include "stages/training_data.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
 namespace {
-
-constexpr int kMaxConsecutiveSkips = 50;
-
-// What a training is made from: the stage's options, the trainer's they resolve to, and the data.
-struct TrainingSetup {
-  TrainOptions options;
-  TrainerOptions trainer;
-  TrainingData data;
-  std::string heldout_split, heldout_rule;
-  std::optional<size_t> training_views_in_memory;  // with a window over the training photos
-};
-
-constexpr double kBytesPerMB = 1 << 20;  // train.photo_memory's unit
 
 // Training views scored at the end beside the held-out ones (spread over them).
 constexpr size_t kTrainingViewsScored = 8;
@@ -55,14 +38,6 @@ struct FinalEvaluation {
   std::vector<double> heldout, fitted, training;
   RenderStats stats;
   BehindScene behind;
-};
-
-// This session of the run (a resumed run counts from its resumption): its held-out evaluations during training and
-// its steps.
-struct SessionLog {
-  int evaluations = 0;
-  double evaluation_seconds = 0;
-  TrainReport::Throughput steps;
 };
 
 // The per-photo colour transforms (train_report.json's "appearance").
@@ -135,17 +110,6 @@ TrainReport MakeTrainReport(Trainer& trainer, const TrainerOptions& trainer_opti
   return report;
 }
 
-bool ModelIsFinite(NerfModel& model) {
-  const auto finite = [](const float* values, size_t count) {
-    return std::all_of(values, values + count, [](float v) { return std::isfinite(v); });
-  };
-  for (const ParamBlock<float>& block : model.field->DenseParams()) {
-    if (!finite(block.data, block.size)) return false;
-  }
-  Encoding<float>* grid = model.field->TrainableEncoding();
-  return grid == nullptr || finite(grid->params(), grid->num_params());
-}
-
 }  // namespace
 
 // A forward-facing capture trains in normalised device coordinates: fewer samples a ray and a better fit than
@@ -192,6 +156,7 @@ void TrainOptions::Check() const {
   CheckOption(*this, final_eval_pixels, final_eval_pixels >= 0, "must be 0 (all) or positive");
   CheckOption(*this, checkpoint_interval, checkpoint_interval >= 0, "must be 0 (none) or positive");
   CheckOption(*this, photo_memory, photo_memory > 0 && std::isfinite(photo_memory), "must be positive");
+  CheckOption(*this, blocks, blocks >= 1 && blocks <= 64, "must be 1..64");
 }
 
 double ResolvedTimeBudget(const TrainOptions& options) {
@@ -256,62 +221,15 @@ TrainerOptions MakeTrainerOptions(const TrainOptions& options, SceneSpace space)
 
 namespace {
 
-void CheckCancel(size_t) { ThrowIfCancelled(); }  // Ctrl-C stops an evaluation too
-
-// Trains until the budget (seconds, else steps) is spent, from where `state` left off: a metrics row at every
-// evaluation (evaluations take at most train.eval_share of the wall time), checkpoints every
-// train.checkpoint_interval seconds into `checkpoint`, tagged with the result's `key`.
-// With a `window` over the training photos, each step trains on those it holds at that step.
-void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptions& options, double budget,
-                    const fs::path& checkpoint, const std::string& key, PhotoWindow* window, RunState* state,
-                    SessionLog* session) {
-  const RunLoop loop{TrainResult::kId.name,      budget, options.steps, options.eval_interval, options.eval_share, true,
-                     options.checkpoint_interval};
-  int consecutive_skips = 0;
-  const auto step = [&](double share) -> std::optional<double> {
-    if (window != nullptr && window->MoveTo(trainer.step())) trainer.SampleFrom(window->resident());
-    const StepResult result = trainer.Step(share);
-    session->steps.rays += result.rays;
-    session->steps.samples += result.samples;
-    if (!result.skipped) {
-      consecutive_skips = 0;
-      return result.loss;
-    }
-    LogWarning(format("train: step {} skipped: {}", trainer.step(), result.problem));
-    if (++consecutive_skips >= kMaxConsecutiveSkips) {
-      throw InternalError(
-          format("training failed: {} steps in a row were not finite (last: {})", consecutive_skips, result.problem));
-    }
-    return std::nullopt;
-  };
-  const auto add_row = [&](RunState* run) {
-    const double psnr =
-        data.heldout.empty() ? std::nan("") : Mean(trainer.HeldoutPsnr(options.eval_pixels, nullptr, CheckCancel));
-    const double loss = run->TakeMeanLoss(std::nan(""));
-    run->metrics += format("{:.3f},{},{:.6g},{:.4f}\n", run->seconds, trainer.step(), loss, psnr);
-  };
-  const auto save = [&](const RunState& run) {
-    if (!ModelIsFinite(trainer.model())) return;
-    WriteOrExplain([&] {
-      SaveRunCheckpoint(checkpoint, key, run, [&](BinaryWriter* writer) { trainer.SaveCheckpoint(writer); });
-    });
-  };
-  const RunSession run = loop.Run(
-      state, [&] { return trainer.step(); }, step, add_row, save);
-  session->steps.steps += run.steps;
-  session->steps.seconds += run.step_seconds;
-  session->evaluations += run.rows;
-  session->evaluation_seconds += run.row_seconds;
-}
-
 // What a finished training writes besides the model: train_report.json, metrics.csv and psnr.png; returns the
 // report.
 TrainReport WriteTrainReport(const TrainResult& out, Trainer& trainer, const TrainingSetup& setup,
                              const FinalEvaluation& evaluation, const RunState& state, int resumed_from,
-                             const SessionLog& session) {
+                             const SessionLog& session, const BlockSteps& blocks) {
   TrainReport report =
       MakeTrainReport(trainer, setup.trainer, setup.options, setup.data, evaluation, resumed_from, session);
-  report.wall_seconds = state.seconds;
+  report.steps += blocks.steps;
+  report.wall_seconds = state.seconds + blocks.seconds;
   report.heldout_split = setup.heldout_split;
   report.heldout_rule = setup.heldout_rule;
   report.training_views_in_memory = setup.training_views_in_memory;
@@ -331,71 +249,18 @@ TrainReport WriteTrainReport(const TrainResult& out, Trainer& trainer, const Tra
   return report;
 }
 
-// A window over the training photos when LoadTrainingData left their pixels out (they would take more than
-// train.photo_memory), reading them from a file in `folder` they are decoded into first; null when they are in
-// memory.
-std::unique_ptr<PhotoWindow> MakePhotoWindow(const TrainOptions& options, const ImportedDataset& poses,
-                                             const fs::path& folder, TrainingData* data) {
-  if (!data->train.front().pixels.empty()) return nullptr;
-  std::vector<size_t> sizes;
-  for (const TrainView& view : data->train) sizes.push_back(view.PixelBytes());
-  const double bytes = std::accumulate(sizes.begin(), sizes.end(), 0.0);
-  size_t size = 0;
-  try {
-    size = PhotoWindow::WindowSize(data->train, options.photo_memory * kBytesPerMB);
-  } catch (const std::invalid_argument& e) {
-    throw UserError(
-        format("{} is {} MB: {}; raise it", OptionKey(options, options.photo_memory), options.photo_memory, e.what()));
-  }
-  LogInfo(
-      format("train: the {} training photos would take {:.1f} MB, more than {} ({} MB): {} at a time in memory, "
-             "read from their decoded copy in {}",
-             data->train.size(), bytes / kBytesPerMB, OptionKey(options, options.photo_memory), options.photo_memory,
-             size, folder.string()));
-  fs::create_directories(folder);
-  const std::vector<const ImportedView*> train = TrainingViews(poses);
-  Progress progress("train: decoding the photos", static_cast<int64_t>(train.size()), "images");
-  auto photos = std::make_shared<const DecodedPhotos>(folder, sizes, [&](size_t v) {
-    std::vector<uint8_t> pixels = LoadTrainView(*train[v]).pixels;
-    progress.Add();
-    return pixels;
-  });
-  return std::make_unique<PhotoWindow>(
-      &data->train, [photos](size_t v) { return photos->Read(v); }, options.photo_memory * kBytesPerMB,
-      static_cast<uint64_t>(options.seed));
-}
-
 }  // namespace
+
+void TrainStage::RunPart(StageContext& context, const std::string& work, int part) const {
+  if (work != kBlockWork) Stage::RunPart(context, work, part);
+  TrainBlockAlone(context, part - 1);
+}
 
 void TrainStage::Run(StageContext& context) const {
   TrainingSetup setup;
-  setup.options = ReadOptions<TrainOptions>(context.config);
+  LoadTrainingSetup(context, &setup);
   const TrainOptions& options = setup.options;
-  const fs::path transforms = Upstream<PosesResult>(context).transforms();
-  const ImportedDataset poses = LoadTransformsJson(transforms, context.workspace.root());
-  setup.heldout_split = HeldoutSplit(poses);
-  setup.heldout_rule = poses.meta.heldout_rule;
-  const size_t training_views = std::count_if(poses.views.begin(), poses.views.end(),
-                                              [](const ImportedView& view) { return view.view.split == "train"; });
-  const double depth_weight = DepthWeight(options, training_views);
-  setup.data = LoadTrainingData(poses, depth_weight > 0, options.photo_memory * kBytesPerMB);
   const TrainingData& data = setup.data;
-  const std::unique_ptr<PhotoWindow> window = MakePhotoWindow(options, poses, context.resume_dir, &setup.data);
-  setup.trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, poses));
-  setup.trainer.depth_weight = depth_weight;
-  const TrainView* with_alpha = FirstWithAlpha(data.train);
-  const bool alpha = with_alpha != nullptr;
-  const BackgroundChoice background = options.background;
-  if (background == BackgroundChoice::kLearnt && alpha) {
-    throw UserError(
-        format("{} is learnt, but {} (in {}) has alpha: it was composited on a known colour, which must stay; use "
-               "auto or fixed",
-               OptionKey(options, options.background), with_alpha->name, transforms.string()));
-  }
-  const bool learn_when_auto = !alpha && !data.background_known;
-  const bool automatic = background == BackgroundChoice::kAuto;
-  setup.trainer.random_background = background == BackgroundChoice::kRandom || (automatic && alpha);
-  setup.trainer.learn_background = background == BackgroundChoice::kLearnt || (automatic && learn_when_auto);
   Trainer trainer(setup.trainer, data);
   const double budget = ResolvedTimeBudget(options);
   LogInfo(format("train: {} field, {} scene, preset {}, {} training and {} held-out ({}) views, {}",
@@ -413,7 +278,10 @@ void TrainStage::Run(StageContext& context) const {
                    checkpoint.string()));
   }
   SessionLog session;
-  TrainUntilDone(trainer, data, options, budget, checkpoint, context.key, window.get(), &state, &session);
+  const bool blocks = options.blocks > 1;
+  TrainUntilDone(trainer, data, options, blocks ? kWholePart : SchedulePart{}, checkpoint, context.key,
+                 setup.window.get(), &state, &session);
+  const BlockSteps block_steps = blocks ? TrainByBlocks(context, setup, state, &trainer) : BlockSteps{};
 
   if (!ModelIsFinite(trainer.model())) throw InternalError("training ended with non-finite parameters");
   FinalEvaluation evaluation;
@@ -422,8 +290,8 @@ void TrainStage::Run(StageContext& context) const {
   evaluation.training = trainer.TrainingPsnr(options.final_eval_pixels, kTrainingViewsScored, CheckCancel);
   const std::vector<double>& psnrs = evaluation.heldout;
   NerfModel& model = trainer.model();
-  model.info = {{"transforms", transforms.string()},
-                {"steps", trainer.step()},
+  model.info = {{"transforms", setup.transforms.string()},
+                {"steps", trainer.step() + block_steps.steps},
                 {"heldout_psnr", Mean(psnrs)},
                 {"distortion_weight", setup.trainer.distortion_weight},
                 {"depth_weight", setup.trainer.depth_weight},
@@ -431,15 +299,17 @@ void TrainStage::Run(StageContext& context) const {
                 {"refine_cameras", setup.trainer.refine_cameras}};
   const TrainResult out{context.output_dir};
   WriteOrExplain([&] { SaveModel(model, out.model()); });
-  if (window) setup.training_views_in_memory = window->size();
-  const TrainReport report = WriteTrainReport(out, trainer, setup, evaluation, state, resumed_from, session);
-  context.summary = {{"steps", trainer.step()},
-                     {"train_seconds", state.seconds},
+  if (setup.window) setup.training_views_in_memory = setup.window->size();
+  const TrainReport report =
+      WriteTrainReport(out, trainer, setup, evaluation, state, resumed_from, session, block_steps);
+  context.summary = {{"steps", report.steps},
+                     {"train_seconds", report.wall_seconds},
                      {"heldout_psnr", report.heldout_psnr ? nlohmann::json(*report.heldout_psnr) : nullptr}};
+  if (blocks) context.summary["train_blocks"] = options.blocks;
   LogInfo(format(
       "train: {} steps in {:.1f} s ({:.2f} M samples/s, {:.1f} a ray); held-out PSNR {:.2f} dB over {} views ({:.1f} "
       "samples per ray rendered)",
-      trainer.step(), state.seconds, session.steps.SamplesPerSecond() / 1e6, session.steps.SamplesPerRay(), Mean(psnrs),
+      report.steps, report.wall_seconds, session.steps.SamplesPerSecond() / 1e6, session.steps.SamplesPerRay(), Mean(psnrs),
       psnrs.size(), report.samples_per_ray_rendered));
   LogFitWarnings(TrainResult::kId.name, report.warnings);
 }

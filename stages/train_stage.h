@@ -73,6 +73,7 @@ struct TrainOptions {
   int final_eval_pixels = 65536;    // held-out pixels per view in the final evaluation (0: all)
   double checkpoint_interval = 60;  // seconds between checkpoints (0: none)
   double photo_memory = 2048;       // MB the training photos may take; beyond it a window over them (photo_window.h)
+  int blocks = 1;                   // trained whole for half the budget, then in this many spatial blocks
   int seed = 0;
 
   template <class V>
@@ -133,6 +134,10 @@ struct TrainOptions {
       "memory the training photos may take; when they would take more, a window over them is kept in memory, "
       "moving on every few steps, the next photos read from disk while the field trains",
       "MB");
+    v("blocks", blocks,
+      "train the field whole for half the budget, then in this many blocks (slabs across the scene's widest axis, "
+      "each with equal shares of the surface the photos see), each on the photos that see it for the other half, "
+      "one after the other or as jobs at once under a scheduler; each point is then answered by its slab's field");
     v("seed", seed, "random seed (initialisation, rays, samples)");
   }
   void Check() const;
@@ -159,6 +164,8 @@ class TrainStage : public StageOf<TrainResult> {
   int format_version() const override { return 12; }
   std::vector<std::string> upstream() const override { return {PosesResult::kId.name}; }
   void Run(StageContext& context) const override;
+  // Block `part` (from 1) of train.blocks (stages/train_blocks.h).
+  void RunPart(StageContext& context, const std::string& work, int part) const override;
 };
 
 }  // namespace p2n

@@ -141,6 +141,46 @@ TEST_CASE("faults: SIGKILL at many moments, then a rerun, gives the uninterrupte
   CHECK(ReadJsonFile(workspace / "40_render" / "eval.json")["psnr"].get<double>() == reference_psnr);
 }
 
+TEST_CASE("faults: SIGKILL while the field trains by blocks, then a rerun, gives the uninterrupted result", "[fault]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir);
+  const auto blocks_until_train = [&](const fs::path& workspace) {
+    std::vector<std::string> args = RunArgsUntil(data, workspace, "train");
+    args.insert(args.end(), {"--train.blocks", "2"});
+    return args;
+  };
+  std::string output;
+  REQUIRE(RunCommand(blocks_until_train(dir / "reference"), &output) == 0);
+  const std::string reference = CheckedKeys(dir / "reference").at("30_train");
+  const double reference_psnr = ReadJsonFile(dir / "reference" / "30_train" / "train_report.json")["heldout_psnr"];
+  // Killed where the blocks begin, as each is saved and once each is done; each next run goes on from there.
+  const fs::path workspace = dir / "ws";
+  int hits = 0;
+  for (const std::string moment : {"blocks.json", "block1_model.bin", "block1.json", "checkpoint_block2.bin",
+                                   "block2.json"}) {
+    const pid_t pid = Spawn(blocks_until_train(workspace), dir / "kills.log");
+    const auto deadline = Clock::now() + std::chrono::seconds(60);
+    int status = 0;
+    bool exited = false;
+    while (!fs::exists(workspace / "30_train.resume" / moment) && Clock::now() < deadline) {
+      if (::waitpid(pid, &status, WNOHANG) == pid) {
+        exited = true;
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    if (exited) break;  // the run finished
+    ::kill(pid, SIGKILL);
+    hits += Wait(pid) == 128 + SIGKILL;
+  }
+  INFO(ReadText(dir / "kills.log"));
+  CHECK(hits >= 3);
+  REQUIRE(RunCommand(blocks_until_train(workspace), &output) == 0);
+  CHECK(CheckedKeys(workspace).at("30_train") == reference);
+  // Each block begins again from the whole field's end, or resumes from its checkpoint: the very same parameters.
+  CHECK(ReadJsonFile(workspace / "30_train" / "train_report.json")["heldout_psnr"].get<double>() == reference_psnr);
+}
+
 TEST_CASE("faults: a file-size limit gives a clear error naming the file and keeps the finished stages", "[fault]") {
   TempDir dir;
   const fs::path data = SmallDataset(dir), workspace = dir / "ws";

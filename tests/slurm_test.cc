@@ -146,6 +146,35 @@ TEST_CASE("slurm: splat blocks run as a job array beside the stage's job, or in 
   CHECK(there["heldout_psnr"].get<double>() == Approx(here["heldout_psnr"].get<double>()).margin(0.05));
 }
 
+TEST_CASE("slurm: the field's blocks run as a job array beside the stage's job", "[slurm]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), workspace = dir / "ws";
+  std::vector<std::string> local = RunArgs(data, workspace);
+  local.insert(local.end(), {"--train.blocks", "2", "--until", "train"});
+  std::string output;
+  REQUIRE(RunCommand(local, &output) == 0);
+  const fs::path report = workspace / "30_train" / "train_report.json";
+  const nlohmann::json here = ReadJsonFile(report);
+  REQUIRE(here["field"]["fields"].size() == 2);
+
+  // A CPU a job: the stage's job trains the whole field, then block 1 while block 2 is a job array's element.
+  const std::vector<std::string> train = {P2N_BINARY,      "train", "-w",          workspace.string(), "--force",
+                                          "--run.progress", "plain", "--run.scheduler", "slurm",          "--slurm.cpus",
+                                          "1"};
+  const int code = RunCommand(train, &output);
+  INFO(output);
+  REQUIRE(code == 0);
+  const fs::path jobs = JobDir(workspace, "30_train");
+  INFO(ReadText(jobs / "attempt-1.log"));
+  CHECK_THAT(ReadText(jobs / "block-2.log"),
+             Catch::Contains("train: block part 2 in job") && Catch::Contains("train: block 2 of 2"));
+  CHECK(ReadText(jobs / "exit-block-2") == "0\n");
+  // The same steps; the same field within 0.3 dB (the jobs have one thread, the local run two).
+  const nlohmann::json there = ReadJsonFile(report);
+  CHECK(there["steps"] == here["steps"]);
+  CHECK(there["heldout_psnr"].get<double>() == Approx(here["heldout_psnr"].get<double>()).margin(0.3));
+}
+
 // Photos the hierarchical mapper would map, under Slurm: their features extracted in blocks and their pairs matched in
 // blocks, each a part of the sfm stage (an element of a job array beside the stage's job), and merged; each cluster
 // mapped by COLMAP's incremental mapper as a part, the models merged, triangulated anew and adjusted; every view as

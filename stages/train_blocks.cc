@@ -1,0 +1,219 @@
+#include "stages/train_blocks.h"
+
+#include <numeric>
+#include <optional>
+
+#include "base/errors.h"
+#include "base/file_util.h"
+#include "base/format.h"
+#include "nerf/camera_refinement.h"
+#include "nerf/field_blocks.h"
+#include "pipeline/log.h"
+#include "stages/stage_io.h"
+
+namespace p2n {
+namespace fs = std::filesystem;
+namespace {
+
+// Each view's surface is found by a grid of this many rays a side.
+constexpr int kSurfaceRaysPerSide = 32;
+// A view trains a block when at least this share of the surface it sees is the block's.
+constexpr double kSlabViewShare = 0.1;
+
+// Where the blocks begin: the slabs, and the training views (indices) each slab's field trains on.
+struct SlabsStart {
+  FieldSlabs slabs;
+  std::vector<std::vector<size_t>> views;
+};
+
+fs::path SlabsStartFile(const StageContext& context) { return context.resume_dir / "blocks.json"; }
+fs::path SlabModelFile(const StageContext& context, int b) {
+  return context.resume_dir / format("block{}_model.bin", b + 1);
+}
+fs::path SlabCheckpoint(const StageContext& context, int b) {
+  return context.resume_dir / format("checkpoint_block{}.bin", b + 1);
+}
+// Written when block b's part has finished: the key of the result, its steps and seconds.
+fs::path SlabDoneFile(const StageContext& context, int b) {
+  return context.resume_dir / format("block{}.json", b + 1);
+}
+
+// The file `path` when it was written for this very result (its "key"), else nothing.
+std::optional<nlohmann::json> OfThisRun(const StageContext& context, const fs::path& path) {
+  if (!fs::exists(path)) return std::nullopt;
+  nlohmann::json json = ReadJsonFile(path);
+  if (json.value("key", "") != context.key) return std::nullopt;
+  return json;
+}
+
+// The training views with their cameras as the whole part left them (corrected where it refined them), without
+// their pixels: what the surface is looked for from.
+std::vector<TrainView> CorrectedCameras(const TrainingData& data, const Trainer& whole) {
+  const std::vector<float>& corrections = whole.camera_corrections();
+  std::vector<TrainView> views(data.train.size());
+  for (size_t v = 0; v < views.size(); ++v) {
+    const TrainView& view = data.train[v];
+    views[v].camera = corrections.empty() ? view.camera : CorrectedCamera(view.camera, &corrections[v * kPoseParams]);
+    views[v].near = view.near;
+    views[v].far = view.far;
+  }
+  return views;
+}
+
+SlabsStart CutBlocks(const TrainingSetup& setup, const Trainer& whole) {
+  const std::vector<Eigen::Matrix3Xd> seen =
+      SurfaceSeen(whole.model(), CorrectedCameras(setup.data, whole), kSurfaceRaysPerSide);
+  Eigen::Index total = 0;
+  for (const Eigen::Matrix3Xd& points : seen) total += points.cols();
+  Eigen::Matrix3Xd all(3, total);
+  Eigen::Index at = 0;
+  for (const Eigen::Matrix3Xd& points : seen) {
+    all.middleCols(at, points.cols()) = points;
+    at += points.cols();
+  }
+  SlabsStart start;
+  start.slabs = CutIntoSlabs(all, setup.options.blocks);
+  for (int b = 0; b < start.slabs.count(); ++b) start.views.push_back(ViewsOfSlab(seen, start.slabs, b, kSlabViewShare));
+  return start;
+}
+
+void SaveSlabsStart(const StageContext& context, const SlabsStart& start) {
+  WriteJsonAtomic(SlabsStartFile(context),
+                  {{"key", context.key}, {"axis", start.slabs.axis}, {"cuts", start.slabs.cuts}, {"views", start.views}});
+}
+
+std::optional<SlabsStart> LoadSlabsStart(const StageContext& context) {
+  const std::optional<nlohmann::json> json = OfThisRun(context, SlabsStartFile(context));
+  if (!json) return std::nullopt;
+  SlabsStart start;
+  start.slabs.axis = json->at("axis").get<int>();
+  start.slabs.cuts = json->at("cuts").get<std::vector<double>>();
+  start.views = json->at("views").get<std::vector<std::vector<size_t>>>();
+  return start;
+}
+
+// A block's training data: the training views that see it, their cameras as the whole part left them, and their
+// pixels (in memory, or a window over them where they would take more than train.photo_memory); no held-out views
+// (the composite is scored at the end).
+struct BlockData {
+  TrainingData data;
+  std::unique_ptr<PhotoWindow> window;
+};
+
+void LoadBlockData(const TrainingSetup& setup, const Trainer& whole, const std::vector<size_t>& indices,
+                   BlockData* block) {
+  const std::vector<TrainView> cameras = CorrectedCameras(setup.data, whole);
+  block->data.background = setup.data.background;
+  block->data.background_known = setup.data.background_known;
+  size_t bytes = 0;
+  for (const size_t v : indices) bytes += setup.data.train[v].PixelBytes();
+  const bool in_memory = setup.photos == nullptr || bytes <= PhotoMemoryBytes(setup.options);
+  for (const size_t v : indices) {
+    TrainView view = setup.data.train[v];
+    view.camera = cameras[v].camera;
+    if (!in_memory) {
+      view.pixels.clear();
+    } else if (view.pixels.empty()) {
+      view.pixels = setup.photos->Read(v);
+    }
+    block->data.train.push_back(std::move(view));
+  }
+  if (in_memory) return;
+  block->window = std::make_unique<PhotoWindow>(
+      &block->data.train, [photos = setup.photos, indices](size_t v) { return photos->Read(indices[v]); },
+      PhotoMemoryBytes(setup.options), static_cast<uint64_t>(setup.options.seed));
+}
+
+// Block b's part: its field trained on from the whole one, on the views that see it, for the rest of the budget
+// (resuming from its own checkpoint); its model kept in the resume folder (the whole one where no view sees it).
+void TrainBlock(const StageContext& context, const TrainingSetup& setup, Trainer& whole, const SlabsStart& start,
+                int b) {
+  const std::vector<size_t>& views = start.views.at(b);
+  LogInfo(format("train: block {} of {}: {} training views", b + 1, start.slabs.count(), views.size()));
+  RunState state;
+  int steps = 0;
+  if (views.empty()) {
+    SaveModel(whole.model(), SlabModelFile(context, b));
+  } else {
+    BlockData block;
+    LoadBlockData(setup, whole, views, &block);
+    TrainerOptions options = setup.trainer;
+    options.refine_cameras = false;  // the cameras stay as the whole part left them, the same for every block
+    options.seed += static_cast<uint64_t>(b) + 1;
+    Trainer trainer(options, block.data);
+    CopyFieldParameters(*whole.model().field, trainer.model().field.get());
+    trainer.model().occupancy = whole.model().occupancy;
+    trainer.model().background = whole.model().background;
+    const fs::path checkpoint = SlabCheckpoint(context, b);
+    LoadRunCheckpoint(checkpoint, context.key, TrainResult::kId.name, &state,
+                      [&](BinaryReader* reader) { trainer.LoadCheckpoint(reader); });
+    SessionLog session;
+    TrainUntilDone(trainer, block.data, setup.options, kBlockPart, checkpoint, context.key, block.window.get(), &state,
+                   &session);
+    if (!ModelIsFinite(trainer.model())) throw InternalError(format("block {} ended with non-finite parameters", b + 1));
+    SaveModel(trainer.model(), SlabModelFile(context, b));
+    steps = trainer.step();
+  }
+  WriteJsonAtomic(SlabDoneFile(context, b), {{"key", context.key}, {"steps", steps}, {"seconds", state.seconds}});
+}
+
+}  // namespace
+
+BlockSteps TrainByBlocks(const StageContext& context, const TrainingSetup& setup, const RunState& state,
+                         Trainer* whole) {
+  SaveRunCheckpoint(CheckpointFile(context), context.key, state,
+                    [&](BinaryWriter* writer) { whole->SaveCheckpoint(writer); });
+  std::optional<SlabsStart> start = LoadSlabsStart(context);
+  if (!start) {
+    start = CutBlocks(setup, *whole);
+    SaveSlabsStart(context, *start);
+  }
+  LogInfo(format("train: {} blocks across the {} axis of the field's cube, each trained on from here for the rest of "
+                 "the budget",
+                 start->slabs.count(), "xyz"[start->slabs.axis]));
+  std::vector<int> pending;  // block b is part b + 1
+  for (int b = 0; b < start->slabs.count(); ++b) {
+    if (!OfThisRun(context, SlabDoneFile(context, b))) pending.push_back(b + 1);
+  }
+  context.RunParts(kBlockWork, pending, [&](int part) { TrainBlock(context, setup, *whole, *start, part - 1); });
+
+  BlockSteps total;
+  std::vector<NerfModel> models;
+  for (int b = 0; b < start->slabs.count(); ++b) {
+    const std::optional<nlohmann::json> done = OfThisRun(context, SlabDoneFile(context, b));
+    if (!done) {
+      throw ExternalToolError(format("train: block {} did not finish ({} is missing); run the stage again", b + 1,
+                                     SlabDoneFile(context, b).string()));
+    }
+    total.steps += done->value("steps", 0);
+    total.seconds += done->value("seconds", 0.0);
+    models.push_back(LoadModel(SlabModelFile(context, b)));
+  }
+  whole->AdoptModel(MergeBlockModels(start->slabs, std::move(models)));
+  return total;
+}
+
+void TrainBlockAlone(const StageContext& context, int b) {
+  TrainingSetup setup;
+  LoadTrainingSetup(context, &setup);
+  Trainer whole(setup.trainer, setup.data);
+  RunState state;
+  if (!LoadRunCheckpoint(CheckpointFile(context), context.key, TrainResult::kId.name, &state,
+                         [&](BinaryReader* reader) { whole.LoadCheckpoint(reader); })) {
+    throw ExternalToolError(format("train: block {}: the whole part's result {} is missing or not this run's; run the "
+                                   "stage again",
+                                   b + 1, CheckpointFile(context).string()));
+  }
+  const std::optional<SlabsStart> start = LoadSlabsStart(context);
+  if (!start) {
+    throw ExternalToolError(format("train: block {}: where the blocks begin ({}) is missing or not this run's; run "
+                                   "the stage again",
+                                   b + 1, SlabsStartFile(context).string()));
+  }
+  if (b < 0 || b >= start->slabs.count()) {
+    throw UserError(format("train: there is no block {} of {}", b + 1, start->slabs.count()));
+  }
+  TrainBlock(context, setup, whole, *start, b);
+}
+
+}  // namespace p2n
