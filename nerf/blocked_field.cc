@@ -22,8 +22,8 @@ int FieldSlabs::SlabOf(double coordinate) const {
 
 FieldSlabs CutIntoSlabs(const Eigen::Matrix3Xd& points, int count) {
   if (count < 1 || count > kMaxSlabs) {
-    throw std::invalid_argument("CutIntoSlabs: " + std::to_string(count) + " slabs (1 to " +
-                                std::to_string(kMaxSlabs) + ")");
+    throw std::invalid_argument("CutIntoSlabs: " + std::to_string(count) + " slabs (1 to " + std::to_string(kMaxSlabs) +
+                                ")");
   }
   FieldSlabs slabs;
   if (count == 1 || points.cols() == 0) return slabs;
@@ -109,8 +109,7 @@ void BlockedField<T>::Forward(const Matrix& positions, const Matrix& directions,
 }
 
 template <typename T>
-void BlockedField<T>::Render(const Matrix& positions, const Matrix& directions, Matrix* density,
-                             Matrix* rgb) const {
+void BlockedField<T>::Render(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb) const {
   density->resize(1, positions.cols());
   rgb->resize(3, positions.cols());
   Route(positions, [&](const RadianceField<T>& field, const std::vector<Eigen::Index>& columns) {

@@ -74,8 +74,7 @@ NerfModel MergeBlockModels(const FieldSlabs& slabs, std::vector<NerfModel> block
   std::vector<const OccupancyGrid*> grids;
   std::vector<std::unique_ptr<RadianceField<float>>> fields;
   for (NerfModel& block : blocks) {
-    if (block.space != first.space ||
-        block.stratified_samples != first.stratified_samples) {
+    if (block.space != first.space || block.stratified_samples != first.stratified_samples) {
       throw std::invalid_argument("MergeBlockModels: the blocks' scene spaces or sampling differ");
     }
     merged.march_step = std::min(merged.march_step, block.march_step);
@@ -83,8 +82,8 @@ NerfModel MergeBlockModels(const FieldSlabs& slabs, std::vector<NerfModel> block
     grids.push_back(&block.occupancy);
     fields.push_back(std::move(block.field));
   }
-  merged.occupancy = OccupancyGrid::Merge(
-      grids, [&](const Eigen::Vector3d& centre) { return slabs.SlabOf(centre[slabs.axis]); });
+  merged.occupancy =
+      OccupancyGrid::Merge(grids, [&](const Eigen::Vector3d& centre) { return slabs.SlabOf(centre[slabs.axis]); });
   merged.field = std::make_unique<BlockedField<float>>(slabs, std::move(fields));
   return merged;
 }

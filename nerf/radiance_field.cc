@@ -14,8 +14,8 @@ std::unique_ptr<RadianceField<T>> MakeField(const nlohmann::json& config, uint64
   if (otype == "NgpField") return std::make_unique<NgpField<T>>(NgpFieldConfig::FromJson(config), seed);
   if (otype == "VanillaField") return std::make_unique<VanillaField<T>>(VanillaFieldConfig::FromJson(config), seed);
   if (otype == "BlockedField") return BlockedField<T>::FromJson(config, seed);
-  throw std::invalid_argument("field config: \"otype\" must be \"NgpField\", \"VanillaField\" or \"BlockedField\", not \"" +
-                              otype + "\"");
+  throw std::invalid_argument(
+      "field config: \"otype\" must be \"NgpField\", \"VanillaField\" or \"BlockedField\", not \"" + otype + "\"");
 }
 
 template std::unique_ptr<RadianceField<float>> MakeField(const nlohmann::json&, uint64_t);

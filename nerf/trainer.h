@@ -206,7 +206,7 @@ class Trainer {
   size_t dense_count_ = 0;
   int step_ = 0;
   int skipped_ = 0;
-  bool adopted_ = false;  // AdoptModel() was called
+  bool adopted_ = false;                                     // AdoptModel() was called
   double samples_per_ray_ = 0;                               // running mean, for the batch size
   std::vector<size_t> sampled_;                              // the training views rays are drawn from
   std::vector<char> is_sampled_;                             // for each training view, whether it is in sampled_

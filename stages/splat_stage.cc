@@ -251,7 +251,7 @@ SplatRun MakeSplatRun(const SplatSetup& setup, const SplatOptions& options, cons
 }  // namespace
 
 void SplatStage::RunPart(StageContext& context, const std::string& work, int part) const {
-  if (work != kBlockWork) Stage::RunPart(context, work, part);
+  if (work != kBlockWork) return Stage::RunPart(context, work, part);
   const SplatOptions options = ReadOptions<SplatOptions>(context.config);
   const SplatSetup setup = LoadSplatSetup(context, options, /*place=*/false);
   OptimiseBlockAlone(MakeSplatRun(setup, options, context), part - 1);

@@ -34,9 +34,7 @@ fs::path SlabCheckpoint(const StageContext& context, int b) {
   return context.resume_dir / format("checkpoint_block{}.bin", b + 1);
 }
 // Written when block b's part has finished: the key of the result, its steps and seconds.
-fs::path SlabDoneFile(const StageContext& context, int b) {
-  return context.resume_dir / format("block{}.json", b + 1);
-}
+fs::path SlabDoneFile(const StageContext& context, int b) { return context.resume_dir / format("block{}.json", b + 1); }
 
 // The file `path` when it was written for this very result (its "key"), else nothing.
 std::optional<nlohmann::json> OfThisRun(const StageContext& context, const fs::path& path) {
@@ -73,13 +71,15 @@ SlabsStart CutBlocks(const TrainingSetup& setup, const Trainer& whole) {
   }
   SlabsStart start;
   start.slabs = CutIntoSlabs(all, setup.options.blocks);
-  for (int b = 0; b < start.slabs.count(); ++b) start.views.push_back(ViewsOfSlab(seen, start.slabs, b, kSlabViewShare));
+  for (int b = 0; b < start.slabs.count(); ++b)
+    start.views.push_back(ViewsOfSlab(seen, start.slabs, b, kSlabViewShare));
   return start;
 }
 
 void SaveSlabsStart(const StageContext& context, const SlabsStart& start) {
-  WriteJsonAtomic(SlabsStartFile(context),
-                  {{"key", context.key}, {"axis", start.slabs.axis}, {"cuts", start.slabs.cuts}, {"views", start.views}});
+  WriteJsonAtomic(
+      SlabsStartFile(context),
+      {{"key", context.key}, {"axis", start.slabs.axis}, {"cuts", start.slabs.cuts}, {"views", start.views}});
 }
 
 std::optional<SlabsStart> LoadSlabsStart(const StageContext& context) {
@@ -150,7 +150,8 @@ void TrainBlock(const StageContext& context, const TrainingSetup& setup, Trainer
     SessionLog session;
     TrainUntilDone(trainer, block.data, setup.options, kBlockPart, checkpoint, context.key, block.window.get(), &state,
                    &session);
-    if (!ModelIsFinite(trainer.model())) throw InternalError(format("block {} ended with non-finite parameters", b + 1));
+    if (!ModelIsFinite(trainer.model()))
+      throw InternalError(format("block {} ended with non-finite parameters", b + 1));
     SaveModel(trainer.model(), SlabModelFile(context, b));
     steps = trainer.step();
   }
@@ -168,9 +169,10 @@ BlockSteps TrainByBlocks(const StageContext& context, const TrainingSetup& setup
     start = CutBlocks(setup, *whole);
     SaveSlabsStart(context, *start);
   }
-  LogInfo(format("train: {} blocks across the {} axis of the field's cube, each trained on from here for the rest of "
-                 "the budget",
-                 start->slabs.count(), "xyz"[start->slabs.axis]));
+  LogInfo(
+      format("train: {} blocks across the {} axis of the field's cube, each trained on from here for the rest of "
+             "the budget",
+             start->slabs.count(), "xyz"[start->slabs.axis]));
   std::vector<int> pending;  // block b is part b + 1
   for (int b = 0; b < start->slabs.count(); ++b) {
     if (!OfThisRun(context, SlabDoneFile(context, b))) pending.push_back(b + 1);
@@ -200,15 +202,17 @@ void TrainBlockAlone(const StageContext& context, int b) {
   RunState state;
   if (!LoadRunCheckpoint(CheckpointFile(context), context.key, TrainResult::kId.name, &state,
                          [&](BinaryReader* reader) { whole.LoadCheckpoint(reader); })) {
-    throw ExternalToolError(format("train: block {}: the whole part's result {} is missing or not this run's; run the "
-                                   "stage again",
-                                   b + 1, CheckpointFile(context).string()));
+    throw ExternalToolError(
+        format("train: block {}: the whole part's result {} is missing or not this run's; run the "
+               "stage again",
+               b + 1, CheckpointFile(context).string()));
   }
   const std::optional<SlabsStart> start = LoadSlabsStart(context);
   if (!start) {
-    throw ExternalToolError(format("train: block {}: where the blocks begin ({}) is missing or not this run's; run "
-                                   "the stage again",
-                                   b + 1, SlabsStartFile(context).string()));
+    throw ExternalToolError(
+        format("train: block {}: where the blocks begin ({}) is missing or not this run's; run "
+               "the stage again",
+               b + 1, SlabsStartFile(context).string()));
   }
   if (b < 0 || b >= start->slabs.count()) {
     throw UserError(format("train: there is no block {} of {}", b + 1, start->slabs.count()));

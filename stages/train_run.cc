@@ -52,8 +52,8 @@ void MakePhotoWindow(const ImportedDataset& poses, const fs::path& folder, Train
     return pixels;
   });
   setup->window = std::make_unique<PhotoWindow>(
-      &data->train, [photos = setup->photos](size_t v) { return photos->Read(v); },
-      PhotoMemoryBytes(options), static_cast<uint64_t>(options.seed));
+      &data->train, [photos = setup->photos](size_t v) { return photos->Read(v); }, PhotoMemoryBytes(options),
+      static_cast<uint64_t>(options.seed));
 }
 
 }  // namespace
@@ -107,7 +107,7 @@ void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptio
                     SessionLog* session) {
   const double budget = ResolvedTimeBudget(options) * part.share();
   const int steps = options.steps > 0 ? std::max(1, static_cast<int>(std::lround(options.steps * part.share()))) : 0;
-  const RunLoop loop{TrainResult::kId.name,  budget, steps, options.eval_interval, options.eval_share, true,
+  const RunLoop loop{TrainResult::kId.name,      budget, steps, options.eval_interval, options.eval_share, true,
                      options.checkpoint_interval};
   int consecutive_skips = 0;
   const auto step = [&](double share) -> std::optional<double> {

@@ -252,7 +252,7 @@ TrainReport WriteTrainReport(const TrainResult& out, Trainer& trainer, const Tra
 }  // namespace
 
 void TrainStage::RunPart(StageContext& context, const std::string& work, int part) const {
-  if (work != kBlockWork) Stage::RunPart(context, work, part);
+  if (work != kBlockWork) return Stage::RunPart(context, work, part);
   TrainBlockAlone(context, part - 1);
 }
 
@@ -309,8 +309,8 @@ void TrainStage::Run(StageContext& context) const {
   LogInfo(format(
       "train: {} steps in {:.1f} s ({:.2f} M samples/s, {:.1f} a ray); held-out PSNR {:.2f} dB over {} views ({:.1f} "
       "samples per ray rendered)",
-      report.steps, report.wall_seconds, session.steps.SamplesPerSecond() / 1e6, session.steps.SamplesPerRay(), Mean(psnrs),
-      psnrs.size(), report.samples_per_ray_rendered));
+      report.steps, report.wall_seconds, session.steps.SamplesPerSecond() / 1e6, session.steps.SamplesPerRay(),
+      Mean(psnrs), psnrs.size(), report.samples_per_ray_rendered));
   LogFitWarnings(TrainResult::kId.name, report.warnings);
 }
 

@@ -156,8 +156,8 @@ TEST_CASE("faults: SIGKILL while the field trains by blocks, then a rerun, gives
   // Killed where the blocks begin, as each is saved and once each is done; each next run goes on from there.
   const fs::path workspace = dir / "ws";
   int hits = 0;
-  for (const std::string moment : {"blocks.json", "block1_model.bin", "block1.json", "checkpoint_block2.bin",
-                                   "block2.json"}) {
+  for (const std::string moment :
+       {"blocks.json", "block1_model.bin", "block1.json", "checkpoint_block2.bin", "block2.json"}) {
     const pid_t pid = Spawn(blocks_until_train(workspace), dir / "kills.log");
     const auto deadline = Clock::now() + std::chrono::seconds(60);
     int status = 0;

@@ -158,9 +158,9 @@ TEST_CASE("slurm: the field's blocks run as a job array beside the stage's job",
   REQUIRE(here["field"]["fields"].size() == 2);
 
   // A CPU a job: the stage's job trains the whole field, then block 1 while block 2 is a job array's element.
-  const std::vector<std::string> train = {P2N_BINARY,      "train", "-w",          workspace.string(), "--force",
-                                          "--run.progress", "plain", "--run.scheduler", "slurm",          "--slurm.cpus",
-                                          "1"};
+  const std::vector<std::string> train = {P2N_BINARY, "train",          "-w",    workspace.string(),
+                                          "--force",  "--run.progress", "plain", "--run.scheduler",
+                                          "slurm",    "--slurm.cpus",   "1"};
   const int code = RunCommand(train, &output);
   INFO(output);
   REQUIRE(code == 0);

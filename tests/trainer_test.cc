@@ -250,9 +250,8 @@ TEST_CASE("model.bin renders the same after loading, newer and damaged files are
   WriteBinaryFileAtomic(dir / "other.bin", {'h', 'e', 'l', 'l', 'o'});
   CHECK_THROWS_WITH(LoadModel(dir / "other.bin"), Catch::Contains("not a photo2nerf model"));
   // The fuzzer's seeds are valid models (of every field; format version 1 with the densities, 2 without).
-  for (const char* seed :
-       {"tiny_ngp.bin", "tiny_vanilla.bin", "tiny_ngp_v2.bin", "tiny_vanilla_v2.bin", "tiny_planes_v2.bin",
-        "tiny_blocked_v2.bin"}) {
+  for (const char* seed : {"tiny_ngp.bin", "tiny_vanilla.bin", "tiny_ngp_v2.bin", "tiny_vanilla_v2.bin",
+                           "tiny_planes_v2.bin", "tiny_blocked_v2.bin"}) {
     const NerfModel tiny =
         LoadModel(std::filesystem::path(P2N_SOURCE_DIR) / "tests" / "fuzz" / "corpus" / "model" / seed);
     CHECK(tiny.occupancy.resolution() == 2);
