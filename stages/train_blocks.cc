@@ -92,28 +92,48 @@ std::optional<SlabsStart> LoadSlabsStart(const StageContext& context) {
   return start;
 }
 
+// A copy of `view` but for its pixels.
+TrainView WithoutPixels(TrainView& view) {
+  std::vector<uint8_t> pixels = std::move(view.pixels);
+  TrainView copy = view;
+  view.pixels = std::move(pixels);
+  return copy;
+}
+
 // A block's training data: the training views that see it, their cameras as the whole part left them, and their
 // pixels (in memory, or a window over them where they would take more than train.photo_memory); no held-out views
-// (the composite is scored at the end).
+// (the composite is scored at the end). Pixels the whole part holds are lent, not copied (the whole does not train
+// while a block does), and given back when the block's data goes.
 struct BlockData {
   TrainingData data;
   std::unique_ptr<PhotoWindow> window;
+  std::vector<TrainView>* lender = nullptr;
+  std::vector<std::pair<size_t, size_t>> lent;  // (the lender's view, this block's)
+
+  BlockData() = default;
+  BlockData(const BlockData&) = delete;
+  BlockData& operator=(const BlockData&) = delete;
+  ~BlockData() {
+    for (const auto& [from, to] : lent) (*lender)[from].pixels = std::move(data.train[to].pixels);
+  }
 };
 
-void LoadBlockData(const TrainingSetup& setup, const Trainer& whole, const std::vector<size_t>& indices,
-                   BlockData* block) {
+void LoadBlockData(TrainingSetup& setup, const Trainer& whole, const std::vector<size_t>& indices, BlockData* block) {
   const std::vector<TrainView> cameras = CorrectedCameras(setup.data, whole);
   block->data.background = setup.data.background;
   block->data.background_known = setup.data.background_known;
+  block->lender = &setup.data.train;
   size_t bytes = 0;
   for (const size_t v : indices) bytes += setup.data.train[v].PixelBytes();
   const bool in_memory = setup.photos == nullptr || bytes <= PhotoMemoryBytes(setup.options);
   for (const size_t v : indices) {
-    TrainView view = setup.data.train[v];
+    TrainView& source = setup.data.train[v];
+    TrainView view = WithoutPixels(source);
     view.camera = cameras[v].camera;
-    if (!in_memory) {
-      view.pixels.clear();
-    } else if (view.pixels.empty()) {
+    if (in_memory && !source.pixels.empty()) {
+      block->lent.emplace_back(v, block->data.train.size());
+      view.pixels = std::move(source.pixels);
+    } else if (in_memory) {
       view.pixels = setup.photos->Read(v);
     }
     block->data.train.push_back(std::move(view));
@@ -126,8 +146,7 @@ void LoadBlockData(const TrainingSetup& setup, const Trainer& whole, const std::
 
 // Block b's part: its field trained on from the whole one, on the views that see it, for the rest of the budget
 // (resuming from its own checkpoint); its model kept in the resume folder (the whole one where no view sees it).
-void TrainBlock(const StageContext& context, const TrainingSetup& setup, Trainer& whole, const SlabsStart& start,
-                int b) {
+void TrainBlock(const StageContext& context, TrainingSetup& setup, Trainer& whole, const SlabsStart& start, int b) {
   const std::vector<size_t>& views = start.views.at(b);
   LogInfo(format("train: block {} of {}: {} training views", b + 1, start.slabs.count(), views.size()));
   RunState state;
@@ -160,8 +179,7 @@ void TrainBlock(const StageContext& context, const TrainingSetup& setup, Trainer
 
 }  // namespace
 
-BlockSteps TrainByBlocks(const StageContext& context, const TrainingSetup& setup, const RunState& state,
-                         Trainer* whole) {
+BlockSteps TrainByBlocks(const StageContext& context, TrainingSetup& setup, const RunState& state, Trainer* whole) {
   SaveRunCheckpoint(CheckpointFile(context), context.key, state,
                     [&](BinaryWriter* writer) { whole->SaveCheckpoint(writer); });
   std::optional<SlabsStart> start = LoadSlabsStart(context);

@@ -24,9 +24,9 @@ struct BlockSteps {
 };
 
 // After the whole part (`whole`, at `state`): its end kept as the stage's checkpoint, the blocks trained from it, and
-// their composite adopted by `whole` (Trainer::AdoptModel) for the evaluation and the report.
-BlockSteps TrainByBlocks(const StageContext& context, const TrainingSetup& setup, const RunState& state,
-                         Trainer* whole);
+// their composite adopted by `whole` (Trainer::AdoptModel) for the evaluation and the report. The photos of `setup`
+// in memory are lent to each block while it trains, and are back when this returns or throws.
+BlockSteps TrainByBlocks(const StageContext& context, TrainingSetup& setup, const RunState& state, Trainer* whole);
 
 // Block `b`'s part alone (in a job of its own), from the whole part's checkpoint.
 void TrainBlockAlone(const StageContext& context, int b);

@@ -278,6 +278,8 @@ TEST_CASE("train stage: train.blocks trains the field whole, then by slabs, and 
   const double whole_psnr =
       ReadJsonFile(other.dir / "ws" / "30_train" / "train_report.json")["heldout_psnr"].get<double>();
   CHECK(report["heldout_psnr"].get<double>() > whole_psnr - 1.0);
+  // The training photos lent to the blocks came back: the final evaluation scores the composite on them.
+  CHECK(report["training_psnr"].get<double>() > report["heldout_psnr"].get<double>() - 1.0);
 }
 
 TEST_CASE("train stage: a run by blocks cancelled after a block resumes with the blocks left", "[train][blocks]") {
