@@ -144,6 +144,24 @@ void LoadBlockData(TrainingSetup& setup, const Trainer& whole, const std::vector
       PhotoMemoryBytes(setup.options), static_cast<uint64_t>(setup.options.seed));
 }
 
+// The whole part's photos in its window (where the training photos take more than train.photo_memory), let go while
+// the blocks train, each of which holds its own within the setting: the views they were.
+std::vector<size_t> LetWindowGo(TrainingSetup& setup) {
+  std::vector<size_t> held;
+  if (!setup.window) return held;
+  for (const size_t v : setup.window->resident()) {
+    if (setup.data.train[v].pixels.empty()) continue;
+    std::vector<uint8_t>().swap(setup.data.train[v].pixels);
+    held.push_back(v);
+  }
+  return held;
+}
+
+// Reads back the photos LetWindowGo let go: the final evaluation scores the composite on the window's photos.
+void ReadWindowBack(TrainingSetup& setup, const std::vector<size_t>& held) {
+  for (const size_t v : held) setup.data.train[v].pixels = setup.photos->Read(v);
+}
+
 // Block b's part: its field trained on from the whole one, on the views that see it, for the rest of the budget
 // (resuming from its own checkpoint); its model kept in the resume folder (the whole one where no view sees it).
 void TrainBlock(const StageContext& context, TrainingSetup& setup, Trainer& whole, const SlabsStart& start, int b) {
@@ -195,7 +213,9 @@ BlockSteps TrainByBlocks(const StageContext& context, TrainingSetup& setup, cons
   for (int b = 0; b < start->slabs.count(); ++b) {
     if (!OfThisRun(context, SlabDoneFile(context, b))) pending.push_back(b + 1);
   }
+  const std::vector<size_t> held = LetWindowGo(setup);
   context.RunParts(kBlockWork, pending, [&](int part) { TrainBlock(context, setup, *whole, *start, part - 1); });
+  ReadWindowBack(setup, held);
 
   BlockSteps total;
   std::vector<NerfModel> models;

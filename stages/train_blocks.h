@@ -25,7 +25,9 @@ struct BlockSteps {
 
 // After the whole part (`whole`, at `state`): its end kept as the stage's checkpoint, the blocks trained from it, and
 // their composite adopted by `whole` (Trainer::AdoptModel) for the evaluation and the report. The photos of `setup`
-// in memory are lent to each block while it trains, and are back when this returns or throws.
+// in memory are lent to each block while it trains, and are back when this returns; those of its window over the
+// photos are let go while the blocks train and read back after, so that the stage holds train.photo_memory's worth
+// once.
 BlockSteps TrainByBlocks(const StageContext& context, TrainingSetup& setup, const RunState& state, Trainer* whole);
 
 // Block `b`'s part alone (in a job of its own), from the whole part's checkpoint.

@@ -282,6 +282,22 @@ TEST_CASE("train stage: train.blocks trains the field whole, then by slabs, and 
   CHECK(report["training_psnr"].get<double>() > report["heldout_psnr"].get<double>() - 1.0);
 }
 
+// Ten training photos of 9 KB; 0.06 MB hold six: the whole part's window of four, each block's as many.
+TEST_CASE("train stage: by blocks, photos beyond train.photo_memory train through a window, the blocks' too",
+          "[train][blocks]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(200);
+  config.Set("train.blocks", 2, "test");
+  config.Set("train.photo_memory", 0.06, "test");
+  setup.runner.Run(setup.workspace, config, Until("train"));
+  const nlohmann::json report = ReadJsonFile(setup.dir / "ws" / "30_train" / "train_report.json");
+  CHECK(report["steps"] == 300);
+  CHECK(report["training_views_in_memory"] == 4);
+  CHECK(std::isfinite(report["heldout_psnr"].get<double>()));
+  // The window's photos let go while the blocks trained are back: the final evaluation scores the composite on them.
+  CHECK(report["training_psnr"].get<double>() > report["heldout_psnr"].get<double>() - 1.0);
+}
+
 TEST_CASE("train stage: a run by blocks cancelled after a block resumes with the blocks left", "[train][blocks]") {
   StageWorkspace setup;
   Config config = SmallStageConfig(200);
