@@ -1,5 +1,5 @@
 // Writes the synthetic scene's photos and true cameras into a folder: the input of the README's demo.
-// Usage: make_synthetic_scene OUT_FOLDER [NUM_VIEWS [WIDTH HEIGHT [orbit|handheld]]]
+// Usage: make_synthetic_scene OUT_FOLDER [NUM_VIEWS [WIDTH HEIGHT [orbit|handheld|survey]]]
 
 #include <cstdlib>
 #include <exception>
@@ -9,7 +9,7 @@
 
 int main(int argc, char** argv) {
   if (argc < 2 || argc > 6 || argc == 4) {
-    std::cerr << "usage: make_synthetic_scene OUT_FOLDER [NUM_VIEWS [WIDTH HEIGHT [orbit|handheld]]]\n";
+    std::cerr << "usage: make_synthetic_scene OUT_FOLDER [NUM_VIEWS [WIDTH HEIGHT [orbit|handheld|survey]]]\n";
     return 1;
   }
   p2n::SyntheticSceneOptions options;

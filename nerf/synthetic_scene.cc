@@ -193,9 +193,34 @@ PinholeCamera LookAtCamera(const Vector3d& position, const Vector3d& target, int
   return camera;
 }
 
+namespace {
+
+// A drone's survey: rows across the ground at kSurveyHeight, back and forth, each camera looking ahead and down
+// (kSurveyTilt from straight down), so that a view sees a small part of the scene.
+std::vector<PinholeCamera> SurveyCameras(const SyntheticSceneOptions& options) {
+  constexpr double kSurveyHeight = 2.5, kSurveyHalfWidth = 3, kSurveyTilt = 30 * kPi / 180;
+  const int rows = std::max(1, static_cast<int>(std::lround(std::sqrt(options.num_views))));
+  const int per_row = (options.num_views + rows - 1) / rows;
+  const auto across = [&](int k, int count) {
+    return count > 1 ? -kSurveyHalfWidth + 2 * kSurveyHalfWidth * k / (count - 1) : 0.0;
+  };
+  std::vector<PinholeCamera> cameras;
+  for (int i = 0; i < options.num_views; ++i) {
+    const int row = i / per_row;
+    const double heading = row % 2 == 0 ? 1 : -1;
+    const Vector3d position(heading * across(i % per_row, per_row), across(row, rows), kSurveyHeight);
+    const Vector3d target = position + Vector3d(heading * kSurveyHeight * std::tan(kSurveyTilt), 0, -kSurveyHeight);
+    cameras.push_back(LookAtCamera(position, target, options.width, options.height, options.fov_x_deg));
+  }
+  return cameras;
+}
+
+}  // namespace
+
 std::vector<PinholeCamera> SyntheticCameras(const SyntheticSceneOptions& options) {
+  if (options.path == "survey") return SurveyCameras(options);
   if (options.path != "orbit" && options.path != "handheld") {
-    throw std::invalid_argument("unknown camera path '" + options.path + "': use orbit or handheld");
+    throw std::invalid_argument("unknown camera path '" + options.path + "': use orbit, handheld or survey");
   }
   std::vector<PinholeCamera> cameras;
   const Vector3d target(0, 0, 0.4);

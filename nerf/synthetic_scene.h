@@ -20,7 +20,8 @@ namespace p2n {
 
 struct SyntheticSceneOptions {
   std::string path = "orbit";  // "orbit": an upward spiral around the scene; "handheld": a walk along an arc
-                               // in front of it with jittered position, aim and roll
+                               // in front of it with jittered position, aim and roll; "survey": rows over the
+                               // ground looking ahead and down, each view seeing a small part (a large scene)
   uint64_t seed = 1;           // the handheld path's jitter
   int num_views = 24;          // cameras
   int width = 320;             // pixels

@@ -4,7 +4,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "base/camera.h"
+#include "splat/scene_size.h"
 
 namespace p2n {
 
@@ -63,12 +63,7 @@ std::vector<size_t> ViewsOfBlock(const std::vector<TrainView>& views, const Gaus
     size_t in_view = 0, in_block = 0;
     for (size_t i = 0; i < splats.size(); ++i) {
       const float* p = &splats.positions[3 * i];
-      double depth = 0;
-      const Eigen::Vector2d pixel = Project(camera, Eigen::Vector3d(p[0], p[1], p[2]), &depth);
-      if (!(depth > near) || pixel.x() < 0 || pixel.y() < 0 || pixel.x() >= camera.width ||
-          pixel.y() >= camera.height) {
-        continue;
-      }
+      if (!InPicture(camera, p, near)) continue;
       ++in_view;
       if (blocks.BlockOf(p) == block) ++in_block;
     }

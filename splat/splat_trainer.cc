@@ -290,6 +290,7 @@ void SplatTrainer::Save(BinaryWriter* writer) const {
   std::ostringstream state;
   state << random_;
   writer->PutString(state.str());
+  writer->Put<uint64_t>(options_.max_gaussians);
 }
 
 void SplatTrainer::Load(BinaryReader* reader) {
@@ -322,6 +323,7 @@ void SplatTrainer::Load(BinaryReader* reader) {
   std::istringstream state(reader->GetString());
   state >> random_;
   if (state.fail()) throw std::runtime_error("a splat checkpoint's random state cannot be read");
+  options_.max_gaussians = reader->Get<uint64_t>();
 }
 
 FloatImage RenderSplats(const Gaussians<float>& gaussians, const PinholeCamera& camera,

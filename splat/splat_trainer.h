@@ -41,8 +41,8 @@ struct SplatTrainerOptions {
   double densify_gradient = 2e-4;  // mean screen-space gradient (normalised device units) that densifies
   double dense_fraction = 0.01;    // of the extent: larger Gaussians split, smaller ones clone
   double prune_opacity = 0.005;
-  double ssim_weight = 0.1;  // the loss: (1 - ssim_weight) L1 + ssim_weight (1 - SSIM) (ssim_loss.h)
-  size_t max_gaussians = 1'500'000;
+  double ssim_weight = 0.1;          // the loss: (1 - ssim_weight) L1 + ssim_weight (1 - SSIM) (ssim_loss.h)
+  size_t max_gaussians = 1'500'000;  // densification's cap: the run's, which a checkpoint keeps (Save, Load)
   uint64_t seed = 0;
 
   // std::invalid_argument naming the field and its rule.
@@ -90,7 +90,8 @@ class SplatTrainer {
   // The SH degree in use at this step.
   int ShDegree() const;
 
-  // Everything a resumed run needs to continue as this one would (the scene excepted).
+  // Everything a resumed run needs to continue as this one would (the scene excepted; options.max_gaussians
+  // included: Load sets it, so that a block's part job densifies to the cap its stage chose).
   void Save(BinaryWriter* writer) const;
   void Load(BinaryReader* reader);
 

@@ -120,17 +120,18 @@ std::string SplatSection(const SplatResult& result, const SplatReport& report,
   html += "</div>\n";
   html += format(
       "<p>The field baked into {} 3D Gaussian splats (spherical harmonics of degree {}; {} placed from the {}, "
-      "then optimised for {:.0f} s, {} steps): held-out PSNR {} dB and SSIM {} (the field: {} dB), {:.3f} s per "
-      "held-out view on the CPU. <a href=\"{}\">splats.ply</a> ({:.1f} MB) is in the standard 3D "
-      "Gaussian Splatting layout, {}; SuperSplat, the PlayCanvas and three.js splat viewers open it as it is. "
+      "a training photo seeing {:.0f}% of them, then optimised for {:.0f} s, {} steps): held-out PSNR {} dB and "
+      "SSIM {} (the field: {} dB), {:.3f} s per held-out view on the CPU. <a href=\"{}\">splats.ply</a> ({:.1f} "
+      "MB) is in the standard 3D Gaussian Splatting layout, {}; SuperSplat, the PlayCanvas and three.js splat viewers "
+      "open it as it is. "
       "<a href=\"{}\">splats.spz</a> ({:.1f} MB) holds the same splats in Niantic's compact SPZ, for the web (Spark, "
       "Babylon.js, SuperSplat) and Scaniverse; <a href=\"{}\">splats.glb</a> ({:.1f} MB) in glTF with "
       "KHR_gaussian_splatting, upright (+Y up), for the glTF tools that read it.</p>\n",
       report.splats, report.sh_degree, report.initial_splats, report.init == "sparse" ? "sparse points" : "field",
-      report.seconds, report.steps, Number(report.heldout_psnr), Number(report.heldout_ssim, 3),
-      Number(train ? train->heldout_psnr : std::nullopt), report.seconds_per_view, Link(result.splats()),
-      report.file_bytes / 1e6, HtmlEscape(report.frame_description), Link(result.spz()), report.spz_bytes / 1e6,
-      Link(result.glb()), report.glb_bytes / 1e6);
+      100 * report.view_share, report.seconds, report.steps, Number(report.heldout_psnr),
+      Number(report.heldout_ssim, 3), Number(train ? train->heldout_psnr : std::nullopt), report.seconds_per_view,
+      Link(result.splats()), report.file_bytes / 1e6, HtmlEscape(report.frame_description), Link(result.spz()),
+      report.spz_bytes / 1e6, Link(result.glb()), report.glb_bytes / 1e6);
   return html;
 }
 

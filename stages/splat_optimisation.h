@@ -25,6 +25,11 @@ struct SplatSetup {
   std::array<float, 3> background{1, 1, 1};
   double extent = 1;
   std::optional<double> field_psnr;  // the field's held-out PSNR, as the train stage measured it
+  // Where the splats were placed (not in a block's part job, whose trainer takes its cap from the whole part's
+  // checkpoint): the mean share of them a training view sees (splat/scene_size.h), and the most placed
+  // (PlacedSplats; densification may double it or splat.max_gaussians, whichever is more).
+  double view_share = 1;
+  size_t max_placed = 0;
 };
 
 // What every optimisation of one stage run shares.

@@ -14,6 +14,7 @@
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
 #include "splat/field_init.h"
+#include "splat/scene_size.h"
 #include "splat/similarity.h"
 #include "splat/splat_gltf.h"
 #include "splat/splat_ply.h"
@@ -32,6 +33,15 @@
 namespace p2n {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+// At most one splat per kPixelsPerSplat training pixels: small photos do not resolve more (3D Gaussian Splatting ends
+// with about one per 100 to 300).
+constexpr size_t kPixelsPerSplat = 64;
+constexpr double kNearShare = 0.01;  // the near plane, of the cameras' extent
+
+}  // namespace
 
 void SplatOptions::Check() const {
   CheckOption(*this, time_budget, time_budget >= 0, "must be 0 (by the preset) or positive");
@@ -55,6 +65,11 @@ double SplatTimeBudget(const SplatOptions& options, PresetName train_preset) {
   return train_preset == PresetName::kQuality ? 480 : 180;
 }
 
+size_t PlacedSplats(int max_gaussians, double view_share, size_t pixels) {
+  const double large = view_share < kLargeSceneShare ? kLargeSceneShare / std::max(view_share, 1e-6) : 1.0;
+  return std::min(static_cast<size_t>(std::min(max_gaussians * large, 1e12)), pixels / kPixelsPerSplat);
+}
+
 int SplatScheduleSteps(double budget) {
   const int steps = SplatTrainerOptions{}.steps;
   constexpr double kSeconds = 320;  // the budget up to which the schedule is the trainer's own
@@ -62,8 +77,6 @@ int SplatScheduleSteps(double budget) {
 }
 
 namespace {
-
-constexpr size_t kPixelsPerSplat = 64;
 
 // The splats (in `frame`) in glTF's frame (UprightFrame: +Y up, at the scale of `frame`), their view-dependent
 // colour turned with them.
@@ -102,6 +115,34 @@ Gaussians<float> GaussiansFromSparseFile(const fs::path& file, const FieldInitOp
   return GaussiansFromSparsePoints(points, rgb, init.max_gaussians, init.sh_degree);
 }
 
+// The first splats (in the normalised frame) from the field or the sparse points, as many as PlacedSplats allows
+// for the scene's size (measured on a first placement of as many as a small scene takes).
+void PlaceSplats(const StageContext& context, const SplatOptions& options, const PosesResult& poses,
+                 const TrainResult& train, const NerfModel& model, SplatSetup* setup) {
+  size_t pixels = 0;
+  for (const TrainView& view : setup->data.train) pixels += size_t(view.camera.width) * view.camera.height;
+  std::shared_ptr<const ViewRenders> renders;
+  const auto place = [&](size_t cap) {
+    const FieldInitOptions init{.max_gaussians = cap, .sh_degree = options.sh_degree};
+    if (options.init == SplatInit::kSparse) return GaussiansFromSparseFile(poses.sparse_points(), init);
+    if (!renders) {
+      renders = RenderViewsSmall(context, train.model(), model, setup->data.train, options.init_width,
+                                 "splat: placing splats from the field");
+    }
+    return GaussiansFromRenders(model, renders->cameras, renders->renders, init);
+  };
+  const size_t small = PlacedSplats(options.max_gaussians, 1, pixels);
+  setup->gaussians = place(small);
+  setup->view_share = MeanViewShare(setup->data.train, setup->gaussians, kNearShare * CameraExtent(setup->data.train));
+  const size_t cap = PlacedSplats(options.max_gaussians, setup->view_share, pixels);
+  if (cap > small) {
+    LogInfo(format("splat: a training view sees {:.1f}% of the scene: up to {} splats placed", 100 * setup->view_share,
+                   cap));
+    setup->gaussians = place(cap);
+  }
+  setup->max_placed = cap;
+}
+
 // The training photos of `poses` read into `views` (their cameras as the splats see them), each fitted to `max_side`
 // as it is read (FittedViews).
 std::vector<TrainView> LoadFittedViews(const ImportedDataset& poses, const std::vector<TrainView>& views,
@@ -131,22 +172,8 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
     if (found != trained.corrections.end()) view.camera = CorrectedCamera(view.camera, found->second.data());
   }
 
-  FieldInitOptions init;
-  // At most one splat per kPixelsPerSplat training pixels: small photos do not resolve more (3D Gaussian
-  // Splatting ends with about one per 100 to 300).
-  size_t pixels = 0;
-  for (const TrainView& view : setup.data.train) pixels += size_t(view.camera.width) * view.camera.height;
-  init.max_gaussians = std::min(static_cast<size_t>(options.max_gaussians), pixels / kPixelsPerSplat);
-  init.sh_degree = options.sh_degree;
-  if (!place) {
-    setup.gaussians.sh_degree = options.sh_degree;
-  } else if (options.init == SplatInit::kSparse) {
-    setup.gaussians = GaussiansFromSparseFile(poses_result.sparse_points(), init);
-  } else {
-    const std::shared_ptr<const ViewRenders> renders = RenderViewsSmall(
-        context, train.model(), model, setup.data.train, options.init_width, "splat: placing splats from the field");
-    setup.gaussians = GaussiansFromRenders(model, renders->cameras, renders->renders, init);
-  }
+  setup.gaussians.sh_degree = options.sh_degree;
+  if (place) PlaceSplats(context, options, poses_result, train, model, &setup);
 
   setup.frame = MakeOutputFrame(options.frame, poses);
   if (setup.frame.rotation.determinant() <= 0) {
@@ -177,6 +204,7 @@ SplatReport MakeSplatReport(const Optimised& optimised, const SplatSetup& setup,
   report.enabled = true;
   report.splats = optimised.splats.size();
   report.initial_splats = setup.gaussians.size();
+  report.view_share = setup.view_share;
   report.init = EnumName(options.init);
   report.sh_degree = optimised.splats.sh_degree;
   report.steps = optimised.steps;
@@ -236,13 +264,13 @@ void WriteSplatFiles(const SplatResult& out, const Optimised& optimised, const S
 
 // What the stage's optimisations share: the scene, the trainer's options, the budget.
 SplatRun MakeSplatRun(const SplatSetup& setup, const SplatOptions& options, const StageContext& context) {
-  const double near = 0.01 * setup.extent;
+  const double near = kNearShare * setup.extent;
   const double budget = SplatTimeBudget(options, ReadOptions<TrainOptions>(context.config).preset);
   SplatRun run{setup, options, context, {&setup.data.train, setup.background, setup.extent, near}, {}, budget};
   run.scene.learn_background = options.background == SplatBackground::kAuto &&
                                FirstWithAlpha(setup.data.train) == nullptr && !setup.data.background_known;
   run.trainer.seed = static_cast<uint64_t>(options.seed);
-  run.trainer.max_gaussians = 2 * static_cast<size_t>(options.max_gaussians);
+  run.trainer.max_gaussians = 2 * std::max(setup.max_placed, static_cast<size_t>(options.max_gaussians));
   run.trainer.ssim_weight = options.ssim_weight;
   run.trainer.steps = SplatScheduleSteps(budget);
   return run;

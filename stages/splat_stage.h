@@ -37,7 +37,7 @@ struct SplatOptions {
   int sh_degree = 3;
   SplatInit init = SplatInit::kField;  // where the first Gaussians come from
   int init_width = 128;                // training views rendered this wide to place the first Gaussians
-  int max_gaussians = 100'000;         // of the first; densification may double it. Fewer: more steps for the time
+  int max_gaussians = 100'000;         // of the first (more in a large scene); densification may double it
   int blocks = 1;                      // optimised in this many spatial blocks after a whole part (splat/blocks.h)
   double coarse = 0.75;                // share of the optimisation on the photos at half size
   int max_image_size = 1080;           // the photos are downsized to at most this on their longest side; 0: any size
@@ -63,7 +63,10 @@ struct SplatOptions {
     v("init_width", init_width,
       "width the training views are rendered at to place the first splats (narrower beyond 2 M pixels in all)",
       "pixels");
-    v("max_gaussians", max_gaussians, "splats placed from the field (densification may add as many again)");
+    v("max_gaussians", max_gaussians,
+      "splats placed from the field where a training view sees at least half of the scene; where it sees less (a "
+      "street, a survey) more in proportion, so that a view draws about as many; at most one per 64 training pixels "
+      "(densification may add as many again)");
     v("blocks", blocks,
       "optimise the splats whole for half the budget, then in this many blocks (slabs across the scene's widest axis) "
       "for the other half each, every block on the training views that see it with the others drawn as the whole "
@@ -91,6 +94,14 @@ struct SplatOptions {
   void Check() const;
 };
 
+// A scene is large where a training view sees less than this share of its splats (its mean over the training views,
+// MeanViewShare, measured on the splats placed as for a small scene).
+inline constexpr double kLargeSceneShare = 0.5;
+// The splats placed from the field (or the sparse points): `max_gaussians` (splat.max_gaussians), times
+// kLargeSceneShare / view_share in a large scene (each view then draws about as many as in a small one), and at most
+// one per 64 of the `pixels` training pixels.
+size_t PlacedSplats(int max_gaussians, double view_share, size_t pixels);
+
 // splat.time_budget, or the training preset's share when it is 0.
 double SplatTimeBudget(const SplatOptions& options, PresetName train_preset);
 // The steps over which the means' learning rate decays (SplatTrainerOptions::steps) in a run of `budget` seconds (0:
@@ -104,8 +115,9 @@ class SplatStage : public StageOf<SplatResult> {
   // 5: optimised on photos of at most splat.max_image_size (halved); 6: downsized to it with an area filter
   // 7: a background the import knows stays fixed (auto); 8: splats.spz beside splats.ply; 9: and splats.glb;
   // 10: the coarse part's dilation a full-size pixel's; 11: densification under the cap by the largest gradients;
-  // 12: the coarse part at most 40 passes; 13: the means' schedule stretched by a budget above 320 s
-  int format_version() const override { return 13; }
+  // 12: the coarse part at most 40 passes; 13: the means' schedule stretched by a budget above 320 s;
+  // 14: more splats for a large scene, the trainer's cap in its checkpoints
+  int format_version() const override { return 14; }
   std::vector<std::string> upstream() const override { return {PosesResult::kId.name, TrainResult::kId.name}; }
   void Run(StageContext& context) const override;
   // Block `part` (from 1) of splat.blocks (stages/splat_optimisation.h).

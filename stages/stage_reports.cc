@@ -463,6 +463,7 @@ void Describe(S& s, SplatReport& report) {
   s("splats", report.splats);
   s("initial_splats", report.initial_splats);
   s("init", report.init);
+  s.Optional("view_share", report.view_share);
   s("sh_degree", report.sh_degree);
   s("steps", report.steps);
   s("seconds", report.seconds);
@@ -486,6 +487,7 @@ void Describe(S& s, SplatReport& report) {
   s("viewer_bytes", report.viewer_bytes);
   s.Optional("warnings", report.warnings);
   s.Check("near", "must be positive", [&] { return report.near > 0; });
+  s.Check("view_share", "must be 0..1", [&] { return report.view_share >= 0 && report.view_share <= 1; });
 }
 
 template <class S>

@@ -199,7 +199,8 @@ struct TrainReport {
 struct SplatReport {
   bool enabled = false;  // false: the stage was off, and nothing else is written
   size_t splats = 0, initial_splats = 0;
-  std::string init;  // field | sparse
+  std::string init;       // field | sparse
+  double view_share = 1;  // the mean share of the splats placed a training view sees (splat/scene_size.h); older: 1
   int sh_degree = 0, steps = 0, resumed_from_step = 0;
   double seconds = 0;  // of optimisation
   size_t heldout_views = 0;

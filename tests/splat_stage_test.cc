@@ -16,6 +16,7 @@
 #include "splat/spz.h"
 #include "stage_fixtures.h"
 #include "stages/splat_optimisation.h"
+#include "stages/splat_stage.h"
 
 namespace p2n::testing {
 namespace fs = std::filesystem;
@@ -39,6 +40,8 @@ TEST_CASE("splat stage: splats where the scene is, scored on the held-out views,
   CHECK(report["spz_bytes"].get<size_t>() < report["file_bytes"].get<size_t>() / 3);
   CHECK(report["steps"] == 30);
   CHECK(report["heldout_psnr"].get<double>() > 15);
+  // An orbit: each view sees most of the scene.
+  CHECK(report["view_share"].get<double>() > 0.5);
   CHECK(report["heldout_psnr_per_view"].size() == report["heldout_views"].get<size_t>());
   const std::string metrics = ReadTextFile(out / "metrics.csv");
   CHECK(metrics.find("wall_seconds,step,splats,train_loss,heldout_psnr\n") == 0);
@@ -83,6 +86,16 @@ TEST_CASE("splat stage: the means' schedule is 2,000 steps, stretched in proport
   for (const double budget : {0.0, 30.0, 180.0, 320.0}) CHECK(SplatScheduleSteps(budget) == 2000);
   CHECK(SplatScheduleSteps(480) == 3000);
   CHECK(SplatScheduleSteps(960) == 6000);
+}
+
+TEST_CASE("splat stage: the splats placed follow the scene's size", "[splat]") {
+  const size_t pixels = 64 * 1'000'000;  // room for a million
+  CHECK(PlacedSplats(100'000, 1, pixels) == 100'000);
+  CHECK(PlacedSplats(100'000, 0.5, pixels) == 100'000);
+  CHECK(PlacedSplats(100'000, 0.1, pixels) == 500'000);
+  CHECK(PlacedSplats(100'000, 0.01, pixels) == 1'000'000);  // 5 M asked, one per 64 pixels
+  CHECK(PlacedSplats(100'000, 0, pixels) == 1'000'000);
+  CHECK(PlacedSplats(100'000, 1, 64 * 2'000) == 2'000);  // small photos
 }
 
 TEST_CASE("splat stage: splat.blocks optimises whole, then each block, merged into one set of splats", "[splat]") {

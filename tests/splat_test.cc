@@ -352,6 +352,29 @@ TEST_CASE("Splat optimisation fits photos, and a resumed run continues as an uni
   CHECK(psnr(resumed.gaussians()) == Approx(after).margin(0.05));
 }
 
+TEST_CASE("A splat checkpoint keeps densification's cap: a trainer made with another goes on to the run's", "[splat]") {
+  const Gaussians<float> truth = RandomSplats(30, 0, 5);
+  const std::vector<TrainView> views = ViewsOf(truth, 4);
+  const SplatScene scene{&views, {1, 1, 1}, 2.5, 0.01};
+  SplatTrainerOptions options;
+  options.densify_from = options.densify_interval = 4;
+  options.densify_gradient = 1e-12;  // every splat drawn is a candidate
+  options.max_gaussians = truth.size() + 5;
+  SplatTrainer trainer(Disturbed(truth), scene, options);
+  trainer.Step();
+  BinaryWriter checkpoint;
+  trainer.Save(&checkpoint);
+  for (int s = 1; s < 4; ++s) trainer.Step();
+  CHECK(trainer.gaussians().size() == truth.size() + 5);  // densified at the fourth step, to the cap
+
+  options.max_gaussians = 1'000'000;
+  SplatTrainer resumed(truth, scene, options);
+  BinaryReader reader(checkpoint.buffer(), "checkpoint");
+  resumed.Load(&reader);
+  for (int s = 1; s < 4; ++s) resumed.Step();
+  CHECK(resumed.gaussians().size() == truth.size() + 5);
+}
+
 TEST_CASE("Splats optimised on the photos at half size look as they should at full size", "[splat]") {
   const Gaussians<float> truth = RandomSplats(30, 0, 5);
   const std::vector<TrainView> views = ViewsOf(truth, 8, {1, 1, 1}, Eigen::Vector3d::Zero(), 64);

@@ -80,6 +80,7 @@ SplatReport SomeSplatReport() {
   report.splats = 12345;
   report.initial_splats = 9000;
   report.init = "sparse";
+  report.view_share = 0.125;
   report.sh_degree = 2;
   report.steps = 77;
   report.resumed_from_step = 40;
@@ -228,6 +229,10 @@ TEST_CASE("Reports between stages read back exactly what was written", "[reports
   const SplatReport splat = SomeSplatReport();
   WriteJsonAtomic(dir.path() / "splat_report.json", splat.ToJson());
   CHECK(SplatReport::Read(dir.path() / "splat_report.json").ToJson() == splat.ToJson());
+  nlohmann::json older_splat = splat.ToJson();
+  older_splat.erase("view_share");  // written before it was recorded
+  WriteJsonAtomic(dir.path() / "splat_report.json", older_splat);
+  CHECK(SplatReport::Read(dir.path() / "splat_report.json").view_share == 1);
   WriteJsonAtomic(dir.path() / "off.json", SplatReport{}.ToJson());
   CHECK_FALSE(SplatReport::Read(dir.path() / "off.json").enabled);
 
@@ -322,6 +327,8 @@ TEST_CASE("A damaged report names its file, the field and the stage to rerun", "
              Catch::Contains("\"frame\" must be source or normalized, not 'sideways'"));
   CHECK_THAT(ErrorAfterEdit<SplatReport>(splat, splat_json, "/steps", nlohmann::json::value_t::discarded),
              Catch::Contains("\"steps\" is missing"));
+  CHECK_THAT(ErrorAfterEdit<SplatReport>(splat, splat_json, "/view_share", 2),
+             Catch::Contains("\"view_share\" must be 0..1"));
 
   const fs::path eval = dir.path() / "eval.json";
   const nlohmann::json eval_json = SomeEvalReport().ToJson();
