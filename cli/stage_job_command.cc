@@ -1,6 +1,9 @@
 // stage-job: one stage's work inside a job of a scheduler (pipeline/slurm.h). The run that submitted the job holds
 // the workspace lock, made the staging folder and commits it when this returns.
 
+#include <sys/resource.h>
+
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
@@ -17,6 +20,16 @@
 
 namespace p2n {
 namespace fs = std::filesystem;
+namespace {
+
+// This process's peak resident memory in MB (what a job's --mem must allow).
+long PeakMemoryMB() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024;  // kB on Linux
+}
+
+}  // namespace
 
 int RunStageJob(int argc, char** argv) {
   CLI::App app("Run one stage's work as a job of a scheduler; photo2nerf run --run.scheduler slurm submits it.",
@@ -45,8 +58,10 @@ int RunStageJob(int argc, char** argv) {
   CheckAllOptions(config);
   const auto thread_limit = ApplyRunOptions(config, workspace.LogDir() / "photo2nerf.log");
   const char* job_id = std::getenv("SLURM_JOB_ID");
-  LogInfo(format("{}: {} in job {} (workspace {})", job.stage, part ? format("{} part {}", work, *part) : "working",
-                 job_id != nullptr ? job_id : "?", workspace.root().string()));
+  const std::string what =
+      format("{} in job {}", part ? format("{} part {}", work, *part) : "working", job_id != nullptr ? job_id : "?");
+  LogInfo(format("{}: {} (workspace {})", job.stage, what, workspace.root().string()));
+  const auto start = std::chrono::steady_clock::now();
   StageWork stage_work{part, work, nullptr};
   if (!part && ReadOptions<RunOptions>(config).scheduler == Scheduler::kSlurm) {
     stage_work.parts = SlurmParts(ReadOptions<SlurmOptions>(config), fs::read_symlink("/proc/self/exe"), workspace,
@@ -55,6 +70,9 @@ int RunStageJob(int argc, char** argv) {
   const nlohmann::json summary =
       MakeRunner(workspace.input()).RunWork(workspace, config, job.stage, job.key, stage_work);
   if (!part) WriteJsonAtomic(job.summary_path, summary);
+  const std::chrono::duration<double> seconds = std::chrono::steady_clock::now() - start;
+  LogInfo(
+      format("{}: {}: done in {:.1f} s, at most {} MB in memory", job.stage, what, seconds.count(), PeakMemoryMB()));
   return kExitOk;
 }
 

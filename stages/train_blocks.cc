@@ -1,5 +1,7 @@
 #include "stages/train_blocks.h"
 
+#include <tbb/parallel_for.h>
+
 #include <numeric>
 #include <optional>
 
@@ -9,6 +11,7 @@
 #include "nerf/camera_refinement.h"
 #include "nerf/field_blocks.h"
 #include "pipeline/log.h"
+#include "pipeline/progress.h"
 #include "stages/stage_io.h"
 
 namespace p2n {
@@ -103,9 +106,12 @@ TrainView WithoutPixels(TrainView& view) {
 // A block's training data: the training views that see it, their cameras as the whole part left them, and their
 // pixels (in memory, or a window over them where they would take more than train.photo_memory); no held-out views
 // (the composite is scored at the end). Pixels the whole part holds are lent, not copied (the whole does not train
-// while a block does), and given back when the block's data goes.
+// while a block does), and given back when the block's data goes; the others are read (TrainingSetup::read_photo).
+// A window reads from the whole part's decoded copy, or where there is none (a block's job, which loads no photo but
+// its block's) from the block's own.
 struct BlockData {
   TrainingData data;
+  std::shared_ptr<const DecodedPhotos> photos;  // the block's own decoded copy
   std::unique_ptr<PhotoWindow> window;
   std::vector<TrainView>* lender = nullptr;
   std::vector<std::pair<size_t, size_t>> lent;  // (the lender's view, this block's)
@@ -118,30 +124,49 @@ struct BlockData {
   }
 };
 
-void LoadBlockData(TrainingSetup& setup, const Trainer& whole, const std::vector<size_t>& indices, BlockData* block) {
+// The window over a block's training views (`indices` of the setup's) and the decoded copy it reads from.
+void MakeBlockWindow(const TrainingSetup& setup, const std::vector<size_t>& indices, const fs::path& folder,
+                     BlockData* block) {
+  PhotoWindow::Loader read;
+  if (setup.photos) {
+    read = [photos = setup.photos, indices](size_t v) { return photos->Read(indices[v]); };
+  } else {
+    std::vector<size_t> sizes;
+    for (const TrainView& view : block->data.train) sizes.push_back(view.PixelBytes());
+    Progress progress("train: decoding the block's photos", static_cast<int64_t>(sizes.size()), "images");
+    block->photos = std::make_shared<const DecodedPhotos>(folder, sizes, [&](size_t v) {
+      std::vector<uint8_t> pixels = setup.read_photo(indices[v]);
+      progress.Add();
+      return pixels;
+    });
+    read = [photos = block->photos](size_t v) { return photos->Read(v); };
+  }
+  block->window = std::make_unique<PhotoWindow>(&block->data.train, read, PhotoMemoryBytes(setup.options),
+                                                static_cast<uint64_t>(setup.options.seed));
+}
+
+void LoadBlockData(TrainingSetup& setup, const Trainer& whole, const std::vector<size_t>& indices,
+                   const fs::path& folder, BlockData* block) {
   const std::vector<TrainView> cameras = CorrectedCameras(setup.data, whole);
   block->data.background = setup.data.background;
   block->data.background_known = setup.data.background_known;
   block->lender = &setup.data.train;
   size_t bytes = 0;
   for (const size_t v : indices) bytes += setup.data.train[v].PixelBytes();
-  const bool in_memory = setup.photos == nullptr || bytes <= PhotoMemoryBytes(setup.options);
   for (const size_t v : indices) {
     TrainView& source = setup.data.train[v];
     TrainView view = WithoutPixels(source);
     view.camera = cameras[v].camera;
-    if (in_memory && !source.pixels.empty()) {
+    if (!source.pixels.empty()) {
       block->lent.emplace_back(v, block->data.train.size());
       view.pixels = std::move(source.pixels);
-    } else if (in_memory) {
-      view.pixels = setup.photos->Read(v);
     }
     block->data.train.push_back(std::move(view));
   }
-  if (in_memory) return;
-  block->window = std::make_unique<PhotoWindow>(
-      &block->data.train, [photos = setup.photos, indices](size_t v) { return photos->Read(indices[v]); },
-      PhotoMemoryBytes(setup.options), static_cast<uint64_t>(setup.options.seed));
+  if (bytes > PhotoMemoryBytes(setup.options)) return MakeBlockWindow(setup, indices, folder, block);
+  tbb::parallel_for(size_t{0}, indices.size(), [&](size_t v) {
+    if (block->data.train[v].pixels.empty()) block->data.train[v].pixels = setup.read_photo(indices[v]);
+  });
 }
 
 // The whole part's photos in its window (where the training photos take more than train.photo_memory), let go while
@@ -173,7 +198,7 @@ void TrainBlock(const StageContext& context, TrainingSetup& setup, Trainer& whol
     SaveModel(whole.model(), SlabModelFile(context, b));
   } else {
     BlockData block;
-    LoadBlockData(setup, whole, views, &block);
+    LoadBlockData(setup, whole, views, context.resume_dir, &block);
     TrainerOptions options = setup.trainer;
     options.refine_cameras = false;  // the cameras stay as the whole part left them, the same for every block
     options.seed += static_cast<uint64_t>(b) + 1;
@@ -235,7 +260,7 @@ BlockSteps TrainByBlocks(const StageContext& context, TrainingSetup& setup, cons
 
 void TrainBlockAlone(const StageContext& context, int b) {
   TrainingSetup setup;
-  LoadTrainingSetup(context, &setup);
+  LoadTrainingSetup(context, &setup, SetupPhotos::kNone);
   Trainer whole(setup.trainer, setup.data);
   RunState state;
   if (!LoadRunCheckpoint(CheckpointFile(context), context.key, TrainResult::kId.name, &state,

@@ -22,9 +22,9 @@ constexpr int kMaxConsecutiveSkips = 50;
 constexpr double kBytesPerMB = 1 << 20;  // train.photo_memory's unit
 
 // A window over the training photos when LoadTrainingData left their pixels out (they would take more than
-// train.photo_memory), reading them from a file in `folder` they are decoded into first; none when they are in
-// memory.
-void MakePhotoWindow(const ImportedDataset& poses, const fs::path& folder, TrainingSetup* setup) {
+// train.photo_memory), reading them from a file in `folder` they are decoded into first (by `decode`); none when they
+// are in memory.
+void MakePhotoWindow(const PhotoWindow::Loader& decode, const fs::path& folder, TrainingSetup* setup) {
   const TrainOptions& options = setup->options;
   TrainingData* data = &setup->data;
   if (!data->train.front().pixels.empty()) return;
@@ -44,32 +44,41 @@ void MakePhotoWindow(const ImportedDataset& poses, const fs::path& folder, Train
              data->train.size(), bytes / kBytesPerMB, OptionKey(options, options.photo_memory), options.photo_memory,
              size, folder.string()));
   fs::create_directories(folder);
-  const std::vector<const ImportedView*> train = TrainingViews(poses);
-  Progress progress("train: decoding the photos", static_cast<int64_t>(train.size()), "images");
+  Progress progress("train: decoding the photos", static_cast<int64_t>(sizes.size()), "images");
   setup->photos = std::make_shared<const DecodedPhotos>(folder, sizes, [&](size_t v) {
-    std::vector<uint8_t> pixels = LoadTrainView(*train[v]).pixels;
+    std::vector<uint8_t> pixels = decode(v);
     progress.Add();
     return pixels;
   });
-  setup->window = std::make_unique<PhotoWindow>(
-      &data->train, [photos = setup->photos](size_t v) { return photos->Read(v); }, PhotoMemoryBytes(options),
-      static_cast<uint64_t>(options.seed));
+  setup->read_photo = [photos = setup->photos](size_t v) { return photos->Read(v); };
+  setup->window = std::make_unique<PhotoWindow>(&data->train, setup->read_photo, PhotoMemoryBytes(options),
+                                                static_cast<uint64_t>(options.seed));
 }
 
 }  // namespace
 
-void LoadTrainingSetup(const StageContext& context, TrainingSetup* setup) {
+void LoadTrainingSetup(const StageContext& context, TrainingSetup* setup, SetupPhotos photos) {
   setup->options = ReadOptions<TrainOptions>(context.config);
   const TrainOptions& options = setup->options;
   setup->transforms = Upstream<PosesResult>(context).transforms();
-  const ImportedDataset poses = LoadTransformsJson(setup->transforms, context.workspace.root());
+  const auto dataset =
+      std::make_shared<const ImportedDataset>(LoadTransformsJson(setup->transforms, context.workspace.root()));
+  const ImportedDataset& poses = *dataset;
   setup->heldout_split = HeldoutSplit(poses);
   setup->heldout_rule = poses.meta.heldout_rule;
   const size_t training_views = std::count_if(poses.views.begin(), poses.views.end(),
                                               [](const ImportedView& view) { return view.view.split == "train"; });
   const double depth_weight = DepthWeight(options, training_views);
-  setup->data = LoadTrainingData(poses, depth_weight > 0, PhotoMemoryBytes(options));
-  MakePhotoWindow(poses, context.resume_dir, setup);
+  const PhotoWindow::Loader decode = [dataset, train = TrainingViews(poses)](size_t v) {
+    return LoadTrainView(*train[v]).pixels;
+  };
+  setup->read_photo = decode;
+  if (photos == SetupPhotos::kAll) {
+    setup->data = LoadTrainingData(poses, depth_weight > 0, PhotoMemoryBytes(options));
+    MakePhotoWindow(decode, context.resume_dir, setup);
+  } else {
+    setup->data = LoadTrainingCameras(poses, depth_weight > 0);
+  }
   setup->trainer = MakeTrainerOptions(options, ResolveSceneSpace(options, poses));
   setup->trainer.depth_weight = depth_weight;
   const TrainView* with_alpha = FirstWithAlpha(setup->data.train);

@@ -25,16 +25,22 @@ struct TrainingSetup {
   TrainingData data;
   std::filesystem::path transforms;  // the poses stage's transforms.json
   std::string heldout_split, heldout_rule;
+  // Training view v's pixels, from the decoded copy where there is one, else from its file.
+  PhotoWindow::Loader read_photo;
   // Where the training photos are too many for memory: their decoded copy, and a window over them.
   std::shared_ptr<const DecodedPhotos> photos;
   std::unique_ptr<PhotoWindow> window;
   std::optional<size_t> training_views_in_memory;  // with a window over the training photos
 };
 
+// Which photos LoadTrainingSetup loads: every training and held-out photo (or a window over the training photos), or
+// none (a field block's job reads its own views' photos by TrainingSetup::read_photo).
+enum class SetupPhotos { kAll, kNone };
+
 // The stage's options, the poses stage's views and photos (or a window over the photos where they would take more than
 // train.photo_memory, decoded into the stage's resume folder) and the trainer's options, into `setup` (in place: the
 // window points into its data).
-void LoadTrainingSetup(const StageContext& context, TrainingSetup* setup);
+void LoadTrainingSetup(const StageContext& context, TrainingSetup* setup, SetupPhotos photos = SetupPhotos::kAll);
 
 // This session of the run (a resumed run counts from its resumption): its held-out evaluations during training and
 // its steps.

@@ -139,24 +139,38 @@ std::vector<const ImportedView*> TrainingViews(const ImportedDataset& poses) {
   return train;
 }
 
-TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points, double photo_bytes) {
+namespace {
+
+// The data's background and its `count` training views, none loaded; UserError when there are none.
+TrainingData Unloaded(const ImportedDataset& poses, size_t count) {
+  if (count == 0) {  // files.front(): the transforms.json
+    throw UserError(format("'{}' has no training view (split \"train\")", poses.files.front().string()));
+  }
   TrainingData data;
   data.background = poses.meta.Background();
   data.background_known = poses.meta.background.has_value();
+  data.train.resize(count);
+  return data;
+}
+
+void LoadHeaders(const std::vector<const ImportedView*>& train, TrainingData* data) {
+  tbb::parallel_for(size_t{0}, train.size(), [&](size_t i) { data->train[i] = TrainViewHeader(*train[i]); });
+}
+
+}  // namespace
+
+TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points, double photo_bytes) {
   const std::string heldout_split = HeldoutSplit(poses);
   const std::vector<const ImportedView*> train = TrainingViews(poses);
   std::vector<const ImportedView*> heldout;
   for (const ImportedView& view : poses.views) {
     if (view.view.split == heldout_split) heldout.push_back(&view);
   }
-  if (train.empty()) {  // files.front(): the transforms.json
-    throw UserError(format("'{}' has no training view (split \"train\")", poses.files.front().string()));
-  }
-  data.train.resize(train.size());
+  TrainingData data = Unloaded(poses, train.size());
   data.heldout.resize(heldout.size());
   size_t loaded = train.size();
   if (std::isfinite(photo_bytes)) {
-    tbb::parallel_for(size_t{0}, train.size(), [&](size_t i) { data.train[i] = TrainViewHeader(*train[i]); });
+    LoadHeaders(train, &data);
     double bytes = 0;
     for (const TrainView& view : data.train) bytes += view.PixelBytes();
     if (bytes > photo_bytes) loaded = 0;
@@ -170,6 +184,14 @@ TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points, d
     }
     progress.Add();
   });
+  if (depth_points) AddDepthPoints(poses, train, &data);
+  return data;
+}
+
+TrainingData LoadTrainingCameras(const ImportedDataset& poses, bool depth_points) {
+  const std::vector<const ImportedView*> train = TrainingViews(poses);
+  TrainingData data = Unloaded(poses, train.size());
+  LoadHeaders(train, &data);
   if (depth_points) AddDepthPoints(poses, train, &data);
   return data;
 }

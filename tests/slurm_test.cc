@@ -166,8 +166,9 @@ TEST_CASE("slurm: the field's blocks run as a job array beside the stage's job",
   REQUIRE(code == 0);
   const fs::path jobs = JobDir(workspace, "30_train");
   INFO(ReadText(jobs / "attempt-1.log"));
-  CHECK_THAT(ReadText(jobs / "block-2.log"),
-             Catch::Contains("train: block part 2 in job") && Catch::Contains("train: block 2 of 2"));
+  CHECK_THAT(ReadText(jobs / "block-2.log"), Catch::Contains("train: block part 2 in job") &&
+                                                 Catch::Contains("train: block 2 of 2") &&
+                                                 Catch::Contains(": done in ") && Catch::Contains("MB in memory"));
   CHECK(ReadText(jobs / "exit-block-2") == "0\n");
   // The same steps; the same field within 0.3 dB (the jobs have one thread, the local run two).
   const nlohmann::json there = ReadJsonFile(report);

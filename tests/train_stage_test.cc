@@ -4,6 +4,8 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
+#include <algorithm>
+#include <functional>
 #include <thread>
 
 #include "base/errors.h"
@@ -296,6 +298,62 @@ TEST_CASE("train stage: by blocks, photos beyond train.photo_memory train throug
   CHECK(std::isfinite(report["heldout_psnr"].get<double>()));
   // The window's photos let go while the blocks trained are back: the final evaluation scores the composite on them.
   CHECK(report["training_psnr"].get<double>() > report["heldout_psnr"].get<double>() - 1.0);
+}
+
+// A field block's job (its part run alone, as a scheduler runs it) decodes no photo but its block's: every other
+// photo, held out or training, is cut to half its bytes while the job runs (its header still read, its pixels not:
+// a job that decoded it would fail), in memory or through a window (0.06 MB: each block's photos decoded into its own
+// copy), and the composite is the run's in turn.
+TEST_CASE("train stage: a field block's job decodes its block's photos alone", "[train][blocks]") {
+  const double photo_memory = GENERATE(2048.0, 0.06);
+  Config config = SmallStageConfig(200);
+  config.Set("train.blocks", 2, "test");
+  config.Set("train.photo_memory", photo_memory, "test");
+  StageWorkspace in_turn;
+  in_turn.runner.Run(in_turn.workspace, config, Until("train"));
+  const nlohmann::json here = ReadJsonFile(in_turn.dir / "ws" / "30_train" / "train_report.json");
+
+  StageWorkspace setup;
+  setup.runner.Run(setup.workspace, config, Until("poses"));
+  std::vector<std::pair<fs::path, std::string>> photos;  // each photo the poses stage keeps and its split
+  const fs::path poses_dir = setup.dir / "ws" / "20_poses";
+  const nlohmann::json poses = ReadJsonFile(poses_dir / "transforms.json");
+  for (const nlohmann::json& frame : poses["frames"]) {
+    photos.emplace_back(poses_dir / frame["file_path"].get<std::string>(), frame["split"]);
+  }
+  const fs::path staging = setup.workspace.StagingDir("30_train");
+  fs::create_directories(staging);
+  size_t jobs = 0, cut = 0;
+  StageWork work;
+  work.parts = [&](const std::string& kind, const std::vector<int>& parts, const std::function<void(int)>&) {
+    REQUIRE(kind == kBlockWork);
+    const nlohmann::json start = ReadJsonFile(setup.dir / "ws" / "30_train.resume" / "blocks.json");
+    for (const int part : parts) {
+      const std::vector<size_t> views = start["views"][part - 1];
+      std::vector<std::pair<fs::path, std::string>> kept;  // each photo cut and its bytes
+      size_t train = 0;
+      for (const auto& [photo, split] : photos) {
+        const bool mine = split == "train" && std::count(views.begin(), views.end(), train++) > 0;
+        if (mine) continue;
+        kept.emplace_back(photo, ReadText(photo));
+        WriteText(photo, kept.back().second.substr(0, kept.back().second.size() / 2));
+      }
+      StageWork job;
+      job.part = part;
+      job.work = kind;
+      setup.runner.RunWork(setup.workspace, config, "train", "key", job);
+      for (const auto& [photo, bytes] : kept) WriteText(photo, bytes);
+      cut += kept.size();
+      ++jobs;
+    }
+  };
+  setup.runner.RunWork(setup.workspace, config, "train", "key", work);
+  CHECK(jobs == 2);
+  CHECK(cut >= 2 * 2);  // at least the two held-out photos, in each job
+  const nlohmann::json there = ReadJsonFile(staging / "train_report.json");
+  CHECK(there["steps"] == 300);
+  CHECK(there["field"]["fields"].size() == 2);
+  CHECK(there["heldout_psnr"].get<double>() == Approx(here["heldout_psnr"].get<double>()).margin(0.3));
 }
 
 TEST_CASE("train stage: a run by blocks cancelled after a block resumes with the blocks left", "[train][blocks]") {
