@@ -40,10 +40,31 @@ size_t RetrievedPhoto(const std::string& line, const std::map<uint32_t, size_t>&
   return found->second;
 }
 
+// The ranks (0: the most similar other photo) `picks` takes of a list of `count`.
+std::vector<size_t> PickedRanks(const RetrievalPicks& picks, size_t count) {
+  std::vector<size_t> ranks;
+  for (size_t r = 0; r < std::min(picks.nearest, count); ++r) ranks.push_back(r);
+  if (count <= picks.nearest) return ranks;
+  const size_t rest = count - picks.nearest;
+  const size_t spread = std::min(picks.spread, rest);
+  for (size_t j = 0; j < spread; ++j) ranks.push_back(picks.nearest + (2 * j + 1) * rest / (2 * spread));
+  return ranks;
+}
+
+// Adds the pairs of `query` with the photos `retrieved` for it (most similar first) that `picks` takes.
+void AddPicked(size_t query, const std::vector<size_t>& retrieved, const RetrievalPicks& picks,
+               std::set<std::pair<size_t, size_t>>* seen, std::vector<std::pair<size_t, size_t>>* pairs) {
+  for (const size_t rank : PickedRanks(picks, retrieved.size())) {
+    const std::pair<size_t, size_t> pair(std::min(query, retrieved[rank]), std::max(query, retrieved[rank]));
+    if (seen->insert(pair).second) pairs->push_back(pair);
+  }
+}
+
 }  // namespace
 
 std::vector<std::pair<size_t, size_t>> RetrievedPairs(const std::string& answer,
-                                                      const std::vector<ColmapDatabaseImage>& images) {
+                                                      const std::vector<ColmapDatabaseImage>& images,
+                                                      const RetrievalPicks& picks) {
   std::map<std::string, size_t> by_name;
   std::map<uint32_t, size_t> by_id;
   for (size_t i = 0; i < images.size(); ++i) {
@@ -53,17 +74,20 @@ std::vector<std::pair<size_t, size_t>> RetrievedPairs(const std::string& answer,
   std::vector<std::pair<size_t, size_t>> pairs;
   std::set<std::pair<size_t, size_t>> seen;
   std::optional<size_t> query;
+  std::vector<size_t> retrieved;  // for `query`, itself left out
   std::istringstream lines(answer);
   for (std::string line; std::getline(lines, line);) {
     if (line.starts_with(kQuery)) {
+      if (query) AddPicked(*query, retrieved, picks, &seen, &pairs);
       query = QueriedPhoto(line, by_name);
+      retrieved.clear();
     } else if (line.starts_with(kRetrieved)) {
       if (!query) Unreadable(line);
-      const size_t retrieved = RetrievedPhoto(line, by_id);
-      const std::pair<size_t, size_t> pair(std::min(*query, retrieved), std::max(*query, retrieved));
-      if (pair.first != pair.second && seen.insert(pair).second) pairs.push_back(pair);
+      const size_t photo = RetrievedPhoto(line, by_id);
+      if (photo != *query) retrieved.push_back(photo);
     }
   }
+  if (query) AddPicked(*query, retrieved, picks, &seen, &pairs);
   return pairs;
 }
 

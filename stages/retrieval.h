@@ -13,12 +13,25 @@
 
 namespace p2n {
 
+// Which of the photos retrieved for a photo, most similar first, it is paired with: the `nearest` first, and `spread`
+// more at even steps through the rest of the list. On a dense capture (a walk, a video, an orbit of hundreds) the most
+// similar photos are the next few along the path, with too little parallax between them to place points, and
+// clusters of them mapped apart share too little to be merged; the less similar ones further down the list are
+// farther along it.
+struct RetrievalPicks {
+  size_t nearest = 0, spread = 0;
+  // The photos to retrieve for each (itself first, as COLMAP lists it): the nearest and four times as many more to
+  // spread the others over.
+  size_t Candidates() const { return 1 + nearest + 4 * nearest; }
+};
+
 // The pairs in COLMAP's vocab_tree_retriever's printed answer: for each "Querying for image NAME [i/n]" line, the
-// lines "  image_id=ID, image_name=..., score=..." of the photos retrieved for it. As indices into `images` (a
-// database's, in name order: ColmapDatabase::Images), the smaller first, each pair once in the order first named,
-// none of a photo with itself. ExternalToolError when a line names a photo the database lacks, or retrieved photos
-// come before any query.
+// lines "  image_id=ID, image_name=..., score=..." of the photos retrieved for it, those `picks` takes. As indices
+// into `images` (a database's, in name order: ColmapDatabase::Images), the smaller first, each pair once in the order
+// first named, none of a photo with itself. ExternalToolError when a line names a photo the database lacks, or
+// retrieved photos come before any query.
 std::vector<std::pair<size_t, size_t>> RetrievedPairs(const std::string& answer,
-                                                      const std::vector<ColmapDatabaseImage>& images);
+                                                      const std::vector<ColmapDatabaseImage>& images,
+                                                      const RetrievalPicks& picks);
 
 }  // namespace p2n

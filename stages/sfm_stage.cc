@@ -306,19 +306,21 @@ struct ColmapRun {
     return command;
   }
 
-  // Each photo paired with its sfm.retrieval_neighbours most similar photos by COLMAP's retrieval in `tree`
-  // (retrieval.h), as indices in name order; none when its answer cannot be read (COLMAP's matcher then retrieves
-  // and matches itself).
+  // Each photo paired with its sfm.retrieval_neighbours most similar photos by COLMAP's retrieval in `tree`, and half
+  // as many more spread through the next four times as many (RetrievalPicks, retrieval.h), as indices in name order;
+  // none when its answer cannot be read (COLMAP's matcher then retrieves and matches itself).
   std::vector<std::pair<size_t, size_t>> RetrievePairs(const fs::path& tree) const {
-    const fs::path log = steps->Run(
-        "retrieval",
-        {options.colmap, "vocab_tree_retriever", "--database_path", database().string(), "--vocab_tree_path",
-         tree.string(), "--num_images", std::to_string(options.retrieval_neighbours + 1), "--random_seed", seed},
-        /*allow_failure=*/true);
+    const size_t neighbours = options.retrieval_neighbours;
+    const RetrievalPicks picks{neighbours, neighbours / 2};
+    const fs::path log =
+        steps->Run("retrieval",
+                   {options.colmap, "vocab_tree_retriever", "--database_path", database().string(), "--vocab_tree_path",
+                    tree.string(), "--num_images", std::to_string(picks.Candidates()), "--random_seed", seed},
+                   /*allow_failure=*/true);
     try {
       if (!steps->last_ok())
         throw ExternalToolError(format("COLMAP's vocab_tree_retriever failed (log: {})", log.string()));
-      return RetrievedPairs(ReadTextFile(log), ColmapDatabase(database(), /*read_only=*/true).Images());
+      return RetrievedPairs(ReadTextFile(log), ColmapDatabase(database(), /*read_only=*/true).Images(), picks);
     } catch (const ExternalToolError& e) {
       LogWarning(format("sfm: COLMAP retrieves and matches the photos itself (slower): {}", e.what()));
       return {};

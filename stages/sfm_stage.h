@@ -21,7 +21,7 @@ struct SfmOptions {
   Matcher matcher = Matcher::kAuto;     // auto: AutoMatcher (matcher_choice.h)
   int exhaustive_max_images = 100;      // photos above which auto matching is sequential or by retrieval
   int sequential_overlap = 12;          // neighbours each photo is matched with (sequential)
-  int retrieval_neighbours = 20;        // most similar photos each photo is matched with (vocab_tree)
+  int retrieval_neighbours = 20;        // most similar photos each photo is matched with (vocab_tree), and half more
   int hierarchical_min_images = 500;    // photos from which COLMAP's hierarchical mapper maps them; 0: never
   int leaf_max_images = 200;            // photos in one of its clusters at most
   int max_image_size = 1024;            // longest side for feature extraction, pixels
@@ -50,7 +50,9 @@ struct SfmOptions {
       "photos above which auto matching is sequential (one video's frames, numbered names) or by retrieval (others)",
       "images");
     v("sequential_overlap", sequential_overlap, "neighbours each photo is matched with (sequential)", "images");
-    v("retrieval_neighbours", retrieval_neighbours, "most similar photos each photo is matched with (vocab_tree)",
+    v("retrieval_neighbours", retrieval_neighbours,
+      "most similar photos each photo is matched with (vocab_tree), and half as many more spread through the next "
+      "four times as many",
       "images");
     v("hierarchical_min_images", hierarchical_min_images,
       "photos from which COLMAP's hierarchical mapper maps them (clusters of at most leaf_max_images photos, each "

@@ -91,15 +91,36 @@ TEST_CASE("retrieval: COLMAP's answer read as pairs of photos in name order", "[
       "  image_id=4, image_name=d.jpg, score=0.4\n"
       "Querying for image d.jpg [3/4] in 0.002s\n";
   using Pairs = std::vector<std::pair<size_t, size_t>>;
-  CHECK(RetrievedPairs(answer, images) == Pairs{{0, 1}, {1, 2}, {0, 3}});
-  CHECK(RetrievedPairs("", images).empty());
+  const RetrievalPicks all{10, 0};
+  CHECK(RetrievedPairs(answer, images, all) == Pairs{{0, 1}, {1, 2}, {0, 3}});
+  CHECK(RetrievedPairs("", images, all).empty());
+  // The nearest one of each and none spread: the second of each (c for b, d for a) is left out.
+  CHECK(RetrievedPairs(answer, images, {1, 0}) == Pairs{{0, 1}});
 
   // An answer about other photos is refused, naming the line.
-  CHECK_THROWS_AS(RetrievedPairs("Querying for image e.jpg [1/1] in 0.1s\n", images), ExternalToolError);
-  CHECK_THROWS_WITH(RetrievedPairs("Querying for image a.jpg [1/4]\n  image_id=9, image_name=x, score=1\n", images),
-                    Catch::Contains("image_id=9"));
-  CHECK_THROWS_AS(RetrievedPairs("  image_id=1, image_name=b [2].jpg, score=1\n", images), ExternalToolError);
-  CHECK_THROWS_AS(RetrievedPairs("Querying for image a.jpg [1/4]\n  image_id=x\n", images), ExternalToolError);
+  CHECK_THROWS_AS(RetrievedPairs("Querying for image e.jpg [1/1] in 0.1s\n", images, all), ExternalToolError);
+  CHECK_THROWS_WITH(
+      RetrievedPairs("Querying for image a.jpg [1/4]\n  image_id=9, image_name=x, score=1\n", images, all),
+      Catch::Contains("image_id=9"));
+  CHECK_THROWS_AS(RetrievedPairs("  image_id=1, image_name=b [2].jpg, score=1\n", images, all), ExternalToolError);
+  CHECK_THROWS_AS(RetrievedPairs("Querying for image a.jpg [1/4]\n  image_id=x\n", images, all), ExternalToolError);
+}
+
+// Photo 0's list of the other twelve, most similar first: the two nearest, then three at even steps through the
+// other ten (ranks 2 + 1, 2 + 5 and 2 + 8 of 0..11).
+TEST_CASE("retrieval: the nearest photos retrieved, and more spread through the rest of the list", "[sfm]") {
+  std::vector<ColmapDatabaseImage> images;
+  std::string answer = "Querying for image p00.jpg [1/13] in 0.002s\n";
+  for (uint32_t i = 0; i < 13; ++i) {
+    images.push_back({i + 1, format("p{:02}.jpg", i)});
+    answer += format("  image_id={}, image_name=p{:02}.jpg, score=0.5\n", i + 1, i);  // itself first
+  }
+  using Pairs = std::vector<std::pair<size_t, size_t>>;
+  CHECK(RetrievedPairs(answer, images, {2, 3}) == Pairs{{0, 1}, {0, 2}, {0, 4}, {0, 8}, {0, 11}});
+  CHECK(RetrievalPicks{2, 3}.Candidates() == 11);
+  // A list shorter than the picks: every photo of it, once.
+  CHECK(RetrievedPairs(answer, images, {2, 20}).size() == 12);
+  CHECK(RetrievedPairs(answer, images, {20, 5}).size() == 12);
 }
 
 }  // namespace p2n::testing
