@@ -27,6 +27,7 @@ constexpr double kSlabViewShare = 0.1;
 struct SlabsStart {
   FieldSlabs slabs;
   std::vector<std::vector<size_t>> views;
+  std::vector<std::string> names;  // of the training views `views` indexes (none in an older resume folder)
 };
 
 fs::path SlabsStartFile(const StageContext& context) { return context.resume_dir / "blocks.json"; }
@@ -74,15 +75,18 @@ SlabsStart CutBlocks(const TrainingSetup& setup, const Trainer& whole) {
   }
   SlabsStart start;
   start.slabs = CutIntoSlabs(all, setup.options.blocks);
+  for (const TrainView& view : setup.data.train) start.names.push_back(view.name);
   for (int b = 0; b < start.slabs.count(); ++b)
     start.views.push_back(ViewsOfSlab(seen, start.slabs, b, kSlabViewShare));
   return start;
 }
 
 void SaveSlabsStart(const StageContext& context, const SlabsStart& start) {
-  WriteJsonAtomic(
-      SlabsStartFile(context),
-      {{"key", context.key}, {"axis", start.slabs.axis}, {"cuts", start.slabs.cuts}, {"views", start.views}});
+  WriteJsonAtomic(SlabsStartFile(context), {{"key", context.key},
+                                            {"axis", start.slabs.axis},
+                                            {"cuts", start.slabs.cuts},
+                                            {"views", start.views},
+                                            {"names", start.names}});
 }
 
 std::optional<SlabsStart> LoadSlabsStart(const StageContext& context) {
@@ -92,7 +96,24 @@ std::optional<SlabsStart> LoadSlabsStart(const StageContext& context) {
   start.slabs.axis = json->at("axis").get<int>();
   start.slabs.cuts = json->at("cuts").get<std::vector<double>>();
   start.views = json->at("views").get<std::vector<std::vector<size_t>>>();
+  start.names = json->value("names", std::vector<std::string>{});
   return start;
+}
+
+// UserError when the training views here are not those the blocks were cut from: a photo of the poses stage's missing
+// on this machine, whose frame transforms.json's reader leaves out, so that block b would train on other views.
+void CheckSameViews(const SlabsStart& start, const TrainingSetup& setup, int b) {
+  if (start.names.empty()) return;  // an older resume folder
+  const std::vector<TrainView>& here = setup.data.train;
+  for (size_t v = 0; v < std::max(start.names.size(), here.size()); ++v) {
+    if (v < start.names.size() && v < here.size() && here[v].name == start.names[v]) continue;
+    const std::string& name = v < start.names.size() ? start.names[v] : here[v].name;
+    throw UserError(
+        format("train: block {}: the training photos of {} here are not those the blocks were cut from ('{}', "
+               "training view {}, differs): check that every photo of the poses stage can be read on this machine "
+               "(a file system every node shares), then run the stage again",
+               b + 1, setup.transforms.string(), name, v + 1));
+  }
 }
 
 // A copy of `view` but for its pixels.
@@ -261,15 +282,6 @@ BlockSteps TrainByBlocks(const StageContext& context, TrainingSetup& setup, cons
 void TrainBlockAlone(const StageContext& context, int b) {
   TrainingSetup setup;
   LoadTrainingSetup(context, &setup, SetupPhotos::kNone);
-  Trainer whole(setup.trainer, setup.data);
-  RunState state;
-  if (!LoadRunCheckpoint(CheckpointFile(context), context.key, TrainResult::kId.name, &state,
-                         [&](BinaryReader* reader) { whole.LoadCheckpoint(reader); })) {
-    throw ExternalToolError(
-        format("train: block {}: the whole part's result {} is missing or not this run's; run the "
-               "stage again",
-               b + 1, CheckpointFile(context).string()));
-  }
   const std::optional<SlabsStart> start = LoadSlabsStart(context);
   if (!start) {
     throw ExternalToolError(
@@ -279,6 +291,16 @@ void TrainBlockAlone(const StageContext& context, int b) {
   }
   if (b < 0 || b >= start->slabs.count()) {
     throw UserError(format("train: there is no block {} of {}", b + 1, start->slabs.count()));
+  }
+  CheckSameViews(*start, setup, b);
+  Trainer whole(setup.trainer, setup.data);
+  RunState state;
+  if (!LoadRunCheckpoint(CheckpointFile(context), context.key, TrainResult::kId.name, &state,
+                         [&](BinaryReader* reader) { whole.LoadCheckpoint(reader); })) {
+    throw ExternalToolError(
+        format("train: block {}: the whole part's result {} is missing or not this run's; run the "
+               "stage again",
+               b + 1, CheckpointFile(context).string()));
   }
   TrainBlock(context, setup, whole, *start, b);
 }
