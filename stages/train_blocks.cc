@@ -11,7 +11,6 @@
 #include "nerf/camera_refinement.h"
 #include "nerf/field_blocks.h"
 #include "pipeline/log.h"
-#include "pipeline/progress.h"
 #include "stages/stage_io.h"
 
 namespace p2n {
@@ -154,12 +153,8 @@ void MakeBlockWindow(const TrainingSetup& setup, const std::vector<size_t>& indi
   } else {
     std::vector<size_t> sizes;
     for (const TrainView& view : block->data.train) sizes.push_back(view.PixelBytes());
-    Progress progress("train: decoding the block's photos", static_cast<int64_t>(sizes.size()), "images");
-    block->photos = std::make_shared<const DecodedPhotos>(folder, sizes, [&](size_t v) {
-      std::vector<uint8_t> pixels = setup.read_photo(indices[v]);
-      progress.Add();
-      return pixels;
-    });
+    block->photos = DecodePhotos(
+        folder, sizes, [&](size_t v) { return setup.read_photo(indices[v]); }, "train: decoding the block's photos");
     read = [photos = block->photos](size_t v) { return photos->Read(v); };
   }
   block->window = std::make_unique<PhotoWindow>(&block->data.train, read, PhotoMemoryBytes(setup.options),

@@ -43,19 +43,24 @@ void MakePhotoWindow(const PhotoWindow::Loader& decode, const fs::path& folder, 
              "read from their decoded copy in {}",
              data->train.size(), bytes / kBytesPerMB, OptionKey(options, options.photo_memory), options.photo_memory,
              size, folder.string()));
-  fs::create_directories(folder);
-  Progress progress("train: decoding the photos", static_cast<int64_t>(sizes.size()), "images");
-  setup->photos = std::make_shared<const DecodedPhotos>(folder, sizes, [&](size_t v) {
-    std::vector<uint8_t> pixels = decode(v);
-    progress.Add();
-    return pixels;
-  });
+  setup->photos = DecodePhotos(folder, sizes, decode, "train: decoding the photos");
   setup->read_photo = [photos = setup->photos](size_t v) { return photos->Read(v); };
   setup->window = std::make_unique<PhotoWindow>(&data->train, setup->read_photo, PhotoMemoryBytes(options),
                                                 static_cast<uint64_t>(options.seed));
 }
 
 }  // namespace
+
+std::shared_ptr<const DecodedPhotos> DecodePhotos(const fs::path& folder, const std::vector<size_t>& sizes,
+                                                  const PhotoWindow::Loader& decode, const std::string& label) {
+  fs::create_directories(folder);
+  Progress progress(label, static_cast<int64_t>(sizes.size()), "images");
+  return std::make_shared<const DecodedPhotos>(folder, sizes, [&](size_t v) {
+    std::vector<uint8_t> pixels = decode(v);
+    progress.Add();
+    return pixels;
+  });
+}
 
 void LoadTrainingSetup(const StageContext& context, TrainingSetup* setup, SetupPhotos photos) {
   setup->options = ReadOptions<TrainOptions>(context.config);
@@ -66,12 +71,9 @@ void LoadTrainingSetup(const StageContext& context, TrainingSetup* setup, SetupP
   const ImportedDataset& poses = *dataset;
   setup->heldout_split = HeldoutSplit(poses);
   setup->heldout_rule = poses.meta.heldout_rule;
-  const size_t training_views = std::count_if(poses.views.begin(), poses.views.end(),
-                                              [](const ImportedView& view) { return view.view.split == "train"; });
-  const double depth_weight = DepthWeight(options, training_views);
-  const PhotoWindow::Loader decode = [dataset, train = TrainingViews(poses)](size_t v) {
-    return LoadTrainView(*train[v]).pixels;
-  };
+  const std::vector<const ImportedView*> train = TrainingViews(poses);
+  const double depth_weight = DepthWeight(options, train.size());
+  const PhotoWindow::Loader decode = [dataset, train](size_t v) { return LoadTrainView(*train[v]).pixels; };
   setup->read_photo = decode;
   if (photos == SetupPhotos::kAll) {
     setup->data = LoadTrainingData(poses, depth_weight > 0, PhotoMemoryBytes(options));
