@@ -16,6 +16,7 @@
 #include "splat/blocks.h"
 #include "stages/stage_io.h"
 #include "stages/stage_results.h"
+#include "stages/training_data.h"
 
 namespace p2n {
 
@@ -175,6 +176,10 @@ fs::path BlockCheckpoint(const SplatRun& run, int b) {
 // was optimised on (none: it was not, having no splats or no view that sees it).
 fs::path BlockDoneFile(const SplatRun& run, int b) { return run.context.resume_dir / format("block{}.json", b + 1); }
 
+// The names of the training views the blocks' parts index (their order), written before the parts run: a block's job
+// checks that it reads the same views (CheckSameViews).
+fs::path BlockViewsFile(const SplatRun& run) { return run.context.resume_dir / "blocks.json"; }
+
 std::optional<nlohmann::json> BlockDone(const SplatRun& run, int b) {
   const fs::path file = BlockDoneFile(run, b);
   if (!fs::exists(file)) return std::nullopt;
@@ -262,6 +267,9 @@ Optimised OptimiseBlocks(const SplatRun& run) {
   const BlocksStart start = StartOfBlocks(whole, run.options.blocks);
   LogInfo(format("splat: {} blocks across the {} axis, each optimised from here for the rest of the budget",
                  start.blocks.count(), "xyz"[start.blocks.axis]));
+  WriteOrExplain([&] {
+    WriteJsonAtomic(BlockViewsFile(run), {{"key", run.context.key}, {"names", ViewNames(run.setup.data.train)}});
+  });
   std::vector<int> pending;  // parts: block b is part b + 1
   for (int b = 0; b < start.blocks.count(); ++b) {
     if (!BlockDone(run, b)) pending.push_back(b + 1);
@@ -283,6 +291,15 @@ Optimised OptimiseBlocks(const SplatRun& run) {
 }
 
 void OptimiseBlockAlone(const SplatRun& run, int b) {
+  const fs::path views = BlockViewsFile(run);
+  const nlohmann::json kept = fs::exists(views) ? ReadJsonFile(views) : nlohmann::json::object();
+  if (kept.value("key", "") != run.context.key) {
+    throw ExternalToolError(format(
+        "splat: block {}: the training views of the blocks ({}) are missing or not this run's; run the stage again",
+        b + 1, views.string()));
+  }
+  CheckSameViews(kept.at("names").get<std::vector<std::string>>(), run.setup.data.train,
+                 format("splat: block {}", b + 1), Upstream<PosesResult>(run.context).transforms());
   SplatTrainer whole(run.setup.gaussians, run.scene, run.trainer);
   RunState state;
   if (!LoadRunCheckpoint(CheckpointFile(run.context), run.context.key, SplatResult::kId.name, &state,

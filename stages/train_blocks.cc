@@ -12,6 +12,7 @@
 #include "nerf/field_blocks.h"
 #include "pipeline/log.h"
 #include "stages/stage_io.h"
+#include "stages/training_data.h"
 
 namespace p2n {
 namespace fs = std::filesystem;
@@ -74,7 +75,7 @@ SlabsStart CutBlocks(const TrainingSetup& setup, const Trainer& whole) {
   }
   SlabsStart start;
   start.slabs = CutIntoSlabs(all, setup.options.blocks);
-  for (const TrainView& view : setup.data.train) start.names.push_back(view.name);
+  start.names = ViewNames(setup.data.train);
   for (int b = 0; b < start.slabs.count(); ++b)
     start.views.push_back(ViewsOfSlab(seen, start.slabs, b, kSlabViewShare));
   return start;
@@ -97,22 +98,6 @@ std::optional<SlabsStart> LoadSlabsStart(const StageContext& context) {
   start.views = json->at("views").get<std::vector<std::vector<size_t>>>();
   start.names = json->value("names", std::vector<std::string>{});
   return start;
-}
-
-// UserError when the training views here are not those the blocks were cut from: a photo of the poses stage's missing
-// on this machine, whose frame transforms.json's reader leaves out, so that block b would train on other views.
-void CheckSameViews(const SlabsStart& start, const TrainingSetup& setup, int b) {
-  if (start.names.empty()) return;  // an older resume folder
-  const std::vector<TrainView>& here = setup.data.train;
-  for (size_t v = 0; v < std::max(start.names.size(), here.size()); ++v) {
-    if (v < start.names.size() && v < here.size() && here[v].name == start.names[v]) continue;
-    const std::string& name = v < start.names.size() ? start.names[v] : here[v].name;
-    throw UserError(
-        format("train: block {}: the training photos of {} here are not those the blocks were cut from ('{}', "
-               "training view {}, differs): check that every photo of the poses stage can be read on this machine "
-               "(a file system every node shares), then run the stage again",
-               b + 1, setup.transforms.string(), name, v + 1));
-  }
 }
 
 // A copy of `view` but for its pixels.
@@ -287,7 +272,7 @@ void TrainBlockAlone(const StageContext& context, int b) {
   if (b < 0 || b >= start->slabs.count()) {
     throw UserError(format("train: there is no block {} of {}", b + 1, start->slabs.count()));
   }
-  CheckSameViews(*start, setup, b);
+  CheckSameViews(start->names, setup.data.train, format("train: block {}", b + 1), setup.transforms);
   Trainer whole(setup.trainer, setup.data);
   RunState state;
   if (!LoadRunCheckpoint(CheckpointFile(context), context.key, TrainResult::kId.name, &state,

@@ -196,4 +196,24 @@ TrainingData LoadTrainingCameras(const ImportedDataset& poses, bool depth_points
   return data;
 }
 
+std::vector<std::string> ViewNames(const std::vector<TrainView>& views) {
+  std::vector<std::string> names;
+  for (const TrainView& view : views) names.push_back(view.name);
+  return names;
+}
+
+void CheckSameViews(const std::vector<std::string>& names, const std::vector<TrainView>& views, const std::string& who,
+                    const std::filesystem::path& transforms) {
+  if (names.empty()) return;
+  for (size_t v = 0; v < std::max(names.size(), views.size()); ++v) {
+    if (v < names.size() && v < views.size() && views[v].name == names[v]) continue;
+    const std::string& name = v < names.size() ? names[v] : views[v].name;
+    throw UserError(
+        format("{}: the training photos of {} here are not those the blocks were cut from ('{}', training view {}, "
+               "differs): check that every photo of the poses stage can be read on this machine (a file system "
+               "every node shares), then run the stage again",
+               who, transforms.string(), name, v + 1));
+  }
+}
+
 }  // namespace p2n

@@ -40,4 +40,12 @@ TrainingData LoadTrainingCameras(const ImportedDataset& poses, bool depth_points
 // The training views ("train" split), in the order LoadTrainingData keeps them.
 std::vector<const ImportedView*> TrainingViews(const ImportedDataset& poses);
 
+// The names of `views`, in order: what a stage's blocks keep of the training views they index (CheckSameViews).
+std::vector<std::string> ViewNames(const std::vector<TrainView>& views);
+// UserError when `views` are not those named `names`, in order: a block's job on a machine where a photo of the poses
+// stage (its `transforms`) cannot be read, whose frame transforms.json's reader leaves out, would train on other
+// views than the block's. `who` begins the message ("train: block 2"). An empty `names` (an older version's) passes.
+void CheckSameViews(const std::vector<std::string>& names, const std::vector<TrainView>& views, const std::string& who,
+                    const std::filesystem::path& transforms);
+
 }  // namespace p2n

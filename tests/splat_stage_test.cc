@@ -3,6 +3,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <functional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -143,6 +144,40 @@ TEST_CASE("splat stage: a block run cancelled in its last block resumes there, t
   CHECK(report["resumed_from_step"].get<int>() > 300);
   CHECK(report["resumed_from_step"].get<int>() < 450);
   CHECK_FALSE(fs::exists(resume));
+}
+
+TEST_CASE("splat stage: a block's job without a training photo of the blocks names it", "[splat][bad_input]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(60);
+  setup.runner.Run(setup.workspace, config, Until("train"));
+  config.Set("splat.blocks", 2, "test");
+  config.Set("splat.steps", 40, "test");
+  const fs::path poses_dir = setup.dir / "ws" / "20_poses";
+  const nlohmann::json poses = ReadJsonFile(poses_dir / "transforms.json");
+  fs::path photo;  // the first training photo: every view after it would shift
+  for (const nlohmann::json& frame : poses["frames"]) {
+    if (photo.empty() && frame["split"] == "train") photo = poses_dir / frame["file_path"].get<std::string>();
+  }
+  REQUIRE(fs::exists(photo));
+  fs::create_directories(setup.workspace.StagingDir("35_splat"));
+  size_t refused = 0;
+  StageWork work;
+  work.parts = [&](const std::string& kind, const std::vector<int>& parts, const std::function<void(int)>&) {
+    fs::rename(photo, photo.string() + ".away");
+    for (const int part : parts) {
+      StageWork job;
+      job.part = part;
+      job.work = kind;
+      CHECK_THROWS_WITH(setup.runner.RunWork(setup.workspace, config, "splat", "key", job),
+                        Catch::Contains(photo.filename().string()) && Catch::Contains("can be read on this machine"));
+      ++refused;
+    }
+    fs::rename(photo.string() + ".away", photo);
+  };
+  CHECK_THROWS_WITH(setup.runner.RunWork(setup.workspace, config, "splat", "key", work),
+                    Catch::Contains("did not finish"));
+  CHECK(refused == 2);
+  CHECK_FALSE(fs::exists(setup.dir / "ws" / "35_splat.resume" / "block1.json"));
 }
 
 TEST_CASE("splat stage: splat.enabled false writes no splats and says so", "[splat]") {
