@@ -82,7 +82,11 @@ Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace,
                      bool remember) {
   Config config(registry);
   const fs::path remembered = workspace.RememberedOptionsPath();
-  if (fs::exists(remembered)) config.Merge(ReadJsonFile(remembered), remembered.string());
+  if (fs::exists(remembered)) {  // an option another version remembered and this one does not take is left out
+    config.Merge(ReadJsonFile(remembered), remembered.string(), [](const UserError& e) {
+      LogWarning(format("{}: left out, as this version of photo2nerf does not take it", e.what()));
+    });
+  }
   if (!flags.config_file.empty()) config.MergeFile(flags.config_file);
   for (const auto& [key, text] : flags.option_text) config.SetFromText(key, text, "--" + key);
   CheckAllOptions(config);
@@ -92,10 +96,12 @@ Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace,
   return config;
 }
 
-std::string RememberedOptionsText(const Workspace& workspace) {
+std::string RememberedOptionsText(const OptionRegistry& registry, const Workspace& workspace) {
   const fs::path remembered = workspace.RememberedOptionsPath();
   if (!fs::exists(remembered)) return "";
-  const nlohmann::json options = ReadJsonFile(remembered);
+  Config config(registry);
+  config.Merge(ReadJsonFile(remembered), remembered.string(), [](const UserError&) {});  // ResolveConfig warns
+  const nlohmann::json options = config.ExplicitResultOptions();
   std::string text;
   for (const auto& [section, values] : options.items()) {
     for (const auto& [name, value] : values.items()) {

@@ -32,14 +32,16 @@ void AddCommonFlags(CLI::App& app, const OptionRegistry& registry, CommonFlags* 
 // for a malformed command line, naming the unknown option and the nearest known one.
 std::optional<int> Parse(CLI::App& app, const OptionRegistry& registry, int argc, char** argv);
 
-// The resolved configuration: defaults, then what the workspace remembers (options.json), then --config, then
-// the flags; every value checked. With `remember`, writes options.json (the result options set so far) and
+// The resolved configuration: defaults, then what the workspace remembers (options.json; an option another version
+// remembered that this one does not take is left out with a warning), then --config, then the flags; every value
+// checked. With `remember`, writes options.json (the result options set so far) and
 // config.json (everything) into the workspace.
 Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace, const CommonFlags& flags,
                      bool remember);
 
-// The options the workspace remembers (options.json), as "key value" pairs joined by ", "; "" when none.
-std::string RememberedOptionsText(const Workspace& workspace);
+// The options the workspace remembers (options.json) that this version takes, as "key value" pairs joined by ", ";
+// "" when none.
+std::string RememberedOptionsText(const OptionRegistry& registry, const Workspace& workspace);
 
 // Applies run.threads, run.log_level and run.progress and sends the log also to `log_file`. The returned
 // object keeps the thread limit alive.

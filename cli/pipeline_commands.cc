@@ -32,7 +32,7 @@ std::string CommandLine(int argc, char** argv) {
 }
 
 // What ran and how long each stage took, then where the results are and how good they are.
-void PrintRunSummary(const Workspace& workspace, const std::vector<StageRun>& runs) {
+void PrintRunSummary(const OptionRegistry& registry, const Workspace& workspace, const std::vector<StageRun>& runs) {
   size_t ran = 0;
   double seconds = 0;
   for (const StageRun& run : runs) {
@@ -44,7 +44,7 @@ void PrintRunSummary(const Workspace& workspace, const std::vector<StageRun>& ru
   for (const StageRun& run : runs) {
     LogInfo(format("  {:<8} {}", run.stage, run.ran ? format("ran in {:.1f} s", run.wall_seconds) : "fresh"));
   }
-  const std::string remembered = RememberedOptionsText(workspace);
+  const std::string remembered = RememberedOptionsText(registry, workspace);
   if (!remembered.empty()) LogInfo(format("  options the workspace remembers: {}", remembered));
   const fs::path eval = InWorkspace<RenderResult>(workspace).eval();
   if (fs::exists(eval)) {
@@ -127,7 +127,7 @@ int RunPipeline(int argc, char** argv, const std::string& stage) {
   }
 
   const std::vector<StageRun> runs = stages.Run(workspace, config, request);
-  PrintRunSummary(workspace, runs);
+  PrintRunSummary(registry, workspace, runs);
   return kExitOk;
 }
 
@@ -154,7 +154,7 @@ int RunStatus(int argc, char** argv) {
     if (kind)
       std::cout << "          a " << EnumName(*kind) << " dataset with cameras: ingest and sfm are not needed\n";
   }
-  const std::string remembered = RememberedOptionsText(workspace);
+  const std::string remembered = RememberedOptionsText(registry, workspace);
   std::cout << "options   " << (remembered.empty() ? "the defaults" : remembered)
             << (remembered.empty() ? "\n" : " (remembered from earlier commands; give another value to change one)\n");
   for (const StageStatus& status : runner.Status(workspace, config)) {

@@ -128,18 +128,27 @@ void Config::SetFromText(std::string_view key, std::string_view text, std::strin
   Set(key, std::string(text), origin);
 }
 
-void Config::Merge(const nlohmann::json& object, std::string_view origin) {
+void Config::Merge(const nlohmann::json& object, std::string_view origin,
+                   const std::function<void(const UserError&)>& refused) {
   if (!object.is_object()) throw UserError(format("{}: expected a JSON object of options", origin));
+  const auto set = [&](const std::string& key, const nlohmann::json& value) {
+    try {
+      Set(key, value, origin);
+    } catch (const UserError& e) {
+      if (!refused) throw;
+      refused(e);
+    }
+  };
   for (const auto& [name, value] : object.items()) {
     if (!value.is_object()) {
-      Set(name, value, origin);
+      set(name, value);
       continue;
     }
     for (const auto& [sub_name, sub_value] : value.items()) {
       if (sub_value.is_object()) {
         throw UserError(format("{}: option '{}.{}' is nested too deeply", origin, name, sub_name));
       }
-      Set(name + "." + sub_name, sub_value, origin);
+      set(name + "." + sub_name, sub_value);
     }
   }
 }

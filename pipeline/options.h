@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <set>
 #include <string>
@@ -28,6 +29,7 @@
 #include <vector>
 
 #include "base/enum_names.h"
+#include "base/errors.h"
 
 namespace p2n {
 
@@ -70,8 +72,11 @@ class Config {
   void Set(std::string_view key, const nlohmann::json& value, std::string_view origin);
   // Parses `text` as the option's type (as typed on a command line) and sets it.
   void SetFromText(std::string_view key, std::string_view text, std::string_view origin);
-  // Merges a JSON object, nested ({"ingest": {"max_image_size": 800}}) or flat ("ingest.max_image_size").
-  void Merge(const nlohmann::json& object, std::string_view origin);
+  // Merges a JSON object, nested ({"ingest": {"max_image_size": 800}}) or flat ("ingest.max_image_size"). An
+  // option Set refuses (an unknown key, a wrong type or choice) throws its UserError, or with `refused` is left out
+  // and passed to it.
+  void Merge(const nlohmann::json& object, std::string_view origin,
+             const std::function<void(const UserError&)>& refused = nullptr);
   // Merges a JSON config file; UserError naming the file on a parse error or an unknown key.
   void MergeFile(const std::filesystem::path& path);
 

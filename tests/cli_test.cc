@@ -76,6 +76,32 @@ TEST_CASE("cli: a run, a fresh rerun, status and clean", "[cli]") {
   CHECK(fs::exists(fs::path(ws) / "logs" / "photo2nerf.log"));
 }
 
+TEST_CASE("cli: an option the workspace remembers that this version does not take is left out, with a warning",
+          "[cli]") {
+  TempDir dir;
+  MakePhotos(dir / "photos", 3);
+  const std::string ws = (dir / "ws").string();
+  REQUIRE(Photo2Nerf({"run", (dir / "photos").string(), "-w", ws, "--until", "ingest", "--ingest.max_image_size", "16"})
+              .code == 0);
+  // What a workspace made by another version may remember: an option since removed, a choice no longer offered.
+  const fs::path options = fs::path(ws) / "options.json";
+  nlohmann::json remembered = ReadJsonFile(options);
+  remembered["train"]["no_such_option"] = 3;
+  remembered["sfm"]["matcher"] = "telepathy";
+  WriteText(options, remembered.dump());
+  const Result status = Photo2Nerf({"status", "-w", ws});
+  INFO(status.output);
+  CHECK(status.code == 0);
+  CHECK_THAT(status.output, Catch::Contains("'train.no_such_option'") && Catch::Contains("'telepathy'") &&
+                                Catch::Contains("left out"));
+  CHECK_THAT(status.output, Catch::Contains("options   ingest.max_image_size 16 (remembered") &&
+                                !Catch::Contains("matcher telepathy"));
+  const Result rerun = Photo2Nerf({"run", "-w", ws, "--until", "ingest"});
+  CHECK(rerun.code == 0);
+  CHECK_THAT(rerun.output, Catch::Contains("ingest: fresh, skipped"));
+  CHECK(ReadJsonFile(options) == nlohmann::json{{"ingest", {{"max_image_size", 16}}}});
+}
+
 TEST_CASE("cli: user errors exit 1 with a message naming what is wrong", "[cli]") {
   TempDir dir;
   MakePhotos(dir / "photos", 3);

@@ -129,6 +129,20 @@ TEST_CASE("config files: nested or dotted keys, unknown keys rejected with their
   CHECK_THROWS_WITH(config.MergeFile(dir / "missing.json"), Catch::Contains("cannot read config file"));
 }
 
+TEST_CASE("a merge that is told what to do with refused options sets the others", "[options]") {
+  const OptionRegistry registry = Registry();
+  Config config(registry);
+  std::vector<std::string> refused;
+  config.Merge(nlohmann::json{{"train", {{"stepz", 7}, {"steps", 9}, {"mode", "warp"}}}, {"train.learning_rate", 3}},
+               "remembered.json", [&](const UserError& e) { refused.push_back(e.what()); });
+  CHECK(config.Get<int>("train.steps") == 9);
+  CHECK(config.Get<double>("train.learning_rate") == 3.0);
+  CHECK(config.Get<std::string>("train.mode") == "fast");  // the default: "warp" refused
+  REQUIRE(refused.size() == 2);
+  CHECK_THAT(refused[0] + refused[1],
+             Catch::Contains("'train.stepz'") && Catch::Contains("'warp'") && Catch::Contains("remembered.json"));
+}
+
 TEST_CASE("an auto-or-number option's text: auto, a whole number, or neither", "[options]") {
   std::optional<double> value = 3.0;
   CHECK(ParseAutoOrNumber("auto", &value));
