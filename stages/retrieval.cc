@@ -16,6 +16,10 @@ namespace {
 
 constexpr std::string_view kQuery = "Querying for image ", kRetrieved = "  image_id=";
 
+// The vocabulary tree's sizes (TreeSizeFor).
+constexpr size_t kFeaturesPerWord = 64, kMinWords = 256, kMaxLinearWords = 999;
+constexpr size_t kLargeTreePhotos = 2'000, kLargeTreeMaxWords = 9'600, kTreePhotos = 30;
+
 [[noreturn]] void Unreadable(const std::string& line) {
   throw ExternalToolError(format("COLMAP's retrieval: '{}' names no photo of the database", line));
 }
@@ -61,6 +65,13 @@ void AddPicked(size_t query, const std::vector<size_t>& retrieved, const Retriev
 }
 
 }  // namespace
+
+VocabularyTreeSize TreeSizeFor(size_t photos, size_t features) {
+  const size_t words = photos < kLargeTreePhotos
+                           ? std::clamp<size_t>(photos * features / kFeaturesPerWord, kMinWords, kMaxLinearWords)
+                           : std::min<size_t>(photos * 12 / 5, kLargeTreeMaxWords);
+  return {words, std::min(photos, kTreePhotos)};  // COLMAP aborts when asked for more photos than there are
+}
 
 std::vector<std::pair<size_t, size_t>> RetrievedPairs(const std::string& answer,
                                                       const std::vector<ColmapDatabaseImage>& images,

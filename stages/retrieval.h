@@ -25,6 +25,18 @@ struct RetrievalPicks {
   size_t Candidates() const { return 1 + nearest + 4 * nearest; }
 };
 
+// The vocabulary tree retrieval searches, built from the photos themselves (COLMAP's pretrained trees are a download
+// away): its words, and the photos whose features it is clustered from.
+struct VocabularyTreeSize {
+  size_t words = 0, photos = 0;
+};
+// The tree for `photos` photos of at most `features` features each. Below 2,000 photos a word per 64 features, at most
+// 999 (FLANN, which COLMAP searches the words with, tunes an index of 1,000 words or more by trial searches that
+// cost more than the rest of such a retrieval); from 2,000, 2.4 words a photo, at most 9,600: each query scores the
+// photos that share its words, so with a fixed vocabulary the retrieval grows with the square of the photos
+// (docs/benchmarks.md, "The vocabulary tree's words" and "Retrieval at 3,000 photos"). Clustered from 30 photos.
+VocabularyTreeSize TreeSizeFor(size_t photos, size_t features);
+
 // The pairs in COLMAP's vocab_tree_retriever's printed answer: for each "Querying for image NAME [i/n]" line, the
 // lines "  image_id=ID, image_name=..., score=..." of the photos retrieved for it, those `picks` takes. As indices
 // into `images` (a database's, in name order: ColmapDatabase::Images), the smaller first, each pair once in the order

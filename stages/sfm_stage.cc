@@ -46,13 +46,9 @@ constexpr const char* kMapperTuning[] = {"--Mapper.ba_global_function_tolerance"
 // The clusters' models are aligned on the points whose reprojection errors stay under this (pixels): COLMAP's
 // model_merger's 64 admits alignments that bend the merged model by degrees where its mapper's own 4 does not.
 constexpr const char* kMergeMaxReprojectionError = "4";
-// The vocabulary tree, built from the photos themselves: a word per 64 features, clustered from up to 30 photos
-// with a narrower, shallower k-means than COLMAP's defaults (branching 256, 11 iterations, every photo), which
-// were three times slower on fox's 50 photos. At most 999 words: FLANN, which COLMAP searches the words with,
-// tunes its index of 1,000 words or more by trial searches that cost more than all the rest of the retrieval,
-// and searches fewer linearly (docs/benchmarks.md, "The vocabulary tree's words").
-constexpr size_t kFeaturesPerWord = 64, kMinWords = 256, kMaxWords = 999;
-constexpr int kTreeBranching = 16, kTreeIterations = 5, kTreeMaxImages = 30;
+// The vocabulary tree's k-means (TreeSizeFor has its size): narrower and shallower than COLMAP's defaults (branching
+// 256, 11 iterations), which were three times slower on fox's 50 photos (docs/benchmarks.md).
+constexpr int kTreeBranching = 16, kTreeIterations = 5;
 
 // Whether `photos` are mapped by COLMAP's hierarchical mapper (sfm.hierarchical_min_images).
 bool UsesHierarchicalMapper(const SfmOptions& options, size_t photos) {
@@ -221,17 +217,15 @@ struct ColmapRun {
               format("feature extraction of block {}", part));
   }
 
-  // A vocabulary tree of the photos' own features, for matching by retrieval (COLMAP's pretrained trees are a
-  // download away; a few hundred photos' features are plenty to cluster).
+  // A vocabulary tree of the photos' own features, for matching by retrieval.
   fs::path BuildVocabularyTree(size_t photos) const {
     const fs::path tree = out.vocab_tree();
-    const size_t words = std::clamp<size_t>(photos * options.max_num_features / kFeaturesPerWord, kMinWords, kMaxWords);
+    const VocabularyTreeSize size = TreeSizeFor(photos, static_cast<size_t>(options.max_num_features));
     steps->Run("vocabulary tree",
                {options.colmap, "vocab_tree_builder", "--database_path", database().string(), "--vocab_tree_path",
-                tree.string(), "--num_visual_words", std::to_string(words), "--branching",
+                tree.string(), "--num_visual_words", std::to_string(size.words), "--branching",
                 std::to_string(kTreeBranching), "--num_iterations", std::to_string(kTreeIterations), "--max_num_images",
-                std::to_string(std::min<size_t>(kTreeMaxImages, photos)),  // COLMAP aborts when it is above them
-                "--random_seed", seed});
+                std::to_string(size.photos), "--random_seed", seed});
     return tree;
   }
 

@@ -123,4 +123,20 @@ TEST_CASE("retrieval: the nearest photos retrieved, and more spread through the 
   CHECK(RetrievedPairs(answer, images, {20, 5}).size() == 12);
 }
 
+TEST_CASE("retrieval: the vocabulary tree's words grow with the photos from 2,000", "[sfm]") {
+  using Size = std::pair<size_t, size_t>;
+  const auto size = [](size_t photos, size_t features) {
+    const VocabularyTreeSize tree = TreeSizeFor(photos, features);
+    return Size{tree.words, tree.photos};
+  };
+  CHECK(size(5, 1'000) == Size{256, 5});         // 78 by the features, at least 256; the photos there are
+  CHECK(size(20, 2'048) == Size{640, 20});       // a word per 64 features
+  CHECK(size(300, 2'048) == Size{999, 30});      // below FLANN's tuned index
+  CHECK(size(1'999, 2'048) == Size{999, 30});    // the last below 2,000 photos
+  CHECK(size(2'000, 2'048) == Size{4'800, 30});  // 2.4 a photo
+  CHECK(size(3'000, 512) == Size{7'200, 30});    // whatever the features
+  CHECK(size(4'000, 2'048) == Size{9'600, 30});  // at most 9,600
+  CHECK(size(20'000, 2'048) == Size{9'600, 30});
+}
+
 }  // namespace p2n::testing
