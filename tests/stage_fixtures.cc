@@ -1,5 +1,8 @@
 #include "stage_fixtures.h"
 
+#include <functional>
+#include <stdexcept>
+
 #include "base/file_util.h"
 #include "nerf/synthetic_scene.h"
 #include "stages/stages.h"
@@ -45,6 +48,42 @@ StageStatus StageWorkspace::Status(const Config& config, const std::string& stag
     if (status.stage->name() == stage) return status;
   }
   throw std::invalid_argument("no stage " + stage);
+}
+
+std::filesystem::path StageWorkspace::FirstTrainingPhoto() const {
+  const std::filesystem::path poses = dir / "ws" / "20_poses";
+  const nlohmann::json transforms = ReadJsonFile(poses / "transforms.json");
+  for (const nlohmann::json& frame : transforms["frames"]) {
+    if (frame["split"] == "train") return poses / frame["file_path"].get<std::string>();
+  }
+  throw std::invalid_argument("no training photo in " + poses.string());
+}
+
+StageWorkspace::JobsRun StageWorkspace::RunJobsWithout(const Config& config, const std::string& stage,
+                                                       const std::string& folder, const std::filesystem::path& photo) {
+  const auto error = [](const std::function<void()>& run) {
+    try {
+      run();
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  std::filesystem::create_directories(workspace.StagingDir(folder));
+  JobsRun out;
+  StageWork work;
+  work.parts = [&](const std::string& kind, const std::vector<int>& parts, const std::function<void(int)>&) {
+    std::filesystem::rename(photo, photo.string() + ".away");
+    for (const int part : parts) {
+      StageWork job;
+      job.part = part;
+      job.work = kind;
+      out.jobs.push_back(error([&] { runner.RunWork(workspace, config, stage, "key", job); }));
+    }
+    std::filesystem::rename(photo.string() + ".away", photo);
+  };
+  out.stage = error([&] { runner.RunWork(workspace, config, stage, "key", work); });
+  return out;
 }
 
 RunRequest Until(const std::string& stage) {

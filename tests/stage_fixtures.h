@@ -2,6 +2,8 @@
 // A small dataset with cameras and a workspace on it, for the tests of the stages after poses.
 
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "pipeline/options.h"
 #include "pipeline/runner.h"
@@ -25,6 +27,16 @@ struct StageWorkspace {
   Runner runner;
   // The status of one stage.
   StageStatus Status(const Config& config, const std::string& stage) const;
+  // The first training photo of the poses stage (which must have run).
+  std::filesystem::path FirstTrainingPhoto() const;
+  // Runs `stage` (output folder `folder`) with its parts run as a scheduler's jobs would (RunWork with each part)
+  // while `photo` is moved away: what each job threw ("" when it did not), and what the stage threw.
+  struct JobsRun {
+    std::vector<std::string> jobs;
+    std::string stage;
+  };
+  JobsRun RunJobsWithout(const Config& config, const std::string& stage, const std::string& folder,
+                         const std::filesystem::path& photo);
 };
 
 // A request that runs the stages up to `stage`.
