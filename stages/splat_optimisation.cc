@@ -181,11 +181,7 @@ fs::path BlockDoneFile(const SplatRun& run, int b) { return run.context.resume_d
 fs::path BlockViewsFile(const SplatRun& run) { return run.context.resume_dir / "blocks.json"; }
 
 std::optional<nlohmann::json> BlockDone(const SplatRun& run, int b) {
-  const fs::path file = BlockDoneFile(run, b);
-  if (!fs::exists(file)) return std::nullopt;
-  const nlohmann::json done = ReadJsonFile(file);
-  if (done.value("key", "") != run.context.key) return std::nullopt;
-  return done;
+  return OfThisRun(run.context, BlockDoneFile(run, b));
 }
 
 // Block b's part: its splats optimised from where the whole part ended for the rest of the budget, on the views that
@@ -291,14 +287,13 @@ Optimised OptimiseBlocks(const SplatRun& run) {
 }
 
 void OptimiseBlockAlone(const SplatRun& run, int b) {
-  const fs::path views = BlockViewsFile(run);
-  const nlohmann::json kept = fs::exists(views) ? ReadJsonFile(views) : nlohmann::json::object();
-  if (kept.value("key", "") != run.context.key) {
+  const std::optional<nlohmann::json> kept = OfThisRun(run.context, BlockViewsFile(run));
+  if (!kept) {
     throw ExternalToolError(format(
         "splat: block {}: the training views of the blocks ({}) are missing or not this run's; run the stage again",
-        b + 1, views.string()));
+        b + 1, BlockViewsFile(run).string()));
   }
-  CheckSameViews(kept.at("names").get<std::vector<std::string>>(), run.setup.data.train,
+  CheckSameViews(kept->at("names").get<std::vector<std::string>>(), run.setup.data.train,
                  format("splat: block {}", b + 1), Upstream<PosesResult>(run.context).transforms());
   SplatTrainer whole(run.setup.gaussians, run.scene, run.trainer);
   RunState state;

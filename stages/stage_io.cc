@@ -1,6 +1,7 @@
 #include "stages/stage_io.h"
 
 #include "base/errors.h"
+#include "base/file_util.h"
 #include "base/format.h"
 
 namespace p2n {
@@ -30,6 +31,13 @@ TrainedField ReadTrainedField(const TrainResult& train) {
   TrainedField field{LoadTrainedModel(train.model()), TrainReport::Read(train.report()), {}};
   field.corrections = CameraCorrections(field.report.camera_refinement, train.report());
   return field;
+}
+
+std::optional<nlohmann::json> OfThisRun(const StageContext& context, const std::filesystem::path& path) {
+  if (!std::filesystem::exists(path)) return std::nullopt;
+  nlohmann::json json = ReadJsonFile(path);
+  if (json.value("key", "") != context.key) return std::nullopt;
+  return json;
 }
 
 }  // namespace p2n

@@ -4,8 +4,12 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
+
+#include <nlohmann/json.hpp>
 
 #include "nerf/nerf_model.h"
+#include "pipeline/stage.h"
 #include "stages/camera_corrections.h"
 #include "stages/stage_reports.h"
 #include "stages/stage_results.h"
@@ -15,6 +19,10 @@ namespace p2n {
 // Runs `write`; a std::runtime_error from it (a full disk, a file-size limit, a read-only folder) becomes a
 // UserError that adds what to check. UserErrors pass unchanged.
 void WriteOrExplain(const std::function<void()>& write);
+
+// The JSON file `path` (a resume folder's) when it was written for this very result (its "key" is the context's),
+// else nothing.
+std::optional<nlohmann::json> OfThisRun(const StageContext& context, const std::filesystem::path& path);
 
 // LoadModel, with a damaged or foreign file reported as a UserError that says how to remake it.
 NerfModel LoadTrainedModel(const std::filesystem::path& model_bin);

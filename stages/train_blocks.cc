@@ -40,14 +40,6 @@ fs::path SlabCheckpoint(const StageContext& context, int b) {
 // Written when block b's part has finished: the key of the result, its steps and seconds.
 fs::path SlabDoneFile(const StageContext& context, int b) { return context.resume_dir / format("block{}.json", b + 1); }
 
-// The file `path` when it was written for this very result (its "key"), else nothing.
-std::optional<nlohmann::json> OfThisRun(const StageContext& context, const fs::path& path) {
-  if (!fs::exists(path)) return std::nullopt;
-  nlohmann::json json = ReadJsonFile(path);
-  if (json.value("key", "") != context.key) return std::nullopt;
-  return json;
-}
-
 // The training views with their cameras as the whole part left them (corrected where it refined them), without
 // their pixels: what the surface is looked for from.
 std::vector<TrainView> CorrectedCameras(const TrainingData& data, const Trainer& whole) {
