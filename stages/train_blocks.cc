@@ -11,6 +11,7 @@
 #include "nerf/camera_refinement.h"
 #include "nerf/field_blocks.h"
 #include "pipeline/log.h"
+#include "stages/photo_memory.h"
 #include "stages/stage_io.h"
 #include "stages/training_data.h"
 
@@ -124,16 +125,8 @@ struct BlockData {
 // The window over a block's training views (`indices` of the setup's) and the decoded copy it reads from.
 void MakeBlockWindow(const TrainingSetup& setup, const std::vector<size_t>& indices, const fs::path& folder,
                      BlockData* block) {
-  PhotoWindow::Loader read;
-  if (setup.photos) {
-    read = [photos = setup.photos, indices](size_t v) { return photos->Read(indices[v]); };
-  } else {
-    std::vector<size_t> sizes;
-    for (const TrainView& view : block->data.train) sizes.push_back(view.PixelBytes());
-    block->photos = DecodePhotos(
-        folder, sizes, [&](size_t v) { return setup.read_photo(indices[v]); }, "train: decoding the block's photos");
-    read = [photos = block->photos](size_t v) { return photos->Read(v); };
-  }
+  const PhotoWindow::Loader read = SubsetReader(block->data.train, indices, setup.photos, setup.read_photo, folder,
+                                                "train: decoding the block's photos", &block->photos);
   block->window = std::make_unique<PhotoWindow>(&block->data.train, read, PhotoMemoryBytes(setup.options),
                                                 static_cast<uint64_t>(setup.options.seed));
 }

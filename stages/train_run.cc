@@ -10,7 +10,7 @@
 #include "formats/dataset_import.h"
 #include "pipeline/cancel.h"
 #include "pipeline/log.h"
-#include "pipeline/progress.h"
+#include "stages/photo_memory.h"
 #include "stages/stage_io.h"
 #include "stages/training_data.h"
 
@@ -19,7 +19,6 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr int kMaxConsecutiveSkips = 50;
-constexpr double kBytesPerMB = 1 << 20;  // train.photo_memory's unit
 
 // A window over the training photos when LoadTrainingData left their pixels out (they would take more than
 // train.photo_memory), reading them from a file in `folder` they are decoded into first (by `decode`); none when they
@@ -31,18 +30,12 @@ void MakePhotoWindow(const PhotoWindow::Loader& decode, const fs::path& folder, 
   std::vector<size_t> sizes;
   for (const TrainView& view : data->train) sizes.push_back(view.PixelBytes());
   const double bytes = std::accumulate(sizes.begin(), sizes.end(), 0.0);
-  size_t size = 0;
-  try {
-    size = PhotoWindow::WindowSize(data->train, PhotoMemoryBytes(options));
-  } catch (const std::invalid_argument& e) {
-    throw UserError(
-        format("{} is {} MB: {}; raise it", OptionKey(options, options.photo_memory), options.photo_memory, e.what()));
-  }
+  const size_t size = CheckedWindowSize(data->train, options.photo_memory, OptionKey(options, options.photo_memory));
   LogInfo(
       format("train: the {} training photos would take {:.1f} MB, more than {} ({} MB): {} at a time in memory, "
              "read from their decoded copy in {}",
-             data->train.size(), bytes / kBytesPerMB, OptionKey(options, options.photo_memory), options.photo_memory,
-             size, folder.string()));
+             data->train.size(), bytes / MegabytesToBytes(1), OptionKey(options, options.photo_memory),
+             options.photo_memory, size, folder.string()));
   setup->photos = DecodePhotos(folder, sizes, decode, "train: decoding the photos");
   setup->read_photo = [photos = setup->photos](size_t v) { return photos->Read(v); };
   setup->window = std::make_unique<PhotoWindow>(&data->train, setup->read_photo, PhotoMemoryBytes(options),
@@ -50,17 +43,6 @@ void MakePhotoWindow(const PhotoWindow::Loader& decode, const fs::path& folder, 
 }
 
 }  // namespace
-
-std::shared_ptr<const DecodedPhotos> DecodePhotos(const fs::path& folder, const std::vector<size_t>& sizes,
-                                                  const PhotoWindow::Loader& decode, const std::string& label) {
-  fs::create_directories(folder);
-  Progress progress(label, static_cast<int64_t>(sizes.size()), "images");
-  return std::make_shared<const DecodedPhotos>(folder, sizes, [&](size_t v) {
-    std::vector<uint8_t> pixels = decode(v);
-    progress.Add();
-    return pixels;
-  });
-}
 
 void LoadTrainingSetup(const StageContext& context, TrainingSetup* setup, SetupPhotos photos) {
   setup->options = ReadOptions<TrainOptions>(context.config);
@@ -98,7 +80,7 @@ void LoadTrainingSetup(const StageContext& context, TrainingSetup* setup, SetupP
   setup->trainer.learn_background = background == BackgroundChoice::kLearnt || (automatic && learn_when_auto);
 }
 
-double PhotoMemoryBytes(const TrainOptions& options) { return options.photo_memory * kBytesPerMB; }
+double PhotoMemoryBytes(const TrainOptions& options) { return MegabytesToBytes(options.photo_memory); }
 
 void CheckCancel(size_t) { ThrowIfCancelled(); }
 

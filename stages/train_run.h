@@ -65,10 +65,6 @@ void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptio
                     const std::filesystem::path& checkpoint, const std::string& key, PhotoWindow* window,
                     RunState* state, SessionLog* session);
 
-// Photos of `sizes` bytes decoded by `decode` into a file in `folder` (made if missing), with a progress line `label`.
-std::shared_ptr<const DecodedPhotos> DecodePhotos(const std::filesystem::path& folder, const std::vector<size_t>& sizes,
-                                                  const PhotoWindow::Loader& decode, const std::string& label);
-
 // train.photo_memory in bytes.
 double PhotoMemoryBytes(const TrainOptions& options);
 

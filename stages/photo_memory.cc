@@ -1,0 +1,46 @@
+#include "stages/photo_memory.h"
+
+#include <stdexcept>
+
+#include "base/errors.h"
+#include "base/format.h"
+#include "pipeline/progress.h"
+
+namespace p2n {
+
+namespace fs = std::filesystem;
+
+double MegabytesToBytes(double megabytes) { return megabytes * (1 << 20); }
+
+size_t CheckedWindowSize(const std::vector<TrainView>& views, double megabytes, const std::string& option) {
+  try {
+    return PhotoWindow::WindowSize(views, MegabytesToBytes(megabytes));
+  } catch (const std::invalid_argument& e) {
+    throw UserError(format("{} is {} MB: {}; raise it", option, megabytes, e.what()));
+  }
+}
+
+std::shared_ptr<const DecodedPhotos> DecodePhotos(const fs::path& folder, const std::vector<size_t>& sizes,
+                                                  const PhotoWindow::Loader& decode, const std::string& label) {
+  fs::create_directories(folder);
+  Progress progress(label, static_cast<int64_t>(sizes.size()), "images");
+  return std::make_shared<const DecodedPhotos>(folder, sizes, [&](size_t v) {
+    std::vector<uint8_t> pixels = decode(v);
+    progress.Add();
+    return pixels;
+  });
+}
+
+PhotoWindow::Loader SubsetReader(const std::vector<TrainView>& subset, const std::vector<size_t>& indices,
+                                 const std::shared_ptr<const DecodedPhotos>& photos, const PhotoWindow::Loader& read,
+                                 const fs::path& folder, const std::string& label,
+                                 std::shared_ptr<const DecodedPhotos>* own) {
+  if (photos) return [photos, indices](size_t v) { return photos->Read(indices[v]); };
+  std::vector<size_t> sizes;
+  for (const TrainView& view : subset) sizes.push_back(view.PixelBytes());
+  *own = DecodePhotos(
+      folder, sizes, [&](size_t v) { return read(indices[v]); }, label);
+  return [copy = *own](size_t v) { return copy->Read(v); };
+}
+
+}  // namespace p2n

@@ -1,0 +1,34 @@
+#pragma once
+// Training photos too many for memory (more than a stage's photo_memory, in MB): a window over them
+// (base/photo_window.h) reading from their decoded copy (base/decoded_photos.h). What the train and splat stages and
+// their blocks share.
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "base/decoded_photos.h"
+#include "base/photo_window.h"
+
+namespace p2n {
+
+// A photo_memory setting (MB) in bytes.
+double MegabytesToBytes(double megabytes);
+
+// PhotoWindow::WindowSize of `views` within `megabytes`, or a UserError naming `option` when they hold too few.
+size_t CheckedWindowSize(const std::vector<TrainView>& views, double megabytes, const std::string& option);
+
+// Photos of `sizes` bytes decoded by `decode` into a file in `folder` (made if missing), with a progress line `label`.
+std::shared_ptr<const DecodedPhotos> DecodePhotos(const std::filesystem::path& folder, const std::vector<size_t>& sizes,
+                                                  const PhotoWindow::Loader& decode, const std::string& label);
+
+// What a window over `subset` (views `indices` of a set of training photos, whose view v `read` reads) reads view i
+// with: the set's decoded copy `photos` where there is one, else a copy of the subset's own decoded into `folder`
+// (kept in `own`: a block's job reads no photo but its block's).
+PhotoWindow::Loader SubsetReader(const std::vector<TrainView>& subset, const std::vector<size_t>& indices,
+                                 const std::shared_ptr<const DecodedPhotos>& photos, const PhotoWindow::Loader& read,
+                                 const std::filesystem::path& folder, const std::string& label,
+                                 std::shared_ptr<const DecodedPhotos>* own);
+
+}  // namespace p2n
