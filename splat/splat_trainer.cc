@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <sstream>
 
 #include <opencv2/imgproc.hpp>
@@ -97,6 +98,7 @@ void SplatTrainer::Restrict(const std::vector<bool>& keep, const Gaussians<float
   scene_.context = context;
   scene_.views = views;
   order_.clear();  // an epoch of the new views begins
+  sample_.clear();
 }
 
 void SplatTrainer::RemapAdams(const std::vector<int64_t>& sources) {
@@ -114,10 +116,25 @@ void SplatTrainer::SetViews(const std::vector<TrainView>* views, double scale) {
   view_scale_ = scale;
 }
 
+void SplatTrainer::SampleFrom(const std::vector<size_t>& views) {
+  for (const size_t v : views) {
+    if (v >= scene_.views->size()) throw std::invalid_argument("SplatTrainer::SampleFrom: a view that is not there");
+  }
+  sample_ = views;
+  if (sample_.empty()) return;
+  std::vector<bool> in(scene_.views->size(), false);
+  for (const size_t v : sample_) in[v] = true;
+  std::erase_if(order_, [&](size_t v) { return !in[v]; });
+}
+
 const TrainView& SplatTrainer::NextView() {
   if (order_.empty()) {
-    order_.resize(scene_.views->size());
-    for (size_t i = 0; i < order_.size(); ++i) order_[i] = i;
+    if (sample_.empty()) {
+      order_.resize(scene_.views->size());
+      std::iota(order_.begin(), order_.end(), size_t{0});
+    } else {
+      order_ = sample_;
+    }
     std::shuffle(order_.begin(), order_.end(), random_);
   }
   const size_t view = order_.back();
@@ -127,6 +144,9 @@ const TrainView& SplatTrainer::NextView() {
 
 double SplatTrainer::Step() {
   const TrainView& view = NextView();
+  if (view.pixels.size() != view.PixelBytes()) {
+    throw std::logic_error("SplatTrainer: training view " + view.name + " has no pixels (not in the photo window)");
+  }
   RasterOptions raster;
   raster.projection.near = scene_.near;
   raster.projection.sh_degree = ShDegree();
@@ -336,62 +356,66 @@ FloatImage RenderSplats(const Gaussians<float>& gaussians, const PinholeCamera& 
   return FloatImage{camera.width, camera.height, 3, rasterizer.rgb()};
 }
 
-std::vector<TrainView> HalfSizeViews(const std::vector<TrainView>& views) {
-  std::vector<TrainView> half;
-  for (const TrainView& view : views) {
-    const int w = view.camera.width / 2, ht = view.camera.height / 2, c = view.channels;
-    if (w < 1 || ht < 1)
-      throw std::invalid_argument("HalfSizeViews: a view of " + std::to_string(view.camera.width) + "x" +
-                                  std::to_string(view.camera.height) + " pixels");
-    TrainView h{view.camera, view.near, view.far, c, {}, view.name, {}};
-    h.camera.width = w, h.camera.height = ht;
-    h.camera.fx /= 2, h.camera.fy /= 2, h.camera.cx /= 2, h.camera.cy /= 2;
-    h.pixels.assign(size_t(w) * ht * c, 0);
-    for (int y = 0; y < ht; ++y) {
-      for (int x = 0; x < w; ++x) {
-        for (int k = 0; k < c; ++k) {
-          int sum = 2;  // rounds
-          for (int dy = 0; dy < 2; ++dy) {
-            for (int dx = 0; dx < 2; ++dx)
-              sum += view.pixels[(size_t(2 * y + dy) * view.camera.width + 2 * x + dx) * c + k];
-          }
-          h.pixels[(size_t(y) * w + x) * c + k] = static_cast<uint8_t>(sum / 4);
+TrainView HalfSizeView(const TrainView& view) {
+  const int w = view.camera.width / 2, ht = view.camera.height / 2, c = view.channels;
+  if (w < 1 || ht < 1)
+    throw std::invalid_argument("HalfSizeViews: a view of " + std::to_string(view.camera.width) + "x" +
+                                std::to_string(view.camera.height) + " pixels");
+  TrainView h{view.camera, view.near, view.far, c, {}, view.name, {}};
+  h.camera.width = w, h.camera.height = ht;
+  h.camera.fx /= 2, h.camera.fy /= 2, h.camera.cx /= 2, h.camera.cy /= 2;
+  if (view.pixels.empty()) return h;
+  h.pixels.assign(size_t(w) * ht * c, 0);
+  for (int y = 0; y < ht; ++y) {
+    for (int x = 0; x < w; ++x) {
+      for (int k = 0; k < c; ++k) {
+        int sum = 2;  // rounds
+        for (int dy = 0; dy < 2; ++dy) {
+          for (int dx = 0; dx < 2; ++dx)
+            sum += view.pixels[(size_t(2 * y + dy) * view.camera.width + 2 * x + dx) * c + k];
         }
+        h.pixels[(size_t(y) * w + x) * c + k] = static_cast<uint8_t>(sum / 4);
       }
     }
-    half.push_back(std::move(h));
   }
+  return h;
+}
+
+std::vector<TrainView> HalfSizeViews(const std::vector<TrainView>& views) {
+  std::vector<TrainView> half;
+  for (const TrainView& view : views) half.push_back(HalfSizeView(view));
   return half;
+}
+
+double FitScale(const std::vector<TrainView>& views, int max_side) {
+  int longest = 0;
+  for (const TrainView& view : views) longest = std::max({longest, view.camera.width, view.camera.height});
+  return max_side <= 0 || longest <= max_side ? 1.0 : static_cast<double>(max_side) / longest;
+}
+
+TrainView FittedView(const TrainView& view, double scale, std::vector<uint8_t> pixels) {
+  if (!pixels.empty() && pixels.size() != view.PixelBytes())
+    throw std::invalid_argument("FittedViews: " + view.name + "'s size");
+  if (scale == 1)
+    return {view.camera, view.near, view.far, view.channels, std::move(pixels), view.name, view.depth_points};
+  const int width = std::max(1, static_cast<int>(std::lround(view.camera.width * scale)));
+  const int height = std::max(1, static_cast<int>(std::lround(view.camera.height * scale)));
+  TrainView small{ResizedCamera(view.camera, width, height), view.near, view.far, view.channels, {}, view.name, {}};
+  if (pixels.empty()) return small;
+  small.pixels.resize(size_t(width) * height * view.channels);
+  const cv::Mat source(view.camera.height, view.camera.width, CV_8UC(view.channels), pixels.data());
+  cv::Mat target(height, width, CV_8UC(view.channels), small.pixels.data());
+  cv::resize(source, target, target.size(), 0, 0, cv::INTER_AREA);
+  return small;
 }
 
 std::vector<TrainView> FittedViews(const std::vector<TrainView>& views, int max_side,
                                    const std::function<std::vector<uint8_t>(size_t)>& pixels) {
-  int longest = 0;
-  for (const TrainView& view : views) longest = std::max({longest, view.camera.width, view.camera.height});
-  const bool as_they_are = max_side <= 0 || longest <= max_side;
-  if (as_they_are && !pixels) return views;
-  const double scale = as_they_are ? 1.0 : static_cast<double>(max_side) / longest;
+  const double scale = FitScale(views, max_side);
+  if (scale == 1 && !pixels) return views;
   std::vector<TrainView> fitted(views.size());
-  tbb::parallel_for(size_t{0}, views.size(), [&](size_t i) {
-    const TrainView& view = views[i];
-    std::vector<uint8_t> read;
-    const std::vector<uint8_t>& source_pixels = pixels ? (read = pixels(i)) : view.pixels;
-    if (source_pixels.size() != view.PixelBytes()) throw std::invalid_argument("FittedViews: " + view.name + "'s size");
-    if (as_they_are) {
-      fitted[i] = view;
-      fitted[i].pixels = std::move(read);
-      return;
-    }
-    const int width = std::max(1, static_cast<int>(std::lround(view.camera.width * scale)));
-    const int height = std::max(1, static_cast<int>(std::lround(view.camera.height * scale)));
-    TrainView small{ResizedCamera(view.camera, width, height), view.near, view.far, view.channels, {}, view.name, {}};
-    small.pixels.resize(size_t(width) * height * view.channels);
-    const cv::Mat source(view.camera.height, view.camera.width, CV_8UC(view.channels),
-                         const_cast<uint8_t*>(source_pixels.data()));
-    cv::Mat target(height, width, CV_8UC(view.channels), small.pixels.data());
-    cv::resize(source, target, target.size(), 0, 0, cv::INTER_AREA);
-    fitted[i] = std::move(small);
-  });
+  tbb::parallel_for(size_t{0}, views.size(),
+                    [&](size_t i) { fitted[i] = FittedView(views[i], scale, pixels ? pixels(i) : views[i].pixels); });
   return fitted;
 }
 

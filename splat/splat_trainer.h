@@ -75,6 +75,9 @@ class SplatTrainer {
   // them, a pixel of the shown size's, so that they learn the look they have there: with a pixel of the smaller
   // views', thin splats widened by it would be thinner, and the picture eroded, where it is shown.
   void SetViews(const std::vector<TrainView>* views, double scale);
+  // Draws the next views from `views` alone (indices of the training views; those a window over the photos holds,
+  // base/photo_window.h), the epoch under way going on with those of its views among them; empty: from all of them.
+  void SampleFrom(const std::vector<size_t>& views);
   // The share of the run done (0..1) from the next step on; without it, step / options.steps. A run bounded by
   // time sets it from its clock, so that densification ends halfway through whatever number of steps the time
   // buys, and the Gaussians it adds are optimised before the end.
@@ -120,18 +123,25 @@ class SplatTrainer {
   double progress_ = -1;   // SetProgress's share; negative: by steps
   double view_scale_ = 1;  // SetViews's scale
   std::mt19937_64 random_;
-  std::vector<size_t> order_;  // this epoch's views; the next is order_.back()
+  std::vector<size_t> order_;   // this epoch's views; the next is order_.back()
+  std::vector<size_t> sample_;  // SampleFrom's views; empty: all
   std::vector<float> screen_gradient_sum_;
   std::vector<uint32_t> screen_gradient_count_;
 };
 
-// `views` at half their size (odd last rows and columns dropped): each pixel the mean of four, the cameras'
-// intrinsics halved exactly. For the coarse first part of an optimisation: many more steps for the time.
+// `view` at half its size (odd last rows and columns dropped): each pixel the mean of four, the camera's intrinsics
+// halved exactly; without pixels where it has none. For the coarse first part of an optimisation: many more steps for
+// the time.
+TrainView HalfSizeView(const TrainView& view);
 std::vector<TrainView> HalfSizeViews(const std::vector<TrainView>& views);
 
-// `views` downsized with an area filter, their intrinsics scaled per axis (ResizedCamera), so that the longest side of
-// the largest is `max_side` (0, or all of them smaller: as they are). With `pixels`, view i's pixels are pixels(i)
-// (its own are absent), read as it is fitted: at most one photo a thread is in memory at full size.
+// The scale that fits the longest side of the largest of `views` to `max_side` (0, or all of them smaller: 1).
+double FitScale(const std::vector<TrainView>& views, int max_side);
+// `view` at `scale` (FitScale's), its intrinsics scaled per axis (ResizedCamera), its pixels `pixels` (of its own size,
+// or none: it has none) downsized with an area filter.
+TrainView FittedView(const TrainView& view, double scale, std::vector<uint8_t> pixels);
+// `views` fitted to `max_side` (FitScale, FittedView). With `pixels`, view i's pixels are pixels(i) (its own are
+// absent), read as it is fitted: at most one photo a thread is in memory at full size.
 std::vector<TrainView> FittedViews(const std::vector<TrainView>& views, int max_side,
                                    const std::function<std::vector<uint8_t>(size_t)>& pixels = {});
 

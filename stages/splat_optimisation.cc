@@ -1,7 +1,10 @@
 #include "stages/splat_optimisation.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <chrono>
+#include <numeric>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -14,6 +17,7 @@
 #include "pipeline/cancel.h"
 #include "pipeline/log.h"
 #include "splat/blocks.h"
+#include "stages/photo_memory.h"
 #include "stages/stage_io.h"
 #include "stages/stage_results.h"
 #include "stages/training_data.h"
@@ -60,22 +64,94 @@ struct Part {
   int start_step = 0;
 };
 
-// Optimises on `views` until the part's share of the budget (seconds, else steps) is spent: a metrics row (its
+// The training views an optimisation runs on: the setup's, or some of them (a block's) with their pixels copied or
+// read; or, where those would take more than splat.photo_memory, a window over them.
+struct ViewsInUse {
+  const std::vector<TrainView>* views = nullptr;
+  std::vector<TrainView> own;                   // some of the setup's
+  std::shared_ptr<const DecodedPhotos> photos;  // their own decoded copy, for the window (a block's job)
+  std::unique_ptr<PhotoWindow> window;          // over `own`
+
+  ViewsInUse() = default;
+  ViewsInUse(const ViewsInUse&) = delete;
+  ViewsInUse& operator=(const ViewsInUse&) = delete;
+};
+
+// The training views `indices` without their pixels.
+std::vector<TrainView> Cameras(const SplatRun& run, const std::vector<size_t>& indices) {
+  std::vector<TrainView> views;
+  for (const size_t v : indices) {
+    const TrainView& view = run.setup.data.train[v];
+    views.push_back({view.camera, view.near, view.far, view.channels, {}, view.name, {}});
+  }
+  return views;
+}
+
+// The training views `indices` (none: all of them) with their pixels, or a window over them, into `use`.
+void UseViews(const SplatRun& run, std::optional<std::vector<size_t>> indices, ViewsInUse* use) {
+  const SplatSetup& setup = run.setup;
+  const bool in_memory = !setup.data.train.front().pixels.empty();
+  if (!indices && in_memory) {
+    use->views = &setup.data.train;
+    return;
+  }
+  if (!indices) {
+    indices.emplace(setup.data.train.size());
+    std::iota(indices->begin(), indices->end(), size_t{0});
+  }
+  use->own = Cameras(run, *indices);
+  use->views = &use->own;
+  const double memory = MegabytesToBytes(run.options.photo_memory);
+  double bytes = 0;
+  for (const TrainView& view : use->own) bytes += view.PixelBytes();
+  if (in_memory || bytes <= memory) {
+    tbb::parallel_for(size_t{0}, indices->size(), [&](size_t i) {
+      const size_t v = (*indices)[i];
+      use->own[i].pixels = in_memory      ? setup.data.train[v].pixels
+                           : setup.photos ? setup.photos->Read(v)
+                                          : setup.read_photo(v);
+    });
+    return;
+  }
+  const PhotoWindow::Loader read =
+      SubsetReader(use->own, *indices, setup.photos, setup.read_photo, run.context.resume_dir,
+                   "splat: decoding the block's photos", &use->photos);
+  use->window = std::make_unique<PhotoWindow>(&use->own, read, memory, static_cast<uint64_t>(run.options.seed));
+}
+
+// The half-size views of the photos a window holds: those it took in halved, those it let go dropped.
+void FollowWindow(const std::vector<TrainView>& views, std::vector<TrainView>* coarse) {
+  for (size_t v = 0; v < views.size(); ++v) {
+    if (views[v].pixels.empty()) {
+      std::vector<uint8_t>().swap((*coarse)[v].pixels);
+    } else if ((*coarse)[v].pixels.empty()) {
+      (*coarse)[v] = HalfSizeView(views[v]);
+    }
+  }
+}
+
+// Optimises on `use`'s views until the part's share of the budget (seconds, else steps) is spent: a metrics row (its
 // steps and seconds the part's own) at every evaluation but the last (the caller's final evaluation makes it),
-// checkpoints in `checkpoint`.
-void OptimiseUntilDone(const SplatRun& run, SplatTrainer& trainer, const std::vector<TrainView>& views,
-                       const fs::path& checkpoint, const Part& part, RunState* state) {
+// checkpoints in `checkpoint`. With a window over the views, each step draws from those it holds then.
+void OptimiseUntilDone(const SplatRun& run, SplatTrainer& trainer, const ViewsInUse& use, const fs::path& checkpoint,
+                       const Part& part, RunState* state) {
   const SplatOptions& options = run.options;
   const double width = part.to - part.from;
   const int steps = options.steps > 0 ? std::max(1, static_cast<int>(std::lround(options.steps * width))) : 0;
   const RunLoop loop{SplatResult::kId.name,      run.budget * width, steps, options.eval_interval, 1, false,
                      options.checkpoint_interval};
-  const std::vector<TrainView> coarse = options.coarse > 0 ? HalfSizeViews(views) : std::vector<TrainView>{};
+  const std::vector<TrainView>& views = *use.views;
+  std::vector<TrainView> coarse = options.coarse > 0 ? HalfSizeViews(views) : std::vector<TrainView>{};
   const auto step = [&](double share) -> std::optional<double> {
     const double progress = part.from + share * width;
     const bool in_coarse =
         !coarse.empty() && InCoarsePart(options.coarse, progress, trainer.step(), run.setup.data.train.size());
     trainer.SetViews(in_coarse ? &coarse : &views, in_coarse ? 0.5 : 1.0);
+    if (!in_coarse) std::vector<TrainView>().swap(coarse);  // the coarse part is over for good
+    if (use.window && use.window->MoveTo(trainer.step())) {
+      trainer.SampleFrom(use.window->resident());
+      if (!coarse.empty()) FollowWindow(views, &coarse);
+    }
     trainer.SetProgress(progress);
     return trainer.Step();
   };
@@ -92,17 +168,17 @@ void OptimiseUntilDone(const SplatRun& run, SplatTrainer& trainer, const std::ve
       state, [&] { return trainer.step() - part.start_step; }, step, add_row, save);
 }
 
-// Optimises with `trainer` on `views` for `part` of the run, resuming from `checkpoint` where it holds this run;
+// Optimises with `trainer` on `use`'s views for `part` of the run, resuming from `checkpoint` where it holds this run;
 // saves one there at the end when `checkpoint_at_end` (the next part begins from it).
-Optimised OptimisePart(const SplatRun& run, SplatTrainer& trainer, const std::vector<TrainView>& views,
-                       const fs::path& checkpoint, const Part& part, bool checkpoint_at_end) {
+Optimised OptimisePart(const SplatRun& run, SplatTrainer& trainer, const ViewsInUse& use, const fs::path& checkpoint,
+                       const Part& part, bool checkpoint_at_end) {
   Optimised out;
   const std::string& key = run.context.key;
   const bool resumed =
       LoadRunCheckpoint(checkpoint, key, SplatResult::kId.name, &out.state, [&](BinaryReader* r) { trainer.Load(r); });
   out.resumed_from = resumed ? trainer.step() - part.start_step : 0;
   if (out.resumed_from > 0) LogInfo(format("splat: resumed at step {} from {}", trainer.step(), checkpoint.string()));
-  OptimiseUntilDone(run, trainer, views, checkpoint, part, &out.state);
+  OptimiseUntilDone(run, trainer, use, checkpoint, part, &out.state);
   if (checkpoint_at_end) {
     WriteOrExplain([&] { SaveRunCheckpoint(checkpoint, key, out.state, [&](BinaryWriter* w) { trainer.Save(w); }); });
   }
@@ -162,13 +238,6 @@ BlocksStart StartOfBlocks(const SplatTrainer& whole, int count) {
   return start;
 }
 
-// The training views of `indices`.
-std::vector<TrainView> TrainViews(const SplatRun& run, const std::vector<size_t>& indices) {
-  std::vector<TrainView> views;
-  for (const size_t v : indices) views.push_back(run.setup.data.train[v]);
-  return views;
-}
-
 fs::path BlockCheckpoint(const SplatRun& run, int b) {
   return run.context.resume_dir / format("checkpoint_block{}.bin", b + 1);
 }
@@ -196,7 +265,8 @@ void OptimiseBlock(const SplatRun& run, const BlocksStart& start, int b) {
   if (splats == 0) seeing.clear();
   int resumed_from = 0;
   if (!seeing.empty()) {
-    const std::vector<TrainView> views = TrainViews(run, seeing);
+    ViewsInUse use;
+    UseViews(run, seeing, &use);
     Gaussians<float> others = start.splats;
     keep.flip();
     others.Filter(keep);
@@ -204,9 +274,9 @@ void OptimiseBlock(const SplatRun& run, const BlocksStart& start, int b) {
     SplatTrainer trainer(start.splats, run.scene, run.trainer);
     BinaryReader reader(start.trainer.buffer(), "the splats optimised whole");
     trainer.Load(&reader);
-    trainer.Restrict(keep, &others, &views);
+    trainer.Restrict(keep, &others, use.views);
     resumed_from =
-        OptimisePart(run, trainer, views, BlockCheckpoint(run, b), {kWholeShare, 1, start.step}, true).resumed_from;
+        OptimisePart(run, trainer, use, BlockCheckpoint(run, b), {kWholeShare, 1, start.step}, true).resumed_from;
   }
   WriteOrExplain([&] {
     WriteJsonAtomic(BlockDoneFile(run, b),
@@ -230,7 +300,7 @@ Optimised FinishedBlock(const SplatRun& run, const BlocksStart& start, int b, bo
     out.splats.Filter(InBlock(start.splats, start.blocks, b));
     return out;
   }
-  const std::vector<TrainView> views = TrainViews(run, seeing);
+  const std::vector<TrainView> views = Cameras(run, seeing);
   SplatScene scene = run.scene;
   scene.views = &views;
   Gaussians<float> none;
@@ -252,14 +322,19 @@ Optimised FinishedBlock(const SplatRun& run, const BlocksStart& start, int b, bo
 
 Optimised OptimiseWhole(const SplatRun& run) {
   SplatTrainer trainer(run.setup.gaussians, run.scene, run.trainer);
-  return OptimisePart(run, trainer, run.setup.data.train, CheckpointFile(run.context), {},
-                      run.options.checkpoint_interval > 0);
+  ViewsInUse use;
+  UseViews(run, std::nullopt, &use);
+  return OptimisePart(run, trainer, use, CheckpointFile(run.context), {}, run.options.checkpoint_interval > 0);
 }
 
 Optimised OptimiseBlocks(const SplatRun& run) {
   SplatTrainer whole(run.setup.gaussians, run.scene, run.trainer);
   Optimised total;
-  AddPart(OptimisePart(run, whole, run.setup.data.train, CheckpointFile(run.context), {0, kWholeShare}, true), &total);
+  {
+    ViewsInUse use;  // let go before the blocks read theirs
+    UseViews(run, std::nullopt, &use);
+    AddPart(OptimisePart(run, whole, use, CheckpointFile(run.context), {0, kWholeShare}, true), &total);
+  }
   const BlocksStart start = StartOfBlocks(whole, run.options.blocks);
   LogInfo(format("splat: {} blocks across the {} axis, each optimised from here for the rest of the budget",
                  start.blocks.count(), "xyz"[start.blocks.axis]));

@@ -4,8 +4,12 @@
 // checkpoints that a killed run resumes from.
 
 #include <array>
+#include <memory>
+#include <optional>
 #include <vector>
 
+#include "base/decoded_photos.h"
+#include "base/photo_window.h"
 #include "base/posed_image.h"
 #include "formats/output_frame.h"
 #include "pipeline/stage.h"
@@ -30,6 +34,13 @@ struct SplatSetup {
   // (PlacedSplats; densification may double it or splat.max_gaussians, whichever is more).
   double view_share = 1;
   size_t max_placed = 0;
+  // Training view v's pixels, fitted to splat.max_image_size, read from its file. Where the training photos would
+  // take more than splat.photo_memory, `data` holds none of them: `photos` is their decoded copy, which windows over
+  // them read (none in a block's job, which reads its block's photos alone), and `views_in_memory` the whole
+  // optimisation's window's size.
+  PhotoWindow::Loader read_photo;
+  std::shared_ptr<const DecodedPhotos> photos;
+  std::optional<size_t> views_in_memory;
 };
 
 // What every optimisation of one stage run shares.

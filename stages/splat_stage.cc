@@ -1,6 +1,9 @@
 #include "stages/splat_stage.h"
 
+#include <tbb/parallel_for.h>
+
 #include <cmath>
+#include <numeric>
 #include <optional>
 
 #include "base/errors.h"
@@ -22,6 +25,7 @@
 #include "splat/spz.h"
 #include "stages/camera_corrections.h"
 #include "stages/fit_checks.h"
+#include "stages/photo_memory.h"
 #include "stages/splat_optimisation.h"
 #include "stages/splat_viewer.h"
 #include "stages/stage_io.h"
@@ -56,6 +60,7 @@ void SplatOptions::Check() const {
   CheckOption(*this, ssim_weight, ssim_weight >= 0 && ssim_weight <= 1, "must be 0..1");
   CheckOption(*this, eval_interval, eval_interval > 0, "must be positive");
   CheckOption(*this, checkpoint_interval, checkpoint_interval >= 0, "must be 0 (none) or positive");
+  CheckOption(*this, photo_memory, photo_memory > 0 && std::isfinite(photo_memory), "must be positive");
 }
 
 double SplatTimeBudget(const SplatOptions& options, PresetName train_preset) {
@@ -143,17 +148,42 @@ void PlaceSplats(const StageContext& context, const SplatOptions& options, const
   setup->max_placed = cap;
 }
 
-// The training photos of `poses` read into `views` (their cameras as the splats see them), each fitted to `max_side`
-// as it is read (FittedViews).
-std::vector<TrainView> LoadFittedViews(const ImportedDataset& poses, const std::vector<TrainView>& views,
-                                       int max_side) {
-  const std::vector<const ImportedView*> train = TrainingViews(poses);
-  Progress progress("splat: loading the training images", static_cast<int64_t>(train.size()), "images");
-  return FittedViews(views, max_side, [&](size_t v) {
-    std::vector<uint8_t> pixels = LoadTrainView(*train[v]).pixels;
-    progress.Add();
-    return pixels;
-  });
+// The training views of `poses` (in `setup`, their cameras as the splats see them) fitted to splat.max_image_size
+// (FittedView), and SplatSetup::read_photo, which reads one from its file as it is fitted. `load`: every photo read
+// now, into memory, or where they would take more than splat.photo_memory into a decoded copy in the stage's resume
+// folder (SplatSetup::photos) that windows over them read.
+void LoadFittedPhotos(const StageContext& context, std::shared_ptr<const ImportedDataset> poses,
+                      const SplatOptions& options, bool load, SplatSetup* setup) {
+  std::vector<TrainView>& views = setup->data.train;
+  const double scale = FitScale(views, options.max_image_size);
+  std::vector<TrainView> full;  // without pixels
+  for (TrainView& view : views) {
+    full.push_back(view);
+    view = FittedView(view, scale, {});
+  }
+  setup->read_photo = [poses, train = TrainingViews(*poses), full = std::move(full), scale](size_t v) {
+    return FittedView(full[v], scale, LoadTrainView(*train[v]).pixels).pixels;
+  };
+  if (!load) return;
+  std::vector<size_t> sizes;
+  for (const TrainView& view : views) sizes.push_back(view.PixelBytes());
+  const double bytes = std::accumulate(sizes.begin(), sizes.end(), 0.0);
+  if (bytes <= MegabytesToBytes(options.photo_memory)) {
+    Progress progress("splat: loading the training images", static_cast<int64_t>(views.size()), "images");
+    tbb::parallel_for(size_t{0}, views.size(), [&](size_t v) {
+      views[v].pixels = setup->read_photo(v);
+      progress.Add();
+    });
+    return;
+  }
+  const std::string option = OptionKey(options, options.photo_memory);
+  setup->views_in_memory = CheckedWindowSize(views, options.photo_memory, option);
+  LogInfo(
+      format("splat: the {} training photos would take {:.1f} MB, more than {} ({} MB): {} at a time in memory, "
+             "read from their decoded copy in {}",
+             views.size(), bytes / MegabytesToBytes(1), option, options.photo_memory, *setup->views_in_memory,
+             context.resume_dir.string()));
+  setup->photos = DecodePhotos(context.resume_dir, sizes, setup->read_photo, "splat: decoding the photos");
 }
 
 // The splats' world; `place`: the first splats too (a block's part begins from the whole part's instead).
@@ -163,7 +193,9 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   const TrainResult train = Upstream<TrainResult>(context);
   const TrainedField trained = ReadTrainedField(train);
   const NerfModel& model = trained.model;
-  const ImportedDataset poses = LoadTransformsJson(poses_result.transforms(), context.workspace.root());
+  const auto dataset =
+      std::make_shared<const ImportedDataset>(LoadTransformsJson(poses_result.transforms(), context.workspace.root()));
+  const ImportedDataset& poses = *dataset;
   setup.data = LoadTrainingData(poses, false, /*photo_bytes=*/0);  // the training photos' pixels as they are fitted
   setup.background = model.background;
   setup.field_psnr = trained.report.heldout_psnr;
@@ -188,7 +220,7 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
   // Large photos are optimised downsized (splat.max_image_size): more steps on fewer pixels score better at full
   // size (docs/benchmarks.md, splats).
   const int full_width = setup.data.train.front().camera.width;
-  setup.data.train = LoadFittedViews(poses, setup.data.train, options.max_image_size);
+  LoadFittedPhotos(context, dataset, options, /*load=*/place, &setup);
   if (setup.data.train.front().camera.width != full_width) {
     LogInfo(format("splat: optimised on the photos at {}x{} ({} {})", setup.data.train.front().camera.width,
                    setup.data.train.front().camera.height, OptionKey(options, options.max_image_size),
@@ -211,6 +243,7 @@ SplatReport MakeSplatReport(const Optimised& optimised, const SplatSetup& setup,
   report.seconds = optimised.state.seconds;
   report.resumed_from_step = optimised.resumed_from;
   report.heldout_views = setup.data.heldout.size();
+  report.training_views_in_memory = setup.views_in_memory;
   if (!setup.data.heldout.empty()) {
     report.heldout_psnr = Mean(scores.psnr);
     report.heldout_ssim = Mean(scores.ssim);

@@ -46,6 +46,7 @@ struct SplatOptions {
   FrameKind frame = FrameKind::kSource;
   double eval_interval = 30;  // seconds of optimisation between held-out evaluations (each of every held-out view)
   double checkpoint_interval = 60;
+  double photo_memory = 2048;  // MB the training photos may take; beyond it a window over them (photo_window.h)
   int seed = 0;
 
   template <class V>
@@ -89,6 +90,10 @@ struct SplatOptions {
     v("eval_interval", eval_interval, "optimisation time between held-out evaluations (metrics.csv rows)", "s");
     v("checkpoint_interval", checkpoint_interval, "time between checkpoints that a killed run resumes from; 0: none",
       "s", OptionKind::kRuntime);
+    v("photo_memory", photo_memory,
+      "memory the training photos (at splat.max_image_size) may take; when they would take more, a window over them "
+      "is kept in memory, moving on every few steps, the next photos read from disk while the splats are optimised",
+      "MB");
     v("seed", seed, "random seed (view order, splits)");
   }
   void Check() const;

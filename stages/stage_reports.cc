@@ -469,6 +469,7 @@ void Describe(S& s, SplatReport& report) {
   s("seconds", report.seconds);
   s("resumed_from_step", report.resumed_from_step);
   s("heldout_views", report.heldout_views);
+  s.Optional("training_views_in_memory", report.training_views_in_memory);
   s("heldout_psnr", report.heldout_psnr);
   s("heldout_ssim", report.heldout_ssim);
   s("heldout_psnr_per_view", report.heldout_psnr_per_view);

@@ -204,6 +204,8 @@ struct SplatReport {
   int sh_degree = 0, steps = 0, resumed_from_step = 0;
   double seconds = 0;  // of optimisation
   size_t heldout_views = 0;
+  // The training photos in memory at once when they did not all fit (splat.photo_memory); none when all were.
+  std::optional<size_t> training_views_in_memory;
   std::optional<double> heldout_psnr, heldout_ssim;  // none without held-out views
   std::vector<double> heldout_psnr_per_view;
   double seconds_per_view = 0;  // rendering a held-out view on the CPU

@@ -161,6 +161,86 @@ TEST_CASE("splat stage: a block's job without a training photo of the blocks nam
   CHECK_FALSE(fs::exists(setup.dir / "ws" / "35_splat.resume" / "block1.json"));
 }
 
+// Ten training photos of 64 x 48 x 3 bytes (9 KB); 0.06 MB hold six: a window of four and one being read.
+TEST_CASE("splat stage: photos beyond splat.photo_memory are optimised through a window, a resumed run alike",
+          "[splat]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(60);
+  setup.runner.Run(setup.workspace, config, Until("train"));
+  config.Set("splat.steps", 1000, "test");  // a second or so: the resumed run's canceller sees a checkpoint first
+  config.Set("splat.eval_interval", 1e6, "test");
+  const fs::path out = setup.dir / "ws" / "35_splat";
+  setup.runner.Run(setup.workspace, config, Until("splat"));
+  const nlohmann::json in_memory = ReadJsonFile(out / "splat_report.json");
+  CHECK(in_memory["training_views_in_memory"].is_null());
+
+  config.Set("splat.photo_memory", 0.06, "test");
+  setup.runner.Run(setup.workspace, config, Until("splat"));
+  const nlohmann::json report = ReadJsonFile(out / "splat_report.json");
+  CHECK(report["training_views_in_memory"] == 4);
+  CHECK(report["steps"] == 1000);
+  CHECK(report["heldout_psnr"].get<double>() > in_memory["heldout_psnr"].get<double>() - 1.5);
+  const std::string windowed = ReadTextFile(out / "splats.ply");
+
+  // Cancelled at a checkpoint and resumed: the window stands where it stood, the same photos make the same splats.
+  config.Set("splat.checkpoint_interval", 0.05, "test");
+  RunRequest again = Until("splat");
+  again.force = {"splat"};
+  const fs::path checkpoint = setup.dir / "ws" / "35_splat.resume" / "checkpoint.bin";
+  std::thread canceller([&] {
+    while (!fs::exists(checkpoint)) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    RequestCancel();
+  });
+  CHECK_THROWS_AS(setup.runner.Run(setup.workspace, config, again), Cancelled);
+  canceller.join();
+  ResetCancel();
+  setup.runner.Run(setup.workspace, config, again);
+  CHECK(ReadJsonFile(out / "splat_report.json")["resumed_from_step"].get<int>() > 0);
+  CHECK(ReadTextFile(out / "splats.ply") == windowed);
+
+  SECTION("a budget of fewer than five photos is refused, naming the option") {
+    config.Set("splat.photo_memory", 0.03, "test");
+    CHECK_THROWS_WITH(setup.runner.Run(setup.workspace, config, Until("splat")),
+                      Catch::Contains("splat.photo_memory is 0.03 MB") && Catch::Contains("raise it"));
+  }
+}
+
+// In turn, the blocks' windows read the whole part's decoded copy; as a scheduler's jobs, each job reads its block's
+// photos from their files (into a decoded copy of its own where they take more than splat.photo_memory).
+TEST_CASE("splat stage: by blocks beyond splat.photo_memory, in turn and as jobs, the same splats", "[splat][blocks]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(60);
+  setup.runner.Run(setup.workspace, config, Until("train"));
+  config.Set("splat.blocks", 2, "test");
+  config.Set("splat.steps", 120, "test");
+  config.Set("splat.photo_memory", 0.06, "test");
+  const fs::path staging = setup.workspace.StagingDir("35_splat");
+  const auto run = [&](bool jobs) {
+    fs::remove_all(setup.workspace.ResumeDir("35_splat"));
+    fs::create_directories(staging);
+    StageWork work;
+    work.parts = [&](const std::string& kind, const std::vector<int>& parts, const std::function<void(int)>& here) {
+      for (const int part : parts) {
+        if (!jobs) {
+          here(part);
+          continue;
+        }
+        StageWork job;
+        job.part = part;
+        job.work = kind;
+        setup.runner.RunWork(setup.workspace, config, "splat", "key", job);
+      }
+    };
+    setup.runner.RunWork(setup.workspace, config, "splat", "key", work);
+    const nlohmann::json report = ReadJsonFile(staging / "splat_report.json");
+    CHECK(report["training_views_in_memory"] == 4);
+    CHECK(report["steps"] == 180);  // 60 whole, then 60 a block
+    return ReadTextFile(staging / "splats.ply");
+  };
+  const std::string in_turn = run(false);
+  CHECK(run(true) == in_turn);
+}
+
 TEST_CASE("splat stage: splat.enabled false writes no splats and says so", "[splat]") {
   StageWorkspace setup;
   Config config = SmallStageConfig(30);

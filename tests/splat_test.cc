@@ -231,6 +231,12 @@ TEST_CASE("Views at half size: each pixel the mean of four, every point where th
       }
     }
   }
+  // A view without pixels (not in a photo window): its camera halved alone.
+  view.pixels.clear();
+  const TrainView empty = HalfSizeView(view);
+  CHECK(empty.camera.fx == h.camera.fx);
+  CHECK(empty.camera.width == 2);
+  CHECK(empty.pixels.empty());
   for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.2, 0.1, -0.3)}) {
     double z_full = 0, z_half = 0;
     const Eigen::Vector2d full = Project(view.camera, p, &z_full), halved = Project(h.camera, p, &z_half);
@@ -373,6 +379,26 @@ TEST_CASE("A splat checkpoint keeps densification's cap: a trainer made with ano
   resumed.Load(&reader);
   for (int s = 1; s < 4; ++s) resumed.Step();
   CHECK(resumed.gaussians().size() == truth.size() + 5);
+}
+
+// A photo window holds some views' pixels (base/photo_window.h): a view without them would throw if it were drawn.
+TEST_CASE("Splat optimisation draws its views from those it is given, the epoch under way going on with them",
+          "[splat]") {
+  const Gaussians<float> truth = RandomSplats(20, 0, 5);
+  std::vector<TrainView> views = ViewsOf(truth, 6, {1, 1, 1}, Eigen::Vector3d::Zero(), 16);
+  const SplatScene scene{&views, {1, 1, 1}, 2.5, 0.01};
+  SplatTrainer trainer(truth, scene, SplatTrainerOptions{});
+  trainer.Step();  // an epoch of all six begins
+  for (const size_t v : {0, 3, 5}) views[v].pixels.clear();
+  trainer.SampleFrom({1, 2, 4});
+  for (int s = 0; s < 30; ++s) CHECK_NOTHROW(trainer.Step());  // the rest of the epoch, then epochs of the three
+  CHECK_THROWS_AS(trainer.SampleFrom({6}), std::invalid_argument);
+  trainer.SampleFrom({});  // all of them again
+  CHECK_THROWS_WITH(
+      [&] {
+        for (int s = 0; s < 12; ++s) trainer.Step();
+      }(),
+      Catch::Contains("has no pixels"));
 }
 
 TEST_CASE("Splats optimised on the photos at half size look as they should at full size", "[splat]") {
