@@ -1,7 +1,5 @@
 #include "splat/splat_trainer.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -395,7 +393,7 @@ double FitScale(const std::vector<TrainView>& views, int max_side) {
 
 TrainView FittedView(const TrainView& view, double scale, std::vector<uint8_t> pixels) {
   if (!pixels.empty() && pixels.size() != view.PixelBytes())
-    throw std::invalid_argument("FittedViews: " + view.name + "'s size");
+    throw std::invalid_argument("FittedView: " + view.name + "'s pixels are not of its size");
   if (scale == 1)
     return {view.camera, view.near, view.far, view.channels, std::move(pixels), view.name, view.depth_points};
   const int width = std::max(1, static_cast<int>(std::lround(view.camera.width * scale)));
@@ -407,16 +405,6 @@ TrainView FittedView(const TrainView& view, double scale, std::vector<uint8_t> p
   cv::Mat target(height, width, CV_8UC(view.channels), small.pixels.data());
   cv::resize(source, target, target.size(), 0, 0, cv::INTER_AREA);
   return small;
-}
-
-std::vector<TrainView> FittedViews(const std::vector<TrainView>& views, int max_side,
-                                   const std::function<std::vector<uint8_t>(size_t)>& pixels) {
-  const double scale = FitScale(views, max_side);
-  if (scale == 1 && !pixels) return views;
-  std::vector<TrainView> fitted(views.size());
-  tbb::parallel_for(size_t{0}, views.size(),
-                    [&](size_t i) { fitted[i] = FittedView(views[i], scale, pixels ? pixels(i) : views[i].pixels); });
-  return fitted;
 }
 
 }  // namespace p2n

@@ -8,7 +8,6 @@
 
 #include <array>
 #include <cstdint>
-#include <functional>
 #include <random>
 #include <vector>
 
@@ -140,10 +139,6 @@ double FitScale(const std::vector<TrainView>& views, int max_side);
 // `view` at `scale` (FitScale's), its intrinsics scaled per axis (ResizedCamera), its pixels `pixels` (of its own size,
 // or none: it has none) downsized with an area filter.
 TrainView FittedView(const TrainView& view, double scale, std::vector<uint8_t> pixels);
-// `views` fitted to `max_side` (FitScale, FittedView). With `pixels`, view i's pixels are pixels(i) (its own are
-// absent), read as it is fitted: at most one photo a thread is in memory at full size.
-std::vector<TrainView> FittedViews(const std::vector<TrainView>& views, int max_side,
-                                   const std::function<std::vector<uint8_t>(size_t)>& pixels = {});
 
 // The Gaussians' image of `camera` over `background`: an RGB FloatImage.
 FloatImage RenderSplats(const Gaussians<float>& gaussians, const PinholeCamera& camera,

@@ -175,7 +175,7 @@ TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points, d
     for (const TrainView& view : data.train) bytes += view.PixelBytes();
     if (bytes > photo_bytes) loaded = 0;
   }
-  Progress progress("train: loading images", static_cast<int64_t>(loaded + heldout.size()), "images");
+  Progress progress("loading images", static_cast<int64_t>(loaded + heldout.size()), "images");
   tbb::parallel_for(size_t{0}, loaded + heldout.size(), [&](size_t i) {
     if (i < loaded) {
       data.train[i] = LoadTrainView(*train[i]);

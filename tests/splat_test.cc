@@ -258,39 +258,36 @@ TEST_CASE("Views fitted to a size: the largest's longest side at the size, each 
       }
     }
   }
-  const std::vector<TrainView> fitted = FittedViews({large, small}, 20);  // by half exactly
-  REQUIRE(fitted.size() == 2);
-  CHECK(fitted[0].camera.width == 20);
-  CHECK(fitted[0].camera.height == 15);
-  CHECK(fitted[1].camera.width == 10);
-  CHECK(fitted[0].camera.fx == Approx(large.camera.fx / 2));
-  CHECK(fitted[0].camera.cy == Approx(large.camera.cy / 2));
+  const std::vector<TrainView> both = {large, small};
+  CHECK(FitScale(both, 20) == 0.5);  // by half exactly
+  const TrainView fitted = FittedView(large, 0.5, large.pixels);
+  CHECK(fitted.camera.width == 20);
+  CHECK(fitted.camera.height == 15);
+  CHECK(FittedView(small, 0.5, small.pixels).camera.width == 10);
+  CHECK(fitted.camera.fx == Approx(large.camera.fx / 2));
+  CHECK(fitted.camera.cy == Approx(large.camera.cy / 2));
+  REQUIRE(fitted.pixels.size() == fitted.PixelBytes());
   for (int y = 0; y < 15; ++y) {
     for (int x = 0; x < 20; ++x) {
       const double mean = 6 * x + 4 * y + 22.5;  // of the four pixels' green values
-      CHECK(std::abs(fitted[0].pixels[(size_t(y) * 20 + x) * 3 + 1] - mean) <= 0.5);
+      CHECK(std::abs(fitted.pixels[(size_t(y) * 20 + x) * 3 + 1] - mean) <= 0.5);
     }
   }
-  const std::vector<TrainView> odd = FittedViews({large}, 16);  // by 0.4: 16 x 12
-  CHECK(odd[0].camera.width == 16);
-  CHECK(odd[0].camera.height == 12);
-  CHECK(odd[0].camera.fy == Approx(large.camera.fy * 0.4));
-  CHECK(FittedViews({large}, 40)[0].camera.width == 40);
-  CHECK(FittedViews({large}, 0)[0].camera.width == 40);
+  CHECK(FitScale({large}, 16) == Approx(0.4));
+  const TrainView odd = FittedView(large, 0.4, large.pixels);  // 16 x 12
+  CHECK(odd.camera.width == 16);
+  CHECK(odd.camera.height == 12);
+  CHECK(odd.camera.fy == Approx(large.camera.fy * 0.4));
+  CHECK(FitScale({large}, 40) == 1);
+  CHECK(FitScale({large}, 0) == 1);
+  CHECK(FittedView(large, 1, large.pixels).pixels == large.pixels);
 
-  // The pixels read as each view is fitted (the views without theirs): the same views.
-  std::vector<TrainView> without = {large, small};
-  for (TrainView& view : without) view.pixels.clear();
-  const auto read = [&](size_t i) { return (i == 0 ? large : small).pixels; };
-  for (const int side : {20, 0}) {
-    const std::vector<TrainView> expected = FittedViews({large, small}, side);
-    const std::vector<TrainView> as_read = FittedViews(without, side, read);
-    REQUIRE(as_read.size() == 2);
-    for (size_t i = 0; i < 2; ++i) {
-      CHECK(as_read[i].camera.width == expected[i].camera.width);
-      CHECK(as_read[i].pixels == expected[i].pixels);
-    }
-  }
+  // Without its pixels (a photo read later, as it is fitted): the same camera, no pixels.
+  const TrainView camera = FittedView(large, 0.5, {});
+  CHECK(camera.camera.width == fitted.camera.width);
+  CHECK(camera.camera.fx == fitted.camera.fx);
+  CHECK(camera.pixels.empty());
+  CHECK_THROWS_AS(FittedView(large, 0.5, small.pixels), std::invalid_argument);  // another photo's pixels
 }
 
 TEST_CASE("SSIM of the splats' loss: 1 for the photo itself, its gradient against central differences", "[splat]") {
