@@ -216,22 +216,26 @@ TEST_CASE("faults: a full disk in the splat stage names its file and keeps the t
   CHECK(fs::exists(workspace / "35_splat" / "splats.ply"));
 }
 
+// The field's window and the splats'.
 TEST_CASE("faults: a full disk while the training photos are decoded for a window names the folder", "[fault]") {
+  const std::string stage = GENERATE(as<std::string>{}, "train", "splat");
+  const std::string before = stage == "train" ? "poses" : "train";
+  const std::string folder = stage == "train" ? "30_train" : "35_splat";
   TempDir dir;
   const fs::path data = SmallDataset(dir), workspace = dir / "ws";
   std::string output;
-  REQUIRE(RunCommand(RunArgsUntil(data, workspace, "poses"), &output) == 0);
-  // Ten training photos of 9 KiB: 0.06 MB of train.photo_memory hold six, and their decoded copy takes 90 KiB.
-  std::vector<std::string> windowed = RunArgsUntil(data, workspace, "train");
-  windowed.insert(windowed.end(), {"--train.photo_memory", "0.06"});
+  REQUIRE(RunCommand(RunArgsUntil(data, workspace, before), &output) == 0);
+  // Ten training photos of 9 KiB: 0.06 MB of photo_memory hold six, and their decoded copy takes 90 KiB.
+  std::vector<std::string> windowed = RunArgsUntil(data, workspace, stage);
+  windowed.insert(windowed.end(), {"--" + stage + ".photo_memory", "0.06"});
   CHECK(RunCommand(WithFileSizeLimit(16, windowed), &output) == 1);
   INFO(output);
-  CHECK_THAT(output, Catch::Contains("decoded photos") && Catch::Contains("30_train.resume") &&
+  CHECK_THAT(output, Catch::Contains("decoded photos") && Catch::Contains(folder + ".resume") &&
                          Catch::Contains("File too large") && Catch::Contains("free space"));
-  CHECK(fs::is_empty(workspace / "30_train.resume"));  // the copy had no name: nothing is left of it
+  CHECK(fs::is_empty(workspace / (folder + ".resume")));  // the copy had no name: nothing is left of it
   REQUIRE(RunCommand(windowed, &output) == 0);
-  CHECK_THAT(output, Catch::Contains("poses: fresh, skipped"));
-  CHECK(ReadJsonFile(workspace / "30_train" / "train_report.json")["training_views_in_memory"] == 4);
+  CHECK_THAT(output, Catch::Contains(before + ": fresh, skipped"));
+  CHECK(ReadJsonFile(workspace / folder / (stage + "_report.json"))["training_views_in_memory"] == 4);
 }
 
 TEST_CASE("faults: a full disk in the export stage names its file and keeps the splats and renders", "[fault]") {
