@@ -198,11 +198,10 @@ TEST_CASE("splat stage: photos beyond splat.photo_memory are optimised through a
   CHECK(ReadJsonFile(out / "splat_report.json")["resumed_from_step"].get<int>() > 0);
   CHECK(ReadTextFile(out / "splats.ply") == windowed);
 
-  SECTION("a budget of fewer than five photos is refused, naming the option") {
-    config.Set("splat.photo_memory", 0.03, "test");
-    CHECK_THROWS_WITH(setup.runner.Run(setup.workspace, config, Until("splat")),
-                      Catch::Contains("splat.photo_memory is 0.03 MB") && Catch::Contains("raise it"));
-  }
+  // A budget of fewer than five photos is refused, naming the option.
+  config.Set("splat.photo_memory", 0.03, "test");
+  CHECK_THROWS_WITH(setup.runner.Run(setup.workspace, config, Until("splat")),
+                    Catch::Contains("splat.photo_memory is 0.03 MB") && Catch::Contains("raise it"));
 }
 
 // In turn, the blocks' windows read the whole part's decoded copy; as a scheduler's jobs, each job reads its block's
