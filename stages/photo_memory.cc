@@ -1,9 +1,11 @@
 #include "stages/photo_memory.h"
 
+#include <numeric>
 #include <stdexcept>
 
 #include "base/errors.h"
 #include "base/format.h"
+#include "pipeline/log.h"
 #include "pipeline/progress.h"
 
 namespace p2n {
@@ -11,14 +13,6 @@ namespace p2n {
 namespace fs = std::filesystem;
 
 double MegabytesToBytes(double megabytes) { return megabytes * (1 << 20); }
-
-size_t CheckedWindowSize(const std::vector<TrainView>& views, double megabytes, const std::string& option) {
-  try {
-    return PhotoWindow::WindowSize(views, MegabytesToBytes(megabytes));
-  } catch (const std::invalid_argument& e) {
-    throw UserError(format("{} is {} MB: {}; raise it", option, megabytes, e.what()));
-  }
-}
 
 std::shared_ptr<const DecodedPhotos> DecodePhotos(const fs::path& folder, const std::vector<size_t>& sizes,
                                                   const PhotoWindow::Loader& decode, const std::string& label) {
@@ -29,6 +23,25 @@ std::shared_ptr<const DecodedPhotos> DecodePhotos(const fs::path& folder, const 
     progress.Add();
     return pixels;
   });
+}
+
+WindowedPhotos DecodeForWindow(const std::vector<TrainView>& views, double megabytes, const std::string& option,
+                               const std::string& stage, const fs::path& folder, const PhotoWindow::Loader& decode) {
+  WindowedPhotos out;
+  try {
+    out.window = PhotoWindow::WindowSize(views, MegabytesToBytes(megabytes));
+  } catch (const std::invalid_argument& e) {
+    throw UserError(format("{} is {} MB: {}; raise it", option, megabytes, e.what()));
+  }
+  std::vector<size_t> sizes;
+  for (const TrainView& view : views) sizes.push_back(view.PixelBytes());
+  const double bytes = std::accumulate(sizes.begin(), sizes.end(), 0.0);
+  LogInfo(
+      format("{}: the {} training photos would take {:.1f} MB, more than {} ({} MB): {} at a time in memory, "
+             "read from their decoded copy in {}",
+             stage, views.size(), bytes / MegabytesToBytes(1), option, megabytes, out.window, folder.string()));
+  out.photos = DecodePhotos(folder, sizes, decode, stage + ": decoding the photos");
+  return out;
 }
 
 PhotoWindow::Loader SubsetReader(const std::vector<TrainView>& subset, const std::vector<size_t>& indices,

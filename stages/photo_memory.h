@@ -16,8 +16,17 @@ namespace p2n {
 // A photo_memory setting (MB) in bytes.
 double MegabytesToBytes(double megabytes);
 
-// PhotoWindow::WindowSize of `views` within `megabytes`, or a UserError naming `option` when they hold too few.
-size_t CheckedWindowSize(const std::vector<TrainView>& views, double megabytes, const std::string& option);
+// Training photos beyond a stage's photo_memory: the size of a window over them, and their decoded copy.
+struct WindowedPhotos {
+  size_t window = 0;
+  std::shared_ptr<const DecodedPhotos> photos;
+};
+// For `views` (without their pixels), which take more than `megabytes` (the option `option` of stage `stage`): the
+// window's size (PhotoWindow::WindowSize; a UserError naming the option when it holds too few), said in the log, and
+// their copy decoded by `decode` into `folder`.
+WindowedPhotos DecodeForWindow(const std::vector<TrainView>& views, double megabytes, const std::string& option,
+                               const std::string& stage, const std::filesystem::path& folder,
+                               const PhotoWindow::Loader& decode);
 
 // Photos of `sizes` bytes decoded by `decode` into a file in `folder` (made if missing), with a progress line `label`.
 std::shared_ptr<const DecodedPhotos> DecodePhotos(const std::filesystem::path& folder, const std::vector<size_t>& sizes,

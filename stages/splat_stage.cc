@@ -3,7 +3,6 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
-#include <numeric>
 #include <optional>
 
 #include "base/errors.h"
@@ -165,9 +164,8 @@ void LoadFittedPhotos(const StageContext& context, std::shared_ptr<const Importe
     return FittedView(full[v], scale, LoadTrainView(*train[v]).pixels).pixels;
   };
   if (!load) return;
-  std::vector<size_t> sizes;
-  for (const TrainView& view : views) sizes.push_back(view.PixelBytes());
-  const double bytes = std::accumulate(sizes.begin(), sizes.end(), 0.0);
+  double bytes = 0;
+  for (const TrainView& view : views) bytes += view.PixelBytes();
   if (bytes <= MegabytesToBytes(options.photo_memory)) {
     Progress progress("splat: loading the training images", static_cast<int64_t>(views.size()), "images");
     tbb::parallel_for(size_t{0}, views.size(), [&](size_t v) {
@@ -176,14 +174,10 @@ void LoadFittedPhotos(const StageContext& context, std::shared_ptr<const Importe
     });
     return;
   }
-  const std::string option = OptionKey(options, options.photo_memory);
-  setup->views_in_memory = CheckedWindowSize(views, options.photo_memory, option);
-  LogInfo(
-      format("splat: the {} training photos would take {:.1f} MB, more than {} ({} MB): {} at a time in memory, "
-             "read from their decoded copy in {}",
-             views.size(), bytes / MegabytesToBytes(1), option, options.photo_memory, *setup->views_in_memory,
-             context.resume_dir.string()));
-  setup->photos = DecodePhotos(context.resume_dir, sizes, setup->read_photo, "splat: decoding the photos");
+  const WindowedPhotos windowed = DecodeForWindow(views, options.photo_memory, OptionKey(options, options.photo_memory),
+                                                  "splat", context.resume_dir, setup->read_photo);
+  setup->views_in_memory = windowed.window;
+  setup->photos = windowed.photos;
 }
 
 // The splats' world; `place`: the first splats too (a block's part begins from the whole part's instead).

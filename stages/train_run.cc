@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 
 #include "base/errors.h"
 #include "base/float_image.h"
@@ -27,16 +26,8 @@ void MakePhotoWindow(const PhotoWindow::Loader& decode, const fs::path& folder, 
   const TrainOptions& options = setup->options;
   TrainingData* data = &setup->data;
   if (!data->train.front().pixels.empty()) return;
-  std::vector<size_t> sizes;
-  for (const TrainView& view : data->train) sizes.push_back(view.PixelBytes());
-  const double bytes = std::accumulate(sizes.begin(), sizes.end(), 0.0);
-  const size_t size = CheckedWindowSize(data->train, options.photo_memory, OptionKey(options, options.photo_memory));
-  LogInfo(
-      format("train: the {} training photos would take {:.1f} MB, more than {} ({} MB): {} at a time in memory, "
-             "read from their decoded copy in {}",
-             data->train.size(), bytes / MegabytesToBytes(1), OptionKey(options, options.photo_memory),
-             options.photo_memory, size, folder.string()));
-  setup->photos = DecodePhotos(folder, sizes, decode, "train: decoding the photos");
+  const std::string option = OptionKey(options, options.photo_memory);
+  setup->photos = DecodeForWindow(data->train, options.photo_memory, option, "train", folder, decode).photos;
   setup->read_photo = [photos = setup->photos](size_t v) { return photos->Read(v); };
   setup->window = std::make_unique<PhotoWindow>(&data->train, setup->read_photo, PhotoMemoryBytes(options),
                                                 static_cast<uint64_t>(options.seed));
