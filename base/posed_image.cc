@@ -12,6 +12,10 @@ FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& 
   return image;
 }
 
+TrainView WithoutPixels(const TrainView& view) {
+  return {view.camera, view.near, view.far, view.channels, {}, view.name, view.depth_points};
+}
+
 const TrainView* FirstWithAlpha(const std::vector<TrainView>& views) {
   for (const TrainView& view : views) {
     if (view.channels == 4) return &view;

@@ -39,6 +39,9 @@ struct TrainView {
   }
 };
 
+// A copy of `view` but for its pixels (a view whose pixels are read later, or lent).
+TrainView WithoutPixels(const TrainView& view);
+
 // The photo as floats (RGB), composited on `background` where it has alpha: what a render is compared with.
 FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& background);
 // The first of `views` with an alpha channel (composited on a background the trainers must keep), or null.

@@ -394,8 +394,11 @@ double FitScale(const std::vector<TrainView>& views, int max_side) {
 TrainView FittedView(const TrainView& view, double scale, std::vector<uint8_t> pixels) {
   if (!pixels.empty() && pixels.size() != view.PixelBytes())
     throw std::invalid_argument("FittedView: " + view.name + "'s pixels are not of its size");
-  if (scale == 1)
-    return {view.camera, view.near, view.far, view.channels, std::move(pixels), view.name, view.depth_points};
+  if (scale == 1) {
+    TrainView same = WithoutPixels(view);
+    same.pixels = std::move(pixels);
+    return same;
+  }
   const int width = std::max(1, static_cast<int>(std::lround(view.camera.width * scale)));
   const int height = std::max(1, static_cast<int>(std::lround(view.camera.height * scale)));
   TrainView small{ResizedCamera(view.camera, width, height), view.near, view.far, view.channels, {}, view.name, {}};

@@ -80,10 +80,7 @@ struct ViewsInUse {
 // The training views `indices` without their pixels.
 std::vector<TrainView> Cameras(const SplatRun& run, const std::vector<size_t>& indices) {
   std::vector<TrainView> views;
-  for (const size_t v : indices) {
-    const TrainView& view = run.setup.data.train[v];
-    views.push_back({view.camera, view.near, view.far, view.channels, {}, view.name, {}});
-  }
+  for (const size_t v : indices) views.push_back(WithoutPixels(run.setup.data.train[v]));
   return views;
 }
 

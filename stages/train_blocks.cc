@@ -93,14 +93,6 @@ std::optional<SlabsStart> LoadSlabsStart(const StageContext& context) {
   return start;
 }
 
-// A copy of `view` but for its pixels.
-TrainView WithoutPixels(TrainView& view) {
-  std::vector<uint8_t> pixels = std::move(view.pixels);
-  TrainView copy = view;
-  view.pixels = std::move(pixels);
-  return copy;
-}
-
 // A block's training data: the training views that see it, their cameras as the whole part left them, and their
 // pixels (in memory, or a window over them where they would take more than train.photo_memory); no held-out views
 // (the composite is scored at the end). Pixels the whole part holds are lent, not copied (the whole does not train
