@@ -56,7 +56,7 @@ std::vector<uint8_t> DecodedPhotos::Read(size_t i) const {
     const ssize_t n = ::pread(fd_, pixels.data() + done, pixels.size() - done, offsets_[i] + done);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
-      throw UserError(format("cannot read the decoded training photos back from '{}': {}", folder_.string(),
+      throw UserError(format("cannot read the decoded photos back from '{}': {}", folder_.string(),
                              n < 0 ? std::strerror(errno) : "the file is shorter than written"));
     }
     done += static_cast<size_t>(n);

@@ -1,5 +1,7 @@
 #include "base/posed_image.h"
 
+#include <stdexcept>
+
 namespace p2n {
 
 FloatImage PhotoOnBackground(const TrainView& view, const std::array<float, 3>& background) {
@@ -21,6 +23,15 @@ const TrainView* FirstWithAlpha(const std::vector<TrainView>& views) {
     if (view.channels == 4) return &view;
   }
   return nullptr;
+}
+
+const TrainView& HeldoutView(const TrainingData& data, size_t v, TrainView* scratch) {
+  const TrainView& view = data.heldout.at(v);
+  if (!view.pixels.empty()) return view;
+  if (!data.read_heldout) throw std::logic_error("a held-out view has no pixels and nothing to read them with");
+  *scratch = WithoutPixels(view);
+  scratch->pixels = data.read_heldout(v);
+  return *scratch;
 }
 
 }  // namespace p2n

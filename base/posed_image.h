@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,13 @@ struct TrainingData {
   std::vector<TrainView> train, heldout;
   std::array<float, 3> background{1, 1, 1};  // behind the scene: the known colour, or where a learnt one starts
   bool background_known = false;             // the images were rendered or composited on `background`
+  // Held-out view v's pixels where `heldout` holds none (photos too many for memory, stages/photo_memory.h): an
+  // evaluation reads them a view at a time.
+  std::function<std::vector<uint8_t>(size_t)> read_heldout;
 };
+
+// Held-out view v of `data` with its pixels: the view itself, or a copy of it in `scratch` with them read
+// (TrainingData::read_heldout).
+const TrainView& HeldoutView(const TrainingData& data, size_t v, TrainView* scratch);
 
 }  // namespace p2n

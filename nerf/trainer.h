@@ -126,10 +126,11 @@ class Trainer {
   StepResult StepOnBatch(const RayBatch& batch, double progress);
   RayBatch SampleBatch(int rays);
 
-  // PSNR of each held-out view, from `pixels_per_view` fixed random pixels of it (0: every pixel), rendered at the
-  // scene's default step (DefaultStepScale, as render.step_scale 0 renders; the render stage may be asked for
-  // another, so both reports state theirs). `on_rays_done`
-  // is called as rays finish (from worker threads; an exception it throws, e.g. on Ctrl-C, stops the evaluation).
+  // PSNR of each held-out view (its pixels read as it comes where the data holds none: TrainingData::read_heldout),
+  // from `pixels_per_view` fixed random pixels of it (0: every pixel), rendered at the scene's default step
+  // (DefaultStepScale, as render.step_scale 0 renders; the render stage may be asked for another, so both reports
+  // state theirs). `on_rays_done` is called as rays finish (from worker threads; an exception it throws, e.g. on
+  // Ctrl-C, stops the evaluation).
   // With `fitted`, also each view's PSNR as NeRF-W scores an image it never trained on: the colour transform
   // that best maps the render of the pixels in its left half onto the photo (least squares) applied to those in
   // its right half, scored there.
@@ -161,7 +162,9 @@ class Trainer {
 
  private:
   struct Chunk;  // one chunk of a step's rays (trainer.cc)
-  std::vector<double> ViewPsnrs(const std::vector<const TrainView*>& views, size_t pixels_per_view, RenderStats* stats,
+  // View v of those scored, with its pixels (read into the scratch view given when they are not in memory).
+  using ViewAt = std::function<const TrainView&(size_t v, TrainView* scratch)>;
+  std::vector<double> ViewPsnrs(size_t count, const ViewAt& view_at, size_t pixels_per_view, RenderStats* stats,
                                 const std::function<void(size_t)>& on_rays_done, std::vector<double>* fitted,
                                 BehindScene* behind) const;
   void UpdateOccupancy();

@@ -42,29 +42,30 @@ std::optional<std::array<double, 3>> BehindScene::MeanColour() const {
 std::vector<double> Trainer::HeldoutPsnr(size_t pixels_per_view, RenderStats* stats,
                                          const std::function<void(size_t)>& on_rays_done, std::vector<double>* fitted,
                                          BehindScene* behind) const {
-  std::vector<const TrainView*> views;
-  for (const TrainView& view : data_.heldout) views.push_back(&view);
-  return ViewPsnrs(views, pixels_per_view, stats, on_rays_done, fitted, behind);
+  const auto view = [this](size_t v, TrainView* scratch) -> const TrainView& { return HeldoutView(data_, v, scratch); };
+  return ViewPsnrs(data_.heldout.size(), view, pixels_per_view, stats, on_rays_done, fitted, behind);
 }
 
 std::vector<double> Trainer::TrainingPsnr(size_t pixels_per_view, size_t max_views,
                                           const std::function<void(size_t)>& on_rays_done) const {
-  std::vector<const TrainView*> views;
   const size_t count = std::min(max_views, sampled_.size());
-  for (size_t i = 0; i < count; ++i) views.push_back(&data_.train[sampled_[i * sampled_.size() / count]]);
-  return ViewPsnrs(views, pixels_per_view, nullptr, on_rays_done, nullptr, nullptr);
+  const auto view = [&](size_t i, TrainView*) -> const TrainView& {
+    return data_.train[sampled_[i * sampled_.size() / count]];
+  };
+  return ViewPsnrs(count, view, pixels_per_view, nullptr, on_rays_done, nullptr, nullptr);
 }
 
-std::vector<double> Trainer::ViewPsnrs(const std::vector<const TrainView*>& views, size_t pixels_per_view,
-                                       RenderStats* stats, const std::function<void(size_t)>& on_rays_done,
-                                       std::vector<double>* fitted, BehindScene* behind) const {
+std::vector<double> Trainer::ViewPsnrs(size_t count, const ViewAt& view_at, size_t pixels_per_view, RenderStats* stats,
+                                       const std::function<void(size_t)>& on_rays_done, std::vector<double>* fitted,
+                                       BehindScene* behind) const {
   std::vector<double> psnrs;
   if (fitted != nullptr) fitted->clear();
   RenderOptions render;
   render.on_rays_done = on_rays_done;
   render.min_transmittance = options_.min_transmittance;
-  for (size_t v = 0; v < views.size(); ++v) {
-    const TrainView& view = *views[v];
+  for (size_t v = 0; v < count; ++v) {
+    TrainView scratch;
+    const TrainView& view = view_at(v, &scratch);
     const size_t total = size_t(view.camera.width) * view.camera.height;
     std::vector<size_t> pixels;
     if (pixels_per_view == 0 || pixels_per_view >= total) {

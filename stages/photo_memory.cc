@@ -1,5 +1,7 @@
 #include "stages/photo_memory.h"
 
+#include <tbb/parallel_for.h>
+
 #include <numeric>
 #include <stdexcept>
 
@@ -7,6 +9,7 @@
 #include "base/format.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
+#include "stages/training_data.h"
 
 namespace p2n {
 
@@ -42,6 +45,30 @@ WindowedPhotos DecodeForWindow(const std::vector<TrainView>& views, double megab
              stage, views.size(), bytes / MegabytesToBytes(1), option, megabytes, out.window, folder.string()));
   out.photos = DecodePhotos(folder, sizes, decode, stage + ": decoding the photos");
   return out;
+}
+
+void LoadHeldoutPhotos(const ImportedDataset& poses, double room, const fs::path& folder, const std::string& stage,
+                       const std::string& option, TrainingData* data) {
+  const std::vector<const ImportedView*> views = HeldoutViews(poses);
+  const auto decode = [views](size_t v) { return LoadTrainView(*views[v]).pixels; };
+  std::vector<size_t> sizes;
+  for (const TrainView& view : data->heldout) sizes.push_back(view.PixelBytes());
+  const double bytes = std::accumulate(sizes.begin(), sizes.end(), 0.0);
+  if (bytes <= room) {
+    Progress progress(stage + ": loading the held-out images", static_cast<int64_t>(views.size()), "images");
+    tbb::parallel_for(size_t{0}, views.size(), [&](size_t v) {
+      data->heldout[v].pixels = decode(v);
+      progress.Add();
+    });
+    return;
+  }
+  LogInfo(
+      format("{}: the {} held-out photos ({:.1f} MB) do not fit in what the training photos leave of {}: each "
+             "evaluation reads them from their decoded copy in {}",
+             stage, views.size(), bytes / MegabytesToBytes(1), option, folder.string()));
+  const std::shared_ptr<const DecodedPhotos> photos =
+      DecodePhotos(folder, sizes, decode, stage + ": decoding the held-out photos");
+  data->read_heldout = [photos](size_t v) { return photos->Read(v); };
 }
 
 PhotoWindow::Loader SubsetReader(const std::vector<TrainView>& subset, const std::vector<size_t>& indices,

@@ -30,8 +30,10 @@ Scores Evaluate(const Gaussians<float>& gaussians, const std::array<float, 3>& b
                 double near, bool with_ssim) {
   Scores scores;
   double seconds = 0;
-  for (const TrainView& view : setup.data.heldout) {
+  for (size_t v = 0; v < setup.data.heldout.size(); ++v) {
     ThrowIfCancelled();
+    TrainView scratch;
+    const TrainView& view = HeldoutView(setup.data, v, &scratch);
     const auto start = std::chrono::steady_clock::now();
     const FloatImage image = RenderSplats(gaussians, view.camera, background, near);
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -150,7 +150,8 @@ void PlaceSplats(const StageContext& context, const SplatOptions& options, const
 // The training views of `poses` (in `setup`, their cameras as the splats see them) fitted to splat.max_image_size
 // (FittedView), and SplatSetup::read_photo, which reads one from its file as it is fitted. `load`: every photo read
 // now, into memory, or where they would take more than splat.photo_memory into a decoded copy in the stage's resume
-// folder (SplatSetup::photos) that windows over them read.
+// folder (SplatSetup::photos) that windows over them read. The held-out photos (kept at their size) in memory too
+// where the training photos leave room enough in splat.photo_memory, else through a decoded copy (LoadHeldoutPhotos).
 void LoadFittedPhotos(const StageContext& context, std::shared_ptr<const ImportedDataset> poses,
                       const SplatOptions& options, bool load, SplatSetup* setup) {
   std::vector<TrainView>& views = setup->data.train;
@@ -163,10 +164,13 @@ void LoadFittedPhotos(const StageContext& context, std::shared_ptr<const Importe
   setup->read_photo = [poses, train = TrainingViews(*poses), full = std::move(full), scale](size_t v) {
     return FittedView(full[v], scale, LoadTrainView(*train[v]).pixels).pixels;
   };
-  if (!load) return;
   double bytes = 0;
   for (const TrainView& view : views) bytes += view.PixelBytes();
-  if (bytes <= MegabytesToBytes(options.photo_memory)) {
+  const double memory = MegabytesToBytes(options.photo_memory);
+  const std::string option = OptionKey(options, options.photo_memory);
+  LoadHeldoutPhotos(*poses, bytes <= memory ? memory - bytes : 0, context.resume_dir, "splat", option, &setup->data);
+  if (!load) return;
+  if (bytes <= memory) {
     Progress progress("splat: loading the training images", static_cast<int64_t>(views.size()), "images");
     tbb::parallel_for(size_t{0}, views.size(), [&](size_t v) {
       views[v].pixels = setup->read_photo(v);
@@ -174,8 +178,8 @@ void LoadFittedPhotos(const StageContext& context, std::shared_ptr<const Importe
     });
     return;
   }
-  const WindowedPhotos windowed = DecodeForWindow(views, options.photo_memory, OptionKey(options, options.photo_memory),
-                                                  "splat", context.resume_dir, setup->read_photo);
+  const WindowedPhotos windowed =
+      DecodeForWindow(views, options.photo_memory, option, "splat", context.resume_dir, setup->read_photo);
   setup->views_in_memory = windowed.window;
   setup->photos = windowed.photos;
 }
@@ -238,6 +242,7 @@ SplatReport MakeSplatReport(const Optimised& optimised, const SplatSetup& setup,
   report.resumed_from_step = optimised.resumed_from;
   report.heldout_views = setup.data.heldout.size();
   report.training_views_in_memory = setup.views_in_memory;
+  report.heldout_views_in_memory = !setup.data.read_heldout;
   if (!setup.data.heldout.empty()) {
     report.heldout_psnr = Mean(scores.psnr);
     report.heldout_ssim = Mean(scores.ssim);

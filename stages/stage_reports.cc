@@ -445,6 +445,7 @@ void Describe(S& s, TrainReport& report) {
   s("resumed_from_step", report.resumed_from_step);
   s("training_views", report.training_views);
   s("training_views_in_memory", report.training_views_in_memory);
+  s.Optional("heldout_views_in_memory", report.heldout_views_in_memory);
   s("samples_per_ray_rendered", report.samples_per_ray_rendered);
   s("render_seconds_per_view", report.render_seconds_per_view);
   s("occupied_fraction", report.occupied_fraction);
@@ -470,6 +471,7 @@ void Describe(S& s, SplatReport& report) {
   s("resumed_from_step", report.resumed_from_step);
   s("heldout_views", report.heldout_views);
   s.Optional("training_views_in_memory", report.training_views_in_memory);
+  s.Optional("heldout_views_in_memory", report.heldout_views_in_memory);
   s("heldout_psnr", report.heldout_psnr);
   s("heldout_ssim", report.heldout_ssim);
   s("heldout_psnr_per_view", report.heldout_psnr_per_view);

@@ -130,6 +130,9 @@ struct TrainReport {
   size_t training_views = 0, heldout_views = 0;
   // The training photos in memory at once when they did not all fit (train.photo_memory); none when all were.
   std::optional<size_t> training_views_in_memory;
+  // false: each evaluation read the held-out photos from their decoded copy (beside the training photos they did not
+  // fit in train.photo_memory); older reports: true.
+  bool heldout_views_in_memory = true;
   std::string heldout_split;
   int heldout_pixels_per_view = 0;     // 0: every pixel (written "all")
   std::optional<double> heldout_psnr;  // none without held-out views
@@ -206,6 +209,7 @@ struct SplatReport {
   size_t heldout_views = 0;
   // The training photos in memory at once when they did not all fit (splat.photo_memory); none when all were.
   std::optional<size_t> training_views_in_memory;
+  bool heldout_views_in_memory = true;               // as the train report's (splat.photo_memory)
   std::optional<double> heldout_psnr, heldout_ssim;  // none without held-out views
   std::vector<double> heldout_psnr_per_view;
   double seconds_per_view = 0;  // rendering a held-out view on the CPU

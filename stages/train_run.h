@@ -33,13 +33,15 @@ struct TrainingSetup {
   std::optional<size_t> training_views_in_memory;  // with a window over the training photos
 };
 
-// Which photos LoadTrainingSetup loads: every training and held-out photo (or a window over the training photos), or
-// none (a field block's job reads its own views' photos by TrainingSetup::read_photo).
+// Which photos LoadTrainingSetup loads: every training and held-out photo (or a window over the training photos, and
+// the held-out ones read at each evaluation), or none (a field block's job reads its own views' photos by
+// TrainingSetup::read_photo).
 enum class SetupPhotos { kAll, kNone };
 
 // The stage's options, the poses stage's views and photos (or a window over the photos where they would take more than
-// train.photo_memory, decoded into the stage's resume folder) and the trainer's options, into `setup` (in place: the
-// window points into its data).
+// train.photo_memory, decoded into the stage's resume folder; the held-out photos in what they leave of it, else
+// through a decoded copy: LoadHeldoutPhotos) and the trainer's options, into `setup` (in place: the window points into
+// its data).
 void LoadTrainingSetup(const StageContext& context, TrainingSetup* setup, SetupPhotos photos = SetupPhotos::kAll);
 
 // This session of the run (a resumed run counts from its resumption): its held-out evaluations during training and

@@ -233,6 +233,7 @@ TrainReport WriteTrainReport(const TrainResult& out, Trainer& trainer, const Tra
   report.heldout_split = setup.heldout_split;
   report.heldout_rule = setup.heldout_rule;
   report.training_views_in_memory = setup.training_views_in_memory;
+  report.heldout_views_in_memory = !setup.data.read_heldout;
   std::vector<std::string> names;
   for (const TrainView& view : setup.data.train) names.push_back(view.name);
   report.camera_refinement = CameraRefinementJson(names, trainer.camera_corrections());

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "base/errors.h"
 #include "base/file_util.h"
@@ -131,12 +132,22 @@ void AddDepthPoints(const ImportedDataset& poses, const std::vector<const Import
 
 }  // namespace
 
-std::vector<const ImportedView*> TrainingViews(const ImportedDataset& poses) {
-  std::vector<const ImportedView*> train;
+namespace {
+
+std::vector<const ImportedView*> SplitViews(const ImportedDataset& poses, const std::string& split) {
+  std::vector<const ImportedView*> views;
   for (const ImportedView& view : poses.views) {
-    if (view.view.split == "train") train.push_back(&view);
+    if (view.view.split == split) views.push_back(&view);
   }
-  return train;
+  return views;
+}
+
+}  // namespace
+
+std::vector<const ImportedView*> TrainingViews(const ImportedDataset& poses) { return SplitViews(poses, "train"); }
+
+std::vector<const ImportedView*> HeldoutViews(const ImportedDataset& poses) {
+  return SplitViews(poses, HeldoutSplit(poses));
 }
 
 namespace {
@@ -153,36 +164,36 @@ TrainingData Unloaded(const ImportedDataset& poses, size_t count) {
   return data;
 }
 
-void LoadHeaders(const std::vector<const ImportedView*>& train, TrainingData* data) {
-  tbb::parallel_for(size_t{0}, train.size(), [&](size_t i) { data->train[i] = TrainViewHeader(*train[i]); });
+void LoadHeaders(const std::vector<const ImportedView*>& views, std::vector<TrainView>* loaded) {
+  loaded->resize(views.size());
+  tbb::parallel_for(size_t{0}, views.size(), [&](size_t i) { (*loaded)[i] = TrainViewHeader(*views[i]); });
 }
 
 }  // namespace
 
 TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points, double photo_bytes) {
-  const std::string heldout_split = HeldoutSplit(poses);
   const std::vector<const ImportedView*> train = TrainingViews(poses);
-  std::vector<const ImportedView*> heldout;
-  for (const ImportedView& view : poses.views) {
-    if (view.view.split == heldout_split) heldout.push_back(&view);
-  }
+  const std::vector<const ImportedView*> heldout = HeldoutViews(poses);
   TrainingData data = Unloaded(poses, train.size());
   data.heldout.resize(heldout.size());
-  size_t loaded = train.size();
+  size_t loaded = train.size(), heldout_loaded = heldout.size();
   if (std::isfinite(photo_bytes)) {
-    LoadHeaders(train, &data);
+    LoadHeaders(train, &data.train);
+    LoadHeaders(heldout, &data.heldout);
+    heldout_loaded = 0;
     double bytes = 0;
     for (const TrainView& view : data.train) bytes += view.PixelBytes();
     if (bytes > photo_bytes) loaded = 0;
   }
-  Progress progress("loading images", static_cast<int64_t>(loaded + heldout.size()), "images");
-  tbb::parallel_for(size_t{0}, loaded + heldout.size(), [&](size_t i) {
+  std::optional<Progress> progress;
+  if (loaded + heldout_loaded > 0) progress.emplace("loading images", int64_t(loaded + heldout_loaded), "images");
+  tbb::parallel_for(size_t{0}, loaded + heldout_loaded, [&](size_t i) {
     if (i < loaded) {
       data.train[i] = LoadTrainView(*train[i]);
     } else {
       data.heldout[i - loaded] = LoadTrainView(*heldout[i - loaded]);
     }
-    progress.Add();
+    progress->Add();
   });
   if (depth_points) AddDepthPoints(poses, train, &data);
   return data;
@@ -191,7 +202,7 @@ TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points, d
 TrainingData LoadTrainingCameras(const ImportedDataset& poses, bool depth_points) {
   const std::vector<const ImportedView*> train = TrainingViews(poses);
   TrainingData data = Unloaded(poses, train.size());
-  LoadHeaders(train, &data);
+  LoadHeaders(train, &data.train);
   if (depth_points) AddDepthPoints(poses, train, &data);
   return data;
 }

@@ -29,8 +29,9 @@ bool ForwardFacingCapture(const ImportedDataset& dataset);
 // The training views ("train" split) and held-out views (HeldoutSplit's) of the poses stage's transforms.json
 // (LoadTransformsJson), decoded to 8 bits, with the background its images were composited on; UserError naming
 // a bad file. With `depth_points`, each training view's depth points too (from sparse_points.ply and
-// sparse_tracks.json beside transforms.json; none when the poses stage has no tracks). The training views' pixels
-// are left out when they would take more than `photo_bytes` in all (a PhotoWindow then holds some at a time).
+// sparse_tracks.json beside transforms.json; none when the poses stage has no tracks). With a finite `photo_bytes`,
+// the training views' pixels are left out when they would take more than that in all (a PhotoWindow then holds some
+// at a time), and the held-out views' always (LoadHeldoutPhotos, stages/photo_memory.h, places them).
 TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points = false,
                               double photo_bytes = std::numeric_limits<double>::infinity());
 // The training views of LoadTrainingData without their pixels (each file's header read: TrainViewHeader), with their
@@ -39,6 +40,8 @@ TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points = 
 TrainingData LoadTrainingCameras(const ImportedDataset& poses, bool depth_points = false);
 // The training views ("train" split), in the order LoadTrainingData keeps them.
 std::vector<const ImportedView*> TrainingViews(const ImportedDataset& poses);
+// The held-out views (HeldoutSplit's), in the order LoadTrainingData keeps them.
+std::vector<const ImportedView*> HeldoutViews(const ImportedDataset& poses);
 
 // The names of `views`, in order: what a stage's blocks keep of the training views they index (CheckSameViews).
 std::vector<std::string> ViewNames(const std::vector<TrainView>& views);

@@ -120,6 +120,24 @@ TEST_CASE("photo window: a budget of fewer than five photos, and a photo that ca
 
 namespace p2n::testing {
 
+TEST_CASE("held-out views: their own pixels, else a copy with them read, else an error", "[photo_window]") {
+  TrainingData data;
+  data.heldout = ViewsWithoutPixels(3);
+  data.heldout[1].pixels.assign(kViewBytes, 9);
+  TrainView scratch;
+  CHECK(&HeldoutView(data, 1, &scratch) == &data.heldout[1]);
+  CHECK_THROWS_AS(HeldoutView(data, 0, &scratch), std::logic_error);
+  std::atomic<int> reads{0};
+  data.read_heldout = CountingLoader(&reads);
+  const TrainView& read = HeldoutView(data, 2, &scratch);
+  CHECK(&read == &scratch);
+  CHECK(read.name == "view_2");
+  CHECK(read.pixels == std::vector<uint8_t>(kViewBytes, 2));
+  CHECK(data.heldout[2].pixels.empty());  // nothing kept
+  CHECK(&HeldoutView(data, 1, &scratch) == &data.heldout[1]);
+  CHECK(reads == 1);
+}
+
 TEST_CASE("decoded photos: each read back as decoded, from a file with no name left in its folder", "[photo_window]") {
   TempDir dir;
   const std::vector<size_t> sizes = {10, 0, 300, 7};

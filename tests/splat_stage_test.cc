@@ -204,6 +204,36 @@ TEST_CASE("splat stage: photos beyond splat.photo_memory are optimised through a
                     Catch::Contains("splat.photo_memory is 0.03 MB") && Catch::Contains("raise it"));
 }
 
+// Ten training photos of 9 KB (90 KB) and two held-out ones: 0.09 MB holds the training photos but not the held-out
+// ones beside them, which each evaluation then reads from their decoded copy, to the same scores.
+TEST_CASE(
+    "train and splat stages: held-out photos beyond what the training photos leave of photo_memory are read at "
+    "each evaluation, to the same scores",
+    "[splat][train]") {
+  Config config = SmallStageConfig(60);
+  const auto run = [&](const StageWorkspace& setup) {
+    setup.runner.Run(setup.workspace, config, Until("splat"));
+    return std::pair{ReadJsonFile(setup.dir / "ws" / "30_train" / "train_report.json"),
+                     ReadJsonFile(setup.dir / "ws" / "35_splat" / "splat_report.json")};
+  };
+  StageWorkspace in_memory, from_disk;
+  const auto [train, splat] = run(in_memory);
+  CHECK(train["heldout_views_in_memory"] == true);
+  CHECK(splat["heldout_views_in_memory"] == true);
+  config.Set("train.photo_memory", 0.09, "test");
+  config.Set("splat.photo_memory", 0.09, "test");
+  const auto [train_read, splat_read] = run(from_disk);
+  REQUIRE(train_read["heldout_views"] == 2);
+  CHECK(train_read["training_views_in_memory"].is_null());
+  CHECK(train_read["heldout_views_in_memory"] == false);
+  CHECK(splat_read["training_views_in_memory"].is_null());
+  CHECK(splat_read["heldout_views_in_memory"] == false);
+  CHECK(train_read["heldout_psnr"] == train["heldout_psnr"]);
+  CHECK(train_read["heldout_psnr_fitted"] == train["heldout_psnr_fitted"]);
+  CHECK(splat_read["heldout_psnr_per_view"] == splat["heldout_psnr_per_view"]);
+  CHECK(splat_read["heldout_ssim"] == splat["heldout_ssim"]);
+}
+
 // In turn, the blocks' windows read the whole part's decoded copy; as a scheduler's jobs, each job reads its block's
 // photos from their files (into a decoded copy of its own where they take more than splat.photo_memory).
 TEST_CASE("splat stage: by blocks beyond splat.photo_memory, in turn and as jobs, the same splats", "[splat][blocks]") {
