@@ -66,17 +66,23 @@ struct Part {
   int start_step = 0;
 };
 
-// The training views an optimisation runs on: the setup's, or some of them (a block's) with their pixels copied or
-// read; or, where those would take more than splat.photo_memory, a window over them.
+// The training views an optimisation runs on: the setup's, or some of them (a block's) with their pixels borrowed
+// from the setup (given back when they go) or read; or, where those would take more than splat.photo_memory, a
+// window over them.
 struct ViewsInUse {
   const std::vector<TrainView>* views = nullptr;
   std::vector<TrainView> own;                   // some of the setup's
   std::shared_ptr<const DecodedPhotos> photos;  // their own decoded copy, for the window (a block's job)
   std::unique_ptr<PhotoWindow> window;          // over `own`
+  std::vector<TrainView>* lender = nullptr;     // the setup's views, whose pixels `own` borrowed
+  std::vector<size_t> lent;                     // the lender's view of each of `own`'s
 
   ViewsInUse() = default;
   ViewsInUse(const ViewsInUse&) = delete;
   ViewsInUse& operator=(const ViewsInUse&) = delete;
+  ~ViewsInUse() {
+    for (size_t i = 0; i < lent.size(); ++i) (*lender)[lent[i]].pixels = std::move(own[i].pixels);
+  }
 };
 
 // The training views `indices` without their pixels.
@@ -86,10 +92,12 @@ std::vector<TrainView> Cameras(const SplatRun& run, const std::vector<size_t>& i
   return views;
 }
 
-// The training views `indices` (none: all of them) with their pixels, or a window over them, into `use`.
+// The training views `indices` (none: all of them) with their pixels, or a window over them, into `use`. Some of
+// them borrow their pixels from the setup where it holds them (a block's part run here: the optimisation whole does
+// not step meanwhile).
 void UseViews(const SplatRun& run, std::optional<std::vector<size_t>> indices, ViewsInUse* use) {
-  const SplatSetup& setup = run.setup;
-  const bool in_memory = !setup.data.train.front().pixels.empty();
+  SplatSetup& setup = run.setup;
+  const bool in_memory = setup.in_memory;
   if (!indices && in_memory) {
     use->views = &setup.data.train;
     return;
@@ -103,12 +111,16 @@ void UseViews(const SplatRun& run, std::optional<std::vector<size_t>> indices, V
   const double memory = MegabytesToBytes(run.options.photo_memory);
   double bytes = 0;
   for (const TrainView& view : use->own) bytes += view.PixelBytes();
-  if (in_memory || bytes <= memory) {
+  if (in_memory) {
+    use->lender = &setup.data.train;
+    use->lent = *indices;
+    for (size_t i = 0; i < indices->size(); ++i) use->own[i].pixels = std::move(setup.data.train[(*indices)[i]].pixels);
+    return;
+  }
+  if (bytes <= memory) {
     tbb::parallel_for(size_t{0}, indices->size(), [&](size_t i) {
       const size_t v = (*indices)[i];
-      use->own[i].pixels = in_memory      ? setup.data.train[v].pixels
-                           : setup.photos ? setup.photos->Read(v)
-                                          : setup.read_photo(v);
+      use->own[i].pixels = setup.photos ? setup.photos->Read(v) : setup.read_photo(v);
     });
     return;
   }

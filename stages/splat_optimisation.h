@@ -41,11 +41,14 @@ struct SplatSetup {
   PhotoWindow::Loader read_photo;
   std::shared_ptr<const DecodedPhotos> photos;
   std::optional<size_t> views_in_memory;
+  bool in_memory = false;  // `data` holds every training photo (borrowed by a block's part while it runs)
 };
 
 // What every optimisation of one stage run shares.
 struct SplatRun {
-  const SplatSetup& setup;
+  // Changed by nothing but a block's part run here, which borrows the training photos' pixels from it and gives
+  // them back (UseViews in splat_optimisation.cc): the parts run in turn.
+  SplatSetup& setup;
   const SplatOptions& options;
   const StageContext& context;
   SplatScene scene;  // the training views, the background, the extent and the near plane

@@ -176,6 +176,7 @@ void LoadFittedPhotos(const StageContext& context, std::shared_ptr<const Importe
       views[v].pixels = setup->read_photo(v);
       progress.Add();
     });
+    setup->in_memory = true;
     return;
   }
   const WindowedPhotos windowed =
@@ -295,7 +296,7 @@ void WriteSplatFiles(const SplatResult& out, const Optimised& optimised, const S
 }
 
 // What the stage's optimisations share: the scene, the trainer's options, the budget.
-SplatRun MakeSplatRun(const SplatSetup& setup, const SplatOptions& options, const StageContext& context) {
+SplatRun MakeSplatRun(SplatSetup& setup, const SplatOptions& options, const StageContext& context) {
   const double near = kNearShare * setup.extent;
   const double budget = SplatTimeBudget(options, ReadOptions<TrainOptions>(context.config).preset);
   SplatRun run{setup, options, context, {&setup.data.train, setup.background, setup.extent, near}, {}, budget};
@@ -313,7 +314,7 @@ SplatRun MakeSplatRun(const SplatSetup& setup, const SplatOptions& options, cons
 void SplatStage::RunPart(StageContext& context, const std::string& work, int part) const {
   if (work != kBlockWork) return Stage::RunPart(context, work, part);
   const SplatOptions options = ReadOptions<SplatOptions>(context.config);
-  const SplatSetup setup = LoadSplatSetup(context, options, /*place=*/false);
+  SplatSetup setup = LoadSplatSetup(context, options, /*place=*/false);
   OptimiseBlockAlone(MakeSplatRun(setup, options, context), part - 1);
 }
 
@@ -325,7 +326,7 @@ void SplatStage::Run(StageContext& context) const {
     context.summary["splats"] = "off";
     return;
   }
-  const SplatSetup setup = LoadSplatSetup(context, options, /*place=*/true);
+  SplatSetup setup = LoadSplatSetup(context, options, /*place=*/true);
   const SplatRun run = MakeSplatRun(setup, options, context);
   const double near = run.scene.near;
   LogInfo(format("splat: {} splats placed from the {}; {} training and {} held-out views, {}", setup.gaussians.size(),
