@@ -47,8 +47,11 @@ WindowedPhotos DecodeForWindow(const std::vector<TrainView>& views, double megab
   return out;
 }
 
-void LoadHeldoutPhotos(const ImportedDataset& poses, double room, const fs::path& folder, const std::string& stage,
-                       const std::string& option, TrainingData* data) {
+void LoadHeldoutPhotos(const ImportedDataset& poses, double megabytes, const std::string& option,
+                       const std::string& stage, const fs::path& folder, TrainingData* data) {
+  double training = 0;
+  for (const TrainView& view : data->train) training += view.PixelBytes();
+  const double memory = MegabytesToBytes(megabytes), room = training <= memory ? memory - training : 0;
   const std::vector<const ImportedView*> views = HeldoutViews(poses);
   const auto decode = [views](size_t v) { return LoadTrainView(*views[v]).pixels; };
   std::vector<size_t> sizes;

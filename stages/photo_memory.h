@@ -29,12 +29,13 @@ WindowedPhotos DecodeForWindow(const std::vector<TrainView>& views, double megab
                                const std::string& stage, const std::filesystem::path& folder,
                                const PhotoWindow::Loader& decode);
 
-// The held-out views' pixels (`data`'s, LoadTrainingData's views of `poses` without them): in memory when they take
-// at most `room` bytes (what the training photos leave of the stage's photo_memory), else decoded into a nameless
-// copy in `folder` that each evaluation reads a view at a time (TrainingData::read_heldout), which the log says
-// (`stage`, `option`: the stage and its photo_memory's key). Only their pixels are set: the cameras are kept.
-void LoadHeldoutPhotos(const ImportedDataset& poses, double room, const std::filesystem::path& folder,
-                       const std::string& stage, const std::string& option, TrainingData* data);
+// The held-out views' pixels (`data`'s, LoadTrainingData's views of `poses` without them): in memory when they fit
+// in what `data`'s training views (at the size they are trained at) leave of `megabytes` (the stage's photo_memory,
+// its key `option`; nothing when they take more, a window over them holding that much), else decoded into a nameless
+// copy in `folder` that each evaluation reads a view at a time (TrainingData::read_heldout), which the log says.
+// Only their pixels are set: the cameras are kept.
+void LoadHeldoutPhotos(const ImportedDataset& poses, double megabytes, const std::string& option,
+                       const std::string& stage, const std::filesystem::path& folder, TrainingData* data);
 
 // Photos of `sizes` bytes decoded by `decode` into a file in `folder` (made if missing), with a progress line `label`.
 std::shared_ptr<const DecodedPhotos> DecodePhotos(const std::filesystem::path& folder, const std::vector<size_t>& sizes,

@@ -168,7 +168,7 @@ void LoadFittedPhotos(const StageContext& context, std::shared_ptr<const Importe
   for (const TrainView& view : views) bytes += view.PixelBytes();
   const double memory = MegabytesToBytes(options.photo_memory);
   const std::string option = OptionKey(options, options.photo_memory);
-  LoadHeldoutPhotos(*poses, bytes <= memory ? memory - bytes : 0, context.resume_dir, "splat", option, &setup->data);
+  LoadHeldoutPhotos(*poses, options.photo_memory, option, "splat", context.resume_dir, &setup->data);
   if (!load) return;
   if (bytes <= memory) {
     Progress progress("splat: loading the training images", static_cast<int64_t>(views.size()), "images");

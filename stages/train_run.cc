@@ -49,15 +49,10 @@ void LoadTrainingSetup(const StageContext& context, TrainingSetup* setup, SetupP
   const PhotoWindow::Loader decode = [dataset, train](size_t v) { return LoadTrainView(*train[v]).pixels; };
   setup->read_photo = decode;
   if (photos == SetupPhotos::kAll) {
-    const double memory = PhotoMemoryBytes(options);
-    setup->data = LoadTrainingData(poses, depth_weight > 0, memory);
+    setup->data = LoadTrainingData(poses, depth_weight > 0, PhotoMemoryBytes(options));
     MakePhotoWindow(decode, context.resume_dir, setup);
-    double room = 0;  // what the training photos leave of it: nothing beside a window
-    if (!setup->window) {
-      room = memory;
-      for (const TrainView& view : setup->data.train) room -= view.PixelBytes();
-    }
-    LoadHeldoutPhotos(poses, room, context.resume_dir, "train", OptionKey(options, options.photo_memory), &setup->data);
+    LoadHeldoutPhotos(poses, options.photo_memory, OptionKey(options, options.photo_memory), "train",
+                      context.resume_dir, &setup->data);
   } else {
     setup->data = LoadTrainingCameras(poses, depth_weight > 0);
   }
