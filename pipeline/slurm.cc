@@ -43,17 +43,28 @@ void WriteBatchScript(const fs::path& script, const fs::path& program, const Wor
   fs::permissions(script, fs::perms::owner_exec, fs::perm_options::add);
 }
 
-// Waits until the job has written `exit_file`, or Slurm no longer runs it and the file did not come.
-void WaitForJob(const std::string& id, const fs::path& exit_file, const fs::path& dir) {
+// Waits until the job has written `exit_file`, or Slurm no longer runs it and the file did not come. Says when Slurm
+// puts the job back in its queue: it runs again from the start, and its log (`job_log`) says why.
+void WaitForJob(const std::string& id, const fs::path& exit_file, const fs::path& dir, const std::string& stage,
+                const fs::path& job_log) {
   using Clock = std::chrono::steady_clock;
   auto next_query = Clock::now() + slurm::kQueryInterval;
   std::optional<Clock::time_point> ended;
+  int restarts = 0;
   while (!fs::exists(exit_file)) {
     ThrowIfCancelled();
     const auto now = Clock::now();
     if (ended && now > *ended + slurm::kExitFileGrace) return;
     if (!ended && now >= next_query) {
-      if (!slurm::JobAlive(id, dir)) ended = now;
+      const slurm::JobStatus status = slurm::QueryJob(id, dir);
+      if (!status.alive) ended = now;
+      if (status.restarts > restarts) {
+        restarts = status.restarts;
+        LogWarning(
+            format("{}: Slurm requeued job {} (its node failed, or it was preempted: {}); it runs again when "
+                   "Slurm starts it, training and splats from their last checkpoint",
+                   stage, id, job_log.string()));
+      }
       next_query = now + slurm::kQueryInterval;
     }
     std::this_thread::sleep_for(slurm::kExitFilePoll);
@@ -84,13 +95,14 @@ std::optional<int> SubmitAndWait(const SlurmOptions& options, const fs::path& di
                                  const std::string& stage, int attempt) {
   const fs::path submit_log = dir / format("submit-{}.log", attempt);
   const auto start = std::chrono::steady_clock::now();
-  const std::string id = slurm::Submit(
-      slurm::SbatchCommand(options, context.workspace, "p2n-" + stage, dir / format("attempt-{}.log", attempt),
-                           {format("--export=ALL,P2N_ATTEMPT={}", attempt)}, dir / "job.sh"),
-      submit_log, "the job of stage " + stage);
+  const fs::path job_log = dir / format("attempt-{}.log", attempt);
+  const std::string id =
+      slurm::Submit(slurm::SbatchCommand(options, context.workspace, "p2n-" + stage, job_log,
+                                         {format("--export=ALL,P2N_ATTEMPT={}", attempt)}, dir / "job.sh"),
+                    submit_log, "the job of stage " + stage);
   const fs::path exit_file = dir / format("exit-{}", attempt);
   try {
-    WaitForJob(id, exit_file, dir);
+    WaitForJob(id, exit_file, dir, stage, job_log);
   } catch (const Cancelled&) {
     RunCleanupSubprocess({"scancel", id}, submit_log, "scancel");
     LogWarning(format("{}: cancelled Slurm job {}", stage, id));

@@ -1,5 +1,6 @@
 #include "pipeline/slurm_jobs.h"
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -24,12 +25,13 @@ std::vector<std::string> SplitSpaces(const std::string& text) {
   return words;
 }
 
-// What squeue says of job `id` in `format`, one line per job (or array element); nothing when it fails.
+// What squeue says of job `id` in `format` ("--format=%T", "--Format=State"), one line per job (or array element);
+// nothing when it fails.
 std::vector<std::string> Squeue(const std::string& id, const std::string& format, bool array, const fs::path& dir) {
   const fs::path answer = dir / "squeue.log";
   std::error_code error;
   fs::remove(answer, error);
-  std::vector<std::string> argv = {"squeue", "--noheader", "--jobs=" + id, "--format=" + format};
+  std::vector<std::string> argv = {"squeue", "--noheader", "--jobs=" + id, format};
   if (array) argv.push_back("--array");
   const SubprocessResult result = RunSubprocess(argv, answer, "asking Slurm about job " + id);
   if (result.signal != 0 || result.exit_code != 0) return {};
@@ -48,6 +50,8 @@ std::vector<std::string> SbatchCommand(const SlurmOptions& options, const Worksp
                                        const fs::path& script) {
   std::vector<std::string> argv = {"sbatch", "--parsable", "--job-name=" + name, "--chdir=" + workspace.root().string(),
                                    "--output=" + output.string()};
+  // Appending: a job Slurm requeues (its node failed) writes after its first run's lines, which say why, not over them.
+  argv.push_back("--open-mode=append");
   if (!options.partition.empty()) argv.push_back("--partition=" + options.partition);
   // A whole node with all its memory (--exclusive alone gives a cluster's default memory a CPU, which may be less);
   // with some CPUs the cluster's default memory for them, unless the further arguments ask for more (they come later).
@@ -83,16 +87,24 @@ std::optional<std::string> JobId(const fs::path& submit_log) {
   return std::nullopt;
 }
 
-bool JobAlive(const std::string& id, const fs::path& dir) {
-  for (const std::string& state : Squeue(id, "%T", false, dir)) {
-    if (!Ended(state)) return true;
+JobStatus QueryJob(const std::string& id, const fs::path& dir) {
+  JobStatus status;
+  for (const std::string& line : Squeue(id, "--Format=State,RestartCnt", false, dir)) {
+    std::istringstream words(line);
+    std::string state;
+    int restarts = 0;
+    if (!(words >> state >> restarts)) continue;
+    status.alive |= !Ended(state);
+    status.restarts = std::max(status.restarts, restarts);
   }
-  return false;
+  return status;
 }
+
+bool JobAlive(const std::string& id, const fs::path& dir) { return QueryJob(id, dir).alive; }
 
 std::map<int, ElementState> ArrayStates(const std::string& id, const fs::path& dir) {
   std::map<int, ElementState> states;
-  for (const std::string& line : Squeue(id, "%K %T %r", true, dir)) {
+  for (const std::string& line : Squeue(id, "--format=%K %T %r", true, dir)) {
     std::istringstream words(line);
     int index = 0;
     ElementState state;

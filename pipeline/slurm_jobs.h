@@ -31,8 +31,14 @@ std::string Submit(const std::vector<std::string>& sbatch, const std::filesystem
 // The job id sbatch --parsable printed ("123" or "123;cluster") into its log; nothing when it printed none.
 std::optional<std::string> JobId(const std::filesystem::path& submit_log);
 
-// Whether Slurm still has job `id` (or an element of the job array) pending or running; false once it ended or is no
-// longer known. `dir` takes squeue's log.
+// What Slurm says of job `id` (or of the elements of job array `id`): whether it is still pending or running (false
+// once it ended or is no longer known), and how many times Slurm has put it back in its queue (its node failed, or it
+// was preempted). `dir` takes squeue's log.
+struct JobStatus {
+  bool alive = false;
+  int restarts = 0;
+};
+JobStatus QueryJob(const std::string& id, const std::filesystem::path& dir);
 bool JobAlive(const std::string& id, const std::filesystem::path& dir);
 // Slurm's state of each element of job array `id` by its index ("RUNNING"; "PENDING" with why: "Resources",
 // "Priority", or "None" while the scheduler has not yet looked at it); none it no longer knows.

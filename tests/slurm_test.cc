@@ -1,15 +1,16 @@
 // `--run.scheduler slurm` against a real one-machine Slurm cluster (scripts/local_slurm.sh, which CTest starts
 // before these tests and stops after them; SLURM_CONF points at it): the results of a local run, a cancelled job
-// submitted again with the finished stages kept, the mapper's clusters and splat blocks as job arrays (beside the
-// stage's job, taken back by it when there is no room, rerun by it from a checkpoint when cancelled), a job's own
-// failure reported and not retried, Ctrl-C cancelling the running job, a killed run's job cancelled by the next run,
-// and a missing sbatch.
+// submitted again with the finished stages kept, one whose node fails requeued by Slurm, the mapper's clusters and
+// splat blocks as job arrays (beside the stage's job, taken back by it when there is no room, rerun by it from a
+// checkpoint when cancelled), a job's own failure reported and not retried, Ctrl-C cancelling the running job, a killed
+// run's job cancelled by the next run, and a missing sbatch.
 
 #include <signal.h>
 #include <catch2/catch.hpp>
 
 #include <chrono>
 #include <fstream>
+#include <sstream>
 #include <thread>
 
 #include "base/file_util.h"
@@ -61,6 +62,14 @@ std::string StartedJob(const fs::path& workspace, const std::string& folder) {
   }
   REQUIRE_THAT(ReadText(dir / "attempt-1.log"), Catch::Contains("working in job"));
   return SubmittedJob(dir / "submit-1.log");
+}
+
+// Waits (up to a minute) until the stage's resume folder has a checkpoint.
+void WaitForCheckpoint(const fs::path& resume) {
+  const auto deadline = Clock::now() + std::chrono::seconds(60);
+  while (!fs::exists(resume / "checkpoint.bin") && Clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
 }
 
 // What squeue says of the job ("RUNNING", "CANCELLED", ...).
@@ -272,10 +281,7 @@ TEST_CASE("slurm: a cancelled job is submitted again, resumes, and the stages do
   const pid_t run = Spawn(LongSlurmRunArgs(data, workspace), dir / "run.log");
   const std::string job = StartedJob(workspace, "30_train");
   const nlohmann::json poses = ReadJsonFile(workspace / "20_poses" / "manifest.json");
-  const auto deadline = Clock::now() + std::chrono::seconds(60);
-  while (!fs::exists(workspace / "30_train.resume" / "checkpoint.bin") && Clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
+  WaitForCheckpoint(workspace / "30_train.resume");
   std::string ignored;
   REQUIRE(RunCommand({"scancel", job}, &ignored) == 0);
   const int code = Wait(run);
@@ -286,6 +292,35 @@ TEST_CASE("slurm: a cancelled job is submitted again, resumes, and the stages do
   CHECK(fs::exists(JobDir(workspace, "30_train") / "attempt-2.log"));
   CHECK(ReadJsonFile(workspace / "30_train" / "train_report.json")["resumed_from_step"].get<int>() > 0);
   CHECK(ReadJsonFile(workspace / "20_poses" / "manifest.json") == poses);
+  CHECK(CheckedKeys(workspace).size() == 2);  // poses (the import), train
+}
+
+TEST_CASE("slurm: a job whose node fails is requeued by Slurm, said so, and goes on from its checkpoint", "[slurm]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), workspace = dir / "ws";
+  const pid_t run = Spawn(LongSlurmRunArgs(data, workspace), dir / "run.log");
+  const std::string job = StartedJob(workspace, "30_train");
+  WaitForCheckpoint(workspace / "30_train.resume");
+  std::string output, node;
+  REQUIRE(RunCommand({"squeue", "--noheader", "--jobs=" + job, "--format=%N"}, &output) == 0);
+  std::istringstream words(output);
+  for (std::string word; words >> word;) node = word;  // the last word (before it, the command)
+  // The node lost: Slurm ends its jobs and requeues them; it takes the node back once its slurmd answers.
+  const int down = RunCommand({"scontrol", "update", "NodeName=" + node, "State=DOWN", "Reason=test"}, &output);
+  INFO(output);
+  REQUIRE(down == 0);
+  const int code = Wait(run);
+  RunCommand({"scontrol", "update", "NodeName=" + node, "State=RESUME"}, &output);  // in case it did not
+  const std::string log = ReadText(dir / "run.log");
+  INFO(log);
+  REQUIRE(code == 0);
+  CHECK_THAT(log, Catch::Contains("train: Slurm requeued job " + job + " (its node failed"));
+  const fs::path jobs = JobDir(workspace, "30_train");
+  CHECK(!fs::exists(jobs / "submit-2.log"));  // Slurm's requeue, not a resubmission
+  const std::string job_log = ReadText(jobs / "attempt-1.log");
+  INFO(job_log);
+  CHECK_THAT(job_log, Catch::Contains("DUE TO NODE FAILURE") && Catch::Contains("resumed at step"));
+  CHECK(ReadJsonFile(workspace / "30_train" / "train_report.json")["resumed_from_step"].get<int>() > 0);
   CHECK(CheckedKeys(workspace).size() == 2);  // poses (the import), train
 }
 
