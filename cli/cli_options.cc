@@ -3,6 +3,7 @@
 #include <tbb/global_control.h>
 
 #include <filesystem>
+#include <functional>
 
 #include "base/errors.h"
 #include "base/file_util.h"
@@ -78,18 +79,45 @@ std::optional<int> Parse(CLI::App& app, const OptionRegistry& registry, int argc
   return std::nullopt;
 }
 
+namespace {
+
+using Refused = std::function<void(const UserError&)>;
+
+// What the workspace remembers (options.json), as this version reads it: a value it does not take (an option since
+// removed, a choice no longer offered, a rule since changed) is left out and passed to `refused`.
+Config ReadRemembered(const OptionRegistry& registry, const fs::path& file, const Refused& refused) {
+  Config config(registry);
+  if (!fs::exists(file)) return config;
+  config.Merge(ReadJsonFile(file), file.string(), refused);
+  while (true) {
+    try {
+      CheckAllOptions(config);
+      return config;
+    } catch (const OptionError& e) {
+      if (config.Origin(e.key()).empty()) return config;  // a rule between options: checked once all are in
+      refused(UserError(format("option {} (from {}) {}", e.key(), file.string(), e.rule())));
+      config.Unset(e.key());
+    }
+  }
+}
+
+}  // namespace
+
 Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace, const CommonFlags& flags,
                      bool remember) {
-  Config config(registry);
   const fs::path remembered = workspace.RememberedOptionsPath();
-  if (fs::exists(remembered)) {  // an option another version remembered and this one does not take is left out
-    config.Merge(ReadJsonFile(remembered), remembered.string(), [](const UserError& e) {
-      LogWarning(format("{}: left out, as this version of photo2nerf does not take it", e.what()));
-    });
-  }
+  Config config = ReadRemembered(registry, remembered, [](const UserError& e) {
+    LogWarning(format("{}: left out, as this version of photo2nerf does not take it", e.what()));
+  });
   if (!flags.config_file.empty()) config.MergeFile(flags.config_file);
   for (const auto& [key, text] : flags.option_text) config.SetFromText(key, text, "--" + key);
-  CheckAllOptions(config);
+  try {
+    CheckAllOptions(config);
+  } catch (const OptionError& e) {
+    const std::string origin = config.Origin(e.key());
+    if (origin.empty()) throw;
+    throw UserError(format("option {} (from {}) {}", e.key(), origin, e.rule()));
+  }
   if (!remember) return config;
   WriteJsonAtomic(remembered, config.ExplicitResultOptions());
   WriteJsonAtomic(workspace.ConfigPath(), config.ToJson());
@@ -97,10 +125,8 @@ Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace,
 }
 
 std::string RememberedOptionsText(const OptionRegistry& registry, const Workspace& workspace) {
-  const fs::path remembered = workspace.RememberedOptionsPath();
-  if (!fs::exists(remembered)) return "";
-  Config config(registry);
-  config.Merge(ReadJsonFile(remembered), remembered.string(), [](const UserError&) {});  // ResolveConfig warns
+  const Config config =
+      ReadRemembered(registry, workspace.RememberedOptionsPath(), [](const UserError&) {});  // ResolveConfig warns
   const nlohmann::json options = config.ExplicitResultOptions();
   std::string text;
   for (const auto& [section, values] : options.items()) {

@@ -32,10 +32,10 @@ void AddCommonFlags(CLI::App& app, const OptionRegistry& registry, CommonFlags* 
 // for a malformed command line, naming the unknown option and the nearest known one.
 std::optional<int> Parse(CLI::App& app, const OptionRegistry& registry, int argc, char** argv);
 
-// The resolved configuration: defaults, then what the workspace remembers (options.json; an option another version
-// remembered that this one does not take is left out with a warning), then --config, then the flags; every value
-// checked. With `remember`, writes options.json (the result options set so far) and
-// config.json (everything) into the workspace.
+// The resolved configuration: defaults, then what the workspace remembers (options.json; a value another version
+// remembered that this one does not take, or whose rule it breaks, is left out with a warning), then --config, then
+// the flags; every value checked, an error naming where a refused one came from. With `remember`, writes options.json
+// (the result options set so far) and config.json (everything) into the workspace.
 Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace, const CommonFlags& flags,
                      bool remember);
 

@@ -99,8 +99,20 @@ void Config::Set(std::string_view key, const nlohmann::json& value, std::string_
     throw UserError(
         format("option '{}' (from {}) must be one of: {}; got '{}'", key, origin, allowed, value.get<std::string>()));
   }
-  explicit_keys_.insert(std::string(key));
+  origins_[std::string(key)] = origin;
   values_[std::string(key)] = expected.is_number_float() ? nlohmann::json(value.get<double>()) : value;
+}
+
+void Config::Unset(std::string_view key) {
+  const OptionSpec* spec = registry_->Find(key);
+  if (spec == nullptr) throw InternalError(format("Config::Unset: no option {}", key));
+  values_[spec->key] = spec->default_value;
+  origins_.erase(spec->key);
+}
+
+std::string Config::Origin(std::string_view key) const {
+  const auto found = origins_.find(key);
+  return found == origins_.end() ? std::string() : found->second;
 }
 
 void Config::SetFromText(std::string_view key, std::string_view text, std::string_view origin) {
@@ -192,7 +204,7 @@ nlohmann::json Config::ToJson() const {
 
 nlohmann::json Config::ExplicitResultOptions() const {
   nlohmann::json nested = nlohmann::json::object();
-  for (const std::string& key : explicit_keys_) {
+  for (const auto& [key, origin] : origins_) {
     if (registry_->Find(key)->kind == OptionKind::kRuntime) continue;
     const size_t dot = key.find('.');
     nested[key.substr(0, dot)][key.substr(dot + 1)] = Get(key);
@@ -223,6 +235,9 @@ std::string OptionKeyOf(std::string_view section, const char* name) {
   return std::string(section).append(".").append(name);
 }
 
-void FailOption(std::string_view key, std::string_view rule) { throw UserError(format("option {} {}", key, rule)); }
+OptionError::OptionError(std::string_view key, std::string_view rule)
+    : UserError(format("option {} {}", key, rule)), key_(key), rule_(rule) {}
+
+void FailOption(std::string_view key, std::string_view rule) { throw OptionError(key, rule); }
 
 }  // namespace p2n

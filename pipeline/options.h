@@ -21,8 +21,8 @@
 
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <optional>
-#include <set>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -80,6 +80,11 @@ class Config {
   // Merges a JSON config file; UserError naming the file on a parse error or an unknown key.
   void MergeFile(const std::filesystem::path& path);
 
+  // Puts an option back to its default, as if it had not been set.
+  void Unset(std::string_view key);
+  // Where an option's value came from (Set's `origin`); empty for a default.
+  std::string Origin(std::string_view key) const;
+
   const nlohmann::json& Get(std::string_view key) const;
   template <class T>
   T Get(std::string_view key) const {
@@ -96,8 +101,8 @@ class Config {
 
  private:
   const OptionRegistry* registry_;
-  nlohmann::json values_;  // flat: dotted key -> value
-  std::set<std::string> explicit_keys_;
+  nlohmann::json values_;                                    // flat: dotted key -> value
+  std::map<std::string, std::string, std::less<>> origins_;  // of the options set: explicit
 };
 
 // An option that is "auto" or a number (train.distortion, render.elevation): the number, or nothing for auto.
@@ -110,7 +115,18 @@ struct AutoOrNumber {
 // it is neither.
 bool ParseAutoOrNumber(const std::string& text, std::optional<double>* value);
 std::string AutoOrNumberText(const AutoOrNumber& option);
-// Throws UserError "option KEY RULE".
+// A value an option's rule refuses ("option KEY RULE"), with its key and rule apart: whoever resolved the
+// configuration knows where the value came from (Config::Origin) and can say so.
+class OptionError : public UserError {
+ public:
+  OptionError(std::string_view key, std::string_view rule);
+  const std::string& key() const { return key_; }
+  const std::string& rule() const { return rule_; }
+
+ private:
+  std::string key_, rule_;
+};
+// Throws OptionError.
 [[noreturn]] void FailOption(std::string_view key, std::string_view rule);
 
 namespace internal {

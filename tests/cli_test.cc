@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include "base/file_util.h"
+#include "base/format.h"
 #include "formats/colmap_model.h"
 #include "pipeline/workspace.h"
 #include "tests/test_util.h"
@@ -76,8 +77,10 @@ TEST_CASE("cli: a run, a fresh rerun, status and clean", "[cli]") {
   CHECK(fs::exists(fs::path(ws) / "logs" / "photo2nerf.log"));
 }
 
-TEST_CASE("cli: an option the workspace remembers that this version does not take is left out, with a warning",
-          "[cli]") {
+TEST_CASE(
+    "cli: an option the workspace remembers that this version does not take or whose rule it breaks is left out, with "
+    "a warning",
+    "[cli]") {
   TempDir dir;
   MakePhotos(dir / "photos", 3);
   const std::string ws = (dir / "ws").string();
@@ -88,12 +91,15 @@ TEST_CASE("cli: an option the workspace remembers that this version does not tak
   nlohmann::json remembered = ReadJsonFile(options);
   remembered["train"]["no_such_option"] = 3;
   remembered["sfm"]["matcher"] = "telepathy";
+  remembered["train"]["steps"] = -5;  // a rule since changed
   WriteText(options, remembered.dump());
   const Result status = Photo2Nerf({"status", "-w", ws});
   INFO(status.output);
   CHECK(status.code == 0);
   CHECK_THAT(status.output, Catch::Contains("'train.no_such_option'") && Catch::Contains("'telepathy'") &&
                                 Catch::Contains("left out"));
+  CHECK_THAT(status.output, Catch::Contains(format("option train.steps (from {}) must be", options.string())) &&
+                                !Catch::Contains("train.steps -5"));
   CHECK_THAT(status.output, Catch::Contains("options   ingest.max_image_size 16 (remembered") &&
                                 !Catch::Contains("matcher telepathy"));
   const Result rerun = Photo2Nerf({"run", "-w", ws, "--until", "ingest"});
@@ -129,7 +135,10 @@ TEST_CASE("cli: user errors exit 1 with a message naming what is wrong", "[cli]"
          "unknown option '--ingest.max_image_siz'; did you mean '--ingest.max_image_size'?");
   expect(Photo2Nerf({"run", photos, "-w", ws, "--ingest.max_image_size", "big"}), "must be an integer");
   expect(Photo2Nerf({"run", photos, "-w", ws, "--ingest.max_image_size", "-3"}),
-         "option ingest.max_image_size must be");
+         "option ingest.max_image_size (from --ingest.max_image_size) must be");
+  WriteText(dir / "config.json", R"({"ingest": {"max_image_size": -3}})");
+  expect(Photo2Nerf({"run", photos, "-w", ws, "--config", (dir / "config.json").string()}),
+         format("option ingest.max_image_size (from {}) must be", (dir / "config.json").string()));
   WriteText(dir / "config.json", R"({"ingest": {"max_size": 3}})");
   expect(Photo2Nerf({"run", photos, "-w", ws, "--config", (dir / "config.json").string()}),
          "unknown option 'ingest.max_size'");

@@ -8,6 +8,7 @@
 #include <opencv2/videoio.hpp>
 
 #include <fstream>
+#include <set>
 
 #include "base/errors.h"
 #include "base/file_util.h"
