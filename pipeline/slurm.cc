@@ -44,28 +44,36 @@ void WriteBatchScript(const fs::path& script, const fs::path& program, const Wor
 }
 
 // Waits until the job has written `exit_file`, or Slurm no longer runs it and the file did not come. Says when Slurm
-// puts the job back in its queue: it runs again from the start, and its log (`job_log`) says why.
+// puts the job back in its queue (it runs again from the start, and its log `job_log` says why) and when Slurm does
+// not answer (nothing is concluded from that: the job may still run).
 void WaitForJob(const std::string& id, const fs::path& exit_file, const fs::path& dir, const std::string& stage,
                 const fs::path& job_log) {
   using Clock = std::chrono::steady_clock;
   auto next_query = Clock::now() + slurm::kQueryInterval;
   std::optional<Clock::time_point> ended;
   int restarts = 0;
+  bool unanswered = false;
   while (!fs::exists(exit_file)) {
     ThrowIfCancelled();
     const auto now = Clock::now();
     if (ended && now > *ended + slurm::kExitFileGrace) return;
     if (!ended && now >= next_query) {
-      const slurm::JobStatus status = slurm::QueryJob(id, dir);
-      if (!status.alive) ended = now;
-      if (status.restarts > restarts) {
-        restarts = status.restarts;
+      next_query = now + slurm::kQueryInterval;
+      const std::optional<slurm::JobStatus> status = slurm::QueryJob(id, dir);
+      if (!status && !unanswered) {
+        LogWarning(format("{}: Slurm does not answer about job {} ({}); waiting for it", stage, id,
+                          slurm::LastError(dir / "squeue.log")));
+      }
+      unanswered = !status;
+      if (!status) continue;
+      if (!status->alive) ended = now;
+      if (status->restarts > restarts) {
+        restarts = status->restarts;
         LogWarning(
             format("{}: Slurm requeued job {} (its node failed, or it was preempted: {}); it runs again when "
                    "Slurm starts it, training and splats from their last checkpoint",
                    stage, id, job_log.string()));
       }
-      next_query = now + slurm::kQueryInterval;
     }
     std::this_thread::sleep_for(slurm::kExitFilePoll);
   }

@@ -26,21 +26,25 @@ std::vector<std::string> SplitSpaces(const std::string& text) {
 }
 
 // What squeue says of job `id` in `format` ("--format=%T", "--Format=State"), one line per job (or array element);
-// nothing when it fails.
-std::vector<std::string> Squeue(const std::string& id, const std::string& format, bool array, const fs::path& dir) {
+// no lines when Slurm no longer knows the job, nothing when squeue got no answer (the controller busy or restarting).
+std::optional<std::vector<std::string>> Squeue(const std::string& id, const std::string& format, bool array,
+                                               const fs::path& dir) {
   const fs::path answer = dir / "squeue.log";
   std::error_code error;
   fs::remove(answer, error);
   std::vector<std::string> argv = {"squeue", "--noheader", "--jobs=" + id, format};
   if (array) argv.push_back("--array");
   const SubprocessResult result = RunSubprocess(argv, answer, "asking Slurm about job " + id);
-  if (result.signal != 0 || result.exit_code != 0) return {};
   std::ifstream log(answer);
   std::vector<std::string> lines;
   std::string line;
   std::getline(log, line);  // the command
   while (std::getline(log, line)) lines.push_back(line);
-  return lines;
+  if (result.signal == 0 && result.exit_code == 0) return lines;
+  for (const std::string& said : lines) {
+    if (said.find("Invalid job id") != std::string::npos) return std::vector<std::string>{};
+  }
+  return std::nullopt;
 }
 
 }  // namespace
@@ -87,24 +91,32 @@ std::optional<std::string> JobId(const fs::path& submit_log) {
   return std::nullopt;
 }
 
-JobStatus QueryJob(const std::string& id, const fs::path& dir) {
+std::optional<JobStatus> QueryJob(const std::string& id, const fs::path& dir) {
+  const std::optional<std::vector<std::string>> lines = Squeue(id, "--Format=State,RestartCnt", false, dir);
+  if (!lines) return std::nullopt;
   JobStatus status;
-  for (const std::string& line : Squeue(id, "--Format=State,RestartCnt", false, dir)) {
+  for (const std::string& line : *lines) {
     std::istringstream words(line);
     std::string state;
     int restarts = 0;
-    if (!(words >> state >> restarts)) continue;
+    if (!(words >> state)) continue;
+    words >> restarts;
     status.alive |= !Ended(state);
     status.restarts = std::max(status.restarts, restarts);
   }
   return status;
 }
 
-bool JobAlive(const std::string& id, const fs::path& dir) { return QueryJob(id, dir).alive; }
+bool JobAlive(const std::string& id, const fs::path& dir) {
+  const std::optional<JobStatus> status = QueryJob(id, dir);
+  return !status || status->alive;
+}
 
-std::map<int, ElementState> ArrayStates(const std::string& id, const fs::path& dir) {
+std::optional<std::map<int, ElementState>> ArrayStates(const std::string& id, const fs::path& dir) {
+  const std::optional<std::vector<std::string>> lines = Squeue(id, "--format=%K %T %r", true, dir);
+  if (!lines) return std::nullopt;
   std::map<int, ElementState> states;
-  for (const std::string& line : Squeue(id, "--format=%K %T %r", true, dir)) {
+  for (const std::string& line : *lines) {
     std::istringstream words(line);
     int index = 0;
     ElementState state;
@@ -132,9 +144,9 @@ bool CancelAndWait(const std::string& id, const fs::path& dir, const std::string
   while (JobAlive(id, dir)) {
     if (std::chrono::steady_clock::now() > deadline) {
       throw ExternalToolError(
-          format("{}: Slurm job {} of an earlier run does not end after scancel; end it (scancel --signal=KILL {}) "
-                 "and run again",
-                 stage, id, id));
+          format("{}: Slurm job {} of an earlier run does not end after scancel, or Slurm does not answer ({}); end "
+                 "it (scancel --signal=KILL {}) and run again",
+                 stage, id, (dir / "squeue.log").string(), id));
     }
     std::this_thread::sleep_for(kExitFilePoll);
   }

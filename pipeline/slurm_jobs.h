@@ -33,19 +33,22 @@ std::optional<std::string> JobId(const std::filesystem::path& submit_log);
 
 // What Slurm says of job `id` (or of the elements of job array `id`): whether it is still pending or running (false
 // once it ended or is no longer known), and how many times Slurm has put it back in its queue (its node failed, or it
-// was preempted). `dir` takes squeue's log.
+// was preempted); nothing when Slurm did not answer (its controller busy or restarting: nothing is known). `dir`
+// takes squeue's log.
 struct JobStatus {
   bool alive = false;
   int restarts = 0;
 };
-JobStatus QueryJob(const std::string& id, const std::filesystem::path& dir);
+std::optional<JobStatus> QueryJob(const std::string& id, const std::filesystem::path& dir);
+// Whether the job may still be pending or running: true also when Slurm did not answer.
 bool JobAlive(const std::string& id, const std::filesystem::path& dir);
 // Slurm's state of each element of job array `id` by its index ("RUNNING"; "PENDING" with why: "Resources",
-// "Priority", or "None" while the scheduler has not yet looked at it); none it no longer knows.
+// "Priority", or "None" while the scheduler has not yet looked at it); none it no longer knows; nothing when Slurm
+// did not answer.
 struct ElementState {
   std::string state, reason;
 };
-std::map<int, ElementState> ArrayStates(const std::string& id, const std::filesystem::path& dir);
+std::optional<std::map<int, ElementState>> ArrayStates(const std::string& id, const std::filesystem::path& dir);
 // Whether a state is one of a job that has ended (or is no longer known).
 bool Ended(const std::string& state);
 

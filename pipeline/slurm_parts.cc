@@ -73,9 +73,10 @@ void PartEnded(const PartArray& array, int part, int code, const std::function<v
 bool TakeBack(const PartArray& array, int part) {
   const std::string element = format("{}_{}", array.id, part);
   RunSubprocess({"scancel", element}, array.Queries() / "scancel.log", "scancel");
-  const std::map<int, slurm::ElementState> states = slurm::ArrayStates(array.id, array.Queries());
-  const auto found = states.find(part);
-  const std::string state = found == states.end() ? "" : found->second.state;
+  const std::optional<std::map<int, slurm::ElementState>> states = slurm::ArrayStates(array.id, array.Queries());
+  if (!states) return false;  // Slurm did not answer: whether it started is not known
+  const auto found = states->find(part);
+  const std::string state = found == states->end() ? "" : found->second.state;
   return (state.empty() || state == "CANCELLED") && !fs::exists(array.Log(part)) && !fs::exists(array.ExitFile(part));
 }
 
@@ -109,10 +110,11 @@ void WaitForParts(PartArray& array, const std::function<void(int)>& here) {
     }
     if (array.waiting.empty() || Clock::now() < next_query) continue;
     next_query = Clock::now() + slurm::kQueryInterval;
-    const std::map<int, slurm::ElementState> states = slurm::ArrayStates(array.id, array.Queries());
+    const std::optional<std::map<int, slurm::ElementState>> states = slurm::ArrayStates(array.id, array.Queries());
+    if (!states) continue;  // Slurm did not answer: ask again later
     for (const int part : std::set<int>(array.waiting)) {
-      const auto found = states.find(part);
-      const slurm::ElementState element = found == states.end() ? slurm::ElementState{} : found->second;
+      const auto found = states->find(part);
+      const slurm::ElementState element = found == states->end() ? slurm::ElementState{} : found->second;
       const std::string& state = element.state;
       // Pending for want of room (not merely not yet looked at by the scheduler).
       if (state == "PENDING" && element.reason != "None" && TakeBack(array, part)) {

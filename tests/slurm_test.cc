@@ -1,9 +1,9 @@
 // `--run.scheduler slurm` against a real one-machine Slurm cluster (scripts/local_slurm.sh, which CTest starts
 // before these tests and stops after them; SLURM_CONF points at it): the results of a local run, a cancelled job
-// submitted again with the finished stages kept, one whose node fails requeued by Slurm, the mapper's clusters and
-// splat blocks as job arrays (beside the stage's job, taken back by it when there is no room, rerun by it from a
-// checkpoint when cancelled), a job's own failure reported and not retried, Ctrl-C cancelling the running job, a killed
-// run's job cancelled by the next run, and a missing sbatch.
+// submitted again with the finished stages kept, one whose node fails requeued by Slurm, a controller that does not
+// answer waited for, the mapper's clusters and splat blocks as job arrays (beside the stage's job, taken back by it
+// when there is no room, rerun by it from a checkpoint when cancelled), a job's own failure reported and not retried,
+// Ctrl-C cancelling the running job, a killed run's job cancelled by the next run, and a missing sbatch.
 
 #include <signal.h>
 #include <catch2/catch.hpp>
@@ -322,6 +322,33 @@ TEST_CASE("slurm: a job whose node fails is requeued by Slurm, said so, and goes
   CHECK_THAT(job_log, Catch::Contains("DUE TO NODE FAILURE") && Catch::Contains("resumed at step"));
   CHECK(ReadJsonFile(workspace / "30_train" / "train_report.json")["resumed_from_step"].get<int>() > 0);
   CHECK(CheckedKeys(workspace).size() == 2);  // poses (the import), train
+}
+
+TEST_CASE("slurm: a controller that does not answer for a while is waited for, not taken for a job lost", "[slurm]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), workspace = dir / "ws", silent = dir / "silent";
+  // squeue as when slurmctld is busy or restarting, while `silent` exists.
+  fs::create_directories(dir / "bin");
+  const char* path = std::getenv("PATH");
+  WriteText(dir / "bin" / "squeue",
+            format("#!/bin/sh\nif [ -e '{}' ]; then\n  echo 'squeue: error: slurm_load_jobs error: Socket timed out "
+                   "on send/recv operation'\n  exit 1\nfi\nPATH='{}' exec squeue \"$@\"\n",
+                   silent.string(), path));
+  fs::permissions(dir / "bin" / "squeue", fs::perms::owner_all);
+  std::vector<std::string> args = LongSlurmRunArgs(data, workspace);
+  args.insert(args.begin(), {"/usr/bin/env", format("PATH={}:{}", (dir / "bin").string(), path)});
+  const pid_t run = Spawn(args, dir / "run.log");
+  StartedJob(workspace, "30_train");
+  WriteText(silent, "");
+  std::this_thread::sleep_for(std::chrono::seconds(12));  // two queries unanswered, beyond the exit file's grace
+  fs::remove(silent);
+  const int code = Wait(run);
+  const std::string log = ReadText(dir / "run.log");
+  INFO(log);
+  REQUIRE(code == 0);
+  CHECK_THAT(log, Catch::Contains("Slurm does not answer about job") && Catch::Contains("Socket timed out"));
+  CHECK(!fs::exists(JobDir(workspace, "30_train") / "submit-2.log"));  // the job ran on, once
+  CHECK(ReadJsonFile(workspace / "30_train" / "train_report.json")["steps"] == 600);
 }
 
 TEST_CASE("slurm: a job that fails on its own is not submitted again, and its error is the stage's", "[slurm]") {
