@@ -65,9 +65,8 @@ void WaitForJob(const std::string& id, const fs::path& exit_file, const fs::path
                           slurm::LastError(dir / "squeue.log")));
       }
       unanswered = !status;
-      if (!status) continue;
-      if (!status->alive) ended = now;
-      if (status->restarts > restarts) {
+      if (status && !status->alive) ended = now;
+      if (status && status->restarts > restarts) {
         restarts = status->restarts;
         LogWarning(
             format("{}: Slurm requeued job {} (its node failed, or it was preempted: {}); it runs again when "
