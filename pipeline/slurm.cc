@@ -43,20 +43,22 @@ void WriteBatchScript(const fs::path& script, const fs::path& program, const Wor
   fs::permissions(script, fs::perms::owner_exec, fs::perm_options::add);
 }
 
-// Waits until the job has written `exit_file`, or Slurm no longer runs it and the file did not come. Says when Slurm
+// Waits until the job has written `exit_file`, or Slurm no longer runs it and the file did not come; the last state
+// Slurm gave ("" when none). Says when Slurm
 // puts the job back in its queue (it runs again from the start, and its log `job_log` says why) and when Slurm does
 // not answer (nothing is concluded from that: the job may still run).
-void WaitForJob(const std::string& id, const fs::path& exit_file, const fs::path& dir, const std::string& stage,
-                const fs::path& job_log) {
+std::string WaitForJob(const std::string& id, const fs::path& exit_file, const fs::path& dir, const std::string& stage,
+                       const fs::path& job_log) {
   using Clock = std::chrono::steady_clock;
   auto next_query = Clock::now() + slurm::kQueryInterval;
   std::optional<Clock::time_point> ended;
   int restarts = 0;
   bool unanswered = false;
+  std::string state;
   while (!fs::exists(exit_file)) {
     ThrowIfCancelled();
     const auto now = Clock::now();
-    if (ended && now > *ended + slurm::kExitFileGrace) return;
+    if (ended && now > *ended + slurm::kExitFileGrace) return state;
     if (!ended && now >= next_query) {
       next_query = now + slurm::kQueryInterval;
       const std::optional<slurm::JobStatus> status = slurm::QueryJob(id, dir);
@@ -65,6 +67,7 @@ void WaitForJob(const std::string& id, const fs::path& exit_file, const fs::path
                           slurm::LastError(dir / "squeue.log")));
       }
       unanswered = !status;
+      if (status) state = status->state;
       if (status && !status->alive) ended = now;
       if (status && status->restarts > restarts) {
         restarts = status->restarts;
@@ -76,6 +79,7 @@ void WaitForJob(const std::string& id, const fs::path& exit_file, const fs::path
     }
     std::this_thread::sleep_for(slurm::kExitFilePoll);
   }
+  return state;
 }
 
 // Cancels the jobs an earlier run of this stage submitted and left (it was killed while they ran: its stage job or
@@ -96,10 +100,16 @@ void CancelLeftJobs(const fs::path& dir, const fs::path& staging, const std::str
   fs::create_directories(staging);
 }
 
-// Submits attempt `attempt` and waits for it; scancels the job when this process is interrupted. The job's
-// exit code, or nothing when it ended without one.
-std::optional<int> SubmitAndWait(const SlurmOptions& options, const fs::path& dir, const StageContext& context,
-                                 const std::string& stage, int attempt) {
+// How a stage's job ended: its exit code, or nothing when it ended without one; Slurm's last state of it; its log.
+struct JobEnd {
+  std::optional<int> code;
+  std::string state;
+  fs::path log;
+};
+
+// Submits attempt `attempt` and waits for it; scancels the job when this process is interrupted.
+JobEnd SubmitAndWait(const SlurmOptions& options, const fs::path& dir, const StageContext& context,
+                     const std::string& stage, int attempt) {
   const fs::path submit_log = dir / format("submit-{}.log", attempt);
   const auto start = std::chrono::steady_clock::now();
   const fs::path job_log = dir / format("attempt-{}.log", attempt);
@@ -108,18 +118,22 @@ std::optional<int> SubmitAndWait(const SlurmOptions& options, const fs::path& di
                                          {format("--export=ALL,P2N_ATTEMPT={}", attempt)}, dir / "job.sh"),
                     submit_log, "the job of stage " + stage);
   const fs::path exit_file = dir / format("exit-{}", attempt);
+  JobEnd end;
+  end.log = job_log;
   try {
-    WaitForJob(id, exit_file, dir, stage, job_log);
+    end.state = WaitForJob(id, exit_file, dir, stage, job_log);
   } catch (const Cancelled&) {
     RunCleanupSubprocess({"scancel", id}, submit_log, "scancel");
     LogWarning(format("{}: cancelled Slurm job {}", stage, id));
     throw;
   }
-  const std::optional<int> code = slurm::ReadExitCode(exit_file);
+  end.code = slurm::ReadExitCode(exit_file);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   LogInfo(format("{}: Slurm job {} (attempt {}) ended {} after {:.1f} s", stage, id, attempt,
-                 code ? format("with exit code {}", *code) : std::string("without finishing"), seconds));
-  return code;
+                 end.code ? format("with exit code {}", *end.code)
+                          : format("without finishing: {}", slurm::WhyUnfinished(end.state, job_log)),
+                 seconds));
+  return end;
 }
 
 }  // namespace
@@ -151,29 +165,32 @@ StageExecutor SlurmExecutor(const SlurmOptions& options, fs::path program) {
     WriteBatchScript(dir / "job.sh", program, context.workspace, dir / "job.json", stage.name());
     for (int attempt = 1; attempt <= options.retries + 1; ++attempt) {
       ThrowIfCancelled();
-      const std::optional<int> code = SubmitAndWait(options, dir, context, stage.name(), attempt);
+      const JobEnd end = SubmitAndWait(options, dir, context, stage.name(), attempt);
+      const std::optional<int>& code = end.code;
       if (code == 0 && fs::exists(summary)) {
         context.summary = ReadJsonFile(summary);
         return;
       }
-      const fs::path job_log = dir / format("attempt-{}.log", attempt);
+      const fs::path& job_log = end.log;
       if (code && *code != kExitInterrupted) {  // stopped by SIGTERM: from outside
         const std::string message = format("stage {} failed in its Slurm job (exit code {}): {} (the job's log: {})",
                                            stage.name(), *code, slurm::LastError(job_log), job_log.string());
         if (*code == kExitUserError) throw UserError(message);
         throw ExternalToolError(message);
       }
-      if (attempt <= options.retries) {
-        LogWarning(
-            format("{}: the Slurm job ended before finishing (cancelled, out of time, or its node lost); "
-                   "submitting it again ({} of {})",
-                   stage.name(), attempt, options.retries));
+      if (slurm::OutOfMemory(end.state, end.log)) {  // as it would again
+        throw ExternalToolError(
+            format("stage {}: its Slurm job ran {}; not submitted again, as it would again (its log: {})", stage.name(),
+                   slurm::WhyUnfinished(end.state, end.log), end.log.string()));
       }
+      if (attempt > options.retries) {
+        throw ExternalToolError(
+            format("stage {}: {} Slurm jobs in a row ended before finishing, the last one: {}; their logs are in {}",
+                   stage.name(), options.retries + 1, slurm::WhyUnfinished(end.state, job_log), dir.string()));
+      }
+      LogWarning(format("{}: the Slurm job ended before finishing ({}); submitting it again ({} of {})", stage.name(),
+                        slurm::WhyUnfinished(end.state, job_log), attempt, options.retries));
     }
-    throw ExternalToolError(
-        format("stage {}: {} Slurm jobs in a row ended before finishing (cancelled, out of time, or "
-               "their node lost); their logs are in {}",
-               stage.name(), options.retries + 1, dir.string()));
   };
 }
 

@@ -25,14 +25,15 @@ std::vector<std::string> SplitSpaces(const std::string& text) {
   return words;
 }
 
-// What squeue says of job `id` in `format` ("--format=%T", "--Format=State"), one line per job (or array element);
-// no lines when Slurm no longer knows the job, nothing when squeue got no answer (the controller busy or restarting).
+// What squeue says of job `id` in `format` ("--format=%T", "--Format=State"), one line per job (or array element),
+// ended ones too while Slurm keeps them (MinJobAge); no lines when Slurm no longer knows the job, nothing when squeue
+// got no answer (the controller busy or restarting).
 std::optional<std::vector<std::string>> Squeue(const std::string& id, const std::string& format, bool array,
                                                const fs::path& dir) {
   const fs::path answer = dir / "squeue.log";
   std::error_code error;
   fs::remove(answer, error);
-  std::vector<std::string> argv = {"squeue", "--noheader", "--jobs=" + id, format};
+  std::vector<std::string> argv = {"squeue", "--noheader", "--states=all", "--jobs=" + id, format};
   if (array) argv.push_back("--array");
   const SubprocessResult result = RunSubprocess(argv, answer, "asking Slurm about job " + id);
   std::ifstream log(answer);
@@ -103,6 +104,7 @@ std::optional<JobStatus> QueryJob(const std::string& id, const fs::path& dir) {
     words >> restarts;
     status.alive |= !Ended(state);
     status.restarts = std::max(status.restarts, restarts);
+    status.state = state;
   }
   return status;
 }
@@ -134,6 +136,33 @@ bool Ended(const std::string& state) {
     if (state == ended) return true;
   }
   return false;
+}
+
+bool OutOfMemory(const std::string& state, const fs::path& job_log) {
+  if (state == "OUT_OF_MEMORY") return true;  // cgroups
+  std::ifstream log(job_log);
+  std::string line;
+  while (std::getline(log, line)) {
+    // slurmstepd's words when it kills a job above its --mem by polling (JobAcctGatherParams=OverMemoryKill)
+    if (line.find("xceeded job memory limit") != std::string::npos) return true;
+  }
+  return false;
+}
+
+std::string WhyUnfinished(const std::string& state, const fs::path& job_log) {
+  if (OutOfMemory(state, job_log)) {
+    return "out of memory (more: --slurm.sbatch_args --mem=16G, or a whole node and its memory: --slurm.cpus 0)";
+  }
+  static const std::map<std::string, std::string, std::less<>> kWhy = {
+      {"CANCELLED", "cancelled"},
+      {"TIMEOUT", "out of its time limit (more: --slurm.sbatch_args --time=HH:MM:SS)"},
+      {"NODE_FAIL", "its node failed"},
+      {"BOOT_FAIL", "its node did not start"},
+      {"PREEMPTED", "preempted"},
+      {"DEADLINE", "past its deadline"}};
+  const auto found = kWhy.find(state);
+  if (found != kWhy.end()) return found->second;
+  return format("{} ({})", state.empty() ? "ended" : state, LastError(job_log));
 }
 
 bool CancelAndWait(const std::string& id, const fs::path& dir, const std::string& stage) {

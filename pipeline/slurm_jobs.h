@@ -38,6 +38,7 @@ std::optional<std::string> JobId(const std::filesystem::path& submit_log);
 struct JobStatus {
   bool alive = false;
   int restarts = 0;
+  std::string state;  // Slurm's ("RUNNING", "TIMEOUT", ...)
 };
 std::optional<JobStatus> QueryJob(const std::string& id, const std::filesystem::path& dir);
 // Whether the job may still be pending or running: true also when Slurm did not answer.
@@ -51,6 +52,11 @@ struct ElementState {
 std::optional<std::map<int, ElementState>> ArrayStates(const std::string& id, const std::filesystem::path& dir);
 // Whether a state is one of a job that has ended (or is no longer known).
 bool Ended(const std::string& state);
+// Whether a job that ended in `state`, its log `job_log`, was killed for using more memory than it asked for.
+bool OutOfMemory(const std::string& state, const std::filesystem::path& job_log);
+// Why a job that ended in `state` without finishing did not, and what to do when it is the cluster's limits ("out of
+// its time limit (more: ...)"); otherwise the state and the last error of its log.
+std::string WhyUnfinished(const std::string& state, const std::filesystem::path& job_log);
 
 // Cancels job `id` when it still runs and waits until Slurm has ended it; ExternalToolError when it does not end.
 // True when it was running.

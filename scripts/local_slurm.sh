@@ -89,10 +89,15 @@ SlurmdLogFile=$dir/log/slurmd.log
 ProctrackType=proctrack/linuxproc
 TaskPlugin=task/none
 SelectType=select/cons_tres
-SelectTypeParameters=CR_CPU
+# Memory counted as CPUs are (a job without --mem has half of a CPU's share), so that --mem is a limit.
+SelectTypeParameters=CR_CPU_Memory
+DefMemPerCPU=$((memory_mb / $(nproc) / 2))
 SchedulerType=sched/backfill
 ReturnToService=2
-JobAcctGatherType=jobacct_gather/none
+# A job above the memory it asked for (--mem) is killed ("Exceeded job memory limit"), as by a cluster's cgroups.
+JobAcctGatherType=jobacct_gather/linux
+JobAcctGatherParams=OverMemoryKill
+JobAcctGatherFrequency=task=1
 AccountingStorageType=accounting_storage/none
 MpiDefault=none
 InactiveLimit=0

@@ -1,9 +1,10 @@
 // `--run.scheduler slurm` against a real one-machine Slurm cluster (scripts/local_slurm.sh, which CTest starts
 // before these tests and stops after them; SLURM_CONF points at it): the results of a local run, a cancelled job
 // submitted again with the finished stages kept, one whose node fails requeued by Slurm, a controller that does not
-// answer waited for, the mapper's clusters and splat blocks as job arrays (beside the stage's job, taken back by it
-// when there is no room, rerun by it from a checkpoint when cancelled), a job's own failure reported and not retried,
-// Ctrl-C cancelling the running job, a killed run's job cancelled by the next run, and a missing sbatch.
+// answer waited for, one killed for its memory not submitted again, the mapper's clusters and splat blocks as job
+// arrays (beside the stage's job, taken back by it when there is no room, rerun by it from a checkpoint when
+// cancelled), a job's own failure reported and not retried, Ctrl-C cancelling the running job, a killed run's job
+// cancelled by the next run, and a missing sbatch.
 
 #include <signal.h>
 #include <catch2/catch.hpp>
@@ -288,7 +289,7 @@ TEST_CASE("slurm: a cancelled job is submitted again, resumes, and the stages do
   const std::string log = ReadText(dir / "run.log");
   INFO(log);
   REQUIRE(code == 0);
-  CHECK_THAT(log, Catch::Contains("submitting it again (1 of 2)"));
+  CHECK_THAT(log, Catch::Contains("ended before finishing (cancelled); submitting it again (1 of 2)"));
   CHECK(fs::exists(JobDir(workspace, "30_train") / "attempt-2.log"));
   CHECK(ReadJsonFile(workspace / "30_train" / "train_report.json")["resumed_from_step"].get<int>() > 0);
   CHECK(ReadJsonFile(workspace / "20_poses" / "manifest.json") == poses);
@@ -349,6 +350,24 @@ TEST_CASE("slurm: a controller that does not answer for a while is waited for, n
   CHECK_THAT(log, Catch::Contains("Slurm does not answer about job") && Catch::Contains("Socket timed out"));
   CHECK(!fs::exists(JobDir(workspace, "30_train") / "submit-2.log"));  // the job ran on, once
   CHECK(ReadJsonFile(workspace / "30_train" / "train_report.json")["steps"] == 600);
+}
+
+TEST_CASE("slurm: a job killed for its memory is not submitted again, and the error says how to ask for more",
+          "[slurm]") {
+  TempDir dir;
+  const fs::path data = SmallDataset(dir), workspace = dir / "ws";
+  std::vector<std::string> args = LongSlurmRunArgs(data, workspace);
+  std::string output;
+  REQUIRE(RunCommand({P2N_BINARY, "run", data.string(), "-w", workspace.string(), "--until", "poses"}, &output) == 0);
+  args.insert(args.end(), {"--slurm.cpus", "1", "--slurm.sbatch_args", "--mem=60M"});  // the stage needs about 200
+  const int code = RunCommand(args, &output);
+  INFO(output);
+  CHECK(code == 2);
+  CHECK_THAT(output, Catch::Contains("stage train: its Slurm job ran out of memory (more: --slurm.sbatch_args "
+                                     "--mem=") &&
+                         Catch::Contains("not submitted again"));
+  CHECK(!fs::exists(JobDir(workspace, "30_train") / "submit-2.log"));
+  CHECK(fs::exists(workspace / "20_poses" / "manifest.json"));
 }
 
 TEST_CASE("slurm: a job that fails on its own is not submitted again, and its error is the stage's", "[slurm]") {
