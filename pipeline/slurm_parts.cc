@@ -83,7 +83,11 @@ bool TakeBack(const PartArray& array, int part) {
 // Waits for the array's parts; runs here those still waiting for room when asked about (this job is free: the
 // cluster may have none for them beside it) and those that ended without finishing.
 void WaitForParts(PartArray& array, const std::function<void(int)>& here) {
-  std::map<int, Clock::time_point> ended;  // parts whose element ended without an exit file, and when
+  struct Ended {
+    Clock::time_point when;
+    std::string state;  // Slurm's
+  };
+  std::map<int, Ended> ended;  // parts whose element ended without an exit file
   auto next_query = Clock::now();
   while (!array.waiting.empty()) {
     std::this_thread::sleep_for(slurm::kExitFilePoll);
@@ -91,7 +95,7 @@ void WaitForParts(PartArray& array, const std::function<void(int)>& here) {
     for (auto it = array.waiting.begin(); it != array.waiting.end();) {
       const std::optional<int> code = slurm::ReadExitCode(array.ExitFile(*it));
       const auto gone = ended.find(*it);
-      const bool lost = !code && gone != ended.end() && Clock::now() > gone->second + slurm::kExitFileGrace;
+      const bool lost = !code && gone != ended.end() && Clock::now() > gone->second.when + slurm::kExitFileGrace;
       if (!code && !lost) {
         ++it;
         continue;
@@ -101,10 +105,8 @@ void WaitForParts(PartArray& array, const std::function<void(int)>& here) {
       if (code) {
         PartEnded(array, part, *code, here);
       } else {
-        LogWarning(
-            format("{}: {} ended in its Slurm job without finishing (cancelled, out of time, or its node "
-                   "lost); running it here",
-                   array.stage, array.Name(part)));
+        LogWarning(format("{}: {} ended in its Slurm job without finishing ({}); running it here", array.stage,
+                          array.Name(part), slurm::WhyUnfinished(ended[part].state, array.Log(part))));
         here(part);
       }
     }
@@ -123,7 +125,7 @@ void WaitForParts(PartArray& array, const std::function<void(int)>& here) {
         here(part);
         break;  // ask Slurm again: time has passed
       }
-      if (slurm::Ended(state) && !ended.contains(part)) ended[part] = Clock::now();
+      if (slurm::Ended(state) && !ended.contains(part)) ended[part] = {Clock::now(), state};
     }
   }
 }
