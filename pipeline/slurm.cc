@@ -44,9 +44,8 @@ void WriteBatchScript(const fs::path& script, const fs::path& program, const Wor
 }
 
 // Waits until the job has written `exit_file`, or Slurm no longer runs it and the file did not come; the last state
-// Slurm gave ("" when none). Says when Slurm
-// puts the job back in its queue (it runs again from the start, and its log `job_log` says why) and when Slurm does
-// not answer (nothing is concluded from that: the job may still run).
+// Slurm gave ("" when none). Says when Slurm puts the job back in its queue (it runs again from the start, and its
+// log `job_log` says why) and when Slurm does not answer (nothing is concluded from that: the job may still run).
 std::string WaitForJob(const std::string& id, const fs::path& exit_file, const fs::path& dir, const std::string& stage,
                        const fs::path& job_log) {
   using Clock = std::chrono::steady_clock;
