@@ -83,6 +83,11 @@ namespace {
 
 using Refused = std::function<void(const UserError&)>;
 
+// A rule's refusal of a value, saying where the value came from.
+UserError FromOrigin(const OptionError& e, const std::string& origin) {
+  return UserError(format("option {} (from {}) {}", e.key(), origin, e.rule()));
+}
+
 // What the workspace remembers (options.json), as this version reads it: a value it does not take (an option since
 // removed, a choice no longer offered, a rule since changed) is left out and passed to `refused`.
 Config ReadRemembered(const OptionRegistry& registry, const fs::path& file, const Refused& refused) {
@@ -95,7 +100,7 @@ Config ReadRemembered(const OptionRegistry& registry, const fs::path& file, cons
       return config;
     } catch (const OptionError& e) {
       if (config.Origin(e.key()).empty()) return config;  // a rule between options: checked once all are in
-      refused(UserError(format("option {} (from {}) {}", e.key(), file.string(), e.rule())));
+      refused(FromOrigin(e, file.string()));
       config.Unset(e.key());
     }
   }
@@ -116,7 +121,7 @@ Config ResolveConfig(const OptionRegistry& registry, const Workspace& workspace,
   } catch (const OptionError& e) {
     const std::string origin = config.Origin(e.key());
     if (origin.empty()) throw;
-    throw UserError(format("option {} (from {}) {}", e.key(), origin, e.rule()));
+    throw FromOrigin(e, origin);
   }
   if (!remember) return config;
   WriteJsonAtomic(remembered, config.ExplicitResultOptions());

@@ -99,11 +99,13 @@ void CancelLeftJobs(const fs::path& dir, const fs::path& staging, const std::str
   fs::create_directories(staging);
 }
 
-// How a stage's job ended: its exit code, or nothing when it ended without one; Slurm's last state of it; its log.
+// How a stage's job ended: its exit code, or nothing when it ended without one; its log; for one that did not finish
+// (no code, or stopped from outside), why, and whether for its memory.
 struct JobEnd {
   std::optional<int> code;
-  std::string state;
   fs::path log;
+  std::string why;
+  bool out_of_memory = false;
 };
 
 // Submits attempt `attempt` and waits for it; scancels the job when this process is interrupted.
@@ -117,20 +119,24 @@ JobEnd SubmitAndWait(const SlurmOptions& options, const fs::path& dir, const Sta
                                          {format("--export=ALL,P2N_ATTEMPT={}", attempt)}, dir / "job.sh"),
                     submit_log, "the job of stage " + stage);
   const fs::path exit_file = dir / format("exit-{}", attempt);
-  JobEnd end;
-  end.log = job_log;
+  std::string state;
   try {
-    end.state = WaitForJob(id, exit_file, dir, stage, job_log);
+    state = WaitForJob(id, exit_file, dir, stage, job_log);
   } catch (const Cancelled&) {
     RunCleanupSubprocess({"scancel", id}, submit_log, "scancel");
     LogWarning(format("{}: cancelled Slurm job {}", stage, id));
     throw;
   }
+  JobEnd end;
   end.code = slurm::ReadExitCode(exit_file);
+  end.log = job_log;
+  if (!end.code || *end.code == kExitInterrupted) {
+    end.why = slurm::WhyUnfinished(state, job_log);
+    end.out_of_memory = slurm::OutOfMemory(state, job_log);
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   LogInfo(format("{}: Slurm job {} (attempt {}) ended {} after {:.1f} s", stage, id, attempt,
-                 end.code ? format("with exit code {}", *end.code)
-                          : format("without finishing: {}", slurm::WhyUnfinished(end.state, job_log)),
+                 end.code ? format("with exit code {}", *end.code) : format("without finishing: {}", end.why),
                  seconds));
   return end;
 }
@@ -170,25 +176,24 @@ StageExecutor SlurmExecutor(const SlurmOptions& options, fs::path program) {
         context.summary = ReadJsonFile(summary);
         return;
       }
-      const fs::path& job_log = end.log;
       if (code && *code != kExitInterrupted) {  // stopped by SIGTERM: from outside
         const std::string message = format("stage {} failed in its Slurm job (exit code {}): {} (the job's log: {})",
-                                           stage.name(), *code, slurm::LastError(job_log), job_log.string());
+                                           stage.name(), *code, slurm::LastError(end.log), end.log.string());
         if (*code == kExitUserError) throw UserError(message);
         throw ExternalToolError(message);
       }
-      if (slurm::OutOfMemory(end.state, end.log)) {  // as it would again
+      if (end.out_of_memory) {  // as it would again
         throw ExternalToolError(
             format("stage {}: its Slurm job ran {}; not submitted again, as it would again (its log: {})", stage.name(),
-                   slurm::WhyUnfinished(end.state, end.log), end.log.string()));
+                   end.why, end.log.string()));
       }
       if (attempt > options.retries) {
         throw ExternalToolError(
             format("stage {}: {} Slurm jobs in a row ended before finishing, the last one: {}; their logs are in {}",
-                   stage.name(), options.retries + 1, slurm::WhyUnfinished(end.state, job_log), dir.string()));
+                   stage.name(), options.retries + 1, end.why, dir.string()));
       }
       LogWarning(format("{}: the Slurm job ended before finishing ({}); submitting it again ({} of {})", stage.name(),
-                        slurm::WhyUnfinished(end.state, job_log), attempt, options.retries));
+                        end.why, attempt, options.retries));
     }
   };
 }
