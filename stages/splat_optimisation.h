@@ -34,6 +34,7 @@ struct SplatSetup {
   // (PlacedSplats; densification may double it or splat.max_gaussians, whichever is more).
   double view_share = 1;
   size_t max_placed = 0;
+  SplatInit init = SplatInit::kField;  // where they were placed from (splat.init resolved)
   // Training view v's pixels, fitted to splat.max_image_size, read from its file. Where the training photos would
   // take more than splat.photo_memory, `data` holds none of them: `photos` is their decoded copy, which windows over
   // them read (none in a block's job, which reads its block's photos alone), and `views_in_memory` the whole

@@ -74,6 +74,13 @@ size_t PlacedSplats(int max_gaussians, double view_share, size_t pixels) {
   return std::min(static_cast<size_t>(std::min(max_gaussians * large, 1e12)), pixels / kPixelsPerSplat);
 }
 
+SplatInit ResolveSplatInit(SplatInit init, SceneSpace space, const fs::path& sparse_points) {
+  if (init != SplatInit::kAuto) return init;
+  if (space != SceneSpace::kUnbounded) return SplatInit::kField;
+  const bool enough = fs::exists(sparse_points) && ReadPly(sparse_points).size() >= kMinSparseInitPoints;
+  return enough ? SplatInit::kSparse : SplatInit::kField;
+}
+
 int SplatScheduleSteps(double budget) {
   const int steps = SplatTrainerOptions{}.steps;
   constexpr double kSeconds = 320;  // the budget up to which the schedule is the trainer's own
@@ -123,12 +130,13 @@ Gaussians<float> GaussiansFromSparseFile(const fs::path& file, const FieldInitOp
 // for the scene's size (measured on a first placement of as many as a small scene takes).
 void PlaceSplats(const StageContext& context, const SplatOptions& options, const PosesResult& poses,
                  const TrainResult& train, const NerfModel& model, SplatSetup* setup) {
+  setup->init = ResolveSplatInit(options.init, model.space, poses.sparse_points());
   size_t pixels = 0;
   for (const TrainView& view : setup->data.train) pixels += size_t(view.camera.width) * view.camera.height;
   std::shared_ptr<const ViewRenders> renders;
   const auto place = [&](size_t cap) {
     const FieldInitOptions init{.max_gaussians = cap, .sh_degree = options.sh_degree};
-    if (options.init == SplatInit::kSparse) return GaussiansFromSparseFile(poses.sparse_points(), init);
+    if (setup->init == SplatInit::kSparse) return GaussiansFromSparseFile(poses.sparse_points(), init);
     if (!renders) {
       renders = RenderViewsSmall(context, train.model(), model, setup->data.train, options.init_width,
                                  "splat: placing splats from the field");
@@ -229,14 +237,13 @@ SplatSetup LoadSplatSetup(const StageContext& context, const SplatOptions& optio
 }
 
 // splat_report.json's content (but the sizes of the files written), with the signs of a failed fit.
-SplatReport MakeSplatReport(const Optimised& optimised, const SplatSetup& setup, const SplatOptions& options,
-                            const Scores& scores, double near) {
+SplatReport MakeSplatReport(const Optimised& optimised, const SplatSetup& setup, const Scores& scores, double near) {
   SplatReport report;
   report.enabled = true;
   report.splats = optimised.splats.size();
   report.initial_splats = setup.gaussians.size();
   report.view_share = setup.view_share;
-  report.init = EnumName(options.init);
+  report.init = EnumName(setup.init);
   report.sh_degree = optimised.splats.sh_degree;
   report.steps = optimised.steps;
   report.seconds = optimised.state.seconds;
@@ -330,14 +337,14 @@ void SplatStage::Run(StageContext& context) const {
   const SplatRun run = MakeSplatRun(setup, options, context);
   const double near = run.scene.near;
   LogInfo(format("splat: {} splats placed from the {}; {} training and {} held-out views, {}", setup.gaussians.size(),
-                 options.init == SplatInit::kSparse ? "sparse points" : "field", setup.data.train.size(),
+                 setup.init == SplatInit::kSparse ? "sparse points" : "field", setup.data.train.size(),
                  setup.data.heldout.size(),
                  run.budget > 0 ? format("{:.0f} s budget", run.budget) : format("{} steps", options.steps)));
   Optimised optimised = options.blocks > 1 ? OptimiseBlocks(run) : OptimiseWhole(run);
 
   const Scores scores = Evaluate(optimised.splats, optimised.background, setup, near, true);
   AddMetricsRow(optimised.steps, optimised.state.seconds, optimised.splats.size(), scores, &optimised.state);
-  SplatReport report = MakeSplatReport(optimised, setup, options, scores, near);
+  SplatReport report = MakeSplatReport(optimised, setup, scores, near);
   WriteSplatFiles(out, optimised, setup, context, near, &report);
   WriteJsonAtomic(out.report(), report.ToJson());
   context.summary["splats"] = optimised.splats.size();

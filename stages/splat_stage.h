@@ -1,24 +1,26 @@
 #pragma once
-// The splat stage: the trained field baked into 3D Gaussians (splat/), initialised where the field's surfaces
-// are and optimised against the training photos for a time budget; held-out PSNR and SSIM against time
+// The splat stage: the scene as 3D Gaussians (splat/), placed where the field's surfaces are or at the sparse points
+// (ResolveSplatInit) and optimised against the training photos for a time budget; held-out PSNR and SSIM against time
 // (metrics.csv, psnr.png), and splats.ply in the standard 3D Gaussian Splatting layout, in COLMAP's (or the
 // dataset's) frame like the mesh, which splat viewers and tools open unchanged. Interruptible and resumable as
 // training is.
 
+#include <filesystem>
 #include <string>
 
 #include "formats/output_frame.h"
+#include "nerf/nerf_model.h"
 #include "pipeline/options.h"
 #include "stages/stage_results.h"
 #include "stages/train_presets.h"
 
 namespace p2n {
 
-enum class SplatInit { kField, kSparse };
+enum class SplatInit { kAuto, kField, kSparse };
 template <>
 struct EnumNames<SplatInit> {
-  static constexpr std::pair<SplatInit, const char*> kValues[] = {{SplatInit::kField, "field"},
-                                                                  {SplatInit::kSparse, "sparse"}};
+  static constexpr std::pair<SplatInit, const char*> kValues[] = {
+      {SplatInit::kAuto, "auto"}, {SplatInit::kField, "field"}, {SplatInit::kSparse, "sparse"}};
 };
 
 enum class SplatBackground { kAuto, kFixed };
@@ -35,13 +37,13 @@ struct SplatOptions {
   double time_budget = 0;  // seconds of optimisation; 0: by the training preset (SplatTimeBudget)
   int steps = 0;           // stop after this many steps; 0: no step limit
   int sh_degree = 3;
-  SplatInit init = SplatInit::kField;  // where the first Gaussians come from
-  int init_width = 128;                // training views rendered this wide to place the first Gaussians
-  int max_gaussians = 100'000;         // of the first (more in a large scene); densification may double it
-  int blocks = 1;                      // optimised in this many spatial blocks after a whole part (splat/blocks.h)
-  double coarse = 0.75;                // share of the optimisation on the photos at half size
-  int max_image_size = 1080;           // the photos are downsized to at most this on their longest side; 0: any size
-  double ssim_weight = 0.1;            // the loss: (1 - w) L1 + w (1 - SSIM)
+  SplatInit init = SplatInit::kAuto;  // where the first Gaussians come from (ResolveSplatInit)
+  int init_width = 128;               // training views rendered this wide to place the first Gaussians
+  int max_gaussians = 100'000;        // of the first (more in a large scene); densification may double it
+  int blocks = 1;                     // optimised in this many spatial blocks after a whole part (splat/blocks.h)
+  double coarse = 0.75;               // share of the optimisation on the photos at half size
+  int max_image_size = 1080;          // the photos are downsized to at most this on their longest side; 0: any size
+  double ssim_weight = 0.1;           // the loss: (1 - w) L1 + w (1 - SSIM)
   SplatBackground background = SplatBackground::kAuto;  // learnt behind photos, the field's where known
   FrameKind frame = FrameKind::kSource;
   double eval_interval = 30;  // seconds of optimisation between held-out evaluations (each of every held-out view)
@@ -59,8 +61,9 @@ struct SplatOptions {
     v("steps", steps, "stop after this many steps (one training photo each); 0: no step limit", "steps");
     v("sh_degree", sh_degree, "spherical-harmonics degree of the splats' colours (0: one colour each)");
     v("init", init,
-      "where the first splats come from: field (its surfaces, seen by the training views) or sparse (COLMAP's "
-      "sparse points, as 3D Gaussian Splatting starts; for comparison)");
+      "where the first splats come from: field (its surfaces, seen by the training views), sparse (the structure from "
+      "motion's points, or the dataset's, as 3D Gaussian Splatting starts), or auto: sparse for an unbounded scene "
+      "(a capture all round) with at least 1,000 points, else field");
     v("init_width", init_width,
       "width the training views are rendered at to place the first splats (narrower beyond 2 M pixels in all)",
       "pixels");
@@ -102,6 +105,15 @@ struct SplatOptions {
 // A scene is large where a training view sees less than this share of its splats (its mean over the training views,
 // MeanViewShare, measured on the splats placed as for a small scene).
 inline constexpr double kLargeSceneShare = 0.5;
+// The sparse points a capture needs for splat.init auto to start from them: fewer leave too few splats for the
+// densifications of a run's first half to grow from.
+inline constexpr size_t kMinSparseInitPoints = 1000;
+// splat.init resolved: auto is sparse in an unbounded scene (a capture all round, its field's `space`) where
+// `sparse_points` (the poses stage's sparse_points.ply, which a dataset imported without points lacks) holds at least
+// kMinSparseInitPoints, else field: there the field's haze placed opaque splats that the optimisation kept, where a
+// forward-facing field's placement scored better than the points (docs/benchmarks.md, splats from the sparse points).
+SplatInit ResolveSplatInit(SplatInit init, SceneSpace space, const std::filesystem::path& sparse_points);
+
 // The splats placed from the field (or the sparse points): `max_gaussians` (splat.max_gaussians), times
 // kLargeSceneShare / view_share in a large scene (each view then draws about as many as in a small one), and at most
 // one per 64 of the `pixels` training pixels.
@@ -121,8 +133,9 @@ class SplatStage : public StageOf<SplatResult> {
   // 7: a background the import knows stays fixed (auto); 8: splats.spz beside splats.ply; 9: and splats.glb;
   // 10: the coarse part's dilation a full-size pixel's; 11: densification under the cap by the largest gradients;
   // 12: the coarse part at most 40 passes; 13: the means' schedule stretched by a budget above 320 s;
-  // 14: more splats for a large scene, the trainer's cap in its checkpoints
-  int format_version() const override { return 14; }
+  // 14: more splats for a large scene, the trainer's cap in its checkpoints; 15: placed from the sparse points where
+  // there are enough (splat.init auto)
+  int format_version() const override { return 15; }
   std::vector<std::string> upstream() const override { return {PosesResult::kId.name, TrainResult::kId.name}; }
   void Run(StageContext& context) const override;
   // Block `part` (from 1) of splat.blocks (stages/splat_optimisation.h).

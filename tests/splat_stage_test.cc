@@ -11,6 +11,7 @@
 #include "base/errors.h"
 #include "base/file_util.h"
 #include "formats/output_frame.h"
+#include "formats/ply.h"
 #include "pipeline/cancel.h"
 #include "splat/splat_ply.h"
 #include "splat/spz.h"
@@ -30,6 +31,7 @@ TEST_CASE("splat stage: splats where the scene is, scored on the held-out views,
   const fs::path out = setup.dir / "ws" / "35_splat";
   const nlohmann::json report = ReadJsonFile(out / "splat_report.json");
   CHECK(report["heldout_views"] == 6);
+  CHECK(report["init"] == "field");  // splat.init auto: the small dataset comes with its cameras and no points
   const Gaussians<float> splats = ReadSplatPly(out / "splats.ply");
   CHECK(splats.size() == report["splats"].get<size_t>());
   CHECK(splats.sh_degree == 3);
@@ -289,6 +291,30 @@ TEST_CASE("splat stage: splat.init sparse without sparse points says where they 
   config.Set("splat.init", "sparse", "test");  // the small dataset comes with its cameras and no points
   CHECK_THROWS_WITH(setup.runner.Run(setup.workspace, config, Until("splat")),
                     Catch::Contains("sparse_points.ply") && Catch::Contains("--splat.init field"));
+}
+
+TEST_CASE("splat stage: splat.init auto starts an unbounded scene from its sparse points where there are enough",
+          "[splat]") {
+  TempDir dir;
+  const fs::path ply = dir / "sparse_points.ply";
+  const auto resolve = [&](SplatInit init, SceneSpace space) { return ResolveSplatInit(init, space, ply); };
+  // No file: a dataset imported without points.
+  CHECK(resolve(SplatInit::kAuto, SceneSpace::kUnbounded) == SplatInit::kField);
+  const auto write = [&](size_t count) {
+    std::vector<ColouredPoint> points;
+    for (size_t i = 0; i < count; ++i) points.push_back({Eigen::Vector3f(float(i), 0, 1), {128, 64, 32}});
+    WritePly(ply, points);
+  };
+  write(kMinSparseInitPoints - 1);
+  CHECK(resolve(SplatInit::kAuto, SceneSpace::kUnbounded) == SplatInit::kField);
+  write(kMinSparseInitPoints);
+  CHECK(resolve(SplatInit::kAuto, SceneSpace::kUnbounded) == SplatInit::kSparse);
+  // Forward-facing and bounded scenes keep the field's placement.
+  CHECK(resolve(SplatInit::kAuto, SceneSpace::kForward) == SplatInit::kField);
+  CHECK(resolve(SplatInit::kAuto, SceneSpace::kBounded) == SplatInit::kField);
+  // A choice made is kept, with or without points.
+  CHECK(resolve(SplatInit::kField, SceneSpace::kUnbounded) == SplatInit::kField);
+  CHECK(ResolveSplatInit(SplatInit::kSparse, SceneSpace::kBounded, dir / "none.ply") == SplatInit::kSparse);
 }
 
 }  // namespace p2n::testing
