@@ -53,7 +53,7 @@ struct SplatOptions {
 
   template <class V>
   void Visit(V& v) {
-    v("enabled", enabled, "bake the trained field into 3D Gaussian splats (splats.ply, for live viewing)");
+    v("enabled", enabled, "make 3D Gaussian splats of the scene (splats.ply, for live viewing)");
     v("time_budget", time_budget,
       "optimisation time of the splats; 0: by the training preset (fast 30, default 180, quality 480); above 320 s "
       "the means' learning rate decays over proportionally more steps",
