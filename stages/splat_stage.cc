@@ -74,9 +74,9 @@ size_t PlacedSplats(int max_gaussians, double view_share, size_t pixels) {
   return std::min(static_cast<size_t>(std::min(max_gaussians * large, 1e12)), pixels / kPixelsPerSplat);
 }
 
-SplatInit ResolveSplatInit(SplatInit init, SceneSpace space, const fs::path& sparse_points) {
+SplatInit ResolveSplatInit(SplatInit init, SceneSpace space, size_t training_views, const fs::path& sparse_points) {
   if (init != SplatInit::kAuto) return init;
-  if (space != SceneSpace::kUnbounded) return SplatInit::kField;
+  if (space != SceneSpace::kUnbounded || training_views < kFewViews) return SplatInit::kField;
   const bool enough = fs::exists(sparse_points) && ReadPly(sparse_points).size() >= kMinSparseInitPoints;
   return enough ? SplatInit::kSparse : SplatInit::kField;
 }
@@ -130,7 +130,7 @@ Gaussians<float> GaussiansFromSparseFile(const fs::path& file, const FieldInitOp
 // for the scene's size (measured on a first placement of as many as a small scene takes).
 void PlaceSplats(const StageContext& context, const SplatOptions& options, const PosesResult& poses,
                  const TrainResult& train, const NerfModel& model, SplatSetup* setup) {
-  setup->init = ResolveSplatInit(options.init, model.space, poses.sparse_points());
+  setup->init = ResolveSplatInit(options.init, model.space, setup->data.train.size(), poses.sparse_points());
   size_t pixels = 0;
   for (const TrainView& view : setup->data.train) pixels += size_t(view.camera.width) * view.camera.height;
   std::shared_ptr<const ViewRenders> renders;

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "formats/output_frame.h"
+#include "formats/transforms_json.h"
 #include "nerf/nerf_model.h"
 #include "pipeline/options.h"
 #include "stages/stage_results.h"
@@ -63,7 +64,7 @@ struct SplatOptions {
     v("init", init,
       "where the first splats come from: field (its surfaces, seen by the training views), sparse (the structure from "
       "motion's points, or the dataset's, as 3D Gaussian Splatting starts), or auto: sparse for an unbounded scene "
-      "(a capture all round) with at least 1,000 points, else field");
+      "(a capture all round) of at least 20 training photos with at least 1,000 points, else field");
     v("init_width", init_width,
       "width the training views are rendered at to place the first splats (narrower beyond 2 M pixels in all)",
       "pixels");
@@ -108,11 +109,13 @@ inline constexpr double kLargeSceneShare = 0.5;
 // The sparse points a capture needs for splat.init auto to start from them: fewer leave too few splats for the
 // densifications of a run's first half to grow from.
 inline constexpr size_t kMinSparseInitPoints = 1000;
-// splat.init resolved: auto is sparse in an unbounded scene (a capture all round, its field's `space`) where
-// `sparse_points` (the poses stage's sparse_points.ply, which a dataset imported without points lacks) holds at least
-// kMinSparseInitPoints, else field: there the field's haze placed opaque splats that the optimisation kept, where a
-// forward-facing field's placement scored better than the points (docs/benchmarks.md, splats from the sparse points).
-SplatInit ResolveSplatInit(SplatInit init, SceneSpace space, const std::filesystem::path& sparse_points);
+// splat.init resolved: auto is sparse in an unbounded scene (a capture all round, its field's `space`) of at least
+// kFewViews `training_views` where `sparse_points` (the poses stage's sparse_points.ply, which a dataset imported
+// without points lacks) holds at least kMinSparseInitPoints, else field: there the field's haze placed opaque splats
+// that the optimisation kept, where a forward-facing field's placement, or a few photos', scored better than the
+// points (docs/benchmarks.md, splats from the sparse points).
+SplatInit ResolveSplatInit(SplatInit init, SceneSpace space, size_t training_views,
+                           const std::filesystem::path& sparse_points);
 
 // The splats placed from the field (or the sparse points): `max_gaussians` (splat.max_gaussians), times
 // kLargeSceneShare / view_share in a large scene (each view then draws about as many as in a small one), and at most

@@ -297,7 +297,7 @@ TEST_CASE("splat stage: splat.init auto starts an unbounded scene from its spars
           "[splat]") {
   TempDir dir;
   const fs::path ply = dir / "sparse_points.ply";
-  const auto resolve = [&](SplatInit init, SceneSpace space) { return ResolveSplatInit(init, space, ply); };
+  const auto resolve = [&](SplatInit init, SceneSpace space) { return ResolveSplatInit(init, space, kFewViews, ply); };
   // No file: a dataset imported without points.
   CHECK(resolve(SplatInit::kAuto, SceneSpace::kUnbounded) == SplatInit::kField);
   const auto write = [&](size_t count) {
@@ -309,12 +309,13 @@ TEST_CASE("splat stage: splat.init auto starts an unbounded scene from its spars
   CHECK(resolve(SplatInit::kAuto, SceneSpace::kUnbounded) == SplatInit::kField);
   write(kMinSparseInitPoints);
   CHECK(resolve(SplatInit::kAuto, SceneSpace::kUnbounded) == SplatInit::kSparse);
-  // Forward-facing and bounded scenes keep the field's placement.
+  // Fewer training photos, forward-facing and bounded scenes keep the field's placement.
+  CHECK(ResolveSplatInit(SplatInit::kAuto, SceneSpace::kUnbounded, kFewViews - 1, ply) == SplatInit::kField);
   CHECK(resolve(SplatInit::kAuto, SceneSpace::kForward) == SplatInit::kField);
   CHECK(resolve(SplatInit::kAuto, SceneSpace::kBounded) == SplatInit::kField);
   // A choice made is kept, with or without points.
   CHECK(resolve(SplatInit::kField, SceneSpace::kUnbounded) == SplatInit::kField);
-  CHECK(ResolveSplatInit(SplatInit::kSparse, SceneSpace::kBounded, dir / "none.ply") == SplatInit::kSparse);
+  CHECK(ResolveSplatInit(SplatInit::kSparse, SceneSpace::kBounded, 1, dir / "none.ply") == SplatInit::kSparse);
 }
 
 }  // namespace p2n::testing
