@@ -22,6 +22,7 @@ struct ImportedView {
   std::string name;              // the image's file name in the stage's images/
   std::filesystem::path source;  // the image file, or empty when `pixels` holds the image
   OIIO::ImageBuf pixels;         // the image, for datasets that store pixels (.npz)
+  std::filesystem::path mask;    // its foreground mask (image_masks.h), or empty
 };
 
 struct ImportedDataset {

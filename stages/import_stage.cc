@@ -10,6 +10,7 @@
 #include "base/format.h"
 #include "base/image_io.h"
 #include "formats/dataset_import.h"
+#include "formats/image_masks.h"
 #include "formats/ply.h"
 #include "formats/sparse_tracks.h"
 #include "pipeline/hash.h"
@@ -25,6 +26,24 @@ namespace {
 fs::path Input(const Workspace& workspace) {
   if (!workspace.input()) throw UserError("the workspace has no dataset; run `photo2nerf run DATASET -w WS`");
   return *workspace.input();
+}
+
+// The dataset read with its masks when poses.masks takes them from a masks/ folder in it.
+ImportedDataset LoadWithMasks(const fs::path& input, const PosesOptions& options) {
+  ImportedDataset dataset = LoadDataset(input);
+  const fs::path masks = input / "masks";
+  if (!options.masks || !fs::is_directory(masks)) return dataset;
+  std::vector<fs::path> photos;
+  for (const ImportedView& view : dataset.views) {
+    if (view.source.empty()) return dataset;  // pixels inside the dataset file (.npz): no photo to match
+    photos.push_back(view.source);
+  }
+  const std::vector<fs::path> matched = MatchMasks(masks, photos);
+  for (size_t i = 0; i < matched.size(); ++i) {
+    dataset.views[i].mask = matched[i];
+    dataset.files.push_back(matched[i]);
+  }
+  return dataset;
 }
 
 // Undistorts to the same pinhole intrinsics (OpenCV's k1, k2, p1, p2 model, as COLMAP's OPENCV).
@@ -47,7 +66,7 @@ OIIO::ImageBuf Undistort(const OIIO::ImageBuf& image, const PinholeCamera& camer
 }
 
 struct ImageCounts {
-  std::atomic<int> undistorted{0}, transparent{0}, downsized{0};
+  std::atomic<int> undistorted{0}, transparent{0}, downsized{0}, masked{0};
 };
 
 // What each opaque image shows along its border (BorderPixels), by view; KnownBackground reads them only when no
@@ -79,6 +98,11 @@ void WriteImages(ImportedDataset& dataset, int max_side, const fs::path& images,
                              image.spec().height, camera.width, camera.height));
     }
     bool changed = view.source.empty();
+    if (!view.mask.empty()) {
+      image = WithMask(image, view.source, view.mask);
+      changed = true;
+      ++counts->masked;
+    }
     if (view.view.distortion != std::array<double, 4>{}) {
       image = Undistort(image, camera, view.view.distortion);
       view.view.distortion = {};
@@ -166,11 +190,11 @@ Normalization WriteCameras(const ImportedDataset& dataset, const fs::path& input
 
 }  // namespace
 
-std::map<std::string, std::string> ImportStage::ExternalInputs(const Workspace& workspace, const Config&) const {
+std::map<std::string, std::string> ImportStage::ExternalInputs(const Workspace& workspace, const Config& config) const {
   const fs::path input = Input(workspace);
   std::vector<fs::path> files;
   try {
-    files = LoadDataset(input).files;
+    files = LoadWithMasks(input, ReadOptions<PosesOptions>(config)).files;
   } catch (const UserError&) {
     return {{"dataset " + input.string(), "unreadable"}};  // Run() says why
   }
@@ -185,7 +209,7 @@ void ImportStage::Run(StageContext& context) const {
   const PosesOptions poses = ReadOptions<PosesOptions>(context.config);
   const ImportOptions options = ReadOptions<ImportOptions>(context.config);
   const fs::path input = Input(context.workspace);
-  ImportedDataset dataset = LoadDataset(input);
+  ImportedDataset dataset = LoadWithMasks(input, poses);
   for (const std::string& warning : dataset.warnings) LogWarning("import: " + warning);
   LogInfo(format("import: {} dataset, {} views", EnumName(dataset.kind), dataset.views.size()));
   ImageCounts counts;
@@ -195,9 +219,10 @@ void ImportStage::Run(StageContext& context) const {
   const std::optional<Rgb> background = KnownBackground(options, counts, borders);
   const Normalization normalization = WriteCameras(dataset, input, poses, background, out);
   context.summary = {{"views", dataset.views.size()}, {"dataset", EnumName(dataset.kind)}};
-  LogInfo(format("import: {} views ({} undistorted, {} with alpha, {} downsized to {} px), scene scale {:.4g}",
-                 dataset.views.size(), counts.undistorted.load(), counts.transparent.load(), counts.downsized.load(),
-                 poses.max_image_size, normalization.scale));
+  LogInfo(
+      format("import: {} views ({} masked, {} undistorted, {} with alpha, {} downsized to {} px), scene scale {:.4g}",
+             dataset.views.size(), counts.masked.load(), counts.undistorted.load(), counts.transparent.load(),
+             counts.downsized.load(), poses.max_image_size, normalization.scale));
   if (background) {
     LogInfo(format("import: the images are shown on a plain background ({:.3f}, {:.3f}, {:.3f})", (*background)[0],
                    (*background)[1], (*background)[2]));

@@ -12,6 +12,7 @@
 #include "base/format.h"
 #include "base/image_io.h"
 #include "base/video_io.h"
+#include "formats/image_masks.h"
 #include "pipeline/cancel.h"
 #include "pipeline/hash.h"
 #include "pipeline/log.h"
@@ -35,9 +36,34 @@ fs::path InputFolder(const Workspace& workspace) {
   return *workspace.input();
 }
 
-// Decodes one photo and writes what later stages read. Files that need no change are copied byte for byte.
-std::variant<IngestedImage, SkippedPhoto> IngestOne(const fs::path& source, const fs::path& images_dir,
-                                                    const IngestOptions& options) {
+// The masks of the photos in the folder's masks/, in their order; none when it has no such folder.
+std::vector<fs::path> PhotoMasks(const fs::path& input, const InputFiles& files) {
+  const fs::path masks = input / "masks";
+  if (files.photos.empty() || !fs::is_directory(masks)) return {};
+  if (!files.videos.empty()) {
+    throw UserError(
+        format("'{}' holds videos beside masks/, whose masks are for photos alone: move the videos to a "
+               "folder of their own, or the masks away",
+               input.string()));
+  }
+  return MatchMasks(masks, files.photos);
+}
+
+// Writes the photo's mask (`mask`; ReadMask with the photo's EXIF `orientation`) at the size of its image (`image`,
+// named `name`) into `masks_dir` under the image's name (PNG whatever the name says: COLMAP's undistorter finds a file
+// by its image's name).
+void WriteMask(const fs::path& mask, const fs::path& photo, int orientation, const OIIO::ImageSpec& image,
+               const fs::path& masks_dir, const std::string& name) {
+  const OIIO::ImageBuf alpha = ReadMask(mask, photo, image.width, image.height, orientation);
+  if (!alpha.write((masks_dir / name).string(), OIIO::TypeDesc::UINT8, "png"))
+    throw UserError(format("cannot write '{}': {}", (masks_dir / name).string(), alpha.geterror()));
+}
+
+// Decodes one photo and writes what later stages read, and its mask when it has one. Files that need no change are
+// copied byte for byte.
+std::variant<IngestedImage, SkippedPhoto> IngestOne(const fs::path& source, const fs::path& mask,
+                                                    const IngestResult& out_dirs, const IngestOptions& options) {
+  const fs::path images_dir = out_dirs.images();
   const std::string file = source.filename().string();
   ReadImageResult read = ReadImage(source);
   if (!read.ok()) return SkippedPhoto{file, read.error};
@@ -46,13 +72,17 @@ std::variant<IngestedImage, SkippedPhoto> IngestOne(const fs::path& source, cons
   out.orientation = read.orientation;
   out.camera = read.camera;
   OIIO::ImageBuf image = DownsizeAndDescribe(read.image, options.max_image_size, &out);
+  const auto name_image = [&](const std::string& name) {
+    out.name = name;
+    if (!mask.empty()) WriteMask(mask, source, read.orientation, image.spec(), out_dirs.masks(), name);
+  };
   const std::string extension = LowerExtension(source);
   out.from_cmyk = read.from_cmyk;
   const bool eight_bit = image.spec().format == OIIO::TypeDesc::UINT8;
   const bool unchanged = read.orientation == 1 && image.spec().width == out.source_width && eight_bit &&
                          !read.from_cmyk && (extension == "jpg" || extension == "jpeg" || extension == "png");
   if (unchanged) {
-    out.name = file;
+    name_image(file);
     std::error_code error;
     fs::copy_file(source, images_dir / out.name, fs::copy_options::overwrite_existing, error);
     if (error) throw UserError(format("cannot write '{}': {}", (images_dir / out.name).string(), error.message()));
@@ -62,7 +92,7 @@ std::variant<IngestedImage, SkippedPhoto> IngestOne(const fs::path& source, cons
   // (a.png, a_tif.png, a_PNG.png). Eight bits because COLMAP does not register 16-bit PNGs (the messy-folder
   // test found it) and training reads 8 bits anyway; HDR (float) images are encoded to sRGB first.
   const std::string original_extension = source.extension().string().substr(1);
-  out.name = source.stem().string() + (original_extension == "png" ? "" : "_" + original_extension) + ".png";
+  name_image(source.stem().string() + (original_extension == "png" ? "" : "_" + original_extension) + ".png");
   if (image.spec().format == OIIO::TypeDesc::FLOAT) image = OIIO::ImageBufAlgo::colorconvert(image, "linear", "sRGB");
   if (!eight_bit) {
     OIIO::ImageBuf eight(
@@ -89,14 +119,16 @@ void CheckImageCount(const IngestReport& report, int min_images) {
 }
 
 std::vector<std::variant<IngestedImage, SkippedPhoto>> IngestPhotos(const std::vector<fs::path>& photos,
-                                                                    const fs::path& images_dir,
+                                                                    const std::vector<fs::path>& masks,
+                                                                    const IngestResult& out,
                                                                     const IngestOptions& options) {
   std::vector<std::variant<IngestedImage, SkippedPhoto>> results(photos.size());
   if (photos.empty()) return results;
+  if (!masks.empty()) fs::create_directories(out.masks());
   Progress progress("ingest: decoding", static_cast<int64_t>(photos.size()), "images");
   tbb::parallel_for(size_t{0}, photos.size(), [&](size_t i) {
     if (CancelRequested()) return;
-    results[i] = IngestOne(photos[i], images_dir, options);
+    results[i] = IngestOne(photos[i], masks.empty() ? fs::path() : masks[i], out, options);
     progress.Add();
   });
   ThrowIfCancelled();
@@ -105,7 +137,7 @@ std::vector<std::variant<IngestedImage, SkippedPhoto>> IngestPhotos(const std::v
 
 // Adds the decoded images to the report, skipping copies of an earlier one; UserError when two map to one name.
 void AddImages(const std::vector<std::variant<IngestedImage, SkippedPhoto>>& results, const fs::path& input,
-               const fs::path& images_dir, IngestReport* report) {
+               const IngestResult& out, IngestReport* report) {
   std::set<std::string> names;
   std::map<std::string, std::string> first_with_fingerprint;
   std::set<std::pair<int, int>> sizes;
@@ -125,7 +157,8 @@ void AddImages(const std::vector<std::variant<IngestedImage, SkippedPhoto>>& res
     const std::string file = image.frame ? image.name : image.source;
     const auto [it, first] = first_with_fingerprint.emplace(image.fingerprint, file);
     if (!first) {
-      fs::remove(images_dir / image.name);
+      fs::remove(out.images() / image.name);
+      fs::remove(out.masks() / image.name);
       const std::string reason = kDuplicateReason + it->second;
       LogWarning(format("ingest: skipped {}: {}", file, reason));
       report->skipped.push_back({file, reason});
@@ -199,8 +232,15 @@ std::map<std::string, std::string> IngestStage::ExternalInputs(const Workspace& 
   } catch (const UserError&) {
     return {{"folder " + input.string(), "unreadable or without photos"}};  // Run() says why
   }
+  std::vector<fs::path> masks;
+  try {
+    masks = PhotoMasks(input, files);
+  } catch (const UserError&) {
+    return {{"folder " + (input / "masks").string(), "unusable"}};  // Run() says why
+  }
   std::map<std::string, std::string> inputs;
-  for (const auto& [kind, paths] : {std::pair{"image ", &files.photos}, std::pair{"video ", &files.videos}}) {
+  for (const auto& [kind, paths] :
+       {std::pair{"image ", &files.photos}, std::pair{"video ", &files.videos}, std::pair{"mask ", &masks}}) {
     const std::vector<std::string> digests = Sha1OfFiles(*paths);
     for (size_t i = 0; i < paths->size(); ++i) inputs[kind + (*paths)[i].filename().string()] = digests[i];
   }
@@ -219,7 +259,8 @@ void IngestStage::Run(StageContext& context) const {
   const IngestResult out{context.output_dir};
   fs::create_directories(out.images());
 
-  std::vector<std::variant<IngestedImage, SkippedPhoto>> results = IngestPhotos(files.photos, out.images(), options);
+  const std::vector<fs::path> masks = PhotoMasks(input, files);
+  std::vector<std::variant<IngestedImage, SkippedPhoto>> results = IngestPhotos(files.photos, masks, out, options);
   IngestReport report;
   report.input_folder = input.string();
   for (const fs::path& file : files.videos) {
@@ -235,11 +276,12 @@ void IngestStage::Run(StageContext& context) const {
     report.videos.push_back(std::move(video.video));
     ThrowIfCancelled();
   }
-  AddImages(results, input, out.images(), &report);
+  AddImages(results, input, out, &report);
   WriteJsonAtomic(out.report(), report.ToJson());
   CheckImageCount(report, options.min_images);
   context.summary = {{"images", report.images.size()}, {"skipped", report.skipped.size()}};
-  LogInfo(format("ingest: {} images, {} skipped", report.images.size(), report.skipped.size()));
+  LogInfo(format("ingest: {} images, {} skipped{}", report.images.size(), report.skipped.size(),
+                 masks.empty() ? "" : format("; each photo's mask from '{}'", (input / "masks").string())));
 }
 
 }  // namespace p2n

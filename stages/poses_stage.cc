@@ -13,6 +13,7 @@
 #include "base/format.h"
 #include "base/image_io.h"
 #include "formats/colmap_model.h"
+#include "formats/image_masks.h"
 #include "formats/ply.h"
 #include "formats/scene_normalization.h"
 #include "formats/sparse_tracks.h"
@@ -38,32 +39,39 @@ PinholeCamera Intrinsics(const ColmapCamera& camera) {
   return pinhole;
 }
 
-// The views whose images are larger than `max_side` (0: none) name downsized copies in `out`/images instead (PNG,
-// the name kept), with their intrinsics scaled to them. Views name their images from this stage's folder, whose
-// staging copy `out` sits beside it.
-void DownsizeLargeImages(const fs::path& out, int max_side, std::vector<CameraView>* views) {
-  std::vector<CameraView*> large;
+// The views whose images are larger than `max_side` (0: none) or have a mask in `masks` (empty: none) name copies
+// in `out`/images instead (PNG, the name kept): downsized, their intrinsics scaled to them, and with the mask as
+// alpha. Views name their images from this stage's folder, whose staging copy `out` sits beside it.
+void WriteChangedImages(const fs::path& out, int max_side, const fs::path& masks, std::vector<CameraView>* views) {
+  std::vector<CameraView*> changed;
+  int large = 0;
   for (CameraView& view : *views) {
-    if (max_side > 0 && std::max(view.camera.width, view.camera.height) > max_side) large.push_back(&view);
+    const bool downsize = max_side > 0 && std::max(view.camera.width, view.camera.height) > max_side;
+    large += downsize;
+    if (downsize || !masks.empty()) changed.push_back(&view);
   }
-  if (large.empty()) return;
+  if (changed.empty()) return;
   fs::create_directories(out / "images");
-  Progress progress("poses: downsizing images", static_cast<int64_t>(large.size()), "images");
-  tbb::parallel_for(size_t{0}, large.size(), [&](size_t i) {
-    CameraView& view = *large[i];
+  Progress progress("poses: writing images", static_cast<int64_t>(changed.size()), "images");
+  tbb::parallel_for(size_t{0}, changed.size(), [&](size_t i) {
+    CameraView& view = *changed[i];
     const fs::path source = out / view.file_path;
     ReadImageResult read = ReadImage(source);
     if (!read.ok()) throw UserError(format("cannot use '{}': {}", source.string(), read.error));
-    const OIIO::ImageBuf image = DownsizeToFit(read.image, max_side);
     const std::string name = fs::path(view.file_path).filename().string();
+    OIIO::ImageBuf image = masks.empty() ? std::move(read.image) : WithMask(read.image, source, masks / name);
+    if (max_side > 0) image = DownsizeToFit(image, max_side);
     view.file_path = "images/" + (LowerExtension(name) == "png" ? name : name + ".png");
     const std::string error = WriteImage(image, out / view.file_path);
     if (!error.empty()) throw UserError(error);
     view.camera = ResizedCamera(view.camera, image.spec().width, image.spec().height);
     progress.Add();
   });
-  LogInfo(format("poses: {} of {} images downsized to {} pixels on their longest side ({})", large.size(),
-                 views->size(), max_side, OptionKey(&PosesOptions::max_image_size)));
+  if (large > 0) {
+    LogInfo(format("poses: {} of {} images downsized to {} pixels on their longest side ({})", large, views->size(),
+                   max_side, OptionKey(&PosesOptions::max_image_size)));
+  }
+  if (!masks.empty()) LogInfo(format("poses: the {} images take their masks as alpha", views->size()));
 }
 
 // Each view's points (indices in the model's order, as sparse_points.ply holds them) and each point's error.
@@ -138,7 +146,8 @@ void PosesStage::Run(StageContext& context) const {
     views.push_back(view);
   }
   if (without_bounds > 0) LogWarning(format("poses: {} views see too few points for depth bounds", without_bounds));
-  DownsizeLargeImages(context.output_dir, options.max_image_size, &views);
+  const bool masked = options.masks && fs::is_directory(sfm.undistorted_masks());
+  WriteChangedImages(context.output_dir, options.max_image_size, masked ? sfm.undistorted_masks() : fs::path(), &views);
   const std::string heldout_rule = AssignHoldout(&views, options.holdout_every, true);
   KeepTrainingViews(&views, options.train_views);
 

@@ -2,7 +2,8 @@
 // The poses stage: the sfm stage's (undistorted) COLMAP model to camera-to-world matrices in OpenGL axes and
 // pinhole intrinsics, normalised so that the scene fits the unit cube, with per-view near/far bounds and a
 // held-out split. Writes transforms.json (readable by instant-ngp and nerfstudio) and sparse_points.ply, and
-// downsized copies of the images larger than poses.max_image_size (images/; the others are named where they are).
+// copies of the images larger than poses.max_image_size (downsized) or with a mask (with alpha) in images/; the
+// others are named where they are.
 
 #include "stages/stage_results.h"
 
@@ -20,6 +21,7 @@ struct PosesOptions {
   bool normalize = true;  // centre, rotate (up = +z) and scale the scene into the unit cube
   int max_image_size = kDefaultMaxTrainingImageSize;  // longest side of the images later stages read; 0: as they are
   int train_views = 0;                                // training views kept (KeepTrainingViews); 0: all
+  bool masks = true;                                  // a masks/ folder beside the photos gives their alpha
 
   template <class V>
   void Visit(V& v) {
@@ -36,6 +38,9 @@ struct PosesOptions {
       "keep this many of the training views, spread evenly in name order, and leave the others out of training "
       "(split \"unused\"): to measure what a capture of fewer photos would give, on the same held-out views; 0: all",
       "views");
+    v("masks", masks,
+      "use the masks/ folder in the photo folder or dataset (one mask a photo, white on the subject: image_masks.h) "
+      "as the photos' alpha, so that the scene is the subject alone");
   }
   void Check() const;
 };
@@ -43,8 +48,8 @@ struct PosesOptions {
 class PosesStage : public StageOf<PosesResult> {
  public:
   // 2: images downsized to poses.max_image_size; 3: fewer than 20 photos hold out views inside the span of the others
-  // 4: sparse_tracks.json
-  int format_version() const override { return 4; }
+  // 4: sparse_tracks.json; 5: the photos' masks as alpha
+  int format_version() const override { return 5; }
   std::vector<std::string> upstream() const override { return {SfmResult::kId.name}; }
   void Run(StageContext& context) const override;
 };

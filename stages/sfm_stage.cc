@@ -137,6 +137,7 @@ struct ColmapRun {
   const SfmOptions& options;
   ColmapFlags flags;
   fs::path images;
+  fs::path masks;  // the photos' masks named as their images, or empty
   SfmResult out;
   std::string seed, threads;
   StepRunner* steps;
@@ -481,17 +482,25 @@ struct ColmapRun {
     return refined;
   }
 
-  // Pinhole images and model in out/undistorted (without COLMAP's dense-stereo scripts).
+  // Pinhole images and model in out/undistorted (without COLMAP's dense-stereo scripts), and the masks undistorted
+  // as the images (out.undistorted_masks()) when the photos have masks.
   void Undistort(const fs::path& model) const {
-    const fs::path undistorted = out.undistorted();
-    const fs::path log = steps->Run(
-        "undistortion", {options.colmap, "image_undistorter", "--image_path", images.string(), "--input_path",
-                         model.string(), "--output_path", undistorted.string(), "--output_type", "COLMAP"});
-    if (!fs::exists(out.undistorted_model() / "cameras.bin")) {
+    UndistortInto(images, model, out.undistorted(), "undistortion");
+    if (masks.empty()) return;
+    const fs::path folder = out.undistorted_masks().parent_path();
+    UndistortInto(masks, model, folder, "undistortion of the masks");
+    for (const char* spare : {"sparse", "stereo"}) fs::remove_all(folder / spare);
+  }
+
+  void UndistortInto(const fs::path& from, const fs::path& model, const fs::path& to, const std::string& step) const {
+    const fs::path log =
+        steps->Run(step, {options.colmap, "image_undistorter", "--image_path", from.string(), "--input_path",
+                          model.string(), "--output_path", to.string(), "--output_type", "COLMAP"});
+    if (!fs::exists(to / "sparse" / "cameras.bin")) {
       throw ExternalToolError(
-          format("COLMAP's image_undistorter wrote no model into '{}'; log: {}", undistorted.string(), log.string()));
+          format("COLMAP's image_undistorter wrote no model into '{}'; log: {}", to.string(), log.string()));
     }
-    for (const fs::directory_entry& entry : fs::directory_iterator(undistorted)) {
+    for (const fs::directory_entry& entry : fs::directory_iterator(to)) {
       if (entry.path().extension() == ".sh") fs::remove(entry.path());
     }
   }
@@ -646,6 +655,7 @@ struct SfmSetup {
     return {.options = options,
             .flags = flags,
             .images = ingest.images(),
+            .masks = fs::is_directory(ingest.masks()) ? ingest.masks() : fs::path(),
             .out = out,
             .seed = std::to_string(options.seed),
             .threads = std::to_string(threads),
@@ -701,6 +711,7 @@ void SfmStage::Run(StageContext& context) const {
   // mapping, the triangulation after the hierarchical mapper, the principal point's adjustment, undistortion.
   StepRunner steps(out.logs(), (options.refine_principal_point ? 5 : 4) + (hierarchical ? 1 : 0));
   const ColmapRun colmap = setup.Colmap(&steps, context);
+  if (!colmap.masks.empty()) steps.AddSteps(1);
   steps.AddSteps(colmap.Blocks(names.size()) > 1 ? 2 : static_cast<int>(extracted.size()));
   colmap.ExtractFeatures(extracted, names.size());
   std::vector<SfmReport::Model> models;

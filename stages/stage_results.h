@@ -24,6 +24,7 @@ struct IngestResult {
   static constexpr StageId kId{"ingest", "00_ingest"};
   std::filesystem::path dir;
   std::filesystem::path images() const { return dir / "images"; }
+  std::filesystem::path masks() const { return dir / "masks"; }  // the photos' masks, named as their images
   std::filesystem::path report() const { return dir / "ingest_report.json"; }
 };
 
@@ -38,6 +39,8 @@ struct SfmResult {
   std::filesystem::path undistorted() const { return dir / "undistorted"; }
   std::filesystem::path undistorted_images() const { return undistorted() / "images"; }
   std::filesystem::path undistorted_model() const { return undistorted() / "sparse"; }
+  // The photos' masks undistorted as their images, named as them (when the photo folder has masks).
+  std::filesystem::path undistorted_masks() const { return dir / "undistorted_masks" / "images"; }
 };
 
 // Written by the poses stage from COLMAP's model, or by the import stage from a dataset with cameras.

@@ -28,12 +28,13 @@ const fs::path kData = fs::path(P2N_SOURCE_DIR) / ".." / "shared" / "data";
 // Runs the import stage on `input` (images at most `max_image_size` on their longest side, transparent ones shown on
 // `background`); returns the written transforms.json.
 nlohmann::json Import(const fs::path& input, const fs::path& workspace_path, int max_image_size = 0,
-                      const std::string& background = "white") {
+                      const std::string& background = "white", bool masks = true) {
   const OptionRegistry registry = AllOptions();
   Config config(registry);
   config.Set("run.progress", "none", "test");
   if (max_image_size > 0) config.Set("poses.max_image_size", max_image_size, "test");
   config.Set("import.background", background, "test");
+  config.Set("poses.masks", masks, "test");
   Workspace workspace = Workspace::Open(workspace_path, true);
   workspace.SetInput(input);
   RunRequest request;
@@ -154,6 +155,47 @@ TEST_CASE("import: transparent images keep their alpha, and import.background is
   CHECK(imported.getchannel(40, 3, 0, 3) == 1.0f);
   CHECK(Import(dir / "data", dir / "black", 0, "black")["background"] == nlohmann::json::array({0.0, 0.0, 0.0}));
   CHECK_FALSE(Import(dir / "data", dir / "keep", 0, "keep").contains("background"));
+}
+
+TEST_CASE("import: a masks/ folder in the dataset gives the photos their alpha, and a photo without one is named",
+          "[import]") {
+  TempDir dir;
+  WriteSyntheticScene(SmallScene(3), dir / "data");
+  fs::rename(dir / "data" / "ground_truth_cameras.json", dir / "data" / "transforms.json");
+  const nlohmann::json truth = ReadJsonFile(dir / "data" / "transforms.json");
+  fs::create_directories(dir / "data" / "masks");
+  std::vector<fs::path> masks;
+  for (const nlohmann::json& frame : truth["frames"]) {  // half size, the left half left out
+    const fs::path photo = frame["file_path"].get<std::string>();
+    OIIO::ImageBuf mask(OIIO::ImageSpec(32, 24, 1, OIIO::TypeDesc::UINT8));
+    for (OIIO::ImageBuf::Iterator<unsigned char, float> p(mask); !p.done(); ++p) p[0] = p.x() < 16 ? 0.0f : 1.0f;
+    masks.push_back(dir / "data" / "masks" / (photo.stem().string() + "_mask.png"));
+    REQUIRE(mask.write(masks.back().string()));
+  }
+  const nlohmann::json masked = Import(dir / "data", dir / "masked");
+  CHECK(masked["background"] == nlohmann::json::array({1.0, 1.0, 1.0}));
+  const fs::path first_photo = dir / "data" / truth["frames"][0]["file_path"].get<std::string>();
+  const OIIO::ImageBuf photo(first_photo.string());
+  const OIIO::ImageBuf imported(
+      (dir / "masked" / "20_poses" / masked["frames"][0]["file_path"].get<std::string>()).string());
+  REQUIRE(imported.spec().nchannels == 4);
+  CHECK(imported.getchannel(3, 3, 0, 3) == 0.0f);
+  CHECK(imported.getchannel(40, 3, 0, 3) == 1.0f);
+  for (int c = 0; c < 3; ++c) CHECK(imported.getchannel(40, 3, 0, c) == photo.getchannel(40, 3, 0, c));
+
+  const nlohmann::json opaque = Import(dir / "data", dir / "opaque", 0, "white", false);
+  CHECK_FALSE(opaque.contains("background"));
+  const OIIO::ImageBuf kept(
+      (dir / "opaque" / "20_poses" / opaque["frames"][0]["file_path"].get<std::string>()).string());
+  CHECK(kept.spec().nchannels == 3);
+
+  fs::rename(masks[0], dir / "data" / "masks" / "other.png");
+  CHECK_THROWS_WITH(Import(dir / "data", dir / "missing"), Catch::Contains("has no mask for 1 of the 3 photos") &&
+                                                               Catch::Contains(first_photo.filename().string()) &&
+                                                               Catch::Contains("--poses.masks false"));
+  OIIO::ImageBuf narrow(OIIO::ImageSpec(16, 24, 1, OIIO::TypeDesc::UINT8));
+  REQUIRE(narrow.write(masks[0].string()));
+  CHECK_THROWS_WITH(Import(dir / "data", dir / "narrow"), Catch::Contains("is 16x24 but its photo"));
 }
 
 TEST_CASE("import: a COLMAP project folder (images/ + sparse/0) keeps its cameras and points", "[import]") {

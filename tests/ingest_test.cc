@@ -333,4 +333,47 @@ TEST_CASE("ingest reads the camera each photo's EXIF names, and sfm groups the p
   CHECK(by_label["32x24"] == std::vector<std::string>{"e.jpg", "f.jpg"});
 }
 
+TEST_CASE("ingest: the photo folder's masks/ written under the images' names at their size and orientation",
+          "[ingest]") {
+  IngestFixture f;
+  fs::create_directories(f.photos / "masks");
+  // A mask whose left `left` columns of `width` x `height` leave the photo out.
+  const auto mask = [](int width, int height, int left) {
+    OIIO::ImageBuf image(OIIO::ImageSpec(width, height, 1, OIIO::TypeDesc::UINT8));
+    OIIO::ImageBufAlgo::fill(image, {1.0f}, OIIO::ROI(left, width, 0, height, 0, 1, 0, 1));
+    return image;
+  };
+  Write(MakeImage(64, 32, 0), f.photos / "a.png");
+  Write(mask(32, 16, 8), f.photos / "masks" / "a_mask.png");  // half size: resized
+  Write(MakeImage(64, 32, 1), f.photos / "b.jpg", 6);         // shown turned a quarter: 32 x 64 upright
+  Write(mask(64, 32, 16), f.photos / "masks" / "b.jpg.png");  // drawn on the stored pixels: turned with them
+  Write(MakeImage(64, 32, 2), f.photos / "c.tif");
+  Write(mask(64, 32, 32), f.photos / "masks" / "c.png");
+  const nlohmann::json report = f.Run();
+  REQUIRE(report["images"].size() == 3);
+  const fs::path masks = f.workspace.StageDir("00_ingest") / "masks";
+  const auto alpha = [&](const std::string& name, int x, int y) {
+    const ReadImageResult read = ReadImage(masks / name);
+    REQUIRE(read.ok());
+    return read.image.getchannel(x, y, 0, 0);
+  };
+  CHECK(alpha("a.png", 13, 10) == 0.0f);  // the edge at 16, blurred a little by the resize
+  CHECK(alpha("a.png", 19, 10) == 1.0f);
+  CHECK(alpha("c_tif.png", 31, 10) == 0.0f);
+  CHECK(alpha("c_tif.png", 32, 10) == 1.0f);
+  // b.jpg's stored left columns are its upright top rows (orientation 6 turns it clockwise).
+  const ReadImageResult b = ReadImage(masks / "b_jpg.png");
+  REQUIRE(b.ok());
+  CHECK(b.image.spec().width == 32);
+  CHECK(b.image.spec().height == 64);
+  CHECK(b.image.getchannel(10, 15, 0, 0) == 0.0f);
+  CHECK(b.image.getchannel(10, 17, 0, 0) == 1.0f);
+
+  CHECK(f.Status().state == StageState::kFresh);
+  Write(mask(64, 32, 20), f.photos / "masks" / "c.png");  // another mask: the images' alpha changes
+  CHECK(f.Status().state == StageState::kStale);
+  fs::remove(f.photos / "masks" / "c.png");
+  CHECK_THROWS_WITH(f.Run(), Catch::Contains("has no mask for 1 of the 3 photos (the first: 'c.tif')"));
+}
+
 }  // namespace p2n::testing

@@ -1,6 +1,6 @@
 // With real COLMAP: the synthetic scene's cameras are recovered within 0.5 degrees and 1% of the scene size
-// after a similarity alignment, every image registered (issue 3), also from a messy folder (issue 7). Skips with
-// a message when COLMAP is absent.
+// after a similarity alignment, every image registered (issue 3), also from a messy folder (issue 7), and the
+// photos' masks become the alpha of their undistorted images. Skips with a message when COLMAP is absent.
 
 #include <catch2/catch.hpp>
 
@@ -16,6 +16,7 @@
 #include "base/errors.h"
 #include "base/file_util.h"
 #include "base/format.h"
+#include "base/image_io.h"
 #include "formats/colmap_database.h"
 #include "formats/colmap_model.h"
 #include "formats/dataset_import.h"
@@ -78,6 +79,42 @@ void OrbitUntilPoses(const fs::path& dir, const Config& config, bool spaced = fa
   RunUntilPoses(dir / "photos", dir / "ws", config);
 }
 
+// A mask for each photo in `photos`/masks, named as the photo, whose left half leaves the photo out.
+void WriteHalfMasks(const fs::path& photos) {
+  fs::create_directories(photos / "masks");
+  for (const fs::directory_entry& entry : fs::directory_iterator(photos)) {
+    if (entry.path().extension() != ".png") continue;
+    const OIIO::ImageSpec spec = OIIO::ImageBuf(entry.path().string()).spec();
+    OIIO::ImageBuf mask(OIIO::ImageSpec(spec.width, spec.height, 1, OIIO::TypeDesc::UINT8));
+    OIIO::ImageBufAlgo::fill(mask, {1.0f}, OIIO::ROI(spec.width / 2, spec.width, 0, spec.height, 0, 1, 0, 1));
+    REQUIRE(mask.write((photos / "masks" / entry.path().filename()).string()));
+  }
+}
+
+// Whether every image of the poses stage in `poses` has the left half of WriteHalfMasks's masks as alpha (a tenth of
+// the width either side of the edge left for the undistortion), or (`masked` false) no alpha.
+void CheckHalfMasked(const fs::path& poses, const nlohmann::json& transforms, bool masked) {
+  for (const nlohmann::json& frame : transforms["frames"]) {
+    // Read without OpenImageIO's cache, which would keep these files' sizes after the poses stage rewrites them.
+    const ReadImageResult read = ReadImage(poses / frame["file_path"].get<std::string>());
+    INFO(frame["file_path"]);
+    REQUIRE(read.ok());
+    const OIIO::ImageBuf& image = read.image;
+    const int w = image.spec().width, h = image.spec().height;
+    if (!masked) {
+      CHECK(image.spec().nchannels == 3);
+      continue;
+    }
+    REQUIRE(image.spec().nchannels == 4);
+    for (const int y : {h / 4, h / 2, 3 * h / 4}) {
+      CHECK(image.getchannel(w / 10, y, 0, 3) == 0.0f);
+      CHECK(image.getchannel(w / 2 - w / 10, y, 0, 3) == 0.0f);
+      CHECK(image.getchannel(w / 2 + w / 10, y, 0, 3) == 1.0f);
+      CHECK(image.getchannel(w - w / 10, y, 0, 3) == 1.0f);
+    }
+  }
+}
+
 }  // namespace
 
 TEST_CASE("sfm + poses recover the synthetic scene's cameras", "[colmap][e2e]") {
@@ -91,6 +128,7 @@ TEST_CASE("sfm + poses recover the synthetic scene's cameras", "[colmap][e2e]") 
   INFO("camera path: " << scene.path);
   scene.num_views = 24;
   WriteSyntheticScene(scene, dir / "photos");
+  WriteHalfMasks(dir / "photos");
   Config config = QuietConfig();
   // The renderer is an ideal pinhole; the default model (RADIAL) has no tangential terms or second focal length to
   // drift along the handheld arc (one side of the scene), as OPENCV's did (0.46 degrees).
@@ -102,6 +140,10 @@ TEST_CASE("sfm + poses recover the synthetic scene's cameras", "[colmap][e2e]") 
   const nlohmann::json transforms = ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json");
   CheckPoses(transforms, TruePoses(dir / "photos"), 0.5, 0.01);
   CHECK(fs::exists(dir / "ws" / "20_poses" / "sparse_points.ply"));
+  CheckHalfMasked(dir / "ws" / "20_poses", transforms, true);
+  config.Set("poses.masks", false, "test");
+  RunUntilPoses(dir / "photos", dir / "ws", config);
+  CheckHalfMasked(dir / "ws" / "20_poses", ReadJsonFile(dir / "ws" / "20_poses" / "transforms.json"), false);
 
   // Images above poses.max_image_size: the same cameras, downsized copies and intrinsics scaled to them.
   config.Set("poses.max_image_size", 160, "test");
