@@ -37,9 +37,13 @@ SCENES = {
     "lego": ("lego", "object on white (Blender)", None),
     "mic": ("mic", "object on white (Blender)", None),
     "lego_200": ("lego_200/lego_200x200.npz", "object on white (.npz, 200 px)", None),
-    "maryrose": ("maryrose", "real object capture (LLFF cameras)", None),
+    "maryrose": ("maryrose", "real object capture (LLFF cameras, masks)", None),
     "herzjesu_p25": ("herzjesu_p25/images", "photos, COLMAP (surveyed cameras)",
                      "herzjesu_p25/reference_transforms.json"),
+    "entry_p10": ("entry_p10/images", "10 photos, COLMAP (surveyed cameras)", "entry_p10/reference_transforms.json"),
+    "beer_video": ("beer_video/Beer.mp4", "phone video, COLMAP", None),
+    "snowmiku_plush": ("snowmiku_plush/images", "97 phone photos around a plush, COLMAP", None),
+    "computer_mouse": ("computer_mouse/images", "59 phone photos around a mouse, COLMAP", None),
 }
 # Budget name: (train.preset, train.time_budget or None for the preset's, stages run, scenes or None for all).
 # default@300 is the field alone at 5 minutes, the budget of the best figures so far (DESIGN.md).
