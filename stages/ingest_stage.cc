@@ -36,10 +36,19 @@ fs::path InputFolder(const Workspace& workspace) {
   return *workspace.input();
 }
 
-// The masks of the photos in the folder's masks/, in their order; none when it has no such folder.
+// The folder of the photos' masks: masks/ in the photo folder, or beside it when it is an images/ folder (a
+// dataset's layout: images/ and masks/ side by side); empty when there is none.
+fs::path MasksFolder(const fs::path& input) {
+  const fs::path folder = input.has_filename() ? input : input.parent_path();
+  if (fs::is_directory(folder / "masks")) return folder / "masks";
+  const fs::path beside = folder.parent_path() / "masks";
+  return folder.filename() == "images" && fs::is_directory(beside) ? beside : fs::path();
+}
+
+// The masks of the photos (MasksFolder), in their order; none when there is no such folder.
 std::vector<fs::path> PhotoMasks(const fs::path& input, const InputFiles& files) {
-  const fs::path masks = input / "masks";
-  if (files.photos.empty() || !fs::is_directory(masks)) return {};
+  const fs::path masks = MasksFolder(input);
+  if (files.photos.empty() || masks.empty()) return {};
   if (!files.videos.empty()) {
     throw UserError(
         format("'{}' holds videos beside masks/, whose masks are for photos alone: move the videos to a "
@@ -236,7 +245,7 @@ std::map<std::string, std::string> IngestStage::ExternalInputs(const Workspace& 
   try {
     masks = PhotoMasks(input, files);
   } catch (const UserError&) {
-    return {{"folder " + (input / "masks").string(), "unusable"}};  // Run() says why
+    return {{"folder " + MasksFolder(input).string(), "unusable"}};  // Run() says why
   }
   std::map<std::string, std::string> inputs;
   for (const auto& [kind, paths] :
@@ -281,7 +290,7 @@ void IngestStage::Run(StageContext& context) const {
   CheckImageCount(report, options.min_images);
   context.summary = {{"images", report.images.size()}, {"skipped", report.skipped.size()}};
   LogInfo(format("ingest: {} images, {} skipped{}", report.images.size(), report.skipped.size(),
-                 masks.empty() ? "" : format("; each photo's mask from '{}'", (input / "masks").string())));
+                 masks.empty() ? "" : format("; each photo's mask from '{}'", MasksFolder(input).string())));
 }
 
 }  // namespace p2n

@@ -333,8 +333,9 @@ TEST_CASE("ingest reads the camera each photo's EXIF names, and sfm groups the p
   CHECK(by_label["32x24"] == std::vector<std::string>{"e.jpg", "f.jpg"});
 }
 
-TEST_CASE("ingest: the photo folder's masks/ written under the images' names at their size and orientation",
-          "[ingest]") {
+TEST_CASE(
+    "ingest: the photo folder's masks/ (or one beside images/) written as the images, at their size and orientation",
+    "[ingest]") {
   IngestFixture f;
   fs::create_directories(f.photos / "masks");
   // A mask whose left `left` columns of `width` x `height` leave the photo out.
@@ -374,6 +375,15 @@ TEST_CASE("ingest: the photo folder's masks/ written under the images' names at 
   CHECK(f.Status().state == StageState::kStale);
   fs::remove(f.photos / "masks" / "c.png");
   CHECK_THROWS_WITH(f.Run(), Catch::Contains("has no mask for 1 of the 3 photos (the first: 'c.tif')"));
+
+  // A dataset's layout: the photos in images/, the masks beside it.
+  fs::rename(f.photos / "masks", f.dir / "masks");
+  fs::rename(f.photos, f.dir / "images");
+  f.workspace.SetInput(f.dir / "images");
+  Write(mask(64, 32, 32), f.dir / "masks" / "c.png");
+  REQUIRE(f.Run()["images"].size() == 3);
+  CHECK(alpha("c_tif.png", 31, 10) == 0.0f);
+  CHECK(alpha("c_tif.png", 32, 10) == 1.0f);
 }
 
 }  // namespace p2n::testing
