@@ -151,20 +151,25 @@ std::vector<std::array<uint8_t, 3>> SurfaceColours(const NerfModel& model, const
   return colours;
 }
 
-void FitCube(const std::vector<Eigen::Vector3d>& points, MeshOptions* options) {
+void FitCube(const std::vector<Eigen::Vector3d>& points, MeshOptions* options, bool beyond_box) {
   if (points.size() < kMinCubePoints) return;
   Eigen::Vector3d low, high;
   for (int axis = 0; axis < 3; ++axis) {
     std::vector<double> values;
     values.reserve(points.size());
     for (const Eigen::Vector3d& p : points) values.push_back(p[axis]);
-    low[axis] = std::max(-1.0, Quantile(values, kCubeQuantile));
-    high[axis] = std::min(1.0, Quantile(values, 1 - kCubeQuantile));
+    low[axis] = Quantile(values, kCubeQuantile);
+    high[axis] = Quantile(values, 1 - kCubeQuantile);
   }
-  if ((high - low).minCoeff() <= 0) return;
-  options->half_size = std::min(1.0, 0.5 * kCubeMargin * (high - low).maxCoeff());
-  const double room = 1 - options->half_size;
-  options->centre = (0.5 * (low + high)).cwiseMax(-room).cwiseMin(room);
+  const Eigen::Vector3d inside_low = low.cwiseMax(-1.0), inside_high = high.cwiseMin(1.0);
+  if ((inside_high - inside_low).minCoeff() > 0) {
+    options->half_size = std::min(1.0, 0.5 * kCubeMargin * (inside_high - inside_low).maxCoeff());
+    const double room = 1 - options->half_size;
+    options->centre = (0.5 * (inside_low + inside_high)).cwiseMax(-room).cwiseMin(room);
+  } else if (beyond_box && (high - low).minCoeff() >= 0 && (high - low).maxCoeff() > 0) {
+    options->half_size = 0.5 * kCubeMargin * (high - low).maxCoeff();
+    options->centre = 0.5 * (low + high);
+  }
 }
 
 std::vector<float> DensitiesAt(const NerfModel& model, const std::vector<Eigen::Vector3d>& points) {

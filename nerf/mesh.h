@@ -47,8 +47,10 @@ struct MeshOptions {
 // Fits options' cube to where `points` lie (e.g. where the middle of the training views ends: the subject of an
 // unbounded capture): their 5th to 95th percentile along each axis, the longest side widened by a fifth, moved and
 // shrunk to stay inside the scene box [-1, 1]^3. The cube is left as it is for fewer than 100 points or when the
-// points lie outside the box.
-void FitCube(const std::vector<Eigen::Vector3d>& points, MeshOptions* options);
+// points lie outside the box, unless `beyond_box` (the field covers the space beyond the box as it is: a
+// forward-facing scene's frustum, whose normalisation may leave all it sees outside the box): then it spans them
+// there.
+void FitCube(const std::vector<Eigen::Vector3d>& points, MeshOptions* options, bool beyond_box = false);
 
 // The field's densities (1 / world unit) at world points.
 std::vector<float> DensitiesAt(const NerfModel& model, const std::vector<Eigen::Vector3d>& points);

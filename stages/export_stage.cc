@@ -135,7 +135,8 @@ DepthSamples SampleDepths(const StageContext& context, const fs::path& model_fil
 MeshOptions ChooseMeshOptions(const NerfModel& model, const ExportOptions& options, const DepthSamples& depths) {
   MeshOptions mesh;
   mesh.resolution = options.resolution;
-  if (RegionKind(model, options) == MeshRegion::kFocus) FitCube(depths.central, &mesh);
+  if (RegionKind(model, options) == MeshRegion::kFocus)
+    FitCube(depths.central, &mesh, model.space == SceneSpace::kForward);
   mesh.density_threshold = static_cast<float>(options.threshold);
   if (options.threshold > 0) return mesh;
   std::vector<Eigen::Vector3d> surface;

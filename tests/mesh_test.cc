@@ -80,7 +80,10 @@ TEST_CASE("mesh: a smaller cube off the centre meshes only its part of the surfa
   CHECK_THROWS_WITH(ExtractMesh(model, options), Catch::Contains("half_size"));
 }
 
-TEST_CASE("mesh: a cube fitted to points spans their bulk, inside the scene box, outliers ignored", "[mesh]") {
+TEST_CASE(
+    "mesh: a cube fitted to points spans their bulk, inside the scene box (or beyond it where asked), outliers "
+    "ignored",
+    "[mesh]") {
   std::vector<Eigen::Vector3d> points;
   for (int i = 0; i < 1000; ++i) {  // evenly in x in [0.1, 0.5], y in [-0.2, 0.2], z in [0, 0.2]
     const double u = (i % 10 + 0.5) / 10, v = (i / 10 % 10 + 0.5) / 10, w = (i / 100 + 0.5) / 10;
@@ -104,6 +107,16 @@ TEST_CASE("mesh: a cube fitted to points spans their bulk, inside the scene box,
   MeshOptions few;
   FitCube(std::vector<Eigen::Vector3d>(points.begin(), points.begin() + 50), &few);
   CHECK((few.half_size == 1.0 && few.centre == Eigen::Vector3d::Zero()));
+
+  // All of the bulk beyond the box: no cube inside it; one around the bulk where the field covers that space.
+  for (Eigen::Vector3d& p : points) p += Eigen::Vector3d(0, 0, 20);
+  MeshOptions outside;
+  FitCube(points, &outside);
+  CHECK((outside.half_size == 1.0 && outside.centre == Eigen::Vector3d::Zero()));
+  FitCube(points, &outside, true);
+  CHECK(outside.half_size == Approx(options.half_size).margin(0.02));
+  CHECK(outside.centre.x() == Approx(0.9).margin(0.02));
+  CHECK(outside.centre.z() == Approx(20.1).margin(0.02));
 }
 
 TEST_CASE("mesh: the threshold chosen from the field puts the surface where the views see it", "[mesh]") {
