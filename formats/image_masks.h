@@ -1,7 +1,7 @@
 #pragma once
-// Foreground masks beside a dataset's photos (as Brush, Postshot and NeRD's datasets take them): a folder masks/
-// in the dataset, one mask a photo, white on the subject and black on what to leave out. A mask becomes its
-// photo's alpha, so the field, the splats and the mesh keep the subject alone.
+// Foreground masks of the photos (as Brush, Postshot and NeRD's datasets take them): a folder masks/ in a dataset or
+// photo folder, one mask a photo, white on the subject and black on what to leave out. A mask becomes its photo's
+// alpha, so the field, the splats and the mesh keep the subject alone.
 
 #include <OpenImageIO/imagebuf.h>
 

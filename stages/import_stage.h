@@ -1,8 +1,8 @@
 #pragma once
 // The poses stage of a dataset that already has cameras: validates and copies its images (decoding each, taking
 // its mask from the dataset's masks/ as alpha, undistorting distorted ones (transparent ones keep their alpha),
-// downsizing those larger than
-// poses.max_image_size), normalises the cameras like the COLMAP path does and writes the same transforms.json.
+// downsizing those larger than poses.max_image_size), normalises the cameras like the COLMAP path does and writes
+// the same transforms.json.
 // Replaces ingest -> sfm -> poses.
 
 #include <string>

@@ -39,8 +39,8 @@ struct PosesOptions {
       "(split \"unused\"): to measure what a capture of fewer photos would give, on the same held-out views; 0: all",
       "views");
     v("masks", masks,
-      "use the masks/ folder in the photo folder or dataset (one mask a photo, white on the subject: image_masks.h) "
-      "as the photos' alpha, so that the scene is the subject alone");
+      "use the masks/ folder in the photo folder or dataset (one mask a photo, white on the subject, named as the "
+      "photo) as the photos' alpha, so that the scene is the subject alone");
   }
   void Check() const;
 };
