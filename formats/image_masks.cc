@@ -80,29 +80,24 @@ OIIO::ImageBuf ReadMask(const fs::path& mask, const fs::path& photo, int width, 
     }
     alpha = OIIO::ImageBufAlgo::resize(alpha, "", 0, OIIO::ROI(0, width, 0, height, 0, 1, 0, 1));
   }
-  OIIO::ImageBuf out(OIIO::ImageSpec(width, height, 1, OIIO::TypeDesc::FLOAT));
+  OIIO::ImageBuf out = OIIO::ImageBufAlgo::copy(alpha, OIIO::TypeDesc::FLOAT);
   for (OIIO::ImageBuf::Iterator<float> p(out); !p.done(); ++p) {
-    const float a = std::clamp(alpha.getchannel(p.x(), p.y(), 0, 0), 0.0f, 1.0f);
+    const float a = std::clamp(static_cast<float>(p[0]), 0.0f, 1.0f);
     p[0] = a < 8.0f / 255 ? 0.0f : a > 247.0f / 255 ? 1.0f : a;
   }
   return out;
 }
 
 OIIO::ImageBuf WithMask(const OIIO::ImageBuf& image, const fs::path& photo, const fs::path& mask) {
+  namespace algo = OIIO::ImageBufAlgo;
   const OIIO::ImageSpec& spec = image.spec();
-  const OIIO::ImageBuf alpha = ReadMask(mask, photo, spec.width, spec.height);
+  OIIO::ImageBuf alpha = ReadMask(mask, photo, spec.width, spec.height);
   const bool has_alpha = spec.nchannels == 2 || spec.nchannels == 4;
   const int colours = has_alpha ? spec.nchannels - 1 : spec.nchannels;
+  if (has_alpha) alpha = algo::mul(alpha, algo::channels(image, 1, {colours}));
   OIIO::ImageBuf out(OIIO::ImageSpec(spec.width, spec.height, colours + 1, spec.format));
-  std::vector<float> pixel(spec.nchannels + 1);
-  for (int y = 0; y < spec.height; ++y) {
-    for (int x = 0; x < spec.width; ++x) {
-      image.getpixel(x, y, pixel.data(), spec.nchannels);
-      const float a = alpha.getchannel(x, y, 0, 0);
-      pixel[colours] = has_alpha ? a * pixel[colours] : a;
-      out.setpixel(x, y, pixel.data(), colours + 1);
-    }
-  }
+  if (!algo::channel_append(out, algo::channels(image, colours, {}), alpha))
+    throw UserError(format("cannot give '{}' its mask '{}': {}", photo.string(), mask.string(), out.geterror()));
   return out;
 }
 
