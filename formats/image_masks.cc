@@ -31,6 +31,13 @@ std::map<std::string, std::vector<fs::path>> MasksByStem(const fs::path& masks) 
 
 }  // namespace
 
+fs::path MasksFolder(const fs::path& input) {
+  const fs::path folder = input.has_filename() ? input : input.parent_path();
+  if (fs::is_directory(folder / "masks")) return folder / "masks";
+  const fs::path beside = folder.parent_path() / "masks";
+  return folder.filename() == "images" && fs::is_directory(beside) ? beside : fs::path();
+}
+
 std::vector<fs::path> MatchMasks(const fs::path& masks, const std::vector<fs::path>& photos) {
   const std::map<std::string, std::vector<fs::path>> by_stem = MasksByStem(masks);
   std::vector<fs::path> matched;

@@ -11,6 +11,10 @@
 
 namespace p2n {
 
+// The folder of the masks of the photos in `folder` (a photo folder, or a dataset's): its masks/, or the masks/
+// beside it when it is an images/ folder (a dataset's layout); empty when there is none.
+std::filesystem::path MasksFolder(const std::filesystem::path& folder);
+
 // The mask of each photo in `masks` (in the photos' order). A photo IMG_1.JPG takes the mask of the same name
 // with any image extension, or with .png added (COLMAP's IMG_1.JPG.png), or with _mask (IMG_1_mask.png).
 // UserError naming the folder and the photos without one, or two masks that claim one photo.

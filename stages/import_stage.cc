@@ -28,11 +28,11 @@ fs::path Input(const Workspace& workspace) {
   return *workspace.input();
 }
 
-// The dataset read with its masks when poses.masks takes them from a masks/ folder in it.
+// The dataset read with its masks when poses.masks takes them from its MasksFolder.
 ImportedDataset LoadWithMasks(const fs::path& input, const PosesOptions& options) {
   ImportedDataset dataset = LoadDataset(input);
-  const fs::path masks = input / "masks";
-  if (!options.masks || !fs::is_directory(masks)) return dataset;
+  const fs::path masks = MasksFolder(input);
+  if (!options.masks || masks.empty()) return dataset;
   std::vector<fs::path> photos;
   for (const ImportedView& view : dataset.views) {
     if (view.source.empty()) return dataset;  // pixels inside the dataset file (.npz): no photo to match

@@ -36,15 +36,6 @@ fs::path InputFolder(const Workspace& workspace) {
   return *workspace.input();
 }
 
-// The folder of the photos' masks: masks/ in the photo folder, or beside it when it is an images/ folder (a
-// dataset's layout: images/ and masks/ side by side); empty when there is none.
-fs::path MasksFolder(const fs::path& input) {
-  const fs::path folder = input.has_filename() ? input : input.parent_path();
-  if (fs::is_directory(folder / "masks")) return folder / "masks";
-  const fs::path beside = folder.parent_path() / "masks";
-  return folder.filename() == "images" && fs::is_directory(beside) ? beside : fs::path();
-}
-
 // The masks of the photos (MasksFolder), in their order; none when there is no such folder.
 std::vector<fs::path> PhotoMasks(const fs::path& input, const InputFiles& files) {
   const fs::path masks = MasksFolder(input);
