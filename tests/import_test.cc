@@ -78,15 +78,20 @@ SyntheticSceneOptions SmallScene(int views) {
   return scene;
 }
 
+// A transforms.json dataset of the small synthetic scene's `views` views in `folder`; its transforms.json.
+nlohmann::json WriteSmallDataset(int views, const fs::path& folder) {
+  WriteSyntheticScene(SmallScene(views), folder);
+  fs::rename(folder / "ground_truth_cameras.json", folder / "transforms.json");
+  return ReadJsonFile(folder / "transforms.json");
+}
+
 }  // namespace
 
 TEST_CASE("import: a transforms.json dataset keeps its cameras up to a similarity", "[import]") {
   TempDir dir;
-  WriteSyntheticScene(SmallScene(6), dir / "data");
-  fs::rename(dir / "data" / "ground_truth_cameras.json", dir / "data" / "transforms.json");
+  const nlohmann::json truth = WriteSmallDataset(6, dir / "data");
   CHECK(DetectDataset(dir / "data") == DatasetKind::kTransformsJson);
   const nlohmann::json transforms = Import(dir / "data", dir / "ws");
-  const nlohmann::json truth = ReadJsonFile(dir / "data" / "transforms.json");
   REQUIRE(transforms["frames"].size() == 6);
   std::vector<Eigen::Matrix4d> ours, theirs;
   for (size_t i = 0; i < 6; ++i) {
@@ -103,9 +108,7 @@ TEST_CASE("import: a transforms.json dataset keeps its cameras up to a similarit
 
 TEST_CASE("import: images larger than poses.max_image_size are downsized, their intrinsics with them", "[import]") {
   TempDir dir;
-  WriteSyntheticScene(SmallScene(3), dir / "data");
-  fs::rename(dir / "data" / "ground_truth_cameras.json", dir / "data" / "transforms.json");
-  const nlohmann::json truth = ReadJsonFile(dir / "data" / "transforms.json");
+  const nlohmann::json truth = WriteSmallDataset(3, dir / "data");
   const nlohmann::json transforms = Import(dir / "data", dir / "ws", 32);  // 64 x 48 -> 32 x 24
   CHECK(transforms["w"] == 32);
   CHECK(transforms["h"] == 24);
@@ -133,9 +136,7 @@ TEST_CASE("import: images larger than poses.max_image_size are downsized, their 
 TEST_CASE("import: transparent images keep their alpha, and import.background is the colour they are shown on",
           "[import]") {
   TempDir dir;
-  WriteSyntheticScene(SmallScene(3), dir / "data");
-  fs::rename(dir / "data" / "ground_truth_cameras.json", dir / "data" / "transforms.json");
-  const nlohmann::json truth = ReadJsonFile(dir / "data" / "transforms.json");
+  const nlohmann::json truth = WriteSmallDataset(3, dir / "data");
   for (const nlohmann::json& frame : truth["frames"]) {  // the left half transparent
     const fs::path file = dir / "data" / frame["file_path"].get<std::string>();
     const OIIO::ImageBuf rgb(file.string());
@@ -160,9 +161,7 @@ TEST_CASE("import: transparent images keep their alpha, and import.background is
 TEST_CASE("import: a masks/ folder in the dataset gives the photos their alpha, and a photo without one is named",
           "[import]") {
   TempDir dir;
-  WriteSyntheticScene(SmallScene(3), dir / "data");
-  fs::rename(dir / "data" / "ground_truth_cameras.json", dir / "data" / "transforms.json");
-  const nlohmann::json truth = ReadJsonFile(dir / "data" / "transforms.json");
+  const nlohmann::json truth = WriteSmallDataset(3, dir / "data");
   fs::create_directories(dir / "data" / "masks");
   std::vector<fs::path> masks;
   for (const nlohmann::json& frame : truth["frames"]) {  // half size, the left half left out
