@@ -1,5 +1,5 @@
 #pragma once
-// Little-endian binary files with a magic and a format version (DESIGN.md §3): a writer that appends
+// Little-endian binary files with a magic and a format version (docs/design.md §3): a writer that appends
 // numbers, arrays and strings to a buffer, and a reader that checks every length against what is left, so a
 // truncated or hostile file gives an error naming the file, never an over-read or a huge allocation.
 

@@ -1,5 +1,5 @@
 #pragma once
-// Pinhole cameras and the one place where camera axis conventions change (DESIGN.md §3).
+// Pinhole cameras and the one place where camera axis conventions change (docs/design.md §3).
 //
 // COLMAP / OpenCV camera: x right, y down, z forward. NeRF / OpenGL / Blender camera (transforms.json): x right,
 // y up, looking down -z. Pixel (i, j)'s centre is at (i + 0.5, j + 0.5) in both. Transforms are named

@@ -1,5 +1,5 @@
 #pragma once
-// The two error channels of DESIGN.md §5, plus the external-tool and cancellation cases.
+// The two error channels of docs/design.md §5, plus the external-tool and cancellation cases.
 // Library code throws these; only cli/main.cc turns them into exit codes.
 
 #include <filesystem>

@@ -46,7 +46,7 @@ SCENES = {
     "computer_mouse": ("computer_mouse/images", "59 phone photos around a mouse, COLMAP", None),
 }
 # Budget name: (train.preset, train.time_budget or None for the preset's, stages run, scenes or None for all).
-# default@300 is the field alone at 5 minutes, the budget of the best figures so far (DESIGN.md).
+# default@300 is the field alone at 5 minutes, the budget of the best figures so far (docs/benchmarks.md).
 BUDGETS = {
     "fast": ("fast", None, "splat", None),
     "default": ("default", None, "splat", None),

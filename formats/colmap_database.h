@@ -1,6 +1,6 @@
 #pragma once
 // COLMAP's database (database.db, SQLite): the images' names and SIFT descriptors read, raw feature matches
-// written, in COLMAP's layout (DESIGN.md §7), so that COLMAP's own matchers find the matches there and only verify
+// written, in COLMAP's layout (docs/design.md §7), so that COLMAP's own matchers find the matches there and only verify
 // them. Errors name the database and the record and are ExternalToolError: COLMAP wrote the file.
 
 #include <Eigen/Core>

@@ -1,6 +1,6 @@
 #pragma once
 // sparse_tracks.json beside sparse_points.ply: which views see each sparse point, and how well the structure from
-// motion placed it. Free depth for those views' pixels (the train stage's depth loss, DESIGN.md §6).
+// motion placed it. Free depth for those views' pixels (the train stage's depth loss, docs/design.md §6).
 //
 //   {"errors": [px, ...],                                    one per point of sparse_points.ply, in its order
 //    "views": [{"file_path": "...", "points": [i, ...]}, ...]}  transforms.json's views, each with the points it sees

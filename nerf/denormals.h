@@ -1,6 +1,6 @@
 #pragma once
 // Denormal floats make some operations a hundred times slower, and training produces them as errors shrink.
-// DESIGN.md §6: flush them to zero (MXCSR FTZ and DAZ) in every thread that computes; -ffast-math as a whole
+// docs/design.md §6: flush them to zero (MXCSR FTZ and DAZ) in every thread that computes; -ffast-math as a whole
 // stays off because it breaks the non-finite checks. Setting the bits is cheap and idempotent, so parallel
 // bodies call this at their start.
 

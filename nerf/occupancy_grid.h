@@ -1,5 +1,5 @@
 #pragma once
-// An occupancy grid over [0, 1]^3 (DESIGN.md §6): which cells may hold density, refreshed from the field during
+// An occupancy grid over [0, 1]^3 (docs/design.md §6): which cells may hold density, refreshed from the field during
 // training, so that ray marching takes no samples in empty space. Each cell keeps a decaying maximum of the
 // densities seen in it (as instant-ngp does) and a bit: occupied when that value exceeds the threshold.
 

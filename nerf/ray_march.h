@@ -1,5 +1,5 @@
 #pragma once
-// The samples of one world ray through a model's scene (DESIGN.md §6): stratified bins over the scene box
+// The samples of one world ray through a model's scene (docs/design.md §6): stratified bins over the scene box
 // (vanilla), or every `step` through the occupancy grid's occupied cells, the step growing with the distance
 // beyond the unit box in an unbounded scene, even in NDC in a forward-facing one. A march can be taken in
 // pieces (the renderer takes a ray's next few samples only while the ray is still visible): the pieces together

@@ -1,5 +1,5 @@
 #pragma once
-// Trains a radiance field from posed images (DESIGN.md §6): random rays across all training images, marched
+// Trains a radiance field from posed images (docs/design.md §6): random rays across all training images, marched
 // through the occupancy grid (refreshed from the field every few steps) and packed; chunks of rays run in
 // parallel, each with its own gradient buffer, reduced in a fixed order (a seed gives the same run); Adam on the
 // MLPs and sparse Adam on the hash grid. The number of rays per step adapts so that a step has about

@@ -1,5 +1,5 @@
 #pragma once
-// Volume rendering of one ray from its samples (DESIGN.md §6, numerics): alpha_i = 1 - exp(-sigma_i delta_i)
+// Volume rendering of one ray from its samples (docs/design.md §6, numerics): alpha_i = 1 - exp(-sigma_i delta_i)
 // computed as -expm1(-sigma_i delta_i), transmittance in log space (a running sum of sigma delta, never a long
 // product of (1 - alpha)), the background as an explicit term weighted by the final transmittance, and early
 // termination once the transmittance falls below a threshold. Compositing with exp(-sigma delta) is exact for

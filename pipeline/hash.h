@@ -1,6 +1,6 @@
 #pragma once
 // Stable content hashes (SHA-1, hex): the same bytes give the same digest on every platform and version.
-// Never std::hash (DESIGN.md §2).
+// Never std::hash (docs/design.md §2).
 
 #include <cstdint>
 #include <filesystem>

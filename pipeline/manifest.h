@@ -1,5 +1,5 @@
 #pragma once
-// The cache key of a stage and the manifest that records it (DESIGN.md §2: by content, never by existence).
+// The cache key of a stage and the manifest that records it (docs/design.md §2: by content, never by existence).
 
 #include <nlohmann/json.hpp>
 

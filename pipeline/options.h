@@ -1,6 +1,6 @@
 #pragma once
 // Options addressable by dotted keys (`ingest.max_image_size`), from the command line and from JSON config
-// files (DESIGN.md §4). Each configurable unit keeps one plain XxxOptions struct with a default and a comment
+// files (docs/design.md §4). Each configurable unit keeps one plain XxxOptions struct with a default and a comment
 // on every field, and a member template Visit() that names its fields once:
 //
 //   struct IngestOptions {

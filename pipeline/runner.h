@@ -1,5 +1,5 @@
 #pragma once
-// Runs a graph of stages in a workspace, skipping fresh ones, and tells the state of each (DESIGN.md §2).
+// Runs a graph of stages in a workspace, skipping fresh ones, and tells the state of each (docs/design.md §2).
 
 #include <memory>
 #include <optional>

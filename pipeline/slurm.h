@@ -1,5 +1,5 @@
 #pragma once
-// Stages as jobs of a Slurm cluster (`--run.scheduler slurm`, DESIGN.md §2). The process that runs the pipeline
+// Stages as jobs of a Slurm cluster (`--run.scheduler slurm`, docs/design.md §2). The process that runs the pipeline
 // keeps the workspace lock, the cache keys, the manifests and the commit of every stage folder, exactly as a local
 // run; only a stage's work (Stage::Run into its staging folder) runs elsewhere: `sbatch` submits
 // `photo2nerf stage-job`, which reads the stage, its key and the resolved options from a job file and writes the

@@ -1,5 +1,5 @@
 #pragma once
-// The stage contract (DESIGN.md §2): a stage declares its name, folder, format version, upstream stages (those its
+// The stage contract (docs/design.md §2): a stage declares its name, folder, format version, upstream stages (those its
 // options make it read), the option sections whose result options change its output, and any inputs from outside
 // the workspace. Its cache key is a stable hash of those plus the keys of the upstream stages it reads. Run() writes
 // into the staging folder; the pipeline writes the manifest and moves the folder into place.

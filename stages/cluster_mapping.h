@@ -3,7 +3,7 @@
 // hierarchical mapper spread over machines. The stage's job cuts the photos into clusters (mapper_clusters.h) and
 // writes each one's photo list; each part runs COLMAP's incremental mapper on its list; the stage's job merges the
 // clusters' models (COLMAP's model_merger aligns them on the photos they share), then triangulates and adjusts the
-// merged model as after the hierarchical mapper (DESIGN.md §7).
+// merged model as after the hierarchical mapper (docs/design.md §7).
 
 #include <cstddef>
 #include <filesystem>

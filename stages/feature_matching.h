@@ -5,7 +5,7 @@
 // product of the bytes (DescriptorSimilarity: byte products with AVX-512 VNNI), judged by COLMAP's rules: the
 // angle between descriptors at most max_distance, below max_ratio of the second best's, and the best both ways.
 // The raw matches go into COLMAP's database, where its exhaustive and sequential matchers find them and only
-// verify them (DESIGN.md §7).
+// verify them (docs/design.md §7).
 
 #include <cstddef>
 #include <filesystem>

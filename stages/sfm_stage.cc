@@ -30,7 +30,7 @@ namespace p2n {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr double kSuspiciousFocusAngleDeg = 20;  // correct orbit models stay near 8 (DESIGN.md §7)
+constexpr double kSuspiciousFocusAngleDeg = 20;  // correct orbit models stay near 8 (docs/design.md §7)
 constexpr size_t kMaxNamesListed = 20;
 // Global bundle adjustments, the mapper's and the final one, stop when an iteration changes the cost by less than
 // this share of it (Ceres's own default; COLMAP's 0 runs each to its iteration limit, 100 for the final one, on a

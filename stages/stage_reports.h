@@ -1,5 +1,5 @@
 #pragma once
-// The reports that one stage writes and others read (DESIGN.md §5), one struct each: the writer fills it and
+// The reports that one stage writes and others read (docs/design.md §5), one struct each: the writer fills it and
 // writes it with ToJson(), every reader reads it with Read(), both from one declaration of its JSON per struct
 // (Describe in stage_reports.cc), so a field has one name and one type. A reader
 // meets a missing or mistyped field as a UserError that names the file and the field and says which stage to

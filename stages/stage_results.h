@@ -1,5 +1,5 @@
 #pragma once
-// Each stage's identity and what it writes, declared once (DESIGN.md §2). A stage class takes its name and folder
+// Each stage's identity and what it writes, declared once (docs/design.md §2). A stage class takes its name and folder
 // from its result type (StageOf<R>); whatever reads a result, a later stage or the CLI, takes the paths from the
 // same type. A result is a folder: a complete one in the workspace, or the staging folder its stage writes into;
 // with an empty folder (SplatResult{}.splats()) each file's path is its name inside the result.

@@ -1,5 +1,5 @@
 #pragma once
-// The train stage: trains a radiance field on the poses stage's transforms.json and images (DESIGN.md §6).
+// The train stage: trains a radiance field on the poses stage's transforms.json and images (docs/design.md §6).
 // Writes model.bin (renders without the training data), metrics.csv (wall_seconds, step, train_loss,
 // heldout_psnr at fixed intervals of training time; evaluation time is not counted), train_report.json and a
 // plot of held-out PSNR against time. A killed run resumes from its last checkpoint (WS/30_train.resume/).
