@@ -8,6 +8,7 @@ int RunRun(int argc, char** argv);
 int RunStage(int argc, char** argv);  // argv[0] names the stage: `photo2nerf ingest -w WS`
 int RunStatus(int argc, char** argv);
 int RunClean(int argc, char** argv);
+int RunOptionsReference(int argc, char** argv);  // the options reference, docs/options.md
 int RunFitImage(int argc, char** argv);
 int RunStageJob(int argc, char** argv);  // a stage's work as a scheduler's job (pipeline/slurm.h)
 

@@ -30,6 +30,7 @@ std::vector<Command> Commands() {
       {"run", p2n::RunRun, "run every stage that is not fresh: photo2nerf run PHOTOS -w WORKSPACE"},
       {"status", p2n::RunStatus, "say which stages are fresh, and why the others are not"},
       {"clean", p2n::RunClean, "remove stage results from a workspace"},
+      {"options", p2n::RunOptionsReference, "print every option with its default and meaning (docs/options.md)"},
       {"fit-image", p2n::RunFitImage,
        "fit a neural field to one image (the 2D warm-up): photo2nerf fit-image IMG -o DIR"},
       {"stage-job", p2n::RunStageJob, "one stage's work as a Slurm job (run --run.scheduler slurm submits it)"},

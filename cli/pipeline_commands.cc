@@ -14,6 +14,7 @@
 #include "cli/commands.h"
 #include "formats/dataset_import.h"
 #include "pipeline/log.h"
+#include "pipeline/options_reference.h"
 #include "pipeline/runner.h"
 #include "stages/stage_reports.h"
 #include "stages/stage_results.h"
@@ -174,6 +175,13 @@ int RunStatus(int argc, char** argv) {
       std::cout << format("{:<22} ... and {} more\n", "", status.reasons.size() - kMaxReasonsShown);
     }
   }
+  return kExitOk;
+}
+
+int RunOptionsReference(int argc, char** argv) {
+  CLI::App app("Print the reference of every option (docs/options.md) as Markdown.", "photo2nerf options");
+  if (auto code = Parse(app, OptionRegistry(), argc, argv)) return *code;
+  std::cout << OptionsReference(AllOptions());
   return kExitOk;
 }
 
