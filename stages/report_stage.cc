@@ -150,7 +150,7 @@ std::string WarningsSection(const std::optional<TrainReport>& train, const Splat
     html += format("<li><b>{}</b> ({}, <code>{}</code>): {}</li>\n", HtmlEscape(stage), HtmlEscape(w.code),
                    format("{:.3g}", w.figure), HtmlEscape(w.message));
   }
-  return html + "</ul>\n<p>The README's section on warnings says what each means and what to do.</p></div>\n";
+  return html + "</ul>\n<p>docs/troubleshooting.md (Warnings about a result) says what each means and what to do.</p></div>\n";
 }
 
 std::string StagesSection(const StageContext& context) {
