@@ -79,21 +79,27 @@ ImageFitResult FitAndLog(const ImageFitOptions& options, const FloatImage& targe
 
 nlohmann::json Report(const fs::path& image, const FloatImage& target, const ImageFitOptions& options,
                       const ImageFitResult& result) {
-  return {{"image", image.string()}, {"width", target.width},
-          {"height", target.height}, {"channels", target.channels},
-          {"model", options.model},  {"model_config", result.model_config},
-          {"steps", result.steps},   {"train_seconds", result.train_seconds},
-          {"psnr", result.psnr},     {"psnr_at_seconds", PsnrAtTimes(result.curve)}};
+  return {{"image", image.string()},
+          {"width", target.width},
+          {"height", target.height},
+          {"channels", target.channels},
+          {"model", EnumName(options.model)},
+          {"model_config", result.model_config},
+          {"steps", result.steps},
+          {"train_seconds", result.train_seconds},
+          {"psnr", result.psnr},
+          {"psnr_at_seconds", PsnrAtTimes(result.curve)}};
 }
 
 void FitOnce(const fs::path& image, const FloatImage& target, const ImageFitOptions& options, const fs::path& out) {
   const ImageFitResult result = FitAndLog(options, target, "fit: ");
   SaveFloatImage(result.reconstruction, out / "reconstruction.png");
   WriteCurve(out / "metrics.csv", result.curve);
-  WriteLinePlot(out / "psnr.png",
-                {format("fit-image {} ({}x{}): PSNR against training time", options.model, target.width, target.height),
-                 "training time [s]", "PSNR [dB]"},
-                {CurveSeries(options.model, result.curve)});
+  WriteLinePlot(
+      out / "psnr.png",
+      {format("fit-image {} ({}x{}): PSNR against training time", EnumName(options.model), target.width, target.height),
+       "training time [s]", "PSNR [dB]"},
+      {CurveSeries(EnumName(options.model), result.curve)});
   std::vector<CaptionedImage> strip;
   for (const auto& [step, snapshot] : result.snapshots) {
     SaveFloatImage(snapshot, out / format("snapshot_step_{:06d}.png", step));
@@ -109,7 +115,7 @@ void FitOnce(const fs::path& image, const FloatImage& target, const ImageFitOpti
 
 // The seed's study: positional-encoding levels L, hidden layers and learning rate.
 void Sweep(const fs::path& image, const FloatImage& target, ImageFitOptions options, const fs::path& out) {
-  options.model = "pe";
+  options.model = FitModel::kPe;
   options.snapshot_steps = "";
   std::vector<PlotSeries> curves;
   std::string table = "pe_levels,depth,learning_rate,steps,train_seconds,psnr\n";

@@ -11,16 +11,15 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "base/config_check.h"
+#include "base/declared_fields.h"
 
 namespace p2n {
 
 void AdamOptions::Check() const {
-  CheckField(learning_rate >= 0 && std::isfinite(learning_rate), "adam", "learning_rate", "be at least 0",
-             learning_rate);
-  CheckField(beta1 >= 0 && beta1 < 1, "adam", "beta1", "be in [0, 1)", beta1);
-  CheckField(beta2 >= 0 && beta2 < 1, "adam", "beta2", "be in [0, 1)", beta2);
-  CheckField(epsilon > 0, "adam", "epsilon", "be positive", epsilon);
+  CheckField(*this, learning_rate, learning_rate >= 0 && std::isfinite(learning_rate), "be at least 0");
+  CheckField(*this, beta1, beta1 >= 0 && beta1 < 1, "be in [0, 1)");
+  CheckField(*this, beta2, beta2 >= 0 && beta2 < 1, "be in [0, 1)");
+  CheckField(*this, epsilon, epsilon > 0, "be positive");
 }
 
 template <typename T>

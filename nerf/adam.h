@@ -16,10 +16,19 @@
 namespace p2n {
 
 struct AdamOptions {
+  static constexpr const char* kName = "adam";  // checks name adam.FIELD
   double learning_rate = 1e-2;
   double beta1 = 0.9;
   double beta2 = 0.999;
   double epsilon = 1e-8;
+
+  template <class V>
+  void Visit(V& v) {
+    v("learning_rate", learning_rate);
+    v("beta1", beta1);
+    v("beta2", beta2);
+    v("epsilon", epsilon);
+  }
 
   // std::invalid_argument naming the field and its rule (Adam checks its options).
   void Check() const;

@@ -70,12 +70,21 @@ class PositionalEncoding : public Encoding<T> {
 };
 
 struct HashGridConfig {
-  int levels = 16;  // resolutions, from base to finest, growing geometrically
+  static constexpr const char* kName = "hash_grid";  // checks name hash_grid.FIELD
+  int levels = 16;                                   // resolutions, from base to finest, growing geometrically
   int features_per_level = 2;
   int log2_table_size = 19;      // entries per level (at most; coarse levels that fit are stored densely)
   int base_resolution = 16;      // cells per axis of the coarsest level
   int finest_resolution = 2048;  // cells per axis of the finest level
 
+  template <class V>
+  void Visit(V& v) {
+    v("levels", levels);
+    v("features_per_level", features_per_level);
+    v("log2_table_size", log2_table_size);
+    v("base_resolution", base_resolution);
+    v("finest_resolution", finest_resolution);
+  }
   // std::invalid_argument naming the field and its rule.
   void Check() const;
   nlohmann::json ToJson() const;

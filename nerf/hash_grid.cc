@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "base/config_check.h"
+#include "base/declared_fields.h"
 #include "nerf/denormals.h"
 #include "nerf/encoding.h"
 
@@ -40,34 +40,23 @@ constexpr Eigen::Index kTransposeBlock = 256;  // points per task interleaving t
 }  // namespace
 
 nlohmann::json HashGridConfig::ToJson() const {
-  return {{"otype", "HashGrid"},
-          {"levels", levels},
-          {"features_per_level", features_per_level},
-          {"log2_table_size", log2_table_size},
-          {"base_resolution", base_resolution},
-          {"finest_resolution", finest_resolution}};
+  nlohmann::json json = FieldsToJson(*this);
+  json["otype"] = "HashGrid";
+  return json;
 }
 
 void HashGridConfig::Check() const {
-  CheckField(levels >= 1 && levels <= 64, "hash_grid", "levels", "be 1..64", levels);
-  CheckField(features_per_level >= 1 && features_per_level <= 8, "hash_grid", "features_per_level", "be 1..8",
-             features_per_level);
-  CheckField(log2_table_size >= 4 && log2_table_size <= 24, "hash_grid", "log2_table_size", "be 4..24",
-             log2_table_size);
-  CheckField(base_resolution >= 1, "hash_grid", "base_resolution", "be at least 1", base_resolution);
-  CheckField(finest_resolution >= base_resolution && finest_resolution <= (1 << 20), "hash_grid", "finest_resolution",
-             "be base_resolution..2^20", finest_resolution);
+  CheckField(*this, levels, levels >= 1 && levels <= 64, "be 1..64");
+  CheckField(*this, features_per_level, features_per_level >= 1 && features_per_level <= 8, "be 1..8");
+  CheckField(*this, log2_table_size, log2_table_size >= 4 && log2_table_size <= 24, "be 4..24");
+  CheckField(*this, base_resolution, base_resolution >= 1, "be at least 1");
+  CheckField(*this, finest_resolution, finest_resolution >= base_resolution && finest_resolution <= (1 << 20),
+             "be base_resolution..2^20");
 }
 
 HashGridConfig HashGridConfig::FromJson(const nlohmann::json& json) {
   HashGridConfig config;
-  ReadIntFields(json,
-                {{"levels", &config.levels},
-                 {"features_per_level", &config.features_per_level},
-                 {"log2_table_size", &config.log2_table_size},
-                 {"base_resolution", &config.base_resolution},
-                 {"finest_resolution", &config.finest_resolution}},
-                {"otype"}, "hash grid config");
+  ReadFields(json, &config, {"otype"}, "hash grid config");
   return config;
 }
 

@@ -11,6 +11,7 @@
 #include <random>
 #include <sstream>
 
+#include "base/declared_fields.h"
 #include "base/image_io.h"
 #include "nerf/adam.h"
 #include "nerf/denormals.h"
@@ -24,10 +25,6 @@ using Matrix = Eigen::MatrixXf;
 constexpr Eigen::Index kChunk = 512;  // samples per task: activations stay in L2
 constexpr size_t kMaxEvalPixels = 65536;
 
-void Require(bool condition, const std::string& key, const std::string& rule) {
-  if (!condition) throw std::invalid_argument("option fit." + key + " " + rule);
-}
-
 // The encoding + MLP of a model, and their optimisers.
 struct Model {
   std::unique_ptr<Encoding<float>> encoding;
@@ -37,7 +34,7 @@ struct Model {
 
 Model MakeModel(const ImageFitOptions& options, const FloatImage& target) {
   Model model;
-  const bool pe = options.model == "pe";
+  const bool pe = options.model == FitModel::kPe;
   if (pe) {
     model.encoding = std::make_unique<PositionalEncoding<float>>(2, options.pe_levels);
   } else {
@@ -163,20 +160,18 @@ double TrainStep(Model& model, const FloatImage& target, const std::vector<uint3
 }  // namespace
 
 void ImageFitOptions::Check() const {
-  Require(model == "pe" || model == "hashgrid", "model", "must be pe or hashgrid, not '" + model + "'");
-  Require(time_budget >= 0, "time_budget", "must be 0 (no limit) or positive");
-  Require(max_steps >= 0, "max_steps", "must be 0 (no limit) or positive");
-  Require(time_budget > 0 || max_steps > 0, "time_budget", "or fit.max_steps must be set (both are 0: no end)");
-  Require(batch_size >= 1 && batch_size <= (1 << 24), "batch_size", "must be in 1..16777216");
-  Require(learning_rate > 0 && learning_rate < 10, "learning_rate", "must be in (0, 10)");
-  Require(width >= 0 && width <= 4096, "width", "must be 0 (default) to 4096");
-  Require(depth >= 0 && depth <= 32, "depth", "must be 0 (default) to 32");
-  Require(pe_levels >= 0 && pe_levels <= 20, "pe_levels", "must be 0 to 20");
-  Require(hash_levels >= 1 && hash_levels <= 32, "hash_levels", "must be 1 to 32");
-  Require(hash_log2_table_size >= 4 && hash_log2_table_size <= 24, "hash_log2_table_size", "must be 4 to 24");
-  Require(hash_finest_resolution >= 0, "hash_finest_resolution", "must be 0 (image size) or positive");
-  Require(eval_interval > 0, "eval_interval", "must be positive");
-  Require(alpha == "composite" || alpha == "ignore", "alpha", "must be composite or ignore, not '" + alpha + "'");
+  CheckField(*this, time_budget, time_budget >= 0, "be 0 (no limit) or positive");
+  CheckField(*this, max_steps, max_steps >= 0, "be 0 (no limit) or positive");
+  CheckField(*this, time_budget, time_budget > 0 || max_steps > 0, "be positive when fit.max_steps is 0 (no end)");
+  CheckField(*this, batch_size, batch_size >= 1 && batch_size <= (1 << 24), "be in 1..16777216");
+  CheckField(*this, learning_rate, learning_rate > 0 && learning_rate < 10, "be in (0, 10)");
+  CheckField(*this, width, width >= 0 && width <= 4096, "be 0 (default) to 4096");
+  CheckField(*this, depth, depth >= 0 && depth <= 32, "be 0 (default) to 32");
+  CheckField(*this, pe_levels, pe_levels >= 0 && pe_levels <= 20, "be 0 to 20");
+  CheckField(*this, hash_levels, hash_levels >= 1 && hash_levels <= 32, "be 1 to 32");
+  CheckField(*this, hash_log2_table_size, hash_log2_table_size >= 4 && hash_log2_table_size <= 24, "be 4 to 24");
+  CheckField(*this, hash_finest_resolution, hash_finest_resolution >= 0, "be 0 (image size) or positive");
+  CheckField(*this, eval_interval, eval_interval > 0, "be positive");
   SnapshotSteps();
 }
 
@@ -192,14 +187,14 @@ std::vector<int> ImageFitOptions::SnapshotSteps() const {
       step = std::stoi(item, &used);
     } catch (const std::exception&) {
     }
-    Require(used == item.size() && step > 0, "snapshot_steps", "must be positive step numbers separated by commas");
+    CheckField(*this, snapshot_steps, used == item.size() && step > 0, "be positive step numbers separated by commas");
     steps.push_back(step);
   }
   std::sort(steps.begin(), steps.end());
   return steps;
 }
 
-FloatImage LoadImageForFit(const std::filesystem::path& path, const std::string& alpha_mode) {
+FloatImage LoadImageForFit(const std::filesystem::path& path, FitAlpha alpha_mode) {
   ReadImageResult read = ReadImage(path);
   if (!read.ok()) throw std::invalid_argument("cannot use '" + path.string() + "' as an image: " + read.error);
   const OIIO::ImageSpec& spec = read.image.spec();
@@ -212,7 +207,7 @@ FloatImage LoadImageForFit(const std::filesystem::path& path, const std::string&
   image.pixels.resize(static_cast<size_t>(spec.width) * spec.height * image.channels);
   for (size_t p = 0; p < static_cast<size_t>(spec.width) * spec.height; ++p) {
     const float* in = all.data() + p * spec.nchannels;
-    const float a = alpha >= 0 && alpha_mode == "composite" ? std::clamp(in[alpha], 0.0f, 1.0f) : 1.0f;
+    const float a = alpha >= 0 && alpha_mode == FitAlpha::kComposite ? std::clamp(in[alpha], 0.0f, 1.0f) : 1.0f;
     for (int c = 0; c < image.channels; ++c) {
       const float value = std::clamp(in[std::min(c, colours - 1)], 0.0f, 1.0f);
       image.pixels[p * image.channels + c] = a * value + (1 - a);  // over white

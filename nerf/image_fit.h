@@ -12,29 +12,46 @@
 
 #include <nlohmann/json.hpp>
 
+#include "base/enum_names.h"
 #include "base/float_image.h"
 
 namespace p2n {
 
-// Loads an image for fitting: grey stays grey, 8-bit and 16-bit become [0, 1]; alpha is either dropped
-// ("ignore") or composited over white ("composite"). Throws std::invalid_argument naming the file.
-FloatImage LoadImageForFit(const std::filesystem::path& path, const std::string& alpha_mode);
+enum class FitModel { kPe, kHashGrid };
+template <>
+struct EnumNames<FitModel> {
+  static constexpr std::pair<FitModel, const char*> kValues[] = {{FitModel::kPe, "pe"},
+                                                                 {FitModel::kHashGrid, "hashgrid"}};
+};
+
+// What an image's alpha does: composited over white, or dropped.
+enum class FitAlpha { kComposite, kIgnore };
+template <>
+struct EnumNames<FitAlpha> {
+  static constexpr std::pair<FitAlpha, const char*> kValues[] = {{FitAlpha::kComposite, "composite"},
+                                                                 {FitAlpha::kIgnore, "ignore"}};
+};
+
+// Loads an image for fitting: grey stays grey, 8-bit and 16-bit become [0, 1]; alpha is dropped or composited
+// over white. Throws std::invalid_argument naming the file.
+FloatImage LoadImageForFit(const std::filesystem::path& path, FitAlpha alpha);
 
 struct ImageFitOptions {
-  std::string model = "pe";     // "pe": positional encoding + 256-wide MLP (the seed); "hashgrid"
-  double time_budget = 30;      // seconds of training (evaluation time not counted); 0: no limit
-  int max_steps = 0;            // 0: no limit (then time_budget must be set)
-  int batch_size = 10000;       // random pixels per step
-  double learning_rate = 1e-2;  // Adam
-  int width = 0;                // MLP width; 0: the model's default (pe 256, hashgrid 64)
-  int depth = 0;                // hidden layers; 0: the model's default (pe 3, hashgrid 2)
-  int pe_levels = 10;           // L, frequencies of the positional encoding; 0: raw (x, y) only
+  static constexpr const char* kName = "fit";  // checks name fit.FIELD
+  FitModel model = FitModel::kPe;              // positional encoding + 256-wide MLP (the seed), or a hash grid + MLP
+  double time_budget = 30;                     // seconds of training (evaluation time not counted); 0: no limit
+  int max_steps = 0;                           // 0: no limit (then time_budget must be set)
+  int batch_size = 10000;                      // random pixels per step
+  double learning_rate = 1e-2;                 // Adam
+  int width = 0;                               // MLP width; 0: the model's default (pe 256, hashgrid 64)
+  int depth = 0;                               // hidden layers; 0: the model's default (pe 3, hashgrid 2)
+  int pe_levels = 10;                          // L, frequencies of the positional encoding; 0: raw (x, y) only
   int hash_levels = 16;
   int hash_log2_table_size = 19;
   int hash_finest_resolution = 0;                  // cells per axis of the finest level; 0: the image's longer side
   double eval_interval = 1.0;                      // seconds of training between PSNR evaluations
   std::string snapshot_steps = "25,100,500,2000";  // steps whose reconstruction is kept, comma-separated
-  std::string alpha = "composite";                 // RGBA input: "composite" over white, or "ignore" the alpha
+  FitAlpha alpha = FitAlpha::kComposite;           // RGBA input: composited over white, or the alpha ignored
   int seed = 0;
 
   template <class V>

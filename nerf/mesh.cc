@@ -12,7 +12,7 @@
 #include <mutex>
 #include <stdexcept>
 
-#include "base/config_check.h"
+#include "base/declared_fields.h"
 #include "base/float_image.h"
 #include "nerf/denormals.h"
 
@@ -193,11 +193,10 @@ float SurfaceThreshold(const NerfModel& model, const std::vector<Eigen::Vector3d
 }
 
 void MeshOptions::Check() const {
-  CheckField(resolution >= 8 && resolution <= 1024, "mesh", "resolution", "be 8..1024", resolution);
-  CheckField(density_threshold > 0 && std::isfinite(density_threshold), "mesh", "density_threshold", "be positive",
-             density_threshold);
-  CheckField(half_size > 0 && std::isfinite(half_size), "mesh", "half_size", "be positive", half_size);
-  CheckField(centre.allFinite(), "mesh", "centre", "be finite", centre.norm());
+  CheckField(*this, resolution, resolution >= 8 && resolution <= 1024, "be 8..1024");
+  CheckField(*this, density_threshold, density_threshold > 0 && std::isfinite(density_threshold), "be positive");
+  CheckField(*this, half_size, half_size > 0 && std::isfinite(half_size), "be positive");
+  CheckField(*this, centre, centre.allFinite(), "be finite");
 }
 
 Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options,

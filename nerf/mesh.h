@@ -34,12 +34,20 @@ struct EnumNames<MeshSurface> {
 };
 
 struct MeshOptions {
-  int resolution = 256;          // density samples along each side of the box
-  float density_threshold = 25;  // the surface: where the density (1 / world unit) crosses this
+  static constexpr const char* kName = "mesh";  // checks name mesh.FIELD
+  int resolution = 256;                         // density samples along each side of the box
+  float density_threshold = 25;                 // the surface: where the density (1 / world unit) crosses this
   // The box meshed: a cube of this centre and half size (world units); the scene box [-1, 1]^3 by default.
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   double half_size = 1;
 
+  template <class V>
+  void Visit(V& v) {
+    v("resolution", resolution);
+    v("density_threshold", density_threshold);
+    v("centre", centre);
+    v("half_size", half_size);
+  }
   // std::invalid_argument naming the field and its rule (ExtractMesh checks its options).
   void Check() const;
 };

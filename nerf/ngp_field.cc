@@ -5,7 +5,7 @@
 #include <type_traits>
 #include <utility>
 
-#include "base/config_check.h"
+#include "base/declared_fields.h"
 #include "nerf/render_mlp.h"
 #include "nerf/spherical_harmonics.h"
 
@@ -43,27 +43,21 @@ void ExpDensity(const Matrix& raw, Matrix* density) {
 }  // namespace
 
 nlohmann::json NgpFieldConfig::ToJson() const {
-  return {{"otype", "NgpField"},
-          {"encoding", planes ? planes->ToJson() : grid.ToJson()},
-          {"geometry_features", geometry_features},
-          {"width", width},
-          {"density_hidden_layers", density_hidden_layers},
-          {"colour_hidden_layers", colour_hidden_layers},
-          {"direction_encoding", {{"otype", "SphericalHarmonics"}, {"degree", 4}}},
-          {"density_network", DensityConfig(*this).ToJson()},
-          {"colour_network", ColourConfig(*this).ToJson()},
-          {"density_activation", "exp(min(x, 15))"}};
+  nlohmann::json json = FieldsToJson(*this);
+  json["otype"] = "NgpField";
+  json["encoding"] = planes ? planes->ToJson() : grid.ToJson();
+  json["direction_encoding"] = {{"otype", "SphericalHarmonics"}, {"degree", 4}};
+  json["density_network"] = DensityConfig(*this).ToJson();
+  json["colour_network"] = ColourConfig(*this).ToJson();
+  json["density_activation"] = "exp(min(x, 15))";
+  return json;
 }
 
 NgpFieldConfig NgpFieldConfig::FromJson(const nlohmann::json& json) {
   NgpFieldConfig config;
-  ReadIntFields(json,
-                {{"geometry_features", &config.geometry_features},
-                 {"width", &config.width},
-                 {"density_hidden_layers", &config.density_hidden_layers},
-                 {"colour_hidden_layers", &config.colour_hidden_layers}},
-                {"otype", "encoding", "direction_encoding", "density_network", "colour_network", "density_activation"},
-                "NgpField config");
+  ReadFields(json, &config,
+             {"otype", "encoding", "direction_encoding", "density_network", "colour_network", "density_activation"},
+             "NgpField config");
   if (json.contains("encoding")) {
     const nlohmann::json& encoding = json.at("encoding");
     if (encoding.is_object() && encoding.value("otype", "") == "Planes") {

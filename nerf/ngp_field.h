@@ -22,6 +22,14 @@ struct NgpFieldConfig {
   int density_hidden_layers = 1;
   int colour_hidden_layers = 2;
 
+  // The integer fields (the encoding's config is written and read as its own).
+  template <class V>
+  void Visit(V& v) {
+    v("geometry_features", geometry_features);
+    v("width", width);
+    v("density_hidden_layers", density_hidden_layers);
+    v("colour_hidden_layers", colour_hidden_layers);
+  }
   nlohmann::json ToJson() const;
   // The inverse of ToJson(); missing keys keep their defaults; std::invalid_argument for a wrong type, an unknown
   // key, or a derived key (the networks' shapes) that does not follow from the others.

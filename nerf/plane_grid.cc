@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "base/config_check.h"
+#include "base/declared_fields.h"
 #include "nerf/denormals.h"
 
 namespace p2n {
@@ -24,32 +24,23 @@ constexpr int kPlaneAxes[3][2] = {{0, 1}, {0, 2}, {1, 2}};  // xy, xz, yz
 }  // namespace
 
 nlohmann::json PlaneGridConfig::ToJson() const {
-  return {{"otype", "Planes"},
-          {"levels", levels},
-          {"features_per_level", features_per_level},
-          {"finest_resolution", finest_resolution},
-          {"depth_resolution", depth_resolution}};
+  nlohmann::json json = FieldsToJson(*this);
+  json["otype"] = "Planes";
+  return json;
 }
 
 void PlaneGridConfig::Check() const {
-  CheckField(levels >= 1 && levels <= 8, "planes", "levels", "be 1..8", levels);
-  CheckField(features_per_level >= 1 && features_per_level <= 16, "planes", "features_per_level", "be 1..16",
-             features_per_level);
-  for (const auto& [name, resolution] :
-       {std::pair("finest_resolution", finest_resolution), std::pair("depth_resolution", depth_resolution)}) {
-    CheckField(resolution >= (1 << (levels - 1)) && resolution <= 8192, "planes", name, "be 2^(levels - 1)..8192",
-               resolution);
+  CheckField(*this, levels, levels >= 1 && levels <= 8, "be 1..8");
+  CheckField(*this, features_per_level, features_per_level >= 1 && features_per_level <= 16, "be 1..16");
+  for (const int* resolution : {&finest_resolution, &depth_resolution}) {
+    CheckField(*this, *resolution, *resolution >= (1 << (levels - 1)) && *resolution <= 8192,
+               "be 2^(levels - 1)..8192");
   }
 }
 
 PlaneGridConfig PlaneGridConfig::FromJson(const nlohmann::json& json) {
   PlaneGridConfig config;
-  ReadIntFields(json,
-                {{"levels", &config.levels},
-                 {"features_per_level", &config.features_per_level},
-                 {"finest_resolution", &config.finest_resolution},
-                 {"depth_resolution", &config.depth_resolution}},
-                {"otype"}, "planes config");
+  ReadFields(json, &config, {"otype"}, "planes config");
   return config;
 }
 

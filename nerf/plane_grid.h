@@ -18,10 +18,19 @@
 namespace p2n {
 
 struct PlaneGridConfig {
-  int levels = 4;               // resolutions, halving from the finest
-  int features_per_level = 8;   // of each plane, and of the product a level gives
-  int finest_resolution = 512;  // cells along x and y at the finest level
-  int depth_resolution = 512;   // cells along z at the finest level
+  static constexpr const char* kName = "planes";  // checks name planes.FIELD
+  int levels = 4;                                 // resolutions, halving from the finest
+  int features_per_level = 8;                     // of each plane, and of the product a level gives
+  int finest_resolution = 512;                    // cells along x and y at the finest level
+  int depth_resolution = 512;                     // cells along z at the finest level
+
+  template <class V>
+  void Visit(V& v) {
+    v("levels", levels);
+    v("features_per_level", features_per_level);
+    v("finest_resolution", finest_resolution);
+    v("depth_resolution", depth_resolution);
+  }
 
   // std::invalid_argument naming the field and its rule.
   void Check() const;

@@ -7,7 +7,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "base/config_check.h"
+#include "base/declared_fields.h"
 #include "nerf/denormals.h"
 #include "nerf/ray_march.h"
 #include "nerf/volume_rendering.h"
@@ -48,10 +48,9 @@ double SamplingDistance(const NerfModel& model, const Ray& ray, double t) {
 }
 
 void RenderOptions::Check() const {
-  CheckField(step_scale >= 0 && std::isfinite(step_scale), "render", "step_scale", "be at least 0", step_scale);
-  CheckField(min_transmittance >= 0 && min_transmittance < 1, "render", "min_transmittance", "be in [0, 1)",
-             min_transmittance);
-  CheckField(max_samples >= 1, "render", "max_samples", "be at least 1", max_samples);
+  CheckField(*this, step_scale, step_scale >= 0 && std::isfinite(step_scale), "be at least 0");
+  CheckField(*this, min_transmittance, min_transmittance >= 0 && min_transmittance < 1, "be in [0, 1)");
+  CheckField(*this, max_samples, max_samples >= 1, "be at least 1");
 }
 
 void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std::vector<Eigen::Vector2d>& near_far,

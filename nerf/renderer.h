@@ -16,6 +16,7 @@
 namespace p2n {
 
 struct RenderOptions {
+  static constexpr const char* kName = "render";  // checks name render.FIELD
   // Sample spacing = the model's march step x this; 0: DefaultStepScale(model).
   double step_scale = 0;
   // Rays stop below it (0: never). 1e-3 leaves out at most a quarter of an 8-bit level of colour, for 5-6% less
@@ -29,6 +30,13 @@ struct RenderOptions {
   // Called (from any worker thread) with the number of rays just finished; e.g. to advance a progress bar.
   std::function<void(size_t)> on_rays_done;
 
+  template <class V>
+  void Visit(V& v) {
+    v("step_scale", step_scale);
+    v("min_transmittance", min_transmittance);
+    v("max_samples", max_samples);
+    v("median_depth", median_depth);
+  }
   // std::invalid_argument naming the field and its rule (RenderRays checks its options).
   void Check() const;
 };

@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "base/config_check.h"
+#include "base/declared_fields.h"
 #include "nerf/appearance.h"
 #include "nerf/camera_refinement.h"
 #include "nerf/denormals.h"
@@ -83,28 +83,23 @@ bool AllFinite(const Values& values) {
 }  // namespace
 
 void TrainerOptions::Check() const {
-  constexpr const char* kWhat = "trainer";
-  CheckField(occupancy_resolution >= 1 && occupancy_resolution <= 1024, kWhat, "occupancy_resolution", "be 1..1024",
-             occupancy_resolution);
-  CheckField(occupancy_interval >= 1, kWhat, "occupancy_interval", "be at least 1", occupancy_interval);
-  CheckField(occupancy_warmup >= 0, kWhat, "occupancy_warmup", "be at least 0", occupancy_warmup);
-  CheckField(occupancy_decay > 0 && occupancy_decay <= 1, kWhat, "occupancy_decay", "be in (0, 1]", occupancy_decay);
-  CheckField(march_step > 0 && std::isfinite(march_step), kWhat, "march_step", "be positive", march_step);
-  CheckField(fine_march_step >= 0 && std::isfinite(fine_march_step), kWhat, "fine_march_step", "be at least 0",
-             fine_march_step);
-  CheckField(fine_march_from >= 0, kWhat, "fine_march_from", "be at least 0", fine_march_from);
-  CheckField(max_samples_per_ray >= 1, kWhat, "max_samples_per_ray", "be at least 1", max_samples_per_ray);
-  CheckField(stratified_samples >= 0, kWhat, "stratified_samples", "be at least 0", stratified_samples);
-  CheckField(batch_samples >= 1, kWhat, "batch_samples", "be at least 1", batch_samples);
-  CheckField(min_batch_rays >= 1 && min_batch_rays <= max_batch_rays, kWhat, "min_batch_rays", "be 1..max_batch_rays",
-             min_batch_rays);
-  CheckField(learning_rate > 0, kWhat, "learning_rate", "be positive", learning_rate);
-  CheckField(final_learning_rate > 0, kWhat, "final_learning_rate", "be positive", final_learning_rate);
-  CheckField(distortion_weight >= 0, kWhat, "distortion_weight", "be at least 0", distortion_weight);
-  CheckField(depth_weight >= 0 && std::isfinite(depth_weight), kWhat, "depth_weight", "be at least 0", depth_weight);
-  CheckField(min_transmittance >= 0 && min_transmittance < 1, kWhat, "min_transmittance", "be in [0, 1)",
-             min_transmittance);
-  CheckField(refine_warmup >= 0, kWhat, "refine_warmup", "be at least 0", refine_warmup);
+  CheckField(*this, occupancy_resolution, occupancy_resolution >= 1 && occupancy_resolution <= 1024, "be 1..1024");
+  CheckField(*this, occupancy_interval, occupancy_interval >= 1, "be at least 1");
+  CheckField(*this, occupancy_warmup, occupancy_warmup >= 0, "be at least 0");
+  CheckField(*this, occupancy_decay, occupancy_decay > 0 && occupancy_decay <= 1, "be in (0, 1]");
+  CheckField(*this, march_step, march_step > 0 && std::isfinite(march_step), "be positive");
+  CheckField(*this, fine_march_step, fine_march_step >= 0 && std::isfinite(fine_march_step), "be at least 0");
+  CheckField(*this, fine_march_from, fine_march_from >= 0, "be at least 0");
+  CheckField(*this, max_samples_per_ray, max_samples_per_ray >= 1, "be at least 1");
+  CheckField(*this, stratified_samples, stratified_samples >= 0, "be at least 0");
+  CheckField(*this, batch_samples, batch_samples >= 1, "be at least 1");
+  CheckField(*this, min_batch_rays, min_batch_rays >= 1 && min_batch_rays <= max_batch_rays, "be 1..max_batch_rays");
+  CheckField(*this, learning_rate, learning_rate > 0, "be positive");
+  CheckField(*this, final_learning_rate, final_learning_rate > 0, "be positive");
+  CheckField(*this, distortion_weight, distortion_weight >= 0, "be at least 0");
+  CheckField(*this, depth_weight, depth_weight >= 0 && std::isfinite(depth_weight), "be at least 0");
+  CheckField(*this, min_transmittance, min_transmittance >= 0 && min_transmittance < 1, "be in [0, 1)");
+  CheckField(*this, refine_warmup, refine_warmup >= 0, "be at least 0");
 }
 
 Trainer::Trainer(const TrainerOptions& options, const TrainingData& data) : options_(options), data_(data) {

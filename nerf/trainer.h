@@ -37,10 +37,11 @@ struct EnumNames<PhotometricLoss> {
 };
 
 struct TrainerOptions {
-  nlohmann::json field;            // the field's config (MakeField)
-  int occupancy_resolution = 128;  // cells per axis
-  int occupancy_interval = 16;     // steps between occupancy updates
-  int occupancy_warmup = 16;       // steps before the first update (the field knows nothing before)
+  static constexpr const char* kName = "trainer";  // checks name trainer.FIELD
+  nlohmann::json field;                            // the field's config (MakeField)
+  int occupancy_resolution = 128;                  // cells per axis
+  int occupancy_interval = 16;                     // steps between occupancy updates
+  int occupancy_warmup = 16;                       // steps before the first update (the field knows nothing before)
   double occupancy_decay = 0.95;
   double march_step = 3.4641016 / 256;  // world units: 256 samples across the scene box's diagonal
   double fine_march_step = 0;           // > 0: the spacing from step fine_march_from on
@@ -71,6 +72,35 @@ struct TrainerOptions {
   double depth_weight = 0;
   uint64_t seed = 0;
 
+  // The numbers and switches, named once (base/declared_fields.h).
+  template <class V>
+  void Visit(V& v) {
+    v("occupancy_resolution", occupancy_resolution);
+    v("occupancy_interval", occupancy_interval);
+    v("occupancy_warmup", occupancy_warmup);
+    v("occupancy_decay", occupancy_decay);
+    v("march_step", march_step);
+    v("fine_march_step", fine_march_step);
+    v("fine_march_from", fine_march_from);
+    v("max_samples_per_ray", max_samples_per_ray);
+    v("stratified_samples", stratified_samples);
+    v("batch_samples", batch_samples);
+    v("late_batch_samples", late_batch_samples);
+    v("min_batch_rays", min_batch_rays);
+    v("max_batch_rays", max_batch_rays);
+    v("learning_rate", learning_rate);
+    v("final_learning_rate", final_learning_rate);
+    v("distortion_weight", distortion_weight);
+    v("min_transmittance", min_transmittance);
+    v("random_background", random_background);
+    v("learn_background", learn_background);
+    v("appearance", appearance);
+    v("refine_cameras", refine_cameras);
+    v("refine_warmup", refine_warmup);
+    v("error_sampling", error_sampling);
+    v("depth_weight", depth_weight);
+    v("seed", seed);
+  }
   // std::invalid_argument naming the field and its rule (the Trainer checks its options).
   void Check() const;
 };

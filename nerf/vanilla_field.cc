@@ -2,33 +2,24 @@
 
 #include <stdexcept>
 
-#include "base/config_check.h"
+#include "base/declared_fields.h"
 
 namespace p2n {
 
 nlohmann::json VanillaFieldConfig::ToJson() const {
-  return {{"otype", "VanillaField"},
-          {"position_encoding", {{"otype", "Frequency"}, {"levels", position_levels}, {"include_input", true}}},
-          {"direction_encoding", {{"otype", "Frequency"}, {"levels", direction_levels}, {"include_input", true}}},
-          {"position_levels", position_levels},
-          {"direction_levels", direction_levels},
-          {"width", width},
-          {"layers", layers},
-          {"skip_after", layers / 2},
-          {"colour_width", colour_width},
-          {"density_activation", "ReLU"}};
+  nlohmann::json json = FieldsToJson(*this);
+  json["otype"] = "VanillaField";
+  json["position_encoding"] = {{"otype", "Frequency"}, {"levels", position_levels}, {"include_input", true}};
+  json["direction_encoding"] = {{"otype", "Frequency"}, {"levels", direction_levels}, {"include_input", true}};
+  json["skip_after"] = layers / 2;
+  json["density_activation"] = "ReLU";
+  return json;
 }
 
 VanillaFieldConfig VanillaFieldConfig::FromJson(const nlohmann::json& json) {
   VanillaFieldConfig config;
-  ReadIntFields(json,
-                {{"position_levels", &config.position_levels},
-                 {"direction_levels", &config.direction_levels},
-                 {"width", &config.width},
-                 {"layers", &config.layers},
-                 {"colour_width", &config.colour_width}},
-                {"otype", "position_encoding", "direction_encoding", "skip_after", "density_activation"},
-                "VanillaField config");
+  ReadFields(json, &config, {"otype", "position_encoding", "direction_encoding", "skip_after", "density_activation"},
+             "VanillaField config");
   if (config.layers < 2 || config.layers % 2 != 0) {
     throw std::invalid_argument("VanillaField config: layers must be even and at least 2");
   }

@@ -18,6 +18,14 @@ struct VanillaFieldConfig {
   int layers = 8;  // of `width`, split in two halves with the skip connection between them
   int colour_width = 128;
 
+  template <class V>
+  void Visit(V& v) {
+    v("position_levels", position_levels);
+    v("direction_levels", direction_levels);
+    v("width", width);
+    v("layers", layers);
+    v("colour_width", colour_width);
+  }
   nlohmann::json ToJson() const;
   // As NgpFieldConfig::FromJson; also layers must be even and at least 2.
   static VanillaFieldConfig FromJson(const nlohmann::json& json);

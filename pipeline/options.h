@@ -28,6 +28,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "base/declared_fields.h"
 #include "base/enum_names.h"
 #include "base/errors.h"
 
@@ -168,17 +169,6 @@ struct ReadVisitor {
   }
 };
 
-// Finds the name a struct's Visit() gives the field at `target`.
-struct NameFinder {
-  const void* target;
-  const char* found = nullptr;
-  template <class T>
-  void operator()(const char* name, const T& field, const char*, const char* = "", OptionKind = OptionKind::kResult,
-                  const std::vector<std::string>& = {}) {
-    if (static_cast<const void*>(&field) == target) found = name;
-  }
-};
-
 }  // namespace internal
 
 template <class Options>
@@ -207,9 +197,7 @@ Options ReadOptions(const Config& config) {
 std::string OptionKeyOf(std::string_view section, const char* name);
 template <class Options, class T>
 std::string OptionKey(const Options& options, const T& field) {
-  internal::NameFinder finder{&field};
-  const_cast<Options&>(options).Visit(finder);  // a visit that only reads
-  return OptionKeyOf(Options::kSection, finder.found);
+  return OptionKeyOf(Options::kSection, FieldName(options, field));
 }
 // The key of a member: OptionKey(&SfmOptions::colmap) is "sfm.colmap".
 template <class Options, class T>

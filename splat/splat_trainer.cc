@@ -8,27 +8,21 @@
 #include <opencv2/imgproc.hpp>
 
 #include "base/camera.h"
-#include "base/config_check.h"
+#include "base/declared_fields.h"
 
 namespace p2n {
 
 void SplatTrainerOptions::Check() const {
-  const char* what = "splat";
-  CheckField(steps >= 0, what, "steps", "be at least 0", steps);
-  for (const auto& [name, value] : {std::pair{"position_lr", position_lr},
-                                    {"final_position_lr", final_position_lr},
-                                    {"colour_lr", colour_lr},
-                                    {"opacity_lr", opacity_lr},
-                                    {"scale_lr", scale_lr},
-                                    {"rotation_lr", rotation_lr}}) {
-    CheckField(value > 0 && std::isfinite(value), what, name, "be positive", value);
+  CheckField(*this, steps, steps >= 0, "be at least 0");
+  for (const double* rate : {&position_lr, &final_position_lr, &colour_lr, &opacity_lr, &scale_lr, &rotation_lr}) {
+    CheckField(*this, *rate, *rate > 0 && std::isfinite(*rate), "be positive");
   }
-  CheckField(sh_interval > 0, what, "sh_interval", "be positive", sh_interval);
-  CheckField(densify_interval > 0, what, "densify_interval", "be positive", densify_interval);
-  CheckField(densify_until >= 0 && densify_until <= 1, what, "densify_until", "be in [0, 1]", densify_until);
-  CheckField(densify_gradient > 0, what, "densify_gradient", "be positive", densify_gradient);
-  CheckField(prune_opacity >= 0 && prune_opacity < 1, what, "prune_opacity", "be in [0, 1)", prune_opacity);
-  CheckField(ssim_weight >= 0 && ssim_weight <= 1, what, "ssim_weight", "be in [0, 1]", ssim_weight);
+  CheckField(*this, sh_interval, sh_interval > 0, "be positive");
+  CheckField(*this, densify_interval, densify_interval > 0, "be positive");
+  CheckField(*this, densify_until, densify_until >= 0 && densify_until <= 1, "be in [0, 1]");
+  CheckField(*this, densify_gradient, densify_gradient > 0, "be positive");
+  CheckField(*this, prune_opacity, prune_opacity >= 0 && prune_opacity < 1, "be in [0, 1)");
+  CheckField(*this, ssim_weight, ssim_weight >= 0 && ssim_weight <= 1, "be in [0, 1]");
 }
 
 SplatTrainer::SplatTrainer(Gaussians<float> gaussians, const SplatScene& scene, const SplatTrainerOptions& options)

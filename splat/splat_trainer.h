@@ -22,6 +22,7 @@
 namespace p2n {
 
 struct SplatTrainerOptions {
+  static constexpr const char* kName = "splat";  // checks name splat.FIELD
   // The nominal run: the means' learning rate decays over it, and it measures the run's progress (densification's
   // end) unless the trainer's owner does (SplatTrainer::SetProgress).
   int steps = 2000;
@@ -44,6 +45,26 @@ struct SplatTrainerOptions {
   size_t max_gaussians = 1'500'000;  // densification's cap: the run's, which a checkpoint keeps (Save, Load)
   uint64_t seed = 0;
 
+  template <class V>
+  void Visit(V& v) {
+    v("steps", steps);
+    v("position_lr", position_lr);
+    v("final_position_lr", final_position_lr);
+    v("colour_lr", colour_lr);
+    v("opacity_lr", opacity_lr);
+    v("scale_lr", scale_lr);
+    v("rotation_lr", rotation_lr);
+    v("sh_interval", sh_interval);
+    v("densify_interval", densify_interval);
+    v("densify_from", densify_from);
+    v("densify_until", densify_until);
+    v("densify_gradient", densify_gradient);
+    v("dense_fraction", dense_fraction);
+    v("prune_opacity", prune_opacity);
+    v("ssim_weight", ssim_weight);
+    v("max_gaussians", max_gaussians);
+    v("seed", seed);
+  }
   // std::invalid_argument naming the field and its rule.
   void Check() const;
 };

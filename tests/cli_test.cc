@@ -203,9 +203,9 @@ TEST_CASE("cli: fit-image refuses bad input with a clear error", "[cli][fit]") {
   expect(Photo2Nerf({"fit-image", (dir / "notes.png").string(), "-o", (dir / "o1").string()}), "notes.png");
   expect(Photo2Nerf({"fit-image", (dir / "missing.png").string(), "-o", (dir / "o2").string()}), "missing.png");
   expect(Photo2Nerf({"fit-image", image, "-o", (dir / "o3").string(), "--fit.batch_size", "0"}),
-         "option fit.batch_size must be");
+         "fit.batch_size must be in 1..16777216, not 0");
   expect(Photo2Nerf({"fit-image", image, "-o", (dir / "o4").string(), "--fit.model", "siren"}),
-         "option fit.model must be pe or hashgrid");
+         "option 'fit.model' (from --fit.model) must be one of: pe, hashgrid");
   expect(Photo2Nerf({"fit-image", image, "-o", (dir / "in").string()}), "is not empty");
   CHECK(fs::exists(dir / "in" / "photo 0.png"));
 }

@@ -31,7 +31,7 @@ FloatImage Checker(int size) {
 
 ImageFitOptions SmallPe(int levels, int steps) {
   ImageFitOptions options;
-  options.model = "pe";
+  options.model = FitModel::kPe;
   options.pe_levels = levels;
   options.width = 128;
   options.batch_size = 4096;
@@ -48,7 +48,7 @@ TEST_CASE("a smooth gradient image is fitted above 40 dB within a few hundred st
   const ImageFitResult pe = FitImage(SmallPe(10, 300), ramp);
   CHECK(pe.psnr > 40);
   ImageFitOptions grid = SmallPe(10, 300);
-  grid.model = "hashgrid";
+  grid.model = FitModel::kHashGrid;
   grid.width = 0;
   const ImageFitResult hashed = FitImage(grid, ramp);
   CHECK(hashed.psnr > 40);
@@ -76,28 +76,28 @@ TEST_CASE("images load as grey or RGB, with alpha composited over white or ignor
   rgba.setpixel(0, 0, transparent_red);
   rgba.setpixel(1, 0, opaque_blue);
   REQUIRE(rgba.write((dir / "rgba16.png").string()));
-  const FloatImage composited = LoadImageForFit(dir / "rgba16.png", "composite");
+  const FloatImage composited = LoadImageForFit(dir / "rgba16.png", FitAlpha::kComposite);
   REQUIRE(composited.channels == 3);
   CHECK(composited.pixels == std::vector<float>{1, 1, 1, 0, 0, 1});
-  const FloatImage ignored = LoadImageForFit(dir / "rgba16.png", "ignore");
+  const FloatImage ignored = LoadImageForFit(dir / "rgba16.png", FitAlpha::kIgnore);
   CHECK(ignored.pixels == std::vector<float>{1, 0, 0, 0, 0, 1});
   OIIO::ImageBuf grey(OIIO::ImageSpec(3, 2, 1, OIIO::TypeDesc::UINT8));
   REQUIRE(grey.write((dir / "grey.png").string()));
-  CHECK(LoadImageForFit(dir / "grey.png", "composite").channels == 1);
+  CHECK(LoadImageForFit(dir / "grey.png", FitAlpha::kComposite).channels == 1);
   WriteText(dir / "bad.png", "not an image");
-  CHECK_THROWS_WITH(LoadImageForFit(dir / "bad.png", "composite"), Catch::Contains("bad.png"));
+  CHECK_THROWS_WITH(LoadImageForFit(dir / "bad.png", FitAlpha::kComposite), Catch::Contains("bad.png"));
 }
 
 TEST_CASE("fit options are checked and name the option", "[fit]") {
   ImageFitOptions options;
-  options.model = "siren";
-  CHECK_THROWS_WITH(options.Check(), Catch::Contains("option fit.model must be pe or hashgrid"));
+  options.batch_size = 0;
+  CHECK_THROWS_WITH(options.Check(), "fit.batch_size must be in 1..16777216, not 0");
   options = ImageFitOptions();
   options.time_budget = 0;
-  CHECK_THROWS_WITH(options.Check(), Catch::Contains("fit.max_steps must be set"));
+  CHECK_THROWS_WITH(options.Check(), Catch::Contains("fit.time_budget must be positive when fit.max_steps is 0"));
   options = ImageFitOptions();
   options.snapshot_steps = "10,x";
-  CHECK_THROWS_WITH(options.Check(), Catch::Contains("option fit.snapshot_steps"));
+  CHECK_THROWS_WITH(options.Check(), Catch::StartsWith("fit.snapshot_steps must be positive step numbers"));
 }
 
 }  // namespace p2n::testing

@@ -293,7 +293,7 @@ TEST_CASE("three.js draws our textured sphere from a camera as the sphere looks 
   REQUIRE(status == 0);
   const nlohmann::json result = nlohmann::json::parse(output.substr(output.rfind('{')));
   CHECK(result["errors"].empty());
-  const FloatImage drawn = LoadImageForFit(dir / "0.png", "ignore");  // opaque: the background is drawn
+  const FloatImage drawn = LoadImageForFit(dir / "0.png", FitAlpha::kIgnore);  // opaque: the background is drawn
   REQUIRE((drawn.width == camera.width && drawn.height == camera.height));
 
   // The analytic picture: each pixel's ray meets the sphere or shows the background. Where the sphere is seen

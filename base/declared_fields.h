@@ -1,0 +1,131 @@
+#pragma once
+// Structs that declare their fields once: a member template Visit(v) calls v("name", field, ...) for each field
+// (the pipeline's options pass their help, unit and kind after it, pipeline/options.h; the engine's configs and
+// options the name alone). From that one declaration come a field's name wherever a message needs it
+// (FieldName), the checks that name the field (CheckField), and a config's JSON (FieldsToJson, ReadFields).
+//
+//   struct HashGridConfig {
+//     static constexpr const char* kName = "hash_grid";  // messages say hash_grid.levels
+//     int levels = 16;
+//     template <class V> void Visit(V& v) { v("levels", levels); }
+//     void Check() const { CheckField(*this, levels, levels >= 1, "be at least 1"); }
+//   };
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <initializer_list>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <vector>
+
+#include "base/json_number.h"
+
+namespace p2n {
+namespace internal {
+
+// Finds the name Visit() gives the field at `target`.
+struct FieldNameFinder {
+  const void* target;
+  const char* found = nullptr;
+  template <class T, class... Rest>
+  void operator()(const char* name, const T& field, const Rest&...) {
+    if (static_cast<const void*>(&field) == target) found = name;
+  }
+  // The pipeline's options end with their choices, given as a braced list (pipeline/options.h).
+  template <class T, class Kind>
+  void operator()(const char* name, const T& field, const char*, const char*, Kind, const std::vector<std::string>&) {
+    if (static_cast<const void*>(&field) == target) found = name;
+  }
+};
+
+}  // namespace internal
+
+// The name `s`'s Visit() gives its member `field`; nullptr when it declares no such field.
+template <class S, class T>
+const char* FieldName(const S& s, const T& field) {
+  internal::FieldNameFinder finder{&field};
+  const_cast<S&>(s).Visit(finder);  // a visit that only reads
+  return finder.found;
+}
+
+// Throws std::invalid_argument "KNAME.FIELD must RULE, not VALUE" unless `ok`: for the engine's Check()s, which
+// name the field (CheckField(*this, levels, levels >= 1, "be at least 1")) and never spell it.
+template <class S, class T>
+void CheckField(const S& s, const T& field, bool ok, std::string_view rule) {
+  if (ok) return;
+  const char* name = FieldName(s, field);
+  std::ostringstream message;
+  message << S::kName << "." << (name ? name : "?") << " must " << rule << ", not ";
+  if constexpr (requires { field.transpose(); }) {
+    message << field.transpose();  // an Eigen vector on one line
+  } else {
+    message << field;
+  }
+  throw std::invalid_argument(message.str());
+}
+
+// Every field `s` declares, as a JSON object {name: value}.
+template <class S>
+nlohmann::json FieldsToJson(const S& s) {
+  nlohmann::json json = nlohmann::json::object();
+  const auto write = [&json](const char* name, const auto& field, const auto&...) { json[name] = field; };
+  const_cast<S&>(s).Visit(write);
+  return json;
+}
+
+// Reads the fields `s` declares from the JSON object `json` (a field it lacks keeps its value). A key that is
+// neither a field nor in `other_keys` is refused, as is a value of the wrong type: std::invalid_argument naming
+// `what` and the key (a config's reader reads every key its writer writes; a misspelt one must not be ignored).
+template <class S>
+void ReadFields(const nlohmann::json& json, S* s, std::initializer_list<const char*> other_keys,
+                const std::string& what) {
+  if (!json.is_object()) throw std::invalid_argument(what + " is not a JSON object");
+  for (const auto& [key, value] : json.items()) {
+    bool read = false;
+    const auto read_field = [&, &key = key, &value = value](const char* name, auto& field, const auto&...) {
+      if (key != name) return;
+      read = true;
+      using T = std::remove_reference_t<decltype(field)>;
+      std::optional<T> number;
+      if constexpr (std::is_same_v<T, bool>) {
+        if (value.is_boolean()) number = value.template get<bool>();
+      } else if constexpr (std::is_integral_v<T>) {
+        number = JsonInteger<T>(value);
+      } else if (value.is_number()) {
+        number = value.template get<T>();
+      }
+      if (!number) {
+        throw std::invalid_argument(what + ": '" + key + "' must be " +
+                                    (std::is_same_v<T, bool> ? "true or false"
+                                     : std::is_integral_v<T> ? "an integer"
+                                                             : "a number") +
+                                    ", not " + value.dump());
+      }
+      field = *number;
+    };
+    s->Visit(read_field);
+    const auto is_key = [&key = key](const char* k) { return key == k; };
+    if (!read && std::none_of(other_keys.begin(), other_keys.end(), is_key)) {
+      throw std::invalid_argument(what + ": unknown key '" + key + "'");
+    }
+  }
+}
+
+// A config's writer also writes keys derived from its fields, for the reader (a network's shape). Its reader
+// accepts them only as the writer writes them: throws std::invalid_argument naming the first that differs.
+inline void CheckDerivedKeys(const nlohmann::json& json, const nlohmann::json& written,
+                             std::initializer_list<const char*> derived, const std::string& what) {
+  for (const char* key : derived) {
+    if (json.contains(key) && json.at(key) != written.at(key)) {
+      throw std::invalid_argument(what + ": '" + key + "' follows from the other fields (" + written.at(key).dump() +
+                                  ") and cannot be set");
+    }
+  }
+}
+
+}  // namespace p2n
