@@ -7,10 +7,10 @@
 #include "formats/camera_geometry.h"
 #include "pipeline/log.h"
 #include "pipeline/options.h"
-#include "stages/import_stage.h"
-#include "stages/splat_stage.h"
+#include "stages/import_options.h"
+#include "stages/splat_options.h"
 #include "stages/stage_results.h"
-#include "stages/train_stage.h"
+#include "stages/train_options.h"
 
 namespace p2n {
 namespace {

@@ -7,32 +7,11 @@
 
 #include <string>
 
+#include "stages/import_options.h"
 #include "stages/poses_stage.h"
 #include "stages/stage_results.h"
 
 namespace p2n {
-
-// import.background: keep records none.
-enum class ImportBackground { kWhite, kBlack, kKeep };
-template <>
-struct EnumNames<ImportBackground> {
-  static constexpr std::pair<ImportBackground, const char*> kValues[] = {
-      {ImportBackground::kWhite, "white"}, {ImportBackground::kBlack, "black"}, {ImportBackground::kKeep, "keep"}};
-};
-
-struct ImportOptions {
-  static constexpr const char* kSection = "import";  // its options are import.NAME
-
-  ImportBackground background = ImportBackground::kWhite;  // transparent images are shown and scored on it
-
-  template <class V>
-  void Visit(V& v) {
-    v("background", background,
-      "the colour transparent (RGBA) images are shown and scored on (their alpha is kept: training puts random "
-      "colours behind them); keep: no colour recorded (shown on white)");
-  }
-  void Check() const {}
-};
 
 class ImportStage : public StageOf<PosesResult> {
  public:

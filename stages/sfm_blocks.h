@@ -15,9 +15,17 @@
 #include <utility>
 #include <vector>
 
-#include "stages/sfm_stage.h"
+#include "stages/sfm_options.h"
 
 namespace p2n {
+
+// The photos by the camera that took them, as the sfm stage solves them: one group per camera their EXIF names
+// (make, model, lens, focal length; a video's frames: the video) and image size; photos without EXIF by size
+// alone. With sfm.single_camera each group shares one COLMAP camera.
+struct CameraGroup {
+  std::string label;                // "Apple, iPhone 12, 4.2 mm, 4032x3024", or "4032x3024" without EXIF
+  std::vector<std::string> images;  // names in images/
+};
 
 // The kind of the sfm stage's parts that extract features (StageContext::RunParts).
 inline constexpr const char* kExtractionWork = "extraction";

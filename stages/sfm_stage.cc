@@ -15,6 +15,7 @@
 #include "formats/colmap_model.h"
 #include "pipeline/cancel.h"
 #include "pipeline/log.h"
+#include "pipeline/run_options.h"
 #include "pipeline/subprocess.h"
 #include "stages/cluster_mapping.h"
 #include "stages/colmap_flags.h"
@@ -24,7 +25,6 @@
 #include "stages/retrieval.h"
 #include "stages/sfm_blocks.h"
 #include "stages/stage_reports.h"
-#include "stages/stages.h"
 
 namespace p2n {
 namespace fs = std::filesystem;

@@ -15,7 +15,7 @@
 #include "pipeline/stage.h"
 #include "splat/gaussians.h"
 #include "splat/splat_trainer.h"
-#include "stages/splat_stage.h"
+#include "stages/splat_options.h"
 #include "stages/timed_run.h"
 
 namespace p2n {

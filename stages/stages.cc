@@ -14,10 +14,6 @@
 
 namespace p2n {
 
-void RunOptions::Check() const {
-  CheckOption(*this, threads, threads >= 0, format("must be 0 (every core) or more, not {}", threads));
-}
-
 namespace {
 
 // Calls `section.operator()<Options>()` for every option section, in the order `--help` lists them: the one

@@ -14,7 +14,7 @@
 #include "pipeline/stage.h"
 #include "stages/stage_reports.h"
 #include "stages/timed_run.h"
-#include "stages/train_stage.h"
+#include "stages/train_options.h"
 
 namespace p2n {
 
