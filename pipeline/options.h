@@ -40,6 +40,11 @@ namespace p2n {
 // workspace, never in a key, applied to fresh results too (Stage::CheckResult). kRuntime ones (threads, log
 // level, progress display) change nothing in any result and are not remembered.
 enum class OptionKind { kResult, kCheck, kRuntime };
+template <>
+struct EnumNames<OptionKind> {
+  static constexpr std::pair<OptionKind, const char*> kValues[] = {
+      {OptionKind::kResult, "result"}, {OptionKind::kCheck, "check"}, {OptionKind::kRuntime, "runtime"}};
+};
 
 struct OptionSpec {
   std::string key;               // dotted: "section.name"

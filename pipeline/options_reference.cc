@@ -19,18 +19,6 @@ in no key. A *runtime* option (threads, logging, checkpoints, the scheduler) cha
 remembered. Where a default is `auto`, the option's text says what auto chooses.
 )";
 
-const char* KindName(OptionKind kind) {
-  switch (kind) {
-    case OptionKind::kResult:
-      return "result";
-    case OptionKind::kCheck:
-      return "check";
-    case OptionKind::kRuntime:
-      return "runtime";
-  }
-  return "?";
-}
-
 // A value or text inside a table cell: pipes escaped.
 std::string Cell(const std::string& text) {
   std::string out;
@@ -51,7 +39,7 @@ std::string Row(const OptionSpec& spec) {
     what += " (one of " + names + ")";
   }
   return format("| `{}` | {} | {} | {} | {} |\n", spec.key, DefaultText(spec.default_value),
-                spec.unit.empty() ? "" : Cell(spec.unit), KindName(spec.kind), Cell(what));
+                spec.unit.empty() ? "" : Cell(spec.unit), EnumName(spec.kind), Cell(what));
 }
 
 }  // namespace
