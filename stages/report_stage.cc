@@ -75,7 +75,7 @@ std::string TrainingSection(const TrainResult& result, const std::optional<Train
       "<p>Distortion loss weight {:.4g}; {} held-out evaluations during training ({} pixels per view) took "
       "{:.1f} s.</p>\n",
       report.trainer.distortion_weight, evals.count, pixels(evals.pixels_per_view), evals.seconds);
-  if (report.trainer.background == "learnt") {
+  if (report.trainer.background == BackgroundChoice::kLearnt) {
     const std::array<double, 3>& c = report.trainer.background_colour;
     const auto byte = [](double v) { return static_cast<int>(std::lround(255 * std::clamp(v, 0.0, 1.0))); };
     html += format(
@@ -127,11 +127,12 @@ std::string SplatSection(const SplatResult& result, const SplatReport& report,
       "<a href=\"{}\">splats.spz</a> ({:.1f} MB) holds the same splats in Niantic's compact SPZ, for the web (Spark, "
       "Babylon.js, SuperSplat) and Scaniverse; <a href=\"{}\">splats.glb</a> ({:.1f} MB) in glTF with "
       "KHR_gaussian_splatting, upright (+Y up), for the glTF tools that read it.</p>\n",
-      report.splats, report.sh_degree, report.initial_splats, report.init == "sparse" ? "sparse points" : "field",
-      100 * report.view_share, report.seconds, report.steps, Number(report.heldout_psnr),
-      Number(report.heldout_ssim, 3), Number(train ? train->heldout_psnr : std::nullopt), report.seconds_per_view,
-      Link(result.splats()), report.file_bytes / 1e6, HtmlEscape(report.frame_description), Link(result.spz()),
-      report.spz_bytes / 1e6, Link(result.glb()), report.glb_bytes / 1e6);
+      report.splats, report.sh_degree, report.initial_splats,
+      report.init == SplatInit::kSparse ? "sparse points" : "field", 100 * report.view_share, report.seconds,
+      report.steps, Number(report.heldout_psnr), Number(report.heldout_ssim, 3),
+      Number(train ? train->heldout_psnr : std::nullopt), report.seconds_per_view, Link(result.splats()),
+      report.file_bytes / 1e6, HtmlEscape(report.frame_description), Link(result.spz()), report.spz_bytes / 1e6,
+      Link(result.glb()), report.glb_bytes / 1e6);
   return html;
 }
 
@@ -150,7 +151,8 @@ std::string WarningsSection(const std::optional<TrainReport>& train, const Splat
     html += format("<li><b>{}</b> ({}, <code>{}</code>): {}</li>\n", HtmlEscape(stage), HtmlEscape(w.code),
                    format("{:.3g}", w.figure), HtmlEscape(w.message));
   }
-  return html + "</ul>\n<p>docs/troubleshooting.md (Warnings about a result) says what each means and what to do.</p></div>\n";
+  return html +
+         "</ul>\n<p>docs/troubleshooting.md (Warnings about a result) says what each means and what to do.</p></div>\n";
 }
 
 std::string StagesSection(const StageContext& context) {

@@ -243,7 +243,7 @@ SplatReport MakeSplatReport(const Optimised& optimised, const SplatSetup& setup,
   report.splats = optimised.splats.size();
   report.initial_splats = setup.gaussians.size();
   report.view_share = setup.view_share;
-  report.init = EnumName(setup.init);
+  report.init = setup.init;
   report.sh_degree = optimised.splats.sh_degree;
   report.steps = optimised.steps;
   report.seconds = optimised.state.seconds;

@@ -23,6 +23,8 @@
 #include "base/enum_names.h"
 #include "formats/output_frame.h"
 #include "nerf/mesh.h"
+#include "stages/splat_options.h"
+#include "stages/train_options.h"
 
 namespace p2n {
 
@@ -174,7 +176,7 @@ struct TrainReport {
     size_t late_batch_samples = 0;  // in the run's second half; 0: batch_samples throughout
     std::string scene;              // bounded | unbounded | forward
     bool appearance = false, refine_cameras = false, error_sampling = false;
-    std::string background;                     // random (behind images with alpha) | learnt | fixed
+    BackgroundChoice background = BackgroundChoice::kFixed;  // random (behind images with alpha), learnt or fixed
     std::array<double, 3> background_colour{};  // behind the scene after training (the learnt one, or the fixed)
   } trainer;
   struct AppearanceView {
@@ -202,7 +204,7 @@ struct TrainReport {
 struct SplatReport {
   bool enabled = false;  // false: the stage was off, and nothing else is written
   size_t splats = 0, initial_splats = 0;
-  std::string init;       // field | sparse
+  SplatInit init = SplatInit::kField;  // where the first splats came from: the field or the sparse points
   double view_share = 1;  // the mean share of the splats placed a training view sees (splat/scene_size.h); older: 1
   int sh_degree = 0, steps = 0, resumed_from_step = 0;
   double seconds = 0;  // of optimisation

@@ -92,9 +92,9 @@ TrainReport MakeTrainReport(Trainer& trainer, const TrainerOptions& trainer_opti
                     trainer_options.appearance,
                     trainer_options.refine_cameras,
                     trainer_options.error_sampling,
-                    trainer_options.random_background  ? "random"
-                    : trainer_options.learn_background ? "learnt"
-                                                       : "fixed",
+                    trainer_options.random_background  ? BackgroundChoice::kRandom
+                    : trainer_options.learn_background ? BackgroundChoice::kLearnt
+                                                       : BackgroundChoice::kFixed,
                     {model.background[0], model.background[1], model.background[2]}};
   report.appearance = AppearanceReport(trainer, data);
   FieldFit fit{report.heldout_psnr,

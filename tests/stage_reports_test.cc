@@ -62,8 +62,9 @@ TrainReport SomeTrainReport() {
   report.occupied_fraction = 0.125;
   report.throughput = TrainReport::Throughput{480, 60.25, 4096 * 480, 4096 * 480 * 12};
   report.field = {{"otype", "ngp"}};
-  report.trainer = {0.0135,      0.00675, 0.01, 0.002, 65536,    131072,
-                    "unbounded", true,    true, false, "learnt", {0.25, 0.5, 0.75}};
+  report.trainer = {
+      0.0135,           0.00675, 0.01, 0.002, 65536, 131072, "unbounded", true, true, false, BackgroundChoice::kLearnt,
+      {0.25, 0.5, 0.75}};
   report.appearance = {true, 0.875, 1.125, {{"a.png", 0.875, std::vector<float>(12, 0.5f)}}};
   report.camera_refinement = {{"enabled", true},
                               {"rotation_degrees_median", 0.125},
@@ -79,7 +80,7 @@ SplatReport SomeSplatReport() {
   report.enabled = true;
   report.splats = 12345;
   report.initial_splats = 9000;
-  report.init = "sparse";
+  report.init = SplatInit::kSparse;
   report.view_share = 0.125;
   report.sh_degree = 2;
   report.steps = 77;
