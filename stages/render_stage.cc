@@ -107,7 +107,7 @@ PinholeCamera WithIntrinsics(const nlohmann::json& json, PinholeCamera camera, c
 EvalReport RenderHeldout(const ViewRenderer& renderer, const ImportedDataset& dataset, const RenderResult& out) {
   EvalReport eval;
   eval.split = HeldoutSplit(dataset);
-  eval.source = EnumName(renderer.source);
+  eval.source = renderer.source;
   eval.heat_map_max_error = kHeatMapMaxError;
   const std::string& split = eval.split;
   std::vector<const ImportedView*> views;
@@ -276,7 +276,7 @@ PathReport RenderPath(const ViewRenderer& renderer, const ImportedDataset& datas
     WriteFrame(frame, RenderResult::FrameStem(f), options, depth_max, out, video.get(), cameras[0]);
   }
   PathReport report;
-  report.source = EnumName(renderer.source);
+  report.source = renderer.source;
   report.frames = static_cast<int>(cameras.size());
   report.width = cameras[0].width;
   report.height = cameras[0].height;

@@ -373,8 +373,8 @@ void ReportStage::Run(StageContext& context) const {
   body += CamerasSection(context, dataset, heldout_split);
   body += HeldoutSection(render, eval, train, background, options.image_width);
   if (const std::optional<PathReport> path = ReadReportIfExists<PathReport>(render.report())) {
-    std::string how =
-        path->samples_per_ray ? format("{:.3g} samples per ray", *path->samples_per_ray) : "from the " + path->source;
+    std::string how = path->samples_per_ray ? format("{:.3g} samples per ray", *path->samples_per_ray)
+                                            : "from the " + std::string(EnumName(path->source));
     if (path->rendered_frames < path->frames)
       how += format("; {} drawn, the others repeat them", path->rendered_frames);
     body += format("<h2>New views</h2>\n<p>{} path, {} frames of {}x{} at {:.2f} frames per second ({}).</p>\n",

@@ -232,8 +232,17 @@ struct HeldoutScore {
   double psnr = 0, ssim = 0, seconds = 0;
 };
 
+// What draws the views (render.source); a ViewRenderer is the field or the splats, never auto.
+enum class RenderSource { kAuto, kField, kSplats };
+template <>
+struct EnumNames<RenderSource> {
+  static constexpr std::pair<RenderSource, const char*> kValues[] = {
+      {RenderSource::kAuto, "auto"}, {RenderSource::kField, "field"}, {RenderSource::kSplats, "splats"}};
+};
+
 struct EvalReport {
-  std::string split, source;  // the held-out split; what rendered it: field | splats
+  std::string split;                           // the held-out split
+  RenderSource source = RenderSource::kField;  // what rendered it: the field or the splats
   std::vector<HeldoutScore> views;
   std::optional<double> psnr, ssim;  // means over the views; none without views
   double seconds_per_view = 0;
@@ -254,7 +263,8 @@ struct PathVideo {
 };
 
 struct PathReport {
-  std::string source, kind;  // field | splats; orbit | spiral | file
+  RenderSource source = RenderSource::kField;  // the field or the splats
+  std::string kind;                            // orbit | spiral | file
   int frames = 0, width = 0, height = 0;
   int rendered_frames = 0;  // the others repeat an earlier frame's camera (an arc's way back)
   double seconds_per_frame = 0, frames_per_second = 0;  // of the rendered frames

@@ -18,14 +18,6 @@
 
 namespace p2n {
 
-// What draws the views (render.source); a ViewRenderer is the field or the splats, never auto.
-enum class RenderSource { kAuto, kField, kSplats };
-template <>
-struct EnumNames<RenderSource> {
-  static constexpr std::pair<RenderSource, const char*> kValues[] = {
-      {RenderSource::kAuto, "auto"}, {RenderSource::kField, "field"}, {RenderSource::kSplats, "splats"}};
-};
-
 struct ViewRenderer {
   RenderSource source = RenderSource::kField;
   std::array<float, 3> background{1, 1, 1};

@@ -105,7 +105,7 @@ SplatReport SomeSplatReport() {
 EvalReport SomeEvalReport() {
   EvalReport report;
   report.split = "val";
-  report.source = "splats";
+  report.source = RenderSource::kSplats;
   report.views = {{"a.png", "heldout/a.png", "heldout/a_error.png", "/photos/a.png", 25.5, 0.8, 0.1},
                   {"b.png", "heldout/b.png", "heldout/b_error.png", "/photos/b.png", 23.5, 0.7, 0.2}};
   report.psnr = 24.5;
@@ -119,7 +119,7 @@ EvalReport SomeEvalReport() {
 
 PathReport SomePathReport() {
   PathReport report;
-  report.source = "field";
+  report.source = RenderSource::kField;
   report.kind = "orbit";
   report.frames = 60;
   report.rendered_frames = 31;
