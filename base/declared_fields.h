@@ -78,9 +78,10 @@ nlohmann::json FieldsToJson(const S& s) {
   return json;
 }
 
-// Reads the fields `s` declares from the JSON object `json` (a field it lacks keeps its value). A key that is
-// neither a field nor in `other_keys` is refused, as is a value of the wrong type: std::invalid_argument naming
-// `what` and the key (a config's reader reads every key its writer writes; a misspelt one must not be ignored).
+// Reads the integer fields `s` declares (the field configs') from the JSON object `json` (a field it lacks keeps
+// its value). A key that is neither a field nor in `other_keys` is refused, as is a value that is not an integer the
+// field holds: std::invalid_argument naming `what` and the key (a config's reader reads every key its writer writes;
+// a misspelt one must not be ignored).
 template <class S>
 void ReadFields(const nlohmann::json& json, S* s, std::initializer_list<const char*> other_keys,
                 const std::string& what) {
@@ -89,24 +90,12 @@ void ReadFields(const nlohmann::json& json, S* s, std::initializer_list<const ch
     bool read = false;
     const auto read_field = [&, &key = key, &value = value](const char* name, auto& field, const auto&...) {
       if (key != name) return;
-      read = true;
       using T = std::remove_reference_t<decltype(field)>;
-      std::optional<T> number;
-      if constexpr (std::is_same_v<T, bool>) {
-        if (value.is_boolean()) number = value.template get<bool>();
-      } else if constexpr (std::is_integral_v<T>) {
-        number = JsonInteger<T>(value);
-      } else if (value.is_number()) {
-        number = value.template get<T>();
-      }
-      if (!number) {
-        throw std::invalid_argument(what + ": '" + key + "' must be " +
-                                    (std::is_same_v<T, bool> ? "true or false"
-                                     : std::is_integral_v<T> ? "an integer"
-                                                             : "a number") +
-                                    ", not " + value.dump());
-      }
+      static_assert(std::is_integral_v<T> && !std::is_same_v<T, bool>, "ReadFields reads integer fields");
+      const std::optional<T> number = JsonInteger<T>(value);
+      if (!number) throw std::invalid_argument(what + ": '" + key + "' must be an integer, not " + value.dump());
       field = *number;
+      read = true;
     };
     s->Visit(read_field);
     const auto is_key = [&key = key](const char* k) { return key == k; };
