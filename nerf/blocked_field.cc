@@ -1,48 +1,13 @@
 #include "nerf/blocked_field.h"
 
-#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
-#include "base/float_image.h"
-
 namespace p2n {
 
-namespace {
-
-// A model file's slabs: at most this many (each a whole field).
-constexpr int kMaxSlabs = 256;
-
-}  // namespace
-
-int FieldSlabs::SlabOf(double coordinate) const {
-  return static_cast<int>(std::upper_bound(cuts.begin(), cuts.end(), coordinate) - cuts.begin());
-}
-
-FieldSlabs CutIntoSlabs(const Eigen::Matrix3Xd& points, int count) {
-  if (count < 1 || count > kMaxSlabs) {
-    throw std::invalid_argument("CutIntoSlabs: " + std::to_string(count) + " slabs (1 to " + std::to_string(kMaxSlabs) +
-                                ")");
-  }
-  FieldSlabs slabs;
-  if (count == 1 || points.cols() == 0) return slabs;
-  std::vector<std::vector<double>> coordinates(3);
-  double widest = -1;
-  for (int a = 0; a < 3; ++a) {
-    coordinates[a].assign(points.row(a).begin(), points.row(a).end());
-    const double spread = Quantile(coordinates[a], 0.95) - Quantile(coordinates[a], 0.05);
-    if (spread > widest) widest = spread, slabs.axis = a;
-  }
-  for (int b = 1; b < count; ++b) {
-    const double cut = Quantile(coordinates[slabs.axis], double(b) / count);
-    if (slabs.cuts.empty() || cut > slabs.cuts.back()) slabs.cuts.push_back(cut);  // equal quantiles: one cut
-  }
-  return slabs;
-}
-
 template <typename T>
-BlockedField<T>::BlockedField(FieldSlabs slabs, std::vector<std::unique_ptr<RadianceField<T>>> fields)
+BlockedField<T>::BlockedField(Slabs slabs, std::vector<std::unique_ptr<RadianceField<T>>> fields)
     : slabs_(std::move(slabs)), fields_(std::move(fields)) {
   const std::string what = "BlockedField: ";
   if (slabs_.axis < 0 || slabs_.axis > 2) throw std::invalid_argument(what + "axis must be 0, 1 or 2");
@@ -63,7 +28,7 @@ BlockedField<T>::BlockedField(FieldSlabs slabs, std::vector<std::unique_ptr<Radi
 
 template <typename T>
 std::unique_ptr<BlockedField<T>> BlockedField<T>::FromJson(const nlohmann::json& config, uint64_t seed) {
-  FieldSlabs slabs;
+  Slabs slabs;
   slabs.axis = config.at("axis").get<int>();
   slabs.cuts = config.at("cuts").get<std::vector<double>>();
   const nlohmann::json& configs = config.at("fields");

@@ -1,6 +1,6 @@
 #pragma once
-// A field trained by spatial blocks (`train.blocks`): the unit cube cut into slabs along one axis, each slab's
-// field trained alone on the views that see it, and every point answered by the field of the slab it lies in
+// A field trained by spatial blocks (`train.blocks`): the unit cube cut into slabs along one axis (base/slabs.h), each
+// slab's field trained alone on the views that see it, and every point answered by the field of the slab it lies in
 // (Mega-NeRF's routing, with slabs for its cells). Each block's field models the whole of its views' rays; only its
 // own slab of it is ever shown, so the others' fit where its views saw little does not matter.
 //
@@ -11,24 +11,10 @@
 #include <memory>
 #include <vector>
 
+#include "base/slabs.h"
 #include "nerf/radiance_field.h"
 
 namespace p2n {
-
-// Slabs of the unit cube along `axis`: slab b holds the points whose coordinate on it lies in [cuts[b - 1],
-// cuts[b]) (the first from -infinity, the last to +infinity).
-struct FieldSlabs {
-  int axis = 0;
-  std::vector<double> cuts;  // ascending
-
-  int count() const { return static_cast<int>(cuts.size()) + 1; }
-  int SlabOf(double coordinate) const;
-};
-
-// `count` slabs holding (nearly) equal numbers of `points` (3 x n, in the unit cube), across the axis where they
-// spread most between their 5th and 95th percentiles (so that a few far points do not choose it); fewer where
-// quantiles coincide (one cut each); one without points. std::invalid_argument for a count outside 1..256.
-FieldSlabs CutIntoSlabs(const Eigen::Matrix3Xd& points, int count);
 
 template <typename T>
 class BlockedField : public RadianceField<T> {
@@ -37,7 +23,7 @@ class BlockedField : public RadianceField<T> {
   using typename RadianceField<T>::Cache;
 
   // One field a slab; std::invalid_argument when the counts differ, the cuts are not ascending or a field is null.
-  BlockedField(FieldSlabs slabs, std::vector<std::unique_ptr<RadianceField<T>>> fields);
+  BlockedField(Slabs slabs, std::vector<std::unique_ptr<RadianceField<T>>> fields);
   // From Config()'s JSON: {"otype": "BlockedField", "axis", "cuts", "fields": [each slab's config]}.
   static std::unique_ptr<BlockedField> FromJson(const nlohmann::json& config, uint64_t seed);
 
@@ -53,7 +39,7 @@ class BlockedField : public RadianceField<T> {
   // Each slab's dense parameters, then its encoding's, slab after slab.
   std::vector<ParamBlock<T>> DenseParams() override;
 
-  const FieldSlabs& slabs() const { return slabs_; }
+  const Slabs& slabs() const { return slabs_; }
   RadianceField<T>& field(int slab) { return *fields_[slab]; }
 
  private:
@@ -61,7 +47,7 @@ class BlockedField : public RadianceField<T> {
   template <typename Answer>
   void Route(const Matrix& positions, const Answer& answer) const;
 
-  FieldSlabs slabs_;
+  Slabs slabs_;
   std::vector<std::unique_ptr<RadianceField<T>>> fields_;
 };
 

@@ -36,17 +36,6 @@ std::vector<Eigen::Matrix3Xd> SurfaceSeen(const NerfModel& model, const std::vec
   return seen;
 }
 
-std::vector<size_t> ViewsOfSlab(const std::vector<Eigen::Matrix3Xd>& seen, const FieldSlabs& slabs, int slab,
-                                double min_share) {
-  std::vector<size_t> views;
-  for (size_t v = 0; v < seen.size(); ++v) {
-    Eigen::Index in_slab = 0;
-    for (Eigen::Index p = 0; p < seen[v].cols(); ++p) in_slab += slabs.SlabOf(seen[v](slabs.axis, p)) == slab;
-    if (in_slab > 0 && in_slab >= min_share * seen[v].cols()) views.push_back(v);
-  }
-  return views;
-}
-
 void CopyFieldParameters(RadianceField<float>& from, RadianceField<float>* to) {
   if (from.Config() != to->Config()) throw std::invalid_argument("CopyFieldParameters: the fields' configs differ");
   const std::vector<ParamBlock<float>> source = from.DenseParams(), target = to->DenseParams();
@@ -58,7 +47,7 @@ void CopyFieldParameters(RadianceField<float>& from, RadianceField<float>* to) {
   }
 }
 
-NerfModel MergeBlockModels(const FieldSlabs& slabs, std::vector<NerfModel> blocks) {
+NerfModel MergeBlockModels(const Slabs& slabs, std::vector<NerfModel> blocks) {
   if (static_cast<int>(blocks.size()) != slabs.count()) {
     throw std::invalid_argument("MergeBlockModels: " + std::to_string(blocks.size()) + " models for " +
                                 std::to_string(slabs.count()) + " slabs");

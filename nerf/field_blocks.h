@@ -1,6 +1,6 @@
 #pragma once
 // What training a field by spatial blocks (train.blocks) is made of, apart from the stage that runs it: where the
-// views see the scene's surface, the slabs cut through it, the views that see a slab, a block's field started from
+// views see the scene's surface (what base/slabs.h cuts), a block's field started from
 // the whole one, and the blocks' models made one (nerf/blocked_field.h).
 
 #include <vector>
@@ -16,10 +16,6 @@ namespace p2n {
 std::vector<Eigen::Matrix3Xd> SurfaceSeen(const NerfModel& model, const std::vector<TrainView>& views,
                                           int rays_per_side);
 
-// The views (indices, ascending) at least `min_share` of whose surface points (SurfaceSeen) lie in `slab`.
-std::vector<size_t> ViewsOfSlab(const std::vector<Eigen::Matrix3Xd>& seen, const FieldSlabs& slabs, int slab,
-                                double min_share);
-
 // Copies the parameters of `from` (dense and the trainable encoding's) into `to`, a field of the same config;
 // std::invalid_argument when the configs differ.
 void CopyFieldParameters(RadianceField<float>& from, RadianceField<float>* to);
@@ -28,6 +24,6 @@ void CopyFieldParameters(RadianceField<float>& from, RadianceField<float>* to);
 // composite field, each occupancy cell from the grid of the slab its centre lies in, the finest of their march steps
 // (a block may end before the trainer's switch to the fine step) and the mean of their backgrounds; the first
 // block's info. std::invalid_argument when they do not match.
-NerfModel MergeBlockModels(const FieldSlabs& slabs, std::vector<NerfModel> blocks);
+NerfModel MergeBlockModels(const Slabs& slabs, std::vector<NerfModel> blocks);
 
 }  // namespace p2n

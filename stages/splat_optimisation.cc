@@ -17,6 +17,7 @@
 #include "pipeline/cancel.h"
 #include "pipeline/log.h"
 #include "splat/blocks.h"
+#include "stages/blocked_run.h"
 #include "stages/photo_memory.h"
 #include "stages/stage_io.h"
 #include "stages/stage_results.h"
@@ -58,13 +59,6 @@ bool InCoarsePart(double coarse_share, double progress, int steps, size_t train_
 }
 
 namespace {
-
-// A part of the optimisation: its share of the run (from, to: of the budget, of densification's schedule) and the
-// trainer's step when it begins.
-struct Part {
-  double from = 0, to = 1;
-  int start_step = 0;
-};
 
 // The training views an optimisation runs on: the setup's, or some of them (a block's) with their pixels borrowed
 // from the setup (given back when they go) or read; or, where those would take more than splat.photo_memory, a
@@ -145,9 +139,9 @@ void FollowWindow(const std::vector<TrainView>& views, std::vector<TrainView>* c
 // steps and seconds the part's own) at every evaluation but the last (the caller's final evaluation makes it),
 // checkpoints in `checkpoint`. With a window over the views, each step draws from those it holds then.
 void OptimiseUntilDone(const SplatRun& run, SplatTrainer& trainer, const ViewsInUse& use, const fs::path& checkpoint,
-                       const Part& part, RunState* state) {
+                       const BudgetPart& part, RunState* state) {
   const SplatOptions& options = run.options;
-  const double width = part.to - part.from;
+  const double width = part.share();
   const int steps = options.steps > 0 ? std::max(1, static_cast<int>(std::lround(options.steps * width))) : 0;
   const RunLoop loop{SplatResult::kId.name,      run.budget * width, steps, options.eval_interval, 1, false,
                      options.checkpoint_interval};
@@ -182,7 +176,7 @@ void OptimiseUntilDone(const SplatRun& run, SplatTrainer& trainer, const ViewsIn
 // Optimises with `trainer` on `use`'s views for `part` of the run, resuming from `checkpoint` where it holds this run;
 // saves one there at the end when `checkpoint_at_end` (the next part begins from it).
 Optimised OptimisePart(const SplatRun& run, SplatTrainer& trainer, const ViewsInUse& use, const fs::path& checkpoint,
-                       const Part& part, bool checkpoint_at_end) {
+                       const BudgetPart& part, bool checkpoint_at_end) {
   Optimised out;
   const std::string& key = run.context.key;
   const bool resumed =
@@ -198,13 +192,6 @@ Optimised OptimisePart(const SplatRun& run, SplatTrainer& trainer, const ViewsIn
   out.steps = trainer.step() - part.start_step;
   return out;
 }
-
-// The share of the run the splats are optimised whole before the blocks go on from there: the other blocks, drawn
-// as they are then, must already look like the scene (drawn as they started, they pull each block's splats into
-// making up for them, and the merge is much worse; docs/benchmarks.md).
-constexpr double kWholeShare = 0.5;
-// The training views seen by a block when at least this share of the splats they show are the block's.
-constexpr double kBlockViewShare = 0.1;
 
 // `rows` (metrics.csv rows: seconds, step, then the rest) moved on by `seconds` and `steps`.
 std::string ShiftRows(const std::string& rows, int steps, double seconds) {
@@ -236,7 +223,7 @@ struct BlocksStart {
   Gaussians<float> splats;
   std::array<float, 3> background{1, 1, 1};
   int step = 0;
-  SplatBlocks blocks;
+  Slabs blocks;
 };
 
 BlocksStart StartOfBlocks(const SplatTrainer& whole, int count) {
@@ -245,32 +232,16 @@ BlocksStart StartOfBlocks(const SplatTrainer& whole, int count) {
   start.splats = whole.gaussians();
   start.background = whole.background();
   start.step = whole.step();
-  start.blocks = CutIntoBlocks(start.splats, count);
+  start.blocks = CutIntoSlabs(Means(start.splats), count);
   return start;
-}
-
-fs::path BlockCheckpoint(const SplatRun& run, int b) {
-  return run.context.resume_dir / format("checkpoint_block{}.bin", b + 1);
-}
-// Written when block b's part has finished: the key of the result, the steps it resumed from, the training views it
-// was optimised on (none: it was not, having no splats or no view that sees it).
-fs::path BlockDoneFile(const SplatRun& run, int b) { return run.context.resume_dir / format("block{}.json", b + 1); }
-
-// The names of the training views the blocks' parts index (their order), written before the parts run: a block's job
-// checks that it reads the same views (CheckSameViews).
-fs::path BlockViewsFile(const SplatRun& run) { return run.context.resume_dir / "blocks.json"; }
-
-std::optional<nlohmann::json> BlockDone(const SplatRun& run, int b) {
-  return OfThisRun(run.context, BlockDoneFile(run, b));
 }
 
 // Block b's part: its splats optimised from where the whole part ended for the rest of the budget, on the views that
 // see it, the other splats its context (resuming from its own checkpoint); the result in its checkpoint.
 void OptimiseBlock(const SplatRun& run, const BlocksStart& start, int b) {
-  std::vector<bool> keep = InBlock(start.splats, start.blocks, b);
+  std::vector<bool> keep = InSlab(start.splats, start.blocks, b);
   const size_t splats = std::count(keep.begin(), keep.end(), true);
-  std::vector<size_t> seeing =
-      ViewsOfBlock(run.setup.data.train, start.splats, start.blocks, b, kBlockViewShare, run.scene.near);
+  std::vector<size_t> seeing = ViewsOfSlab(run.setup.data.train, start.splats, start.blocks, b, run.scene.near);
   LogInfo(format("splat: block {} of {}: {} splats, {} training views", b + 1, start.blocks.count(), splats,
                  seeing.size()));
   if (splats == 0) seeing.clear();
@@ -286,29 +257,23 @@ void OptimiseBlock(const SplatRun& run, const BlocksStart& start, int b) {
     BinaryReader reader(start.trainer.buffer(), "the splats optimised whole");
     trainer.Load(&reader);
     trainer.Restrict(keep, &others, use.views);
-    resumed_from =
-        OptimisePart(run, trainer, use, BlockCheckpoint(run, b), {kWholeShare, 1, start.step}, true).resumed_from;
+    BudgetPart part = kBlockPart;
+    part.start_step = start.step;
+    resumed_from = OptimisePart(run, trainer, use, BlockCheckpoint(run.context, b), part, true).resumed_from;
   }
-  WriteOrExplain([&] {
-    WriteJsonAtomic(BlockDoneFile(run, b),
-                    {{"key", run.context.key}, {"resumed_from", resumed_from}, {"views", seeing}});
-  });
+  MarkBlockDone(run.context, b, {{"resumed_from", resumed_from}, {"views", seeing}});
 }
 
 // What block b's finished part made, from its checkpoint; `earlier`: it finished before this run of the stage (its
 // steps count as resumed from).
-Optimised FinishedBlock(const SplatRun& run, const BlocksStart& start, int b, bool earlier) {
-  const std::optional<nlohmann::json> done = BlockDone(run, b);
-  if (!done) {
-    throw ExternalToolError(format("splat: block {} did not finish ({} is missing); run the stage again", b + 1,
-                                   BlockDoneFile(run, b).string()));
-  }
+Optimised BlockResult(const SplatRun& run, const BlocksStart& start, int b, bool earlier) {
+  const nlohmann::json done = FinishedBlock(run.context, SplatResult::kId.name, b);
   Optimised out;
   out.background = start.background;
-  const std::vector<size_t> seeing = done->value("views", std::vector<size_t>{});
+  const std::vector<size_t> seeing = done.value("views", std::vector<size_t>{});
   if (seeing.empty()) {  // not optimised: the block's splats as the whole part left them
     out.splats = start.splats;
-    out.splats.Filter(InBlock(start.splats, start.blocks, b));
+    out.splats.Filter(InSlab(start.splats, start.blocks, b));
     return out;
   }
   const std::vector<TrainView> views = Cameras(run, seeing);
@@ -317,15 +282,15 @@ Optimised FinishedBlock(const SplatRun& run, const BlocksStart& start, int b, bo
   Gaussians<float> none;
   none.sh_degree = start.splats.sh_degree;
   SplatTrainer trainer(none, scene, run.trainer);  // all of it read from the checkpoint
-  if (!LoadRunCheckpoint(BlockCheckpoint(run, b), run.context.key, SplatResult::kId.name, &out.state,
+  if (!LoadRunCheckpoint(BlockCheckpoint(run.context, b), run.context.key, SplatResult::kId.name, &out.state,
                          [&](BinaryReader* r) { trainer.Load(r); })) {
     throw ExternalToolError(format("splat: block {}'s result {} is missing or not this run's; run the stage again",
-                                   b + 1, BlockCheckpoint(run, b).string()));
+                                   b + 1, BlockCheckpoint(run.context, b).string()));
   }
   out.splats = trainer.gaussians();
   out.background = trainer.background();
   out.steps = trainer.step() - start.step;
-  out.resumed_from = earlier ? out.steps : done->value("resumed_from", 0);
+  out.resumed_from = earlier ? out.steps : done.value("resumed_from", 0);
   return out;
 }
 
@@ -344,56 +309,37 @@ Optimised OptimiseBlocks(const SplatRun& run) {
   {
     ViewsInUse use;  // let go before the blocks read theirs
     UseViews(run, std::nullopt, &use);
-    AddPart(OptimisePart(run, whole, use, CheckpointFile(run.context), {0, kWholeShare}, true), &total);
+    AddPart(OptimisePart(run, whole, use, CheckpointFile(run.context), kWholePart, true), &total);
   }
   const BlocksStart start = StartOfBlocks(whole, run.options.blocks);
   LogInfo(format("splat: {} blocks across the {} axis, each optimised from here for the rest of the budget",
                  start.blocks.count(), "xyz"[start.blocks.axis]));
-  WriteOrExplain([&] {
-    WriteJsonAtomic(BlockViewsFile(run), {{"key", run.context.key}, {"names", ViewNames(run.setup.data.train)}});
-  });
-  std::vector<int> pending;  // parts: block b is part b + 1
-  for (int b = 0; b < start.blocks.count(); ++b) {
-    if (!BlockDone(run, b)) pending.push_back(b + 1);
-  }
-  run.context.RunParts(kBlockWork, pending, [&](int part) { OptimiseBlock(run, start, part - 1); });
+  SaveBlocksStart(run.context, nlohmann::json::object(), run.setup.data.train);
+  const std::vector<int> ran =
+      RunPendingBlocks(run.context, start.blocks.count(), [&](int b) { OptimiseBlock(run, start, b); });
 
   std::vector<Gaussians<float>> optimised;
   std::array<double, 3> background{0, 0, 0};
   for (int b = 0; b < start.blocks.count(); ++b) {
-    const bool earlier = std::find(pending.begin(), pending.end(), b + 1) == pending.end();
-    Optimised block = FinishedBlock(run, start, b, earlier);
+    const bool earlier = std::find(ran.begin(), ran.end(), b) == ran.end();
+    Optimised block = BlockResult(run, start, b, earlier);
     for (int c = 0; c < 3; ++c) background[c] += block.background[c] / start.blocks.count();
     AddPart(block, &total);
     optimised.push_back(std::move(block.splats));
   }
-  total.splats = MergeBlocks(optimised);
+  total.splats = MergeSlabs(optimised);
   for (int c = 0; c < 3; ++c) total.background[c] = static_cast<float>(background[c]);
   return total;
 }
 
 void OptimiseBlockAlone(const SplatRun& run, int b) {
-  const std::optional<nlohmann::json> kept = OfThisRun(run.context, BlockViewsFile(run));
-  if (!kept) {
-    throw ExternalToolError(format(
-        "splat: block {}: the training views of the blocks ({}) are missing or not this run's; run the stage again",
-        b + 1, BlockViewsFile(run).string()));
-  }
-  CheckSameViews(kept->at("names").get<std::vector<std::string>>(), run.setup.data.train,
-                 format("splat: block {}", b + 1), Upstream<PosesResult>(run.context).transforms());
+  const std::string stage = SplatResult::kId.name;
+  BlocksStartOfJob(run.context, stage, b, run.setup.data.train, Upstream<PosesResult>(run.context).transforms());
   SplatTrainer whole(run.setup.gaussians, run.scene, run.trainer);
   RunState state;
-  if (!LoadRunCheckpoint(CheckpointFile(run.context), run.context.key, SplatResult::kId.name, &state,
-                         [&](BinaryReader* r) { whole.Load(r); })) {
-    throw ExternalToolError(
-        format("splat: block {}: the whole part's result {} is missing or not this run's; run "
-               "the stage again",
-               b + 1, CheckpointFile(run.context).string()));
-  }
+  LoadWholePart(run.context, stage, b, &state, [&](BinaryReader* r) { whole.Load(r); });
   const BlocksStart start = StartOfBlocks(whole, run.options.blocks);
-  if (b < 0 || b >= start.blocks.count()) {
-    throw UserError(format("splat: there is no block {} of {}", b + 1, start.blocks.count()));
-  }
+  CheckBlockIndex(stage, b, start.blocks.count());
   OptimiseBlock(run, start, b);
 }
 

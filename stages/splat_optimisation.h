@@ -1,7 +1,7 @@
 #pragma once
 // The splat stage's optimisation (stages/splat_stage.cc): the splats optimised whole, or block by block
-// (splat.blocks, splat/blocks.h), until the budget is spent, with held-out evaluations as metrics.csv rows and
-// checkpoints that a killed run resumes from.
+// (splat.blocks: stages/blocked_run.h, splat/blocks.h), until the budget is spent, with held-out evaluations as
+// metrics.csv rows and checkpoints that a killed run resumes from.
 
 #include <array>
 #include <memory>
@@ -73,10 +73,8 @@ bool InCoarsePart(double coarse_share, double progress, int steps, size_t train_
 
 // The whole scene's splats optimised at once, resuming from the stage's checkpoint.
 Optimised OptimiseWhole(const SplatRun& run);
-// The splats optimised whole for part of the budget, then each of options.blocks slabs from there for the rest, as
-// parts of the stage's work (kBlockWork, StageContext::RunParts: in turn here, or as jobs of a scheduler at once);
-// merged. Each
-// part's result is a checkpoint kept until the stage completes, so that a resumed run goes on with the parts left.
+// The splats' run by blocks (stages/blocked_run.h): optimised whole, then each of options.blocks slabs of them on from
+// there on the views that see it, the other splats drawn as the whole left them; merged.
 Optimised OptimiseBlocks(const SplatRun& run);
 // Block b's part alone (in a job of its own), from the whole part's checkpoint.
 void OptimiseBlockAlone(const SplatRun& run, int b);

@@ -29,7 +29,6 @@
 #include "stages/splat_viewer.h"
 #include "stages/stage_io.h"
 #include "stages/stage_reports.h"
-#include "stages/train_stage.h"
 #include "stages/training_data.h"
 #include "stages/view_renders.h"
 

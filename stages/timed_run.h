@@ -30,6 +30,15 @@ void SaveRunCheckpoint(const std::filesystem::path& path, const std::string& key
 bool LoadRunCheckpoint(const std::filesystem::path& path, const std::string& key, const std::string& stage,
                        RunState* state, const std::function<void(BinaryReader*)>& load);
 
+// The part of a run's budget (and of its schedules: learning rates, densification) an optimisation covers, and its
+// optimiser's step when the part begins: a stage working by blocks optimises whole over its first part, then each
+// block over the rest (stages/blocked_run.h).
+struct BudgetPart {
+  double from = 0, to = 1;
+  int start_step = 0;
+  double share() const { return to - from; }
+};
+
 // What one session of a run did (a resumed run counts from its resumption).
 struct RunSession {
   int steps = 0;  // skipped ones too

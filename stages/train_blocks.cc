@@ -11,6 +11,7 @@
 #include "nerf/camera_refinement.h"
 #include "nerf/field_blocks.h"
 #include "pipeline/log.h"
+#include "stages/blocked_run.h"
 #include "stages/photo_memory.h"
 #include "stages/stage_io.h"
 #include "stages/training_data.h"
@@ -21,25 +22,16 @@ namespace {
 
 // Each view's surface is found by a grid of this many rays a side.
 constexpr int kSurfaceRaysPerSide = 32;
-// A view trains a block when at least this share of the surface it sees is the block's.
-constexpr double kSlabViewShare = 0.1;
 
 // Where the blocks begin: the slabs, and the training views (indices) each slab's field trains on.
 struct SlabsStart {
-  FieldSlabs slabs;
+  Slabs slabs;
   std::vector<std::vector<size_t>> views;
-  std::vector<std::string> names;  // of the training views `views` indexes (none in an older resume folder)
 };
 
-fs::path SlabsStartFile(const StageContext& context) { return context.resume_dir / "blocks.json"; }
 fs::path SlabModelFile(const StageContext& context, int b) {
   return context.resume_dir / format("block{}_model.bin", b + 1);
 }
-fs::path SlabCheckpoint(const StageContext& context, int b) {
-  return context.resume_dir / format("checkpoint_block{}.bin", b + 1);
-}
-// Written when block b's part has finished: the key of the result, its steps and seconds.
-fs::path SlabDoneFile(const StageContext& context, int b) { return context.resume_dir / format("block{}.json", b + 1); }
 
 // The training views with their cameras as the whole part left them (corrected where it refined them), without
 // their pixels: what the surface is looked for from.
@@ -68,28 +60,19 @@ SlabsStart CutBlocks(const TrainingSetup& setup, const Trainer& whole) {
   }
   SlabsStart start;
   start.slabs = CutIntoSlabs(all, setup.options.blocks);
-  start.names = ViewNames(setup.data.train);
-  for (int b = 0; b < start.slabs.count(); ++b)
-    start.views.push_back(ViewsOfSlab(seen, start.slabs, b, kSlabViewShare));
+  for (int b = 0; b < start.slabs.count(); ++b) start.views.push_back(ViewsOfSlab(seen, start.slabs, b));
   return start;
 }
 
-void SaveSlabsStart(const StageContext& context, const SlabsStart& start) {
-  WriteJsonAtomic(SlabsStartFile(context), {{"key", context.key},
-                                            {"axis", start.slabs.axis},
-                                            {"cuts", start.slabs.cuts},
-                                            {"views", start.views},
-                                            {"names", start.names}});
+nlohmann::json SlabsStartJson(const SlabsStart& start) {
+  return {{"axis", start.slabs.axis}, {"cuts", start.slabs.cuts}, {"views", start.views}};
 }
 
-std::optional<SlabsStart> LoadSlabsStart(const StageContext& context) {
-  const std::optional<nlohmann::json> json = OfThisRun(context, SlabsStartFile(context));
-  if (!json) return std::nullopt;
+SlabsStart SlabsStartOf(const nlohmann::json& json) {
   SlabsStart start;
-  start.slabs.axis = json->at("axis").get<int>();
-  start.slabs.cuts = json->at("cuts").get<std::vector<double>>();
-  start.views = json->at("views").get<std::vector<std::vector<size_t>>>();
-  start.names = json->value("names", std::vector<std::string>{});
+  start.slabs.axis = json.at("axis").get<int>();
+  start.slabs.cuts = json.at("cuts").get<std::vector<double>>();
+  start.views = json.at("views").get<std::vector<std::vector<size_t>>>();
   return start;
 }
 
@@ -184,7 +167,7 @@ void TrainBlock(const StageContext& context, TrainingSetup& setup, Trainer& whol
     CopyFieldParameters(*whole.model().field, trainer.model().field.get());
     trainer.model().occupancy = whole.model().occupancy;
     trainer.model().background = whole.model().background;
-    const fs::path checkpoint = SlabCheckpoint(context, b);
+    const fs::path checkpoint = BlockCheckpoint(context, b);
     LoadRunCheckpoint(checkpoint, context.key, TrainResult::kId.name, &state,
                       [&](BinaryReader* reader) { trainer.LoadCheckpoint(reader); });
     SessionLog session;
@@ -195,7 +178,7 @@ void TrainBlock(const StageContext& context, TrainingSetup& setup, Trainer& whol
     SaveModel(trainer.model(), SlabModelFile(context, b));
     steps = trainer.step();
   }
-  WriteJsonAtomic(SlabDoneFile(context, b), {{"key", context.key}, {"steps", steps}, {"seconds", state.seconds}});
+  MarkBlockDone(context, b, {{"steps", steps}, {"seconds", state.seconds}});
 }
 
 }  // namespace
@@ -203,63 +186,39 @@ void TrainBlock(const StageContext& context, TrainingSetup& setup, Trainer& whol
 BlockSteps TrainByBlocks(const StageContext& context, TrainingSetup& setup, const RunState& state, Trainer* whole) {
   SaveRunCheckpoint(CheckpointFile(context), context.key, state,
                     [&](BinaryWriter* writer) { whole->SaveCheckpoint(writer); });
-  std::optional<SlabsStart> start = LoadSlabsStart(context);
-  if (!start) {
-    start = CutBlocks(setup, *whole);
-    SaveSlabsStart(context, *start);
-  }
+  const std::optional<nlohmann::json> kept = LoadBlocksStart(context);
+  const SlabsStart start = kept ? SlabsStartOf(*kept) : CutBlocks(setup, *whole);
+  if (!kept) SaveBlocksStart(context, SlabsStartJson(start), setup.data.train);
   LogInfo(
       format("train: {} blocks across the {} axis of the field's cube, each trained on from here for the rest of "
              "the budget",
-             start->slabs.count(), "xyz"[start->slabs.axis]));
-  std::vector<int> pending;  // block b is part b + 1
-  for (int b = 0; b < start->slabs.count(); ++b) {
-    if (!OfThisRun(context, SlabDoneFile(context, b))) pending.push_back(b + 1);
-  }
+             start.slabs.count(), "xyz"[start.slabs.axis]));
   const std::vector<size_t> held = LetWindowGo(setup);
-  context.RunParts(kBlockWork, pending, [&](int part) { TrainBlock(context, setup, *whole, *start, part - 1); });
+  RunPendingBlocks(context, start.slabs.count(), [&](int b) { TrainBlock(context, setup, *whole, start, b); });
   ReadWindowBack(setup, held);
 
   BlockSteps total;
   std::vector<NerfModel> models;
-  for (int b = 0; b < start->slabs.count(); ++b) {
-    const std::optional<nlohmann::json> done = OfThisRun(context, SlabDoneFile(context, b));
-    if (!done) {
-      throw ExternalToolError(format("train: block {} did not finish ({} is missing); run the stage again", b + 1,
-                                     SlabDoneFile(context, b).string()));
-    }
-    total.steps += done->value("steps", 0);
-    total.seconds += done->value("seconds", 0.0);
+  for (int b = 0; b < start.slabs.count(); ++b) {
+    const nlohmann::json done = FinishedBlock(context, TrainResult::kId.name, b);
+    total.steps += done.value("steps", 0);
+    total.seconds += done.value("seconds", 0.0);
     models.push_back(LoadModel(SlabModelFile(context, b)));
   }
-  whole->AdoptModel(MergeBlockModels(start->slabs, std::move(models)));
+  whole->AdoptModel(MergeBlockModels(start.slabs, std::move(models)));
   return total;
 }
 
 void TrainBlockAlone(const StageContext& context, int b) {
   TrainingSetup setup;
   LoadTrainingSetup(context, &setup, SetupPhotos::kNone);
-  const std::optional<SlabsStart> start = LoadSlabsStart(context);
-  if (!start) {
-    throw ExternalToolError(
-        format("train: block {}: where the blocks begin ({}) is missing or not this run's; run "
-               "the stage again",
-               b + 1, SlabsStartFile(context).string()));
-  }
-  if (b < 0 || b >= start->slabs.count()) {
-    throw UserError(format("train: there is no block {} of {}", b + 1, start->slabs.count()));
-  }
-  CheckSameViews(start->names, setup.data.train, format("train: block {}", b + 1), setup.transforms);
+  const std::string stage = TrainResult::kId.name;
+  const SlabsStart start = SlabsStartOf(BlocksStartOfJob(context, stage, b, setup.data.train, setup.transforms));
+  CheckBlockIndex(stage, b, start.slabs.count());
   Trainer whole(setup.trainer, setup.data);
   RunState state;
-  if (!LoadRunCheckpoint(CheckpointFile(context), context.key, TrainResult::kId.name, &state,
-                         [&](BinaryReader* reader) { whole.LoadCheckpoint(reader); })) {
-    throw ExternalToolError(
-        format("train: block {}: the whole part's result {} is missing or not this run's; run the "
-               "stage again",
-               b + 1, CheckpointFile(context).string()));
-  }
-  TrainBlock(context, setup, whole, *start, b);
+  LoadWholePart(context, stage, b, &state, [&](BinaryReader* reader) { whole.LoadCheckpoint(reader); });
+  TrainBlock(context, setup, whole, start, b);
 }
 
 }  // namespace p2n

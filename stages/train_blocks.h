@@ -1,21 +1,15 @@
 #pragma once
-// The field trained by spatial blocks (train.blocks, for captures too large for one field in the time): the field is
-// trained whole over the first part of the budget (kWholePart, stages/train_stage.cc); the field's cube is then cut
-// into slabs holding equal shares of the surface the training views see, and each slab's field trained on from the
-// whole one over the rest of the budget, on the views that see it, as parts of the stage's work (kBlockWork,
-// StageContext::RunParts: in turn here, or as jobs of a scheduler at once). The composite (nerf/blocked_field.h)
-// answers each point from its slab's field. The start of the blocks and each block's result are kept in the stage's
-// resume folder until the stage completes, so that a resumed run goes on with the blocks left.
+// The field's step of a run by blocks (stages/blocked_run.h, train.blocks: captures too large for one field in the
+// time): the field's cube cut into slabs holding equal shares of the surface the training views see, each slab's
+// field trained on from the whole one on the views that see it, and the composite (nerf/blocked_field.h) answering
+// each point from its slab's field.
 
 #include "nerf/trainer.h"
 #include "pipeline/stage.h"
+#include "stages/blocked_run.h"
 #include "stages/train_run.h"
 
 namespace p2n {
-
-// The schedule's part the whole field trains over, and the part each block goes on over.
-inline constexpr SchedulePart kWholePart{0, 0.5};
-inline constexpr SchedulePart kBlockPart{0.5, 1};
 
 // The blocks' optimisation steps and seconds, summed.
 struct BlockSteps {

@@ -11,6 +11,7 @@
 #include "pipeline/log.h"
 #include "stages/photo_memory.h"
 #include "stages/stage_io.h"
+#include "stages/train_settings.h"
 #include "stages/training_data.h"
 
 namespace p2n {
@@ -88,7 +89,7 @@ bool ModelIsFinite(NerfModel& model) {
   return grid == nullptr || finite(grid->params(), grid->num_params());
 }
 
-void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptions& options, SchedulePart part,
+void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptions& options, BudgetPart part,
                     const fs::path& checkpoint, const std::string& key, PhotoWindow* window, RunState* state,
                     SessionLog* session) {
   const double budget = ResolvedTimeBudget(options) * part.share();

@@ -52,18 +52,11 @@ struct SessionLog {
   TrainReport::Throughput steps;
 };
 
-// The part of the learning-rate schedule a run covers: a field by blocks is trained whole over its first part, then
-// each block over the rest.
-struct SchedulePart {
-  double from = 0, to = 1;
-  double share() const { return to - from; }
-};
-
 // Trains until `part`'s share of the budget (train.time_budget's seconds, else train.steps) is spent, from where
 // `state` left off: a metrics row at every evaluation (evaluations take at most train.eval_share of the wall time),
 // checkpoints every train.checkpoint_interval seconds into `checkpoint`, tagged with the result's `key`. With a
 // `window` over the training photos, each step trains on those it holds at that step.
-void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptions& options, SchedulePart part,
+void TrainUntilDone(Trainer& trainer, const TrainingData& data, const TrainOptions& options, BudgetPart part,
                     const std::filesystem::path& checkpoint, const std::string& key, PhotoWindow* window,
                     RunState* state, SessionLog* session);
 

@@ -515,31 +515,31 @@ TEST_CASE("Blocks: equal slabs across the widest axis, the views that see each, 
           "[splat]") {
   Gaussians<float> splats = RandomSplats(300, 0, 7);
   for (size_t i = 0; i < splats.size(); ++i) splats.positions[3 * i + 1] *= 10;  // y spreads most: -4..4
-  const SplatBlocks blocks = CutIntoBlocks(splats, 3);
+  const Slabs blocks = CutIntoSlabs(Means(splats), 3);
   CHECK(blocks.axis == 1);
   REQUIRE(blocks.count() == 3);
   std::vector<int> counts(3, 0);
-  for (int b = 0; b < 3; ++b) counts[b] = static_cast<int>(SplatsOfBlock(splats, blocks, b, true).size());
+  for (int b = 0; b < 3; ++b) counts[b] = static_cast<int>(SplatsOfSlab(splats, blocks, b, true).size());
   for (const int count : counts) CHECK(std::abs(count - 100) <= 1);
-  CHECK(SplatsOfBlock(splats, blocks, 1, false).size() == splats.size() - counts[1]);
-  CHECK(CutIntoBlocks(splats, 1).count() == 1);
+  CHECK(SplatsOfSlab(splats, blocks, 1, false).size() == splats.size() - counts[1]);
+  CHECK(CutIntoSlabs(Means(splats), 1).count() == 1);
 
   // Cameras looking at either end, from along x: each sees its end's block, the middle one both ends do not reach.
   std::vector<TrainView> views(2);
   views[0].camera = CameraAt({3, -4, 0}, 32, {0, -4, 0});
   views[1].camera = CameraAt({3, 4, 0}, 32, {0, 4, 0});
-  CHECK(ViewsOfBlock(views, splats, blocks, 0, 0.1, 0.01) == std::vector<size_t>{0});
-  CHECK(ViewsOfBlock(views, splats, blocks, 2, 0.1, 0.01) == std::vector<size_t>{1});
+  CHECK(ViewsOfSlab(views, splats, blocks, 0, 0.01) == std::vector<size_t>{0});
+  CHECK(ViewsOfSlab(views, splats, blocks, 2, 0.01) == std::vector<size_t>{1});
 
   // A splat that moved across a cut during its block's optimisation stays its block's: kept once, where it went.
   std::vector<Gaussians<float>> optimised;
-  for (int b = 0; b < 3; ++b) optimised.push_back(SplatsOfBlock(splats, blocks, b, true));
+  for (int b = 0; b < 3; ++b) optimised.push_back(SplatsOfSlab(splats, blocks, b, true));
   optimised[0].positions[1] = blocks.cuts[1] + 1;  // now in block 2
-  const Gaussians<float> merged = MergeBlocks(optimised);
+  const Gaussians<float> merged = MergeSlabs(optimised);
   CHECK(merged.size() == splats.size());
   CHECK(merged.positions[1] == blocks.cuts[1] + 1);
-  CHECK(SplatsOfBlock(merged, blocks, 2, true).size() == optimised[2].size() + 1);
-  CHECK_THROWS(MergeBlocks({}));
+  CHECK(SplatsOfSlab(merged, blocks, 2, true).size() == optimised[2].size() + 1);
+  CHECK_THROWS(MergeSlabs({}));
 }
 
 TEST_CASE("Block optimisation: optimised whole, then each block on the views that see it, fit as well as at once",
@@ -570,27 +570,26 @@ TEST_CASE("Block optimisation: optimised whole, then each block on the views tha
   BinaryReader reader(halfway.buffer(), "halfway");
   first_half.Load(&reader);
   const Gaussians<float>& middle = first_half.gaussians();
-  const SplatBlocks blocks = CutIntoBlocks(middle, 2);
+  const Slabs blocks = CutIntoSlabs(Means(middle), 2);
   CHECK(blocks.axis == 0);
   std::vector<Gaussians<float>> optimised;
   for (int b = 0; b < blocks.count(); ++b) {
-    const Gaussians<float> others = SplatsOfBlock(middle, blocks, b, false);
+    const Gaussians<float> others = SplatsOfSlab(middle, blocks, b, false);
     std::vector<TrainView> seeing;
-    for (const size_t v : ViewsOfBlock(views, middle, blocks, b, 0.1, 0.01)) seeing.push_back(views[v]);
+    for (const size_t v : ViewsOfSlab(views, middle, blocks, b, 0.01)) seeing.push_back(views[v]);
     CHECK(seeing.size() >= 8);  // its own ring, and the other ring's views that show it
     CHECK(seeing.size() < views.size());
-    std::vector<bool> keep(middle.size());
-    for (size_t i = 0; i < middle.size(); ++i) keep[i] = blocks.BlockOf(&middle.positions[3 * i]) == b;
+    const std::vector<bool> keep = InSlab(middle, blocks, b);
     SplatTrainer trainer(start, scene, options);
     BinaryReader again(halfway.buffer(), "halfway");
     trainer.Load(&again);
     trainer.Restrict(keep, &others, &seeing);
-    CHECK(trainer.gaussians().positions == SplatsOfBlock(middle, blocks, b, true).positions);
+    CHECK(trainer.gaussians().positions == SplatsOfSlab(middle, blocks, b, true).positions);
     CHECK(trainer.Drawn().size() == middle.size());
     for (int s = options.steps / 2; s < options.steps; ++s) trainer.Step();
     optimised.push_back(trainer.gaussians());
   }
-  const Gaussians<float> merged = MergeBlocks(optimised);
+  const Gaussians<float> merged = MergeSlabs(optimised);
   CHECK(merged.size() == optimised[0].size() + optimised[1].size());
   const double before = psnr(start), blocked = psnr(merged), at_once = psnr(whole.gaussians());
   INFO("PSNR " << before << " -> " << blocked << " by blocks, " << at_once << " at once");

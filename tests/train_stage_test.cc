@@ -17,6 +17,7 @@
 #include "stages/stage_reports.h"
 #include "stages/stages.h"
 #include "stages/train_presets.h"
+#include "stages/train_settings.h"
 #include "stages/train_stage.h"
 #include "test_camera.h"
 
