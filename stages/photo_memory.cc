@@ -74,16 +74,50 @@ void LoadHeldoutPhotos(const ImportedDataset& poses, double megabytes, const std
   data->read_heldout = [photos](size_t v) { return photos->Read(v); };
 }
 
+BorrowedViews::~BorrowedViews() {
+  for (const auto& [from, to] : lent) (*lender)[from].pixels = std::move((*views)[to].pixels);
+}
+
+namespace {
+
+// What a window over `subset` (views `indices` of a set whose view v `source.read` reads) reads view i with: the
+// set's decoded copy where there is one, else a copy of the subset's own (kept in `own`).
 PhotoWindow::Loader SubsetReader(const std::vector<TrainView>& subset, const std::vector<size_t>& indices,
-                                 const std::shared_ptr<const DecodedPhotos>& photos, const PhotoWindow::Loader& read,
-                                 const fs::path& folder, const std::string& label,
-                                 std::shared_ptr<const DecodedPhotos>* own) {
-  if (photos) return [photos, indices](size_t v) { return photos->Read(indices[v]); };
+                                 const PhotoSource& source, std::shared_ptr<const DecodedPhotos>* own) {
+  if (source.photos) return [photos = source.photos, indices](size_t v) { return photos->Read(indices[v]); };
   std::vector<size_t> sizes;
   for (const TrainView& view : subset) sizes.push_back(view.PixelBytes());
   *own = DecodePhotos(
-      folder, sizes, [&](size_t v) { return read(indices[v]); }, label);
+      source.folder, sizes, [&](size_t v) { return source.read(indices[v]); }, source.label);
   return [copy = *own](size_t v) { return copy->Read(v); };
+}
+
+}  // namespace
+
+void BorrowViews(std::vector<TrainView>* lender, const std::vector<size_t>& indices, const PhotoSource& source,
+                 std::vector<TrainView>* views, BorrowedViews* borrowed) {
+  borrowed->lender = lender;
+  borrowed->views = views;
+  views->clear();
+  double bytes = 0;
+  for (const size_t v : indices) {
+    TrainView& from = (*lender)[v];
+    bytes += from.PixelBytes();
+    TrainView view = WithoutPixels(from);
+    if (!from.pixels.empty()) {
+      borrowed->lent.emplace_back(v, views->size());
+      view.pixels = std::move(from.pixels);
+    }
+    views->push_back(std::move(view));
+  }
+  if (bytes > source.memory) {
+    const PhotoWindow::Loader read = SubsetReader(*views, indices, source, &borrowed->photos);
+    borrowed->window = std::make_unique<PhotoWindow>(views, read, source.memory, source.seed);
+    return;
+  }
+  tbb::parallel_for(size_t{0}, indices.size(), [&](size_t i) {
+    if ((*views)[i].pixels.empty()) (*views)[i].pixels = source.read(indices[i]);
+  });
 }
 
 }  // namespace p2n

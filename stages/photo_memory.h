@@ -41,12 +41,38 @@ void LoadHeldoutPhotos(const ImportedDataset& poses, double megabytes, const std
 std::shared_ptr<const DecodedPhotos> DecodePhotos(const std::filesystem::path& folder, const std::vector<size_t>& sizes,
                                                   const PhotoWindow::Loader& decode, const std::string& label);
 
-// What a window over `subset` (views `indices` of a set of training photos, whose view v `read` reads) reads view i
-// with: the set's decoded copy `photos` where there is one, else a copy of the subset's own decoded into `folder`
-// (kept in `own`: a block's job reads no photo but its block's).
-PhotoWindow::Loader SubsetReader(const std::vector<TrainView>& subset, const std::vector<size_t>& indices,
-                                 const std::shared_ptr<const DecodedPhotos>& photos, const PhotoWindow::Loader& read,
-                                 const std::filesystem::path& folder, const std::string& label,
-                                 std::shared_ptr<const DecodedPhotos>* own);
+// Where a block's training views take their pixels from: `read` reads view v of the stage's (from its decoded copy
+// `photos` where there is one); a block whose views take more than `memory` bytes trains through a window over them
+// (seeded by `seed`), reading from `photos`, or where there is none (a block's job) from a copy of its own decoded
+// into `folder` with the progress line `label`.
+struct PhotoSource {
+  PhotoWindow::Loader read;
+  std::shared_ptr<const DecodedPhotos> photos;
+  double memory = 0;
+  uint64_t seed = 0;
+  std::filesystem::path folder;
+  std::string label;
+};
+
+// The training views a block is optimised on (the field's or the splats'), some of a stage's, in the borrower's
+// `views`: their pixels borrowed from the stage's views where those hold them (the whole does not step while a block
+// does) and given back when this goes, the others read; or a window over them.
+struct BorrowedViews {
+  std::vector<TrainView>* views = nullptr;
+  std::unique_ptr<PhotoWindow> window;          // over `views`, where they take more than the source's memory
+  std::shared_ptr<const DecodedPhotos> photos;  // their own decoded copy, which the window reads (a block's job)
+  std::vector<TrainView>* lender = nullptr;
+  std::vector<std::pair<size_t, size_t>> lent;  // (the lender's view, this one's)
+
+  BorrowedViews() = default;
+  BorrowedViews(const BorrowedViews&) = delete;
+  BorrowedViews& operator=(const BorrowedViews&) = delete;
+  ~BorrowedViews();
+};
+
+// Views `indices` of `lender` into `views` (which must outlive `borrowed`, and stay where it is: the window points
+// into it).
+void BorrowViews(std::vector<TrainView>* lender, const std::vector<size_t>& indices, const PhotoSource& source,
+                 std::vector<TrainView>* views, BorrowedViews* borrowed);
 
 }  // namespace p2n

@@ -60,23 +60,12 @@ bool InCoarsePart(double coarse_share, double progress, int steps, size_t train_
 
 namespace {
 
-// The training views an optimisation runs on: the setup's, or some of them (a block's) with their pixels borrowed
-// from the setup (given back when they go) or read; or, where those would take more than splat.photo_memory, a
-// window over them.
+// The training views an optimisation runs on: the setup's, or some of them (a block's, or all where the setup does not
+// hold them) borrowed or read (BorrowViews).
 struct ViewsInUse {
   const std::vector<TrainView>* views = nullptr;
-  std::vector<TrainView> own;                   // some of the setup's
-  std::shared_ptr<const DecodedPhotos> photos;  // their own decoded copy, for the window (a block's job)
-  std::unique_ptr<PhotoWindow> window;          // over `own`
-  std::vector<TrainView>* lender = nullptr;     // the setup's views, whose pixels `own` borrowed
-  std::vector<size_t> lent;                     // the lender's view of each of `own`'s
-
-  ViewsInUse() = default;
-  ViewsInUse(const ViewsInUse&) = delete;
-  ViewsInUse& operator=(const ViewsInUse&) = delete;
-  ~ViewsInUse() {
-    for (size_t i = 0; i < lent.size(); ++i) (*lender)[lent[i]].pixels = std::move(own[i].pixels);
-  }
+  std::vector<TrainView> own;
+  BorrowedViews borrowed;  // into `own`, which outlives it
 };
 
 // The training views `indices` without their pixels.
@@ -86,13 +75,10 @@ std::vector<TrainView> Cameras(const SplatRun& run, const std::vector<size_t>& i
   return views;
 }
 
-// The training views `indices` (none: all of them) with their pixels, or a window over them, into `use`. Some of
-// them borrow their pixels from the setup where it holds them (a block's part run here: the optimisation whole does
-// not step meanwhile).
+// The training views `indices` (none: all of them) with their pixels, or a window over them, into `use`.
 void UseViews(const SplatRun& run, std::optional<std::vector<size_t>> indices, ViewsInUse* use) {
   SplatSetup& setup = run.setup;
-  const bool in_memory = setup.in_memory;
-  if (!indices && in_memory) {
+  if (!indices && setup.in_memory) {
     use->views = &setup.data.train;
     return;
   }
@@ -100,28 +86,17 @@ void UseViews(const SplatRun& run, std::optional<std::vector<size_t>> indices, V
     indices.emplace(setup.data.train.size());
     std::iota(indices->begin(), indices->end(), size_t{0});
   }
-  use->own = Cameras(run, *indices);
+  const PhotoWindow::Loader read = [&setup](size_t v) {
+    return setup.photos ? setup.photos->Read(v) : setup.read_photo(v);
+  };
+  const PhotoSource source{read,
+                           setup.photos,
+                           MegabytesToBytes(run.options.photo_memory),
+                           static_cast<uint64_t>(run.options.seed),
+                           run.context.resume_dir,
+                           "splat: decoding the block's photos"};
+  BorrowViews(&setup.data.train, *indices, source, &use->own, &use->borrowed);
   use->views = &use->own;
-  const double memory = MegabytesToBytes(run.options.photo_memory);
-  double bytes = 0;
-  for (const TrainView& view : use->own) bytes += view.PixelBytes();
-  if (in_memory) {
-    use->lender = &setup.data.train;
-    use->lent = *indices;
-    for (size_t i = 0; i < indices->size(); ++i) use->own[i].pixels = std::move(setup.data.train[(*indices)[i]].pixels);
-    return;
-  }
-  if (bytes <= memory) {
-    tbb::parallel_for(size_t{0}, indices->size(), [&](size_t i) {
-      const size_t v = (*indices)[i];
-      use->own[i].pixels = setup.photos ? setup.photos->Read(v) : setup.read_photo(v);
-    });
-    return;
-  }
-  const PhotoWindow::Loader read =
-      SubsetReader(use->own, *indices, setup.photos, setup.read_photo, run.context.resume_dir,
-                   "splat: decoding the block's photos", &use->photos);
-  use->window = std::make_unique<PhotoWindow>(&use->own, read, memory, static_cast<uint64_t>(run.options.seed));
 }
 
 // The half-size views of the photos a window holds: those it took in halved, those it let go dropped.
@@ -153,8 +128,8 @@ void OptimiseUntilDone(const SplatRun& run, SplatTrainer& trainer, const ViewsIn
         !coarse.empty() && InCoarsePart(options.coarse, progress, trainer.step(), run.setup.data.train.size());
     trainer.SetViews(in_coarse ? &coarse : &views, in_coarse ? 0.5 : 1.0);
     if (!in_coarse) std::vector<TrainView>().swap(coarse);  // the coarse part is over for good
-    if (use.window && use.window->MoveTo(trainer.step())) {
-      trainer.SampleFrom(use.window->resident());
+    if (use.borrowed.window && use.borrowed.window->MoveTo(trainer.step())) {
+      trainer.SampleFrom(use.borrowed.window->resident());
       if (!coarse.empty()) FollowWindow(views, &coarse);
     }
     trainer.SetProgress(progress);

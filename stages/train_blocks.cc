@@ -76,58 +76,27 @@ SlabsStart SlabsStartOf(const nlohmann::json& json) {
   return start;
 }
 
-// A block's training data: the training views that see it, their cameras as the whole part left them, and their
-// pixels (in memory, or a window over them where they would take more than train.photo_memory); no held-out views
-// (the composite is scored at the end). Pixels the whole part holds are lent, not copied (the whole does not train
-// while a block does), and given back when the block's data goes; the others are read (TrainingSetup::read_photo).
-// A window reads from the whole part's decoded copy, or where there is none (a block's job, which loads no photo but
-// its block's) from the block's own.
+// A block's training data: the training views that see it (`indices` of the setup's), their cameras as the whole
+// part left them, and their pixels borrowed or read, or a window over them (BorrowViews); no held-out views (the
+// composite is scored at the end).
 struct BlockData {
   TrainingData data;
-  std::shared_ptr<const DecodedPhotos> photos;  // the block's own decoded copy
-  std::unique_ptr<PhotoWindow> window;
-  std::vector<TrainView>* lender = nullptr;
-  std::vector<std::pair<size_t, size_t>> lent;  // (the lender's view, this block's)
-
-  BlockData() = default;
-  BlockData(const BlockData&) = delete;
-  BlockData& operator=(const BlockData&) = delete;
-  ~BlockData() {
-    for (const auto& [from, to] : lent) (*lender)[from].pixels = std::move(data.train[to].pixels);
-  }
+  BorrowedViews borrowed;  // into data.train, which outlives it
 };
-
-// The window over a block's training views (`indices` of the setup's) and the decoded copy it reads from.
-void MakeBlockWindow(const TrainingSetup& setup, const std::vector<size_t>& indices, const fs::path& folder,
-                     BlockData* block) {
-  const PhotoWindow::Loader read = SubsetReader(block->data.train, indices, setup.photos, setup.read_photo, folder,
-                                                "train: decoding the block's photos", &block->photos);
-  block->window = std::make_unique<PhotoWindow>(&block->data.train, read, PhotoMemoryBytes(setup.options),
-                                                static_cast<uint64_t>(setup.options.seed));
-}
 
 void LoadBlockData(TrainingSetup& setup, const Trainer& whole, const std::vector<size_t>& indices,
                    const fs::path& folder, BlockData* block) {
+  const PhotoSource source{setup.read_photo,
+                           setup.photos,
+                           PhotoMemoryBytes(setup.options),
+                           static_cast<uint64_t>(setup.options.seed),
+                           folder,
+                           "train: decoding the block's photos"};
+  BorrowViews(&setup.data.train, indices, source, &block->data.train, &block->borrowed);
   const std::vector<TrainView> cameras = CorrectedCameras(setup.data, whole);
+  for (size_t i = 0; i < indices.size(); ++i) block->data.train[i].camera = cameras[indices[i]].camera;
   block->data.background = setup.data.background;
   block->data.background_known = setup.data.background_known;
-  block->lender = &setup.data.train;
-  size_t bytes = 0;
-  for (const size_t v : indices) bytes += setup.data.train[v].PixelBytes();
-  for (const size_t v : indices) {
-    TrainView& source = setup.data.train[v];
-    TrainView view = WithoutPixels(source);
-    view.camera = cameras[v].camera;
-    if (!source.pixels.empty()) {
-      block->lent.emplace_back(v, block->data.train.size());
-      view.pixels = std::move(source.pixels);
-    }
-    block->data.train.push_back(std::move(view));
-  }
-  if (bytes > PhotoMemoryBytes(setup.options)) return MakeBlockWindow(setup, indices, folder, block);
-  tbb::parallel_for(size_t{0}, indices.size(), [&](size_t v) {
-    if (block->data.train[v].pixels.empty()) block->data.train[v].pixels = setup.read_photo(indices[v]);
-  });
 }
 
 // The whole part's photos in its window (where the training photos take more than train.photo_memory), let go while
@@ -171,8 +140,8 @@ void TrainBlock(const StageContext& context, TrainingSetup& setup, Trainer& whol
     LoadRunCheckpoint(checkpoint, context.key, TrainResult::kId.name, &state,
                       [&](BinaryReader* reader) { trainer.LoadCheckpoint(reader); });
     SessionLog session;
-    TrainUntilDone(trainer, block.data, setup.options, kBlockPart, checkpoint, context.key, block.window.get(), &state,
-                   &session);
+    TrainUntilDone(trainer, block.data, setup.options, kBlockPart, checkpoint, context.key, block.borrowed.window.get(),
+                   &state, &session);
     if (!ModelIsFinite(trainer.model()))
       throw InternalError(format("block {} ended with non-finite parameters", b + 1));
     SaveModel(trainer.model(), SlabModelFile(context, b));
