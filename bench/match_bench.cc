@@ -8,8 +8,8 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "stages/descriptor_similarity.h"
-#include "stages/feature_matching.h"
+#include "stages/sfm/descriptor_similarity.h"
+#include "stages/sfm/feature_matching.h"
 
 int main(int argc, char** argv) {
   if (argc < 2) {

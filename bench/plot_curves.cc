@@ -6,7 +6,7 @@
 #include <iterator>
 #include <string>
 
-#include "nerf/plot.h"
+#include "base/plot.h"
 
 int main(int argc, char** argv) {
   if (argc < 3) {

@@ -15,8 +15,8 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "base/plot.h"
 #include "nerf/heap.h"
-#include "nerf/plot.h"
 #include "nerf/renderer.h"
 #include "stages/training_data.h"
 

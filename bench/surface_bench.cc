@@ -17,8 +17,8 @@
 
 #include "base/file_util.h"
 #include "base/float_image.h"
+#include "examples/synthetic_scene.h"
 #include "formats/dataset_import.h"
-#include "nerf/synthetic_scene.h"
 #include "stages/stage_reports.h"
 
 namespace fs = std::filesystem;

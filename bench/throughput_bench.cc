@@ -18,7 +18,7 @@
 #include "nerf/encoding.h"
 #include "nerf/heap.h"
 #include "nerf/ngp_field.h"
-#include "stages/train_presets.h"
+#include "stages/fitting/train_presets.h"
 
 namespace {
 

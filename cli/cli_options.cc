@@ -10,7 +10,7 @@
 #include "base/format.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
-#include "stages/sfm_stage.h"
+#include "stages/sfm/sfm_options.h"
 #include "stages/stages.h"
 
 namespace p2n {

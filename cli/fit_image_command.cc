@@ -7,10 +7,10 @@
 #include "base/errors.h"
 #include "base/file_util.h"
 #include "base/format.h"
+#include "base/plot.h"
 #include "cli/cli_options.h"
 #include "cli/commands.h"
 #include "nerf/image_fit.h"
-#include "nerf/plot.h"
 #include "pipeline/log.h"
 #include "stages/stages.h"
 

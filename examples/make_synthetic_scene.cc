@@ -5,7 +5,7 @@
 #include <exception>
 #include <iostream>
 
-#include "nerf/synthetic_scene.h"
+#include "examples/synthetic_scene.h"
 
 int main(int argc, char** argv) {
   if (argc < 2 || argc > 6 || argc == 4) {

@@ -33,7 +33,7 @@ class BlockedField : public RadianceField<T> {
                Cache* cache) const override;
   void Render(const Matrix& positions, const Matrix& directions, Matrix* density, Matrix* rgb) const override;
   void Density(const Matrix& positions, Matrix* density) const override;
-  // std::logic_error: the blocks are trained one by one (stages/train_blocks.h), never the composite.
+  // std::logic_error: the blocks are trained one by one (stages/fitting/train_blocks.h), never the composite.
   void Backward(const Cache& cache, const Matrix& d_density, const Matrix& d_rgb, T* d_dense,
                 Matrix* d_encoded) const override;
   // Each slab's dense parameters, then its encoding's, slab after slab.

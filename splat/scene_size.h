@@ -1,7 +1,7 @@
 #pragma once
 // How large a scene is against what one photo sees: an orbit's or a forward-facing capture's views each see most of
 // it, a street's or a drone survey's a small part, and a large scene takes more splats (each view still drawing about
-// as many; stages/splat_stage.h, PlacedSplats).
+// as many; stages/fitting/splat_stage.h, PlacedSplats).
 
 #include <cstddef>
 #include <vector>

@@ -22,9 +22,9 @@
 
 #include "base/enum_names.h"
 #include "formats/output_frame.h"
-#include "nerf/mesh.h"
-#include "stages/splat_options.h"
-#include "stages/train_options.h"
+#include "mesh/mesh.h"
+#include "stages/fitting/splat_options.h"
+#include "stages/fitting/train_options.h"
 
 namespace p2n {
 

@@ -2,15 +2,15 @@
 
 #include "base/format.h"
 #include "formats/dataset_import.h"
-#include "stages/export_stage.h"
-#include "stages/import_stage.h"
-#include "stages/ingest_stage.h"
-#include "stages/poses_stage.h"
-#include "stages/render_stage.h"
-#include "stages/report_stage.h"
-#include "stages/sfm_stage.h"
-#include "stages/splat_stage.h"
-#include "stages/train_stage.h"
+#include "stages/fitting/splat_stage.h"
+#include "stages/fitting/train_stage.h"
+#include "stages/ingest/import_stage.h"
+#include "stages/ingest/ingest_stage.h"
+#include "stages/outputs/export_stage.h"
+#include "stages/outputs/render_stage.h"
+#include "stages/outputs/report_stage.h"
+#include "stages/sfm/poses_stage.h"
+#include "stages/sfm/sfm_stage.h"
 
 namespace p2n {
 

@@ -36,7 +36,7 @@ TrainingData LoadTrainingData(const ImportedDataset& poses, bool depth_points = 
                               double photo_bytes = std::numeric_limits<double>::infinity());
 // The training views of LoadTrainingData without their pixels (each file's header read: TrainViewHeader), with their
 // depth points when `depth_points`, and no held-out view: what a part of the training that reads only some of the
-// photos starts from (a field block's job, stages/train_blocks.h).
+// photos starts from (a field block's job, stages/fitting/train_blocks.h).
 TrainingData LoadTrainingCameras(const ImportedDataset& poses, bool depth_points = false);
 // The training views ("train" split), in the order LoadTrainingData keeps them.
 std::vector<const ImportedView*> TrainingViews(const ImportedDataset& poses);

@@ -5,8 +5,8 @@
 
 #include <cmath>
 
-#include "nerf/camera_path.h"
-#include "nerf/synthetic_scene.h"
+#include "base/camera_path.h"
+#include "examples/synthetic_scene.h"
 #include "test_camera.h"
 
 namespace p2n::testing {

@@ -5,9 +5,9 @@
 
 #include <random>
 
+#include "examples/synthetic_scene.h"
 #include "nerf/camera_refinement.h"
 #include "nerf/nerf_model.h"
-#include "nerf/synthetic_scene.h"
 
 namespace p2n::testing {
 namespace {

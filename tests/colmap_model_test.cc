@@ -8,7 +8,7 @@
 #include "base/errors.h"
 #include "formats/colmap_model.h"
 #include "formats/npy.h"
-#include "stages/colmap_flags.h"
+#include "stages/sfm/colmap_flags.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {

@@ -7,9 +7,9 @@
 #include <limits>
 
 #include "base/json_number.h"
+#include "mesh/mesh.h"
 #include "nerf/adam.h"
 #include "nerf/encoding.h"
-#include "nerf/mesh.h"
 #include "nerf/ngp_field.h"
 #include "nerf/radiance_field.h"
 #include "nerf/renderer.h"

@@ -6,8 +6,8 @@
 
 #include <cmath>
 
-#include "nerf/depth_fusion.h"
-#include "nerf/mesh.h"
+#include "mesh/depth_fusion.h"
+#include "mesh/mesh.h"
 #include "nerf/rays.h"
 #include "tests/sphere_field.h"
 

@@ -13,7 +13,7 @@
 #include <cstdlib>
 
 #include "base/file_util.h"
-#include "nerf/synthetic_scene.h"
+#include "examples/synthetic_scene.h"
 #include "splat/splat_ply.h"
 #include "tests/test_util.h"
 

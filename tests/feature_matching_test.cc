@@ -13,9 +13,9 @@
 #include "base/file_util.h"
 #include "base/format.h"
 #include "formats/colmap_database.h"
-#include "stages/descriptor_similarity.h"
-#include "stages/feature_matching.h"
-#include "stages/sfm_blocks.h"
+#include "stages/sfm/descriptor_similarity.h"
+#include "stages/sfm/feature_matching.h"
+#include "stages/sfm/sfm_blocks.h"
 #include "tests/test_util.h"
 
 using namespace p2n;

@@ -8,8 +8,8 @@
 
 #include "formats/camera_geometry.h"
 #include "formats/transforms_json.h"
-#include "stages/fit_checks.h"
-#include "stages/plain_background.h"
+#include "stages/fitting/fit_checks.h"
+#include "stages/ingest/plain_background.h"
 #include "test_camera.h"
 
 namespace p2n::testing {

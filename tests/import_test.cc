@@ -9,12 +9,12 @@
 
 #include "base/errors.h"
 #include "base/file_util.h"
+#include "examples/synthetic_scene.h"
 #include "formats/colmap_model.h"
 #include "formats/dataset_import.h"
 #include "formats/ply.h"
 #include "formats/sparse_tracks.h"
 #include "nerf/rays.h"
-#include "nerf/synthetic_scene.h"
 #include "stages/stages.h"
 #include "stages/training_data.h"
 #include "tests/test_util.h"

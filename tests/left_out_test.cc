@@ -3,7 +3,7 @@
 
 #include <catch2/catch.hpp>
 
-#include "stages/left_out.h"
+#include "stages/sfm/left_out.h"
 
 namespace p2n::testing {
 namespace {

@@ -9,8 +9,8 @@
 
 #include "base/file_util.h"
 #include "formats/colmap_model.h"
-#include "stages/cluster_mapping.h"
-#include "stages/mapper_clusters.h"
+#include "stages/sfm/cluster_mapping.h"
+#include "stages/sfm/mapper_clusters.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {

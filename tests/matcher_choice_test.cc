@@ -8,8 +8,8 @@
 
 #include "base/errors.h"
 #include "base/format.h"
-#include "stages/matcher_choice.h"
-#include "stages/retrieval.h"
+#include "stages/sfm/matcher_choice.h"
+#include "stages/sfm/retrieval.h"
 
 namespace p2n::testing {
 namespace {

@@ -7,10 +7,10 @@
 
 #include <cmath>
 
-#include "nerf/mesh.h"
+#include "examples/synthetic_scene.h"
+#include "mesh/mesh.h"
 #include "nerf/rays.h"
 #include "nerf/renderer.h"
-#include "nerf/synthetic_scene.h"
 #include "tests/sphere_field.h"
 
 namespace p2n::testing {

@@ -9,9 +9,9 @@
 #include <map>
 
 #include "base/errors.h"
-#include "nerf/mesh.h"
-#include "nerf/mesh_simplify.h"
-#include "nerf/texture_atlas.h"
+#include "mesh/mesh.h"
+#include "mesh/mesh_simplify.h"
+#include "mesh/texture_atlas.h"
 #include "tests/sphere_field.h"
 
 namespace p2n::testing {

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <vector>
 
+#include "examples/synthetic_scene.h"
 #include "nerf/rays.h"
 #include "nerf/spherical_harmonics.h"
-#include "nerf/synthetic_scene.h"
 
 namespace p2n::testing {
 

@@ -4,7 +4,7 @@
 
 #include <Eigen/Geometry>
 
-#include "nerf/synthetic_scene.h"
+#include "examples/synthetic_scene.h"
 #include "splat/scene_size.h"
 
 namespace p2n::testing {

@@ -13,9 +13,9 @@
 
 #include "base/file_util.h"
 #include "base/format.h"
-#include "nerf/synthetic_scene.h"
-#include "stages/feature_matching.h"
-#include "stages/sfm_blocks.h"
+#include "examples/synthetic_scene.h"
+#include "stages/sfm/feature_matching.h"
+#include "stages/sfm/sfm_blocks.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {

@@ -16,7 +16,7 @@
 
 #include "base/file_util.h"
 #include "base/format.h"
-#include "nerf/synthetic_scene.h"
+#include "examples/synthetic_scene.h"
 #include "tests/pose_truth.h"
 #include "tests/program_runs.h"
 #include "tests/stage_fixtures.h"

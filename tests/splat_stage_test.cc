@@ -16,8 +16,8 @@
 #include "splat/splat_ply.h"
 #include "splat/spz.h"
 #include "stage_fixtures.h"
-#include "stages/splat_optimisation.h"
-#include "stages/splat_stage.h"
+#include "stages/fitting/splat_optimisation.h"
+#include "stages/fitting/splat_stage.h"
 
 namespace p2n::testing {
 namespace fs = std::filesystem;

@@ -4,7 +4,7 @@
 #include <stdexcept>
 
 #include "base/file_util.h"
-#include "nerf/synthetic_scene.h"
+#include "examples/synthetic_scene.h"
 #include "stages/stages.h"
 
 namespace p2n::testing {

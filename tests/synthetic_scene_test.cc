@@ -9,7 +9,7 @@
 #include <fstream>
 
 #include "base/camera.h"
-#include "nerf/synthetic_scene.h"
+#include "examples/synthetic_scene.h"
 #include "tests/test_util.h"
 
 namespace p2n::testing {

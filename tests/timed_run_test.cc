@@ -6,7 +6,7 @@
 #include <cmath>
 #include <fstream>
 
-#include "stages/timed_run.h"
+#include "stages/fitting/timed_run.h"
 #include "test_util.h"
 
 namespace p2n::testing {

@@ -14,11 +14,11 @@
 #include "nerf/ngp_field.h"
 #include "pipeline/cancel.h"
 #include "stage_fixtures.h"
+#include "stages/fitting/train_presets.h"
+#include "stages/fitting/train_settings.h"
+#include "stages/fitting/train_stage.h"
 #include "stages/stage_reports.h"
 #include "stages/stages.h"
-#include "stages/train_presets.h"
-#include "stages/train_settings.h"
-#include "stages/train_stage.h"
 #include "test_camera.h"
 
 namespace p2n::testing {

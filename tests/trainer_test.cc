@@ -14,10 +14,10 @@
 #include "base/file_util.h"
 #include "base/float_image.h"
 #include "base/photo_window.h"
+#include "examples/synthetic_scene.h"
 #include "nerf/appearance.h"
 #include "nerf/camera_refinement.h"
 #include "nerf/ngp_field.h"
-#include "nerf/synthetic_scene.h"
 #include "nerf/trainer.h"
 #include "test_util.h"
 

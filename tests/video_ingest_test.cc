@@ -14,7 +14,7 @@
 #include "base/file_util.h"
 #include "base/format.h"
 #include "base/image_io.h"
-#include "stages/frame_choice.h"
+#include "stages/ingest/frame_choice.h"
 #include "tests/stage_fixtures.h"
 #include "tests/test_util.h"
 
