@@ -1,14 +1,19 @@
 #pragma once
-// Videos as ingest reads them: OpenCV's videoio over FFmpeg, the frames turned by the rotation a phone records (a
-// portrait video decodes portrait). ScanVideo measures every frame in one pass; DecodeFrames decodes the chosen
-// ones in a second, so a long video never sits in memory whole.
+// Videos, through OpenCV's videoio over FFmpeg. Read as ingest reads them: the frames turned by the rotation a phone
+// records (a portrait video decodes portrait); ScanVideo measures every frame in one pass, DecodeFrames decodes the
+// chosen ones in a second, so a long video never sits in memory whole. Written as the render stage writes them: MP4,
+// H.264 (what browsers play) where FFmpeg has the encoder (VideoWriter).
 
 #include <OpenImageIO/imagebuf.h>
 
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
+#include <string>
 #include <vector>
+
+#include "base/float_image.h"
 
 namespace p2n {
 
@@ -44,5 +49,27 @@ VideoScan ScanVideo(const std::filesystem::path& path);
 // as 8-bit RGB. UserError naming the file when a frame of them cannot be decoded.
 void DecodeFrames(const std::filesystem::path& path, const std::vector<size_t>& indices,
                   const std::function<void(size_t index, const OIIO::ImageBuf& frame)>& take);
+
+// MP4 video of rendered frames.
+class VideoWriter {
+ public:
+  // Frames must all be width x height (RGB); odd sizes lose their last column or row (H.264 needs even
+  // sizes). UserError naming the file when no encoder can write it.
+  VideoWriter(const std::filesystem::path& path, int width, int height, double fps);
+  ~VideoWriter();
+  VideoWriter(const VideoWriter&) = delete;
+  VideoWriter& operator=(const VideoWriter&) = delete;
+
+  void Add(const FloatImage& frame);
+  // Flushes and closes the file.
+  void Close();
+  // "avc1" (H.264), or "mp4v" (MPEG-4 part 2, which browsers may not play) where FFmpeg has no H.264 encoder.
+  const std::string& codec() const { return codec_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::string codec_;
+};
 
 }  // namespace p2n

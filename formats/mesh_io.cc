@@ -4,18 +4,16 @@
 
 #include "base/file_util.h"
 #include "base/format.h"
-#include "formats/ply.h"
+#include "base/ply.h"
 
 namespace p2n {
 
 void WriteMeshPly(const std::filesystem::path& path, const Mesh& mesh, const std::vector<std::string>& comments) {
-  std::string data = "ply\nformat binary_little_endian 1.0\n" + PlyComments(comments) +
-                     format("element vertex {}\n", mesh.positions.size()) +
-                     "property float x\nproperty float y\nproperty float z\n"
-                     "property float nx\nproperty float ny\nproperty float nz\n"
-                     "property uchar red\nproperty uchar green\nproperty uchar blue\n" +
-                     format("element face {}\n", mesh.triangles.size()) +
-                     "property list uchar int vertex_indices\nend_header\n";
+  PlyElement vertices{"vertex", mesh.positions.size(), PlyProperties("float", {"x", "y", "z", "nx", "ny", "nz"})};
+  for (const PlyProperty& colour : PlyProperties("uchar", {"red", "green", "blue"}))
+    vertices.properties.push_back(colour);
+  const PlyElement faces{"face", mesh.triangles.size(), {{"int", "vertex_indices", "uchar"}}};
+  std::string data = PlyHeader({vertices, faces}, comments);
   constexpr size_t kVertexSize = 6 * sizeof(float) + 3, kFaceSize = 1 + 3 * sizeof(int32_t);
   size_t at = data.size();
   data.resize(at + mesh.positions.size() * kVertexSize + mesh.triangles.size() * kFaceSize);

@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "nerf/make_field.h"
+
 namespace p2n {
 
 template <typename T>

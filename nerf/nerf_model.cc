@@ -7,6 +7,7 @@
 
 #include "base/file_util.h"
 #include "base/json_number.h"
+#include "nerf/make_field.h"
 
 namespace p2n {
 namespace {

@@ -87,11 +87,4 @@ class RadianceField {
   virtual Encoding<T>* TrainableEncoding() { return nullptr; }
 };
 
-// The field a config describes; std::invalid_argument naming the bad field of the config.
-template <typename T>
-std::unique_ptr<RadianceField<T>> MakeField(const nlohmann::json& config, uint64_t seed);
-
-extern template std::unique_ptr<RadianceField<float>> MakeField(const nlohmann::json&, uint64_t);
-extern template std::unique_ptr<RadianceField<double>> MakeField(const nlohmann::json&, uint64_t);
-
 }  // namespace p2n

@@ -15,6 +15,7 @@
 #include "nerf/camera_refinement.h"
 #include "nerf/denormals.h"
 #include "nerf/distortion_loss.h"
+#include "nerf/make_field.h"
 #include "nerf/random_streams.h"
 #include "nerf/volume_rendering.h"
 

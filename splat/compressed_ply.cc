@@ -9,6 +9,8 @@
 
 #include <Eigen/Core>
 
+#include "base/ply.h"
+
 namespace p2n {
 namespace {
 
@@ -123,24 +125,22 @@ void WriteChunk(const Gaussians<float>& g, const size_t* index, size_t count, st
 std::vector<char> CompressedSplatPlyBytes(const Gaussians<float>& g) {
   const size_t n = g.size(), chunk_count = (n + kCompressedChunkSize - 1) / kCompressedChunkSize;
   const int rest = 3 * (g.coefficients() - 1);
-  std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by photo2nerf\n";
-  header += "element chunk " + std::to_string(chunk_count) + "\n";
+  std::vector<std::string> bounds;
   for (const char* part : {"", "scale_"}) {
     for (const char* bound : {"min_", "max_"}) {
-      for (const char* axis : {"x", "y", "z"}) header += std::string("property float ") + bound + part + axis + "\n";
+      for (const char* axis : {"x", "y", "z"}) bounds.push_back(std::string(bound) + part + axis);
     }
   }
   for (const char* bound : {"min_", "max_"}) {
-    for (const char* channel : {"r", "g", "b"}) header += std::string("property float ") + bound + channel + "\n";
+    for (const char* channel : {"r", "g", "b"}) bounds.push_back(std::string(bound) + channel);
   }
-  header += "element vertex " + std::to_string(n) + "\n";
-  for (const char* name : {"position", "rotation", "scale", "color"})
-    header += "property uint packed_" + std::string(name) + "\n";
-  if (rest > 0) {
-    header += "element sh " + std::to_string(n) + "\n";
-    for (int k = 0; k < rest; ++k) header += "property uchar f_rest_" + std::to_string(k) + "\n";
-  }
-  header += "end_header\n";
+  std::vector<PlyElement> elements = {
+      {"chunk", chunk_count, PlyProperties("float", bounds)},
+      {"vertex", n, PlyProperties("uint", {"packed_position", "packed_rotation", "packed_scale", "packed_color"})}};
+  std::vector<std::string> rest_names;
+  for (int k = 0; k < rest; ++k) rest_names.push_back("f_rest_" + std::to_string(k));
+  if (rest > 0) elements.push_back({"sh", n, PlyProperties("uchar", rest_names)});
+  const std::string header = PlyHeader(elements);
 
   const std::vector<size_t> order = MortonOrder(g);
   std::vector<char> bytes(header.begin(), header.end()), vertices, sh;

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "base/file_util.h"
+#include "base/ply.h"
 
 namespace p2n {
 namespace {
@@ -44,70 +45,28 @@ void ForEachProperty(G& g, size_t i, int degree, Visit&& values) {
   throw std::runtime_error("'" + name + "': " + problem + " (expected a binary little-endian 3D Gaussian splat PLY)");
 }
 
-struct PlyProperty {
-  std::string name;
-  size_t size = 0;
-  bool is_double = false;
-};
-
-// The vertex element of a PLY header: its count and its properties in order.
-struct VertexLayout {
-  size_t count = 0;
-  std::vector<PlyProperty> properties;
-};
-
-// Reads the header's lines up to "end_header", leaving `header` at the body.
-VertexLayout ReadVertexLayout(std::istringstream& header, const std::string& name) {
-  std::string line;
-  if (!std::getline(header, line) || line != "ply") Fail(name, "not a PLY file");
-  VertexLayout layout;
-  bool in_vertex = false, seen_vertex = false, little_endian = false;
-  while (std::getline(header, line) && line != "end_header") {
-    std::istringstream words(line);
-    std::string word;
-    words >> word;
-    if (word == "format") {
-      std::string kind;
-      words >> kind;
-      little_endian = kind == "binary_little_endian";
-    } else if (word == "element") {
-      std::string element;
-      words >> element;
-      if (seen_vertex && element != "vertex") break;  // later elements are not read
-      in_vertex = element == "vertex";
-      if (in_vertex && !(words >> layout.count)) Fail(name, "the vertex count cannot be read");
-      seen_vertex = seen_vertex || in_vertex;
-    } else if (word == "property" && in_vertex) {
-      std::string type, property;
-      words >> type >> property;
-      const std::map<std::string, size_t> sizes = {{"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8},
-                                                   {"uchar", 1}, {"uint8", 1},   {"char", 1},   {"int8", 1},
-                                                   {"short", 2}, {"ushort", 2},  {"int16", 2},  {"uint16", 2},
-                                                   {"int", 4},   {"uint", 4},    {"int32", 4},  {"uint32", 4}};
-      const auto size = sizes.find(type);
-      if (size == sizes.end()) Fail(name, "property '" + property + "' has an unsupported type '" + type + "'");
-      layout.properties.push_back({property, size->second, type == "double" || type == "float64"});
-    }
+// The first vertex element of the PLY file `bytes`, and where the body begins: the vertices' records (an element
+// before them would come first in the body: none is read).
+PlyElement VertexElement(const std::string& bytes, const std::string& name, size_t* body) {
+  PlyLayout layout;
+  try {
+    layout = ReadPlyHeader(bytes);
+  } catch (const std::runtime_error& error) {
+    Fail(name, error.what());
   }
-  if (line != "end_header") Fail(name, "the header has no end_header");
-  if (!little_endian) Fail(name, "not binary little-endian");
-  if (!seen_vertex) Fail(name, "no vertex element");
-  return layout;
+  if (!layout.BinaryLittleEndian()) Fail(name, "not binary little-endian");
+  *body = layout.body;
+  for (const PlyElement& element : layout.elements) {
+    if (element.name == "vertex") return element;
+  }
+  Fail(name, "no vertex element");
 }
 
 }  // namespace
 
 std::vector<char> SplatPlyBytes(const Gaussians<float>& gaussians, const std::vector<std::string>& comments) {
-  std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by photo2nerf\n";
-  for (std::string comment : comments) {
-    std::replace_if(
-        comment.begin(), comment.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
-    header += "comment " + comment + "\n";
-  }
-  header += "element vertex " + std::to_string(gaussians.size()) + "\n";
   const std::vector<std::string> names = PropertyNames(gaussians.sh_degree);
-  for (const std::string& name : names) header += "property float " + name + "\n";
-  header += "end_header\n";
+  const std::string header = PlyHeader({{"vertex", gaussians.size(), PlyProperties("float", names)}}, comments);
   std::vector<char> bytes(header.begin(), header.end());
   const size_t record = names.size() * sizeof(float);
   bytes.resize(header.size() + gaussians.size() * record);
@@ -125,14 +84,16 @@ void WriteSplatPly(const std::filesystem::path& path, const Gaussians<float>& ga
 }
 
 Gaussians<float> ParseSplatPly(const std::string& bytes, const std::string& name) {
-  std::istringstream header(bytes);
-  const VertexLayout layout = ReadVertexLayout(header, name);
-  const size_t count = layout.count;
+  size_t body = 0;
+  const PlyElement vertices = VertexElement(bytes, name, &body);
+  const size_t count = vertices.count;
   size_t record = 0, rest = 0;
   std::map<std::string, std::pair<size_t, bool>> offsets;  // name -> offset, is double
-  for (const PlyProperty& p : layout.properties) {
-    offsets[p.name] = {record, p.is_double};
-    record += p.size;
+  for (const PlyProperty& p : vertices.properties) {
+    const size_t size = p.list_count.empty() ? PlyTypeSize(p.type) : 0;
+    if (size == 0) Fail(name, "property '" + p.name + "' has an unsupported type '" + p.type + "'");
+    offsets[p.name] = {record, p.type == "double" || p.type == "float64"};
+    record += size;
     if (p.name.rfind("f_rest_", 0) == 0) ++rest;
   }
   int degree = -1;
@@ -140,8 +101,7 @@ Gaussians<float> ParseSplatPly(const std::string& bytes, const std::string& name
     if (rest == size_t(3 * (ShCoefficients(d) - 1))) degree = d;
   }
   if (degree < 0) Fail(name, std::to_string(rest) + " f_rest properties (0, 9, 24 or 45 expected)");
-  const size_t body = static_cast<size_t>(header.tellg());
-  if (header.fail() || record == 0 || count > (bytes.size() - body) / record) {
+  if (record == 0 || count > (bytes.size() - body) / record) {
     Fail(name, "the body is shorter than its " + std::to_string(count) + " vertices");
   }
   const std::vector<std::string> names = PropertyNames(degree);

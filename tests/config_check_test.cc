@@ -10,6 +10,7 @@
 #include "mesh/mesh.h"
 #include "nerf/adam.h"
 #include "nerf/encoding.h"
+#include "nerf/make_field.h"
 #include "nerf/ngp_field.h"
 #include "nerf/radiance_field.h"
 #include "nerf/renderer.h"

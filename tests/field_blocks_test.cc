@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "nerf/field_blocks.h"
+#include "nerf/make_field.h"
 #include "nerf/nerf_model.h"
 #include "nerf/ngp_field.h"
 

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "nerf/forward_space.h"
+#include "nerf/make_field.h"
 #include "nerf/nerf_model.h"
 #include "nerf/ngp_field.h"
 #include "nerf/renderer.h"

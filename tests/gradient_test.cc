@@ -7,6 +7,7 @@
 
 #include "encoding_checks.h"
 #include "nerf/encoding.h"
+#include "nerf/make_field.h"
 #include "nerf/mlp.h"
 
 namespace p2n::testing {

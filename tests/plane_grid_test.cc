@@ -6,6 +6,7 @@
 #include <random>
 
 #include "encoding_checks.h"
+#include "nerf/make_field.h"
 #include "nerf/ngp_field.h"
 #include "nerf/plane_grid.h"
 

@@ -14,7 +14,7 @@
 #include "base/float_image.h"
 #include "base/format.h"
 #include "formats/dataset_import.h"
-#include "formats/video.h"
+#include "base/video_io.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
 #include "pipeline/cancel.h"

@@ -1,4 +1,4 @@
-#include "nerf/radiance_field.h"
+#include "nerf/make_field.h"
 
 #include <stdexcept>
 
