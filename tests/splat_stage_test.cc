@@ -14,6 +14,7 @@
 #include "formats/ply.h"
 #include "pipeline/cancel.h"
 #include "splat/splat_ply.h"
+#include "splat/splat_schedule.h"
 #include "splat/spz.h"
 #include "stage_fixtures.h"
 #include "stages/fitting/splat_optimisation.h"

@@ -17,6 +17,7 @@
 #include "pipeline/cancel.h"
 #include "pipeline/log.h"
 #include "splat/blocks.h"
+#include "splat/splat_schedule.h"
 #include "stages/fitting/blocked_run.h"
 #include "stages/photo_memory.h"
 #include "stages/stage_io.h"
@@ -49,13 +50,6 @@ Scores Evaluate(const Gaussians<float>& gaussians, const std::array<float, 3>& b
 void AddMetricsRow(int steps, double seconds, size_t splats, const Scores& scores, RunState* state) {
   const double loss = state->TakeMeanLoss(0);
   state->metrics += format("{:.3f},{},{},{:.6g},{:.4f}\n", seconds, steps, splats, loss, Mean(scores.psnr));
-}
-
-// 40 passes: by then the splats have learnt what the half size shows, and a long run's rest is better spent at full
-// size.
-bool InCoarsePart(double coarse_share, double progress, int steps, size_t train_views) {
-  constexpr int kCoarsePasses = 40;
-  return progress < coarse_share && static_cast<size_t>(steps) < kCoarsePasses * train_views;
 }
 
 namespace {
@@ -99,17 +93,6 @@ void UseViews(const SplatRun& run, std::optional<std::vector<size_t>> indices, V
   use->views = &use->own;
 }
 
-// The half-size views of the photos a window holds: those it took in halved, those it let go dropped.
-void FollowWindow(const std::vector<TrainView>& views, std::vector<TrainView>* coarse) {
-  for (size_t v = 0; v < views.size(); ++v) {
-    if (views[v].pixels.empty()) {
-      std::vector<uint8_t>().swap((*coarse)[v].pixels);
-    } else if ((*coarse)[v].pixels.empty()) {
-      (*coarse)[v] = HalfSizeView(views[v]);
-    }
-  }
-}
-
 // Optimises on `use`'s views until the part's share of the budget (seconds, else steps) is spent: a metrics row (its
 // steps and seconds the part's own) at every evaluation but the last (the caller's final evaluation makes it),
 // checkpoints in `checkpoint`. With a window over the views, each step draws from those it holds then.
@@ -120,21 +103,8 @@ void OptimiseUntilDone(const SplatRun& run, SplatTrainer& trainer, const ViewsIn
   const int steps = options.steps > 0 ? std::max(1, static_cast<int>(std::lround(options.steps * width))) : 0;
   const RunLoop loop{SplatResult::kId.name,      run.budget * width, steps, options.eval_interval, 1, false,
                      options.checkpoint_interval};
-  const std::vector<TrainView>& views = *use.views;
-  std::vector<TrainView> coarse = options.coarse > 0 ? HalfSizeViews(views) : std::vector<TrainView>{};
-  const auto step = [&](double share) -> std::optional<double> {
-    const double progress = part.from + share * width;
-    const bool in_coarse =
-        !coarse.empty() && InCoarsePart(options.coarse, progress, trainer.step(), run.setup.data.train.size());
-    trainer.SetViews(in_coarse ? &coarse : &views, in_coarse ? 0.5 : 1.0);
-    if (!in_coarse) std::vector<TrainView>().swap(coarse);  // the coarse part is over for good
-    if (use.borrowed.window && use.borrowed.window->MoveTo(trainer.step())) {
-      trainer.SampleFrom(use.borrowed.window->resident());
-      if (!coarse.empty()) FollowWindow(views, &coarse);
-    }
-    trainer.SetProgress(progress);
-    return trainer.Step();
-  };
+  SplatSchedule schedule(&trainer, use.views, use.borrowed.window.get(), options.coarse, run.setup.data.train.size());
+  const auto step = [&](double share) { return schedule.Step(part.from + share * width); };
   const auto add_row = [&](RunState* now) {
     const Gaussians<float> drawn = trainer.Drawn();
     const Scores scores = Evaluate(drawn, trainer.background(), run.setup, run.scene.near, false);

@@ -66,11 +66,6 @@ struct Optimised {
   RunState state;
 };
 
-// Whether the step after `steps` steps, at `progress` (the share of the budget spent), is in the coarse part: on the
-// photos at half size until `coarse_share` (splat.coarse) of the budget is spent or 40 passes over the
-// `train_views` training views are made, whichever comes first (docs/benchmarks.md, splats).
-bool InCoarsePart(double coarse_share, double progress, int steps, size_t train_views);
-
 // The whole scene's splats optimised at once, resuming from the stage's checkpoint.
 Optimised OptimiseWhole(const SplatRun& run);
 // The splats' run by blocks (stages/fitting/blocked_run.h): optimised whole, then each of options.blocks slabs of them
