@@ -16,11 +16,8 @@ namespace p2n {
 namespace fs = std::filesystem;
 namespace {
 
-const char* kBlenderSplits[] = {"train", "val", "test"};
-
 // One transforms.json (instant-ngp, nerfstudio, or one Blender split) into views.
-TransformsMeta AddTransforms(const fs::path& root, const fs::path& file, const std::string& split,
-                             ImportedDataset* out) {
+TransformsMeta AddTransforms(const fs::path& root, const fs::path& file, ViewSplit split, ImportedDataset* out) {
   TransformsFile transforms = TransformsFile::Read(file, root, split);
   out->files.push_back(file);
   for (CameraView& camera : transforms.views) {
@@ -191,21 +188,22 @@ void LoadNpz(const fs::path& file, ImportedDataset* out) {
   };
   const NpyArray& focal = get("focal");
   if (focal.size() != 1 || !(focal.values[0] > 0)) ThrowBadField(file, "focal", "must be one positive number");
-  for (const char* split : {"train", "val"}) {
-    const NpyArray& images = get(std::string("images_") + split);
-    const NpyArray& poses = get(std::string("c2ws_") + split);
+  for (const ViewSplit split : {ViewSplit::kTrain, ViewSplit::kVal}) {
+    const std::string name = EnumName(split);
+    const NpyArray& images = get("images_" + name);
+    const NpyArray& poses = get("c2ws_" + name);
     if (images.shape.size() != 4 || (images.shape[3] != 3 && images.shape[3] != 4)) {
-      ThrowBadField(file, std::string("images_") + split, "must have shape (N, H, W, 3 or 4)");
+      ThrowBadField(file, "images_" + name, "must have shape (N, H, W, 3 or 4)");
     }
     if (poses.shape != std::vector<size_t>{images.shape[0], 4, 4}) {
-      ThrowBadField(file, std::string("c2ws_") + split, "must have shape (N, 4, 4) with one pose per image");
+      ThrowBadField(file, "c2ws_" + name, "must have shape (N, 4, 4) with one pose per image");
     }
     const int height = static_cast<int>(images.shape[1]), width = static_cast<int>(images.shape[2]);
     const int channels = static_cast<int>(images.shape[3]);
     const bool floats = *std::max_element(images.values.begin(), images.values.end()) <= 1.0;
     for (size_t i = 0; i < images.shape[0]; ++i) {
       ImportedView view;
-      view.name = format("{}_{:03d}.png", split, i);
+      view.name = format("{}_{:03d}.png", name, i);
       view.view.split = split;
       PinholeCamera& camera = view.view.camera;
       for (int r = 0; r < 4; ++r) {
@@ -216,7 +214,7 @@ void LoadNpz(const fs::path& file, ImportedDataset* out) {
       camera.fx = camera.fy = focal.values[0];
       camera.cx = 0.5 * width;
       camera.cy = 0.5 * height;
-      CheckCamera(camera, file, format("c2ws_{}[{}]", split, i));
+      CheckCamera(camera, file, format("c2ws_{}[{}]", name, i));
       view.pixels.reset(OIIO::ImageSpec(width, height, channels, OIIO::TypeDesc::UINT8));
       uint8_t* pixels = static_cast<uint8_t*>(view.pixels.localpixels());
       const double* values = images.values.data() + i * height * width * channels;
@@ -262,7 +260,7 @@ std::optional<DatasetKind> DetectDataset(const fs::path& input) {
 
 ImportedDataset LoadTransformsJson(const fs::path& file, const fs::path& root) {
   ImportedDataset dataset;
-  dataset.meta = AddTransforms(root, file, "train", &dataset);
+  dataset.meta = AddTransforms(root, file, ViewSplit::kTrain, &dataset);
   if (dataset.views.empty()) throw UserError(format("'{}' has no view whose image exists", file.string()));
   return dataset;
 }
@@ -274,11 +272,11 @@ ImportedDataset LoadDataset(const fs::path& input) {
   dataset.kind = *kind;
   switch (*kind) {
     case DatasetKind::kTransformsJson:
-      AddTransforms(input, input / "transforms.json", "train", &dataset);
+      AddTransforms(input, input / "transforms.json", ViewSplit::kTrain, &dataset);
       break;
     case DatasetKind::kBlender:
-      for (const char* split : kBlenderSplits) {
-        const fs::path file = input / (std::string("transforms_") + split + ".json");
+      for (const ViewSplit split : {ViewSplit::kTrain, ViewSplit::kVal, ViewSplit::kTest}) {
+        const fs::path file = input / (std::string("transforms_") + EnumName(split) + ".json");
         if (fs::exists(file)) AddTransforms(input, file, split, &dataset);
       }
       break;
@@ -302,7 +300,7 @@ ImportedDataset LoadDataset(const fs::path& input) {
   }
   std::map<std::string, int> names;
   for (ImportedView& view : dataset.views) {
-    if (names[view.name]++ > 0) view.name = view.view.split + "_" + view.name;
+    if (names[view.name]++ > 0) view.name = EnumName(view.view.split) + ("_" + view.name);
     view.view.file_path = "images/" + view.name;
   }
   return dataset;

@@ -72,7 +72,7 @@ bool SameIntrinsics(const PinholeCamera& a, const PinholeCamera& b) {
 nlohmann::json FrameJson(const CameraView& view, bool shared_intrinsics) {
   nlohmann::json frame = {{"file_path", view.file_path},
                           {"transform_matrix", MatrixJson(view.camera.world_from_cam)},
-                          {"split", view.split},
+                          {"split", EnumName(view.split)},
                           {"near", view.near},
                           {"far", view.far}};
   if (!shared_intrinsics) frame.update(Intrinsics(view.camera));
@@ -104,7 +104,7 @@ std::pair<int, int> ImageSize(const fs::path& image) {
 
 // The view of frames[i], or none when its image is missing; intrinsics from the frame, else the top level.
 std::optional<CameraView> ReadFrame(const nlohmann::json& json, size_t i, const fs::path& file, const fs::path& root,
-                                    const std::string& split) {
+                                    ViewSplit split) {
   const nlohmann::json& frame = json["frames"][i];
   const std::string field = format("frames[{}]", i);
   if (!frame.is_object()) ThrowBadField(file, field, "is not an object");
@@ -127,7 +127,13 @@ std::optional<CameraView> ReadFrame(const nlohmann::json& json, size_t i, const 
     image += ".png";
   }
   if (!fs::exists(image)) return std::nullopt;
-  view.split = frame.contains("split") ? frame["split"].get<std::string>() : split;
+  view.split = split;
+  if (frame.contains("split")) {
+    const std::optional<ViewSplit> named =
+        frame["split"].is_string() ? EnumFromName<ViewSplit>(frame["split"].get<std::string>()) : std::nullopt;
+    if (!named) ThrowBadField(file, field + ".split", "must be one of " + EnumNamesText<ViewSplit>());
+    view.split = *named;
+  }
   view.near = frame.value("near", -1.0);
   view.far = frame.value("far", -1.0);
   PinholeCamera& camera = view.camera;
@@ -184,7 +190,7 @@ TransformsMeta ReadMeta(const nlohmann::json& json, const fs::path& file) {
   return meta;
 }
 
-TransformsFile ReadUnchecked(const fs::path& file, const fs::path& root, const std::string& split) {
+TransformsFile ReadUnchecked(const fs::path& file, const fs::path& root, ViewSplit split) {
   const nlohmann::json json = ReadJsonFile(file);
   if (!json.is_object()) ThrowBadField(file, "the file", "is not a JSON object");
   if (!json.contains("frames") || !json["frames"].is_array()) ThrowBadField(file, "frames", "is missing");
@@ -233,7 +239,7 @@ void TransformsFile::Write(const fs::path& file) const {
   WriteJsonAtomic(file, json);
 }
 
-TransformsFile TransformsFile::Read(const fs::path& file, const fs::path& root, const std::string& split) {
+TransformsFile TransformsFile::Read(const fs::path& file, const fs::path& root, ViewSplit split) {
   try {
     return ReadUnchecked(file, root, split);
   } catch (const nlohmann::json::exception& e) {
@@ -262,7 +268,7 @@ std::vector<CameraView> NormalizedViews(const std::vector<CameraView>& views, co
 void KeepTrainingViews(std::vector<CameraView>* views, int count) {
   std::vector<CameraView*> train;
   for (CameraView& view : *views) {
-    if (view.split == "train") train.push_back(&view);
+    if (view.split == ViewSplit::kTrain) train.push_back(&view);
   }
   const size_t n = train.size();
   if (count <= 0 || size_t(count) >= n) return;
@@ -270,19 +276,19 @@ void KeepTrainingViews(std::vector<CameraView>* views, int count) {
   if (count == 1) keep[n / 2] = true;
   for (int i = 0; count > 1 && i < count; ++i) keep[std::lround(double(i) * double(n - 1) / (count - 1))] = true;
   for (size_t i = 0; i < n; ++i) {
-    if (!keep[i]) train[i]->split = "unused";
+    if (!keep[i]) train[i]->split = ViewSplit::kUnused;
   }
 }
 
 std::string AssignHoldout(std::vector<CameraView>* views, int every, bool inside_span) {
   std::vector<CameraView*> open;  // the views without a split of their own
   for (CameraView& view : *views) {
-    if (view.split != "val" && view.split != "test") open.push_back(&view);
+    if (view.split != ViewSplit::kVal && view.split != ViewSplit::kTest) open.push_back(&view);
   }
-  for (CameraView* view : open) view->split = "train";
+  for (CameraView* view : open) view->split = ViewSplit::kTrain;
   if (every <= 0 || open.empty()) return "";
   if (!inside_span || open.size() >= kFewViews) {
-    for (size_t i = 0; i < open.size(); i += every) open[i]->split = "val";
+    for (size_t i = 0; i < open.size(); i += every) open[i]->split = ViewSplit::kVal;
     return format("every {}th view from the first", every);
   }
   // As many as every Nth would hold out, each the view nearest an even spread over the sequence (away from its
@@ -294,7 +300,7 @@ std::string AssignHoldout(std::vector<CameraView>* views, int every, bool inside
   const auto inside = [&](size_t candidate) {
     std::vector<Eigen::Vector3d> training;
     for (size_t i = 0; i < n; ++i) {
-      if (i != candidate && open[i]->split == "train") training.push_back(centre(i));
+      if (i != candidate && open[i]->split == ViewSplit::kTrain) training.push_back(centre(i));
     }
     return !OutsideSpan(training, centre(candidate));
   };
@@ -303,13 +309,13 @@ std::string AssignHoldout(std::vector<CameraView>* views, int every, bool inside
     long chosen = -1;
     for (long offset = 0; offset < static_cast<long>(n) && chosen < 0; ++offset) {
       for (const long i : {ideal - offset, ideal + offset}) {
-        if (i < 0 || i >= static_cast<long>(n) || open[i]->split != "train" || !inside(i)) continue;
+        if (i < 0 || i >= static_cast<long>(n) || open[i]->split != ViewSplit::kTrain || !inside(i)) continue;
         chosen = i;
         break;
       }
     }
-    if (chosen < 0) chosen = open[ideal]->split == "train" ? ideal : -1;  // none inside: the even spread
-    if (chosen >= 0) open[chosen]->split = "val";
+    if (chosen < 0) chosen = open[ideal]->split == ViewSplit::kTrain ? ideal : -1;  // none inside: the even spread
+    if (chosen >= 0) open[chosen]->split = ViewSplit::kVal;
   }
   return format(
       "{} of {} views, spread over the capture inside the span of the others (fewer than {} photos: "

@@ -32,10 +32,21 @@ struct EnumNames<DatasetKind> {
                                                                     {DatasetKind::kNpz, "npz"}};
 };
 
+// Which part of a capture a view belongs to: trained on, held out for evaluation (a dataset's "val" or "test", or
+// AssignHoldout's "val"), or left out of training (KeepTrainingViews).
+enum class ViewSplit { kTrain, kVal, kTest, kUnused };
+template <>
+struct EnumNames<ViewSplit> {
+  static constexpr std::pair<ViewSplit, const char*> kValues[] = {{ViewSplit::kTrain, "train"},
+                                                                  {ViewSplit::kVal, "val"},
+                                                                  {ViewSplit::kTest, "test"},
+                                                                  {ViewSplit::kUnused, "unused"}};
+};
+
 struct CameraView {
   std::string file_path;  // as written in transforms.json, relative to it
   PinholeCamera camera;   // intrinsics and world_from_cam (OpenGL axes)
-  std::string split = "train";
+  ViewSplit split = ViewSplit::kTrain;
   double near = -1, far = -1;          // along the view, in the file's units; negative: unknown
   std::array<double, 4> distortion{};  // OpenCV k1, k2, p1, p2 (a dataset's; ours are undistorted: zero)
 };
@@ -69,7 +80,7 @@ struct TransformsFile {
   // lists 17); a frame without w and h takes its image's size. Every camera is checked (CheckCamera). UserError
   // naming the file and the field.
   static TransformsFile Read(const std::filesystem::path& file, const std::filesystem::path& root,
-                             const std::string& split = "train");
+                             ViewSplit split = ViewSplit::kTrain);
   // The image of a view, resolved against the file's folder.
   static std::filesystem::path ImagePath(const std::filesystem::path& file, const CameraView& view);
 };
@@ -81,7 +92,7 @@ std::vector<CameraView> NormalizedViews(const std::vector<CameraView>& views, co
 // Captures of fewer views than this hold out views inside the span of the others (AssignHoldout).
 inline constexpr size_t kFewViews = 20;
 
-// Marks views "val" (held out for evaluation) or "train"; views whose split is already "val" or "test" keep it.
+// Marks views val (held out for evaluation) or train; views whose split is already val or test keep it.
 // Every Nth from the first (0: none; the NeRF paper's protocol), or, with `inside_span` and fewer than kFewViews
 // views, as many views spread over the sequence, each inside the span of the training cameras (OutsideSpan): with
 // so few photos the ends of an arc would measure extrapolation, not new views. Returns the rule, said in words
@@ -89,7 +100,7 @@ inline constexpr size_t kFewViews = 20;
 std::string AssignHoldout(std::vector<CameraView>* views, int every, bool inside_span);
 
 // Keeps `count` of the training views (0: all), spread evenly over them in order (the first and the last among them);
-// the others' split becomes "unused": what a capture of fewer photos would train on, scored on the same views.
+// the others' split becomes unused: what a capture of fewer photos would train on, scored on the same views.
 void KeepTrainingViews(std::vector<CameraView>* views, int count);
 
 // Centres, ups and viewing directions of the views, for NormalizeScene.

@@ -22,6 +22,7 @@
 
 #include "base/enum_names.h"
 #include "formats/output_frame.h"
+#include "formats/transforms_json.h"
 #include "mesh/mesh.h"
 #include "stages/fitting/splat_options.h"
 #include "stages/fitting/train_options.h"
@@ -135,7 +136,7 @@ struct TrainReport {
   // false: each evaluation read the held-out photos from their decoded copy (beside the training photos they did not
   // fit in train.photo_memory); older reports: true.
   bool heldout_views_in_memory = true;
-  std::string heldout_split;
+  ViewSplit heldout_split = ViewSplit::kVal;
   int heldout_pixels_per_view = 0;     // 0: every pixel (written "all")
   std::optional<double> heldout_psnr;  // none without held-out views
   // The sample spacing of that evaluation, as a multiple of the march step (render.step_scale's meaning); none in
@@ -241,7 +242,7 @@ struct EnumNames<RenderSource> {
 };
 
 struct EvalReport {
-  std::string split;                           // the held-out split
+  ViewSplit split = ViewSplit::kVal;           // the held-out split
   RenderSource source = RenderSource::kField;  // what rendered it: the field or the splats
   std::vector<HeldoutScore> views;
   std::optional<double> psnr, ssim;  // means over the views; none without views

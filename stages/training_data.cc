@@ -80,10 +80,10 @@ TrainView LoadTrainView(const ImportedView& imported) {
   return view;
 }
 
-std::string HeldoutSplit(const ImportedDataset& dataset) {
+ViewSplit HeldoutSplit(const ImportedDataset& dataset) {
   const bool has_test = std::any_of(dataset.views.begin(), dataset.views.end(),
-                                    [](const ImportedView& v) { return v.view.split == "test"; });
-  return has_test ? "test" : "val";
+                                    [](const ImportedView& v) { return v.view.split == ViewSplit::kTest; });
+  return has_test ? ViewSplit::kTest : ViewSplit::kVal;
 }
 
 bool ForwardFacingCapture(const ImportedDataset& dataset) { return FacesForward(dataset.Cameras()); }
@@ -134,7 +134,7 @@ void AddDepthPoints(const ImportedDataset& poses, const std::vector<const Import
 
 namespace {
 
-std::vector<const ImportedView*> SplitViews(const ImportedDataset& poses, const std::string& split) {
+std::vector<const ImportedView*> SplitViews(const ImportedDataset& poses, ViewSplit split) {
   std::vector<const ImportedView*> views;
   for (const ImportedView& view : poses.views) {
     if (view.view.split == split) views.push_back(&view);
@@ -144,7 +144,9 @@ std::vector<const ImportedView*> SplitViews(const ImportedDataset& poses, const 
 
 }  // namespace
 
-std::vector<const ImportedView*> TrainingViews(const ImportedDataset& poses) { return SplitViews(poses, "train"); }
+std::vector<const ImportedView*> TrainingViews(const ImportedDataset& poses) {
+  return SplitViews(poses, ViewSplit::kTrain);
+}
 
 std::vector<const ImportedView*> HeldoutViews(const ImportedDataset& poses) {
   return SplitViews(poses, HeldoutSplit(poses));

@@ -18,8 +18,8 @@ namespace p2n {
 TrainView LoadTrainView(const ImportedView& imported);
 // The same view without its pixels: the channels they will have from the file's header.
 TrainView TrainViewHeader(const ImportedView& imported);
-// The split held out for evaluation: "test" when any view has it, else "val".
-std::string HeldoutSplit(const ImportedDataset& dataset);
+// The split held out for evaluation: test when any view has it, else val.
+ViewSplit HeldoutSplit(const ImportedDataset& dataset);
 
 // Whether the photos were taken from one side looking one way: cameras that face forward (FacesForward), whatever
 // the dataset's format (LLFF's poses_bounds.npy holds captures taken around an object too). Such a scene trains in

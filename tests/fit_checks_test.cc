@@ -31,7 +31,7 @@ Eigen::Vector3d Centre(const CameraView& view) { return view.camera.world_from_c
 std::vector<size_t> Heldout(const std::vector<CameraView>& views) {
   std::vector<size_t> heldout;
   for (size_t i = 0; i < views.size(); ++i) {
-    if (views[i].split == "val") heldout.push_back(i);
+    if (views[i].split == ViewSplit::kVal) heldout.push_back(i);
   }
   return heldout;
 }
@@ -83,7 +83,7 @@ TEST_CASE("held-out views: inside the span for fewer than 20 photos, every 8th f
     REQUIRE(heldout.size() == 2);
     std::vector<Eigen::Vector3d> training;
     for (const CameraView& view : views) {
-      if (view.split == "train") training.push_back(Centre(view));
+      if (view.split == ViewSplit::kTrain) training.push_back(Centre(view));
     }
     for (const size_t i : heldout) {
       CHECK(i != 0);
@@ -100,10 +100,10 @@ TEST_CASE("held-out views: inside the span for fewer than 20 photos, every 8th f
   }
   SECTION("a dataset's own split stays; none held out with 0") {
     std::vector<CameraView> views = Arc(11, 120);
-    views[4].split = "test";
+    views[4].split = ViewSplit::kTest;
     CHECK(AssignHoldout(&views, 0, true).empty());
     CHECK(Heldout(views).empty());
-    CHECK(views[4].split == "test");
+    CHECK(views[4].split == ViewSplit::kTest);
   }
 }
 

@@ -258,15 +258,17 @@ TEST_CASE("poses.train_views keeps that many training views, spread evenly, and 
   KeepTrainingViews(&views, 5);
   std::vector<size_t> kept;
   for (size_t i = 0; i < views.size(); ++i) {
-    if (views[i].split == "train") kept.push_back(i);
-    CHECK(views[i].split == (i % 8 == 0 ? "val" : views[i].split));
+    if (views[i].split == ViewSplit::kTrain) kept.push_back(i);
+    CHECK(views[i].split == (i % 8 == 0 ? ViewSplit::kVal : views[i].split));
   }
   // The 17 training views are 1-7, 9-15, 17-19: the 1st, 5th, 9th, 13th and 17th of them.
   CHECK(kept == std::vector<size_t>{1, 5, 10, 14, 19});
   KeepTrainingViews(&views, 0);
-  CHECK(std::count_if(views.begin(), views.end(), [](const CameraView& v) { return v.split == "train"; }) == 5);
+  CHECK(std::count_if(views.begin(), views.end(), [](const CameraView& v) { return v.split == ViewSplit::kTrain; }) ==
+        5);
   KeepTrainingViews(&views, 1);
-  CHECK(std::count_if(views.begin(), views.end(), [](const CameraView& v) { return v.split == "train"; }) == 1);
+  CHECK(std::count_if(views.begin(), views.end(), [](const CameraView& v) { return v.split == ViewSplit::kTrain; }) ==
+        1);
 }
 
 TEST_CASE("sparse_tracks.json reads back what was written, and broken ones are refused by field", "[import]") {
@@ -311,7 +313,7 @@ TEST_CASE("transforms.json reads back exactly what was written: cameras, bounds,
     view.camera.world_from_cam.topLeftCorner<3, 3>() =
         Eigen::AngleAxisd(0.3 * i + 0.1, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
     view.camera.world_from_cam.topRightCorner<3, 1>() = Eigen::Vector3d(0.5, -1.25, 2.0 + i);
-    view.split = i == 0 ? "train" : "val";
+    view.split = i == 0 ? ViewSplit::kTrain : ViewSplit::kVal;
     view.near = 0.125 + i;
     view.far = 4.5 + i;
   }
@@ -359,16 +361,21 @@ TEST_CASE("transforms.json reads back exactly what was written: cameras, bounds,
   // A file without our fields (instant-ngp's): no dataset, white, the identity.
   WriteText(dir / "transforms.json", R"({"fl_x": 10, "w": 8, "h": 6, "frames": [{"file_path": "images/a.png",
       "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]})");
-  const TransformsFile plain = TransformsFile::Read(dir / "transforms.json", dir.path(), "test");
+  const TransformsFile plain = TransformsFile::Read(dir / "transforms.json", dir.path(), ViewSplit::kTest);
   CHECK_FALSE(plain.meta.dataset_kind);
   CHECK_FALSE(plain.meta.background.has_value());
   CHECK(plain.meta.Background() == std::array<float, 3>{1, 1, 1});
   CHECK(plain.meta.normalization.normalized_from_world == Eigen::Matrix4d::Identity());
-  CHECK(plain.views.at(0).split == "test");
+  CHECK(plain.views.at(0).split == ViewSplit::kTest);
   CHECK((plain.views[0].near < 0 && plain.views[0].far < 0));
   WriteText(dir / "transforms.json", R"({"fl_x": 10, "w": 8, "h": 6, "background": [1, 1], "frames": []})");
   CHECK_THROWS_WITH(TransformsFile::Read(dir / "transforms.json", dir.path()),
                     Catch::Contains("transforms.json': background must be three numbers"));
+  // A split of no kind we know is named, with the kinds there are.
+  WriteText(dir / "transforms.json", R"({"fl_x": 10, "w": 8, "h": 6, "frames": [{"file_path": "images/a.png",
+      "split": "holdout", "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]})");
+  CHECK_THROWS_WITH(TransformsFile::Read(dir / "transforms.json", dir.path()),
+                    Catch::Contains("frames[0].split must be one of train, val, test or unused"));
 }
 
 TEST_CASE("import: broken and hostile datasets are refused, naming the file and field", "[import]") {
@@ -443,7 +450,7 @@ TEST_CASE("import: the shared datasets (fox, lego, lego_200, fern)", "[import][d
     const ImportedDataset lego = LoadDataset(kData / "lego");
     CHECK(lego.kind == DatasetKind::kBlender);
     std::map<std::string, int> splits;
-    for (const ImportedView& view : lego.views) ++splits[view.view.split];
+    for (const ImportedView& view : lego.views) ++splits[EnumName(view.view.split)];
     CHECK(splits == std::map<std::string, int>{{"test", 25}, {"train", 100}, {"val", 10}});
     CHECK(lego.views[0].view.camera.fx == Approx(1111.111).epsilon(1e-3));  // 400 / tan(camera_angle_x / 2)
   }

@@ -50,7 +50,7 @@ TrainReport SomeTrainReport() {
   report.wall_seconds = 61.5;
   report.training_views = 10;
   report.heldout_views = 2;
-  report.heldout_split = "val";
+  report.heldout_split = ViewSplit::kVal;
   report.heldout_pixels_per_view = 0;  // every pixel: "all"
   report.heldout_psnr = 27.25;
   report.heldout_psnr_fitted = 27.5;
@@ -104,7 +104,7 @@ SplatReport SomeSplatReport() {
 
 EvalReport SomeEvalReport() {
   EvalReport report;
-  report.split = "val";
+  report.split = ViewSplit::kVal;
   report.source = RenderSource::kSplats;
   report.views = {{"a.png", "heldout/a.png", "heldout/a_error.png", "/photos/a.png", 25.5, 0.8, 0.1},
                   {"b.png", "heldout/b.png", "heldout/b_error.png", "/photos/b.png", 23.5, 0.7, 0.2}};

@@ -24,7 +24,8 @@ struct TrainingSetup {
   TrainerOptions trainer;
   TrainingData data;
   std::filesystem::path transforms;  // the poses stage's transforms.json
-  std::string heldout_split, heldout_rule;
+  ViewSplit heldout_split = ViewSplit::kVal;
+  std::string heldout_rule;
   // Training view v's pixels, from the decoded copy where there is one, else from its file.
   PhotoWindow::Loader read_photo;
   // Where the training photos are too many for memory: their decoded copy, and a window over them.

@@ -160,7 +160,7 @@ void TrainStage::Run(StageContext& context) const {
   const double budget = ResolvedTimeBudget(options);
   LogInfo(format("train: {} field, {} scene, preset {}, {} training and {} held-out ({}) views, {}",
                  EnumName(options.field), SceneSpaceName(setup.trainer.space), EnumName(options.preset),
-                 data.train.size(), data.heldout.size(), setup.heldout_split,
+                 data.train.size(), data.heldout.size(), EnumName(setup.heldout_split),
                  budget > 0 ? format("{:.0f} s budget", budget) : format("{} steps", options.steps)));
 
   RunState state;

@@ -153,7 +153,7 @@ Normalization WriteCameras(const ImportedDataset& dataset, const fs::path& input
   for (const ImportedView& view : dataset.views) transforms.views.push_back(view.view);
   std::vector<CameraView>& views = transforms.views;
   const bool has_split =
-      std::any_of(views.begin(), views.end(), [](const CameraView& v) { return v.split != "train"; });
+      std::any_of(views.begin(), views.end(), [](const CameraView& v) { return v.split != ViewSplit::kTrain; });
   // LLFF data keeps the NeRF paper's protocol (every 8th from the first), whatever its size.
   if (!has_split)
     transforms.meta.heldout_rule = AssignHoldout(&views, poses.holdout_every, dataset.kind != DatasetKind::kLlff);

@@ -48,7 +48,7 @@ constexpr size_t kMaxDepthViews = 200;
 void ApplyCameraCorrections(const std::map<std::string, CameraCorrection>& corrections, ImportedDataset* dataset) {
   for (ImportedView& view : dataset->views) {
     const auto found = corrections.find(view.source.filename().string());
-    if (view.view.split == "train" && found != corrections.end()) {
+    if (view.view.split == ViewSplit::kTrain && found != corrections.end()) {
       view.view.camera = CorrectedCamera(view.view.camera, found->second.data());
     }
   }
@@ -93,7 +93,7 @@ DepthSamples SampleDepths(const StageContext& context, const fs::path& model_fil
   std::vector<TrainView> training;  // the training views' cameras, without their pixels
   std::vector<PinholeCamera> cameras;
   for (const ImportedView& view : dataset.views) {
-    if (view.view.split != "train") continue;
+    if (view.view.split != ViewSplit::kTrain) continue;
     training.push_back({view.view.camera, view.view.near, view.view.far, 3, {}, view.source.filename().string(), {}});
     cameras.push_back(view.view.camera);
   }

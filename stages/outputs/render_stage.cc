@@ -13,8 +13,8 @@
 #include "base/file_util.h"
 #include "base/float_image.h"
 #include "base/format.h"
-#include "formats/dataset_import.h"
 #include "base/video_io.h"
+#include "formats/dataset_import.h"
 #include "nerf/nerf_model.h"
 #include "nerf/renderer.h"
 #include "pipeline/cancel.h"
@@ -109,7 +109,7 @@ EvalReport RenderHeldout(const ViewRenderer& renderer, const ImportedDataset& da
   eval.split = HeldoutSplit(dataset);
   eval.source = renderer.source;
   eval.heat_map_max_error = kHeatMapMaxError;
-  const std::string& split = eval.split;
+  const ViewSplit split = eval.split;
   std::vector<const ImportedView*> views;
   size_t pixels = 0;
   for (const ImportedView& view : dataset.views) {
@@ -439,7 +439,7 @@ void RenderStage::Run(StageContext& context) const {
   if (kind != PathChoice::kNone) {
     const ImportedView* first = &dataset.views.front();
     for (const ImportedView& view : dataset.views) {
-      if (view.view.split == "train") {
+      if (view.view.split == ViewSplit::kTrain) {
         first = &view;
         break;
       }

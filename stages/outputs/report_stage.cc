@@ -64,7 +64,7 @@ std::string TrainingSection(const TrainResult& result, const std::optional<Train
       "<p>{} steps in {:.1f} s of training; final held-out PSNR {} dB over {} {} views ({} pixels each); "
       "{:.3g} samples per ray when rendering; {:.1f}% of the occupancy grid occupied.</p>\n",
       report.steps, report.wall_seconds, Number(report.heldout_psnr), report.heldout_views,
-      HtmlEscape(report.heldout_split), pixels(report.heldout_pixels_per_view), report.samples_per_ray_rendered,
+      EnumName(report.heldout_split), pixels(report.heldout_pixels_per_view), report.samples_per_ray_rendered,
       100 * report.occupied_fraction);
   if (report.throughput && report.throughput->steps > 0) {
     html += format("<p>Training evaluated the field at {:.3g} million samples a second, {:.3g} samples per ray.</p>\n",
@@ -222,8 +222,7 @@ std::string LeftOutHtml(const SfmReport& sfm) {
   return html + "</table>\n";
 }
 
-std::string CamerasSection(const StageContext& context, const ImportedDataset& dataset,
-                           const std::string& heldout_split) {
+std::string CamerasSection(const StageContext& context, const ImportedDataset& dataset, ViewSplit heldout_split) {
   std::string html = "<h2>Cameras</h2>\n";
   const std::optional<SfmReport> sfm =
       context.runner->Find(SfmResult::kId.name)
@@ -275,7 +274,7 @@ std::string HeldoutSection(const RenderResult& render, const std::optional<EvalR
   std::string html = format(
       "<h2>Held-out views</h2>\n<p>{} views of the {} split ({}), never trained on: PSNR {} dB, SSIM {} "
       "on average.{} Error maps: mean absolute RGB error, black 0 to yellow {} and above.</p>\n",
-      eval->views.size(), HtmlEscape(eval->split),
+      eval->views.size(), EnumName(eval->split),
       HtmlEscape(train && !train->heldout_rule.empty() ? train->heldout_rule : "as the dataset splits them"),
       Number(eval->psnr, 4), Number(eval->ssim, 3), StepScaleNote(*eval, train),
       format("{:.2g}", eval->heat_map_max_error));
@@ -346,7 +345,7 @@ void ReportStage::Run(StageContext& context) const {
   const ExportResult export_result = Upstream<ExportResult>(context);
   const ImportedDataset dataset =
       LoadTransformsJson(Upstream<PosesResult>(context).transforms(), context.workspace.root());
-  const std::string heldout_split = HeldoutSplit(dataset);
+  const ViewSplit heldout_split = HeldoutSplit(dataset);
   const std::optional<TrainReport> train = ReadReportIfExists<TrainReport>(train_result.report());
   const SplatReport splat_report = SplatReport::Read(splat.report());
   const std::optional<EvalReport> eval = ReadReportIfExists<EvalReport>(render.eval());

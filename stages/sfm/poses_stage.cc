@@ -173,7 +173,7 @@ void PosesStage::Run(StageContext& context) const {
   WritePly(out.sparse_points(), cloud);
   TracksOf(model, images, transforms.views).Write(out.sparse_tracks());
   const size_t held_out =
-      std::count_if(views.begin(), views.end(), [](const CameraView& v) { return v.split != "train"; });
+      std::count_if(views.begin(), views.end(), [](const CameraView& v) { return v.split != ViewSplit::kTrain; });
   context.summary = {{"views", views.size()}, {"held_out", held_out}, {"points", cloud.size()}};
   LogInfo(format("poses: {} views ({} held out: {}), scene scale {:.4g} (centre from {}, up from {})", views.size(),
                  held_out, heldout_rule.empty() ? "none" : heldout_rule, normalization.scale, normalization.centre_from,
