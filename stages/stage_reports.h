@@ -241,6 +241,17 @@ struct EnumNames<RenderSource> {
       {RenderSource::kAuto, "auto"}, {RenderSource::kField, "field"}, {RenderSource::kSplats, "splats"}};
 };
 
+// The render stage's camera path (render.path); a path rendered is never auto or none.
+enum class PathChoice { kAuto, kOrbit, kSpiral, kFile, kNone };
+template <>
+struct EnumNames<PathChoice> {
+  static constexpr std::pair<PathChoice, const char*> kValues[] = {{PathChoice::kAuto, "auto"},
+                                                                   {PathChoice::kOrbit, "orbit"},
+                                                                   {PathChoice::kSpiral, "spiral"},
+                                                                   {PathChoice::kFile, "file"},
+                                                                   {PathChoice::kNone, "none"}};
+};
+
 struct EvalReport {
   ViewSplit split = ViewSplit::kVal;           // the held-out split
   RenderSource source = RenderSource::kField;  // what rendered it: the field or the splats
@@ -265,7 +276,7 @@ struct PathVideo {
 
 struct PathReport {
   RenderSource source = RenderSource::kField;  // the field or the splats
-  std::string kind;                            // orbit | spiral | file
+  PathChoice kind = PathChoice::kOrbit;
   int frames = 0, width = 0, height = 0;
   int rendered_frames = 0;  // the others repeat an earlier frame's camera (an arc's way back)
   double seconds_per_frame = 0, frames_per_second = 0;  // of the rendered frames

@@ -120,7 +120,7 @@ EvalReport SomeEvalReport() {
 PathReport SomePathReport() {
   PathReport report;
   report.source = RenderSource::kField;
-  report.kind = "orbit";
+  report.kind = PathChoice::kOrbit;
   report.frames = 60;
   report.rendered_frames = 31;
   report.width = 320;

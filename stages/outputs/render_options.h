@@ -11,16 +11,6 @@ namespace p2n {
 
 inline constexpr int kDefaultMaxPathWidth = 320;
 
-enum class PathChoice { kAuto, kOrbit, kSpiral, kFile, kNone };
-template <>
-struct EnumNames<PathChoice> {
-  static constexpr std::pair<PathChoice, const char*> kValues[] = {{PathChoice::kAuto, "auto"},
-                                                                   {PathChoice::kOrbit, "orbit"},
-                                                                   {PathChoice::kSpiral, "spiral"},
-                                                                   {PathChoice::kFile, "file"},
-                                                                   {PathChoice::kNone, "none"}};
-};
-
 struct RenderStageOptions {
   static constexpr const char* kSection = "render";  // its options are render.NAME
 

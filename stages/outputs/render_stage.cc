@@ -448,7 +448,7 @@ void RenderStage::Run(StageContext& context) const {
     const PinholeCamera reference = ScaledCamera(first->view.camera, width);
     const std::vector<PinholeCamera> cameras = PathCameras(options, kind, dataset, reference);
     PathReport path = RenderPath(renderer, dataset, cameras, options, out);
-    path.kind = EnumName(kind);
+    path.kind = kind;
     WriteJsonAtomic(out.report(), {{"path", path.ToJson()}});
     summary["frames"] = path.frames;
     summary["frames_per_second"] = path.frames_per_second;

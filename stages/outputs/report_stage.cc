@@ -377,7 +377,7 @@ void ReportStage::Run(StageContext& context) const {
     if (path->rendered_frames < path->frames)
       how += format("; {} drawn, the others repeat them", path->rendered_frames);
     body += format("<h2>New views</h2>\n<p>{} path, {} frames of {}x{} at {:.2f} frames per second ({}).</p>\n",
-                   HtmlEscape(path->kind), path->frames, path->width, path->height, path->frames_per_second, how);
+                   EnumName(path->kind), path->frames, path->width, path->height, path->frames_per_second, how);
     const fs::path video = render.video();
     if (fs::exists(video)) {
       const std::string source = options.embed_video ? FileDataUri(video, "video/mp4") : Link(video);
