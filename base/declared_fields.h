@@ -8,7 +8,7 @@
 //     static constexpr const char* kName = "hash_grid";  // messages say hash_grid.levels
 //     int levels = 16;
 //     template <class V> void Visit(V& v) { v("levels", levels); }
-//     void Check() const { CheckField(*this, levels, levels >= 1, "be at least 1"); }
+//     void Check() const { CheckField(*this, levels, levels >= 1, "must be at least 1"); }
 //   };
 
 #include <nlohmann/json.hpp>
@@ -53,20 +53,28 @@ const char* FieldName(const S& s, const T& field) {
   return finder.found;
 }
 
-// Throws std::invalid_argument "KNAME.FIELD must RULE, not VALUE" unless `ok`: for the engine's Check()s, which
-// name the field (CheckField(*this, levels, levels >= 1, "be at least 1")) and never spell it.
+// How a failed CheckField on a struct of type S is told: std::invalid_argument "KNAME.FIELD RULE, not VALUE" for the
+// engine's configs; the pipeline's options (those with a kSection) tell the user instead (pipeline/options.h).
+template <class S>
+struct FieldCheckFailure {
+  template <class T>
+  [[noreturn]] static void Throw(const char* name, const T& value, std::string_view rule) {
+    std::ostringstream message;
+    message << S::kName << "." << (name ? name : "?") << " " << rule << ", not ";
+    if constexpr (requires { value.transpose(); }) {
+      message << value.transpose();  // an Eigen vector on one line
+    } else {
+      message << value;
+    }
+    throw std::invalid_argument(message.str());
+  }
+};
+
+// Reports `field` of `s` as breaking `rule` ("must be at least 1") unless `ok` (FieldCheckFailure): for the Check()s of
+// every struct that declares its fields, which name the field and never spell it.
 template <class S, class T>
 void CheckField(const S& s, const T& field, bool ok, std::string_view rule) {
-  if (ok) return;
-  const char* name = FieldName(s, field);
-  std::ostringstream message;
-  message << S::kName << "." << (name ? name : "?") << " must " << rule << ", not ";
-  if constexpr (requires { field.transpose(); }) {
-    message << field.transpose();  // an Eigen vector on one line
-  } else {
-    message << field;
-  }
-  throw std::invalid_argument(message.str());
+  if (!ok) FieldCheckFailure<S>::Throw(FieldName(s, field), field, rule);
 }
 
 // Every field `s` declares, as a JSON object {name: value}.

@@ -193,10 +193,10 @@ float SurfaceThreshold(const NerfModel& model, const std::vector<Eigen::Vector3d
 }
 
 void MeshOptions::Check() const {
-  CheckField(*this, resolution, resolution >= 8 && resolution <= 1024, "be 8..1024");
-  CheckField(*this, density_threshold, density_threshold > 0 && std::isfinite(density_threshold), "be positive");
-  CheckField(*this, half_size, half_size > 0 && std::isfinite(half_size), "be positive");
-  CheckField(*this, centre, centre.allFinite(), "be finite");
+  CheckField(*this, resolution, resolution >= 8 && resolution <= 1024, "must be 8..1024");
+  CheckField(*this, density_threshold, density_threshold > 0 && std::isfinite(density_threshold), "must be positive");
+  CheckField(*this, half_size, half_size > 0 && std::isfinite(half_size), "must be positive");
+  CheckField(*this, centre, centre.allFinite(), "must be finite");
 }
 
 Mesh ExtractMesh(const NerfModel& model, const MeshOptions& options,

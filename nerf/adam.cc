@@ -16,10 +16,10 @@
 namespace p2n {
 
 void AdamOptions::Check() const {
-  CheckField(*this, learning_rate, learning_rate >= 0 && std::isfinite(learning_rate), "be at least 0");
-  CheckField(*this, beta1, beta1 >= 0 && beta1 < 1, "be in [0, 1)");
-  CheckField(*this, beta2, beta2 >= 0 && beta2 < 1, "be in [0, 1)");
-  CheckField(*this, epsilon, epsilon > 0, "be positive");
+  CheckField(*this, learning_rate, learning_rate >= 0 && std::isfinite(learning_rate), "must be at least 0");
+  CheckField(*this, beta1, beta1 >= 0 && beta1 < 1, "must be in [0, 1)");
+  CheckField(*this, beta2, beta2 >= 0 && beta2 < 1, "must be in [0, 1)");
+  CheckField(*this, epsilon, epsilon > 0, "must be positive");
 }
 
 template <typename T>

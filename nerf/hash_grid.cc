@@ -46,12 +46,12 @@ nlohmann::json HashGridConfig::ToJson() const {
 }
 
 void HashGridConfig::Check() const {
-  CheckField(*this, levels, levels >= 1 && levels <= 64, "be 1..64");
-  CheckField(*this, features_per_level, features_per_level >= 1 && features_per_level <= 8, "be 1..8");
-  CheckField(*this, log2_table_size, log2_table_size >= 4 && log2_table_size <= 24, "be 4..24");
-  CheckField(*this, base_resolution, base_resolution >= 1, "be at least 1");
+  CheckField(*this, levels, levels >= 1 && levels <= 64, "must be 1..64");
+  CheckField(*this, features_per_level, features_per_level >= 1 && features_per_level <= 8, "must be 1..8");
+  CheckField(*this, log2_table_size, log2_table_size >= 4 && log2_table_size <= 24, "must be 4..24");
+  CheckField(*this, base_resolution, base_resolution >= 1, "must be at least 1");
   CheckField(*this, finest_resolution, finest_resolution >= base_resolution && finest_resolution <= (1 << 20),
-             "be base_resolution..2^20");
+             "must be base_resolution..2^20");
 }
 
 HashGridConfig HashGridConfig::FromJson(const nlohmann::json& json) {

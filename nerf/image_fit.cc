@@ -160,18 +160,18 @@ double TrainStep(Model& model, const FloatImage& target, const std::vector<uint3
 }  // namespace
 
 void ImageFitOptions::Check() const {
-  CheckField(*this, time_budget, time_budget >= 0, "be 0 (no limit) or positive");
-  CheckField(*this, max_steps, max_steps >= 0, "be 0 (no limit) or positive");
-  CheckField(*this, time_budget, time_budget > 0 || max_steps > 0, "be positive when fit.max_steps is 0 (no end)");
-  CheckField(*this, batch_size, batch_size >= 1 && batch_size <= (1 << 24), "be in 1..16777216");
-  CheckField(*this, learning_rate, learning_rate > 0 && learning_rate < 10, "be in (0, 10)");
-  CheckField(*this, width, width >= 0 && width <= 4096, "be 0 (default) to 4096");
-  CheckField(*this, depth, depth >= 0 && depth <= 32, "be 0 (default) to 32");
-  CheckField(*this, pe_levels, pe_levels >= 0 && pe_levels <= 20, "be 0 to 20");
-  CheckField(*this, hash_levels, hash_levels >= 1 && hash_levels <= 32, "be 1 to 32");
-  CheckField(*this, hash_log2_table_size, hash_log2_table_size >= 4 && hash_log2_table_size <= 24, "be 4 to 24");
-  CheckField(*this, hash_finest_resolution, hash_finest_resolution >= 0, "be 0 (image size) or positive");
-  CheckField(*this, eval_interval, eval_interval > 0, "be positive");
+  CheckField(*this, time_budget, time_budget >= 0, "must be 0 (no limit) or positive");
+  CheckField(*this, max_steps, max_steps >= 0, "must be 0 (no limit) or positive");
+  CheckField(*this, time_budget, time_budget > 0 || max_steps > 0, "must be positive when fit.max_steps is 0 (no end)");
+  CheckField(*this, batch_size, batch_size >= 1 && batch_size <= (1 << 24), "must be in 1..16777216");
+  CheckField(*this, learning_rate, learning_rate > 0 && learning_rate < 10, "must be in (0, 10)");
+  CheckField(*this, width, width >= 0 && width <= 4096, "must be 0 (default) to 4096");
+  CheckField(*this, depth, depth >= 0 && depth <= 32, "must be 0 (default) to 32");
+  CheckField(*this, pe_levels, pe_levels >= 0 && pe_levels <= 20, "must be 0 to 20");
+  CheckField(*this, hash_levels, hash_levels >= 1 && hash_levels <= 32, "must be 1 to 32");
+  CheckField(*this, hash_log2_table_size, hash_log2_table_size >= 4 && hash_log2_table_size <= 24, "must be 4 to 24");
+  CheckField(*this, hash_finest_resolution, hash_finest_resolution >= 0, "must be 0 (image size) or positive");
+  CheckField(*this, eval_interval, eval_interval > 0, "must be positive");
   SnapshotSteps();
 }
 
@@ -187,7 +187,8 @@ std::vector<int> ImageFitOptions::SnapshotSteps() const {
       step = std::stoi(item, &used);
     } catch (const std::exception&) {
     }
-    CheckField(*this, snapshot_steps, used == item.size() && step > 0, "be positive step numbers separated by commas");
+    CheckField(*this, snapshot_steps, used == item.size() && step > 0,
+               "must be positive step numbers separated by commas");
     steps.push_back(step);
   }
   std::sort(steps.begin(), steps.end());

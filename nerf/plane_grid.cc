@@ -30,11 +30,11 @@ nlohmann::json PlaneGridConfig::ToJson() const {
 }
 
 void PlaneGridConfig::Check() const {
-  CheckField(*this, levels, levels >= 1 && levels <= 8, "be 1..8");
-  CheckField(*this, features_per_level, features_per_level >= 1 && features_per_level <= 16, "be 1..16");
+  CheckField(*this, levels, levels >= 1 && levels <= 8, "must be 1..8");
+  CheckField(*this, features_per_level, features_per_level >= 1 && features_per_level <= 16, "must be 1..16");
   for (const int* resolution : {&finest_resolution, &depth_resolution}) {
     CheckField(*this, *resolution, *resolution >= (1 << (levels - 1)) && *resolution <= 8192,
-               "be 2^(levels - 1)..8192");
+               "must be 2^(levels - 1)..8192");
   }
 }
 

@@ -48,9 +48,9 @@ double SamplingDistance(const NerfModel& model, const Ray& ray, double t) {
 }
 
 void RenderOptions::Check() const {
-  CheckField(*this, step_scale, step_scale >= 0 && std::isfinite(step_scale), "be at least 0");
-  CheckField(*this, min_transmittance, min_transmittance >= 0 && min_transmittance < 1, "be in [0, 1)");
-  CheckField(*this, max_samples, max_samples >= 1, "be at least 1");
+  CheckField(*this, step_scale, step_scale >= 0 && std::isfinite(step_scale), "must be at least 0");
+  CheckField(*this, min_transmittance, min_transmittance >= 0 && min_transmittance < 1, "must be in [0, 1)");
+  CheckField(*this, max_samples, max_samples >= 1, "must be at least 1");
 }
 
 void RenderRays(const NerfModel& model, const std::vector<Ray>& rays, const std::vector<Eigen::Vector2d>& near_far,

@@ -84,23 +84,24 @@ bool AllFinite(const Values& values) {
 }  // namespace
 
 void TrainerOptions::Check() const {
-  CheckField(*this, occupancy_resolution, occupancy_resolution >= 1 && occupancy_resolution <= 1024, "be 1..1024");
-  CheckField(*this, occupancy_interval, occupancy_interval >= 1, "be at least 1");
-  CheckField(*this, occupancy_warmup, occupancy_warmup >= 0, "be at least 0");
-  CheckField(*this, occupancy_decay, occupancy_decay > 0 && occupancy_decay <= 1, "be in (0, 1]");
-  CheckField(*this, march_step, march_step > 0 && std::isfinite(march_step), "be positive");
-  CheckField(*this, fine_march_step, fine_march_step >= 0 && std::isfinite(fine_march_step), "be at least 0");
-  CheckField(*this, fine_march_from, fine_march_from >= 0, "be at least 0");
-  CheckField(*this, max_samples_per_ray, max_samples_per_ray >= 1, "be at least 1");
-  CheckField(*this, stratified_samples, stratified_samples >= 0, "be at least 0");
-  CheckField(*this, batch_samples, batch_samples >= 1, "be at least 1");
-  CheckField(*this, min_batch_rays, min_batch_rays >= 1 && min_batch_rays <= max_batch_rays, "be 1..max_batch_rays");
-  CheckField(*this, learning_rate, learning_rate > 0, "be positive");
-  CheckField(*this, final_learning_rate, final_learning_rate > 0, "be positive");
-  CheckField(*this, distortion_weight, distortion_weight >= 0, "be at least 0");
-  CheckField(*this, depth_weight, depth_weight >= 0 && std::isfinite(depth_weight), "be at least 0");
-  CheckField(*this, min_transmittance, min_transmittance >= 0 && min_transmittance < 1, "be in [0, 1)");
-  CheckField(*this, refine_warmup, refine_warmup >= 0, "be at least 0");
+  CheckField(*this, occupancy_resolution, occupancy_resolution >= 1 && occupancy_resolution <= 1024, "must be 1..1024");
+  CheckField(*this, occupancy_interval, occupancy_interval >= 1, "must be at least 1");
+  CheckField(*this, occupancy_warmup, occupancy_warmup >= 0, "must be at least 0");
+  CheckField(*this, occupancy_decay, occupancy_decay > 0 && occupancy_decay <= 1, "must be in (0, 1]");
+  CheckField(*this, march_step, march_step > 0 && std::isfinite(march_step), "must be positive");
+  CheckField(*this, fine_march_step, fine_march_step >= 0 && std::isfinite(fine_march_step), "must be at least 0");
+  CheckField(*this, fine_march_from, fine_march_from >= 0, "must be at least 0");
+  CheckField(*this, max_samples_per_ray, max_samples_per_ray >= 1, "must be at least 1");
+  CheckField(*this, stratified_samples, stratified_samples >= 0, "must be at least 0");
+  CheckField(*this, batch_samples, batch_samples >= 1, "must be at least 1");
+  CheckField(*this, min_batch_rays, min_batch_rays >= 1 && min_batch_rays <= max_batch_rays,
+             "must be 1..max_batch_rays");
+  CheckField(*this, learning_rate, learning_rate > 0, "must be positive");
+  CheckField(*this, final_learning_rate, final_learning_rate > 0, "must be positive");
+  CheckField(*this, distortion_weight, distortion_weight >= 0, "must be at least 0");
+  CheckField(*this, depth_weight, depth_weight >= 0 && std::isfinite(depth_weight), "must be at least 0");
+  CheckField(*this, min_transmittance, min_transmittance >= 0 && min_transmittance < 1, "must be in [0, 1)");
+  CheckField(*this, refine_warmup, refine_warmup >= 0, "must be at least 0");
 }
 
 Trainer::Trainer(const TrainerOptions& options, const TrainingData& data) : options_(options), data_(data) {

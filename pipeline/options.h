@@ -9,7 +9,7 @@
 //     template <class V> void Visit(V& v) {
 //       v("max_image_size", max_image_size, "longest image side after downscaling; 0 keeps it", "px");
 //     }
-//     void Check() const;  // CheckOption(*this, max_image_size, rule holds, "must ..."): UserError naming the key
+//     void Check() const;  // CheckField(*this, max_image_size, rule holds, "must ..."): UserError naming the key
 //   };
 //
 // A field is a bool, a number, a string, an enum with EnumNames (base/enum_names.h: its names are the option's
@@ -211,11 +211,14 @@ std::string OptionKey(T Options::*member) {
   return OptionKey(options, options.*member);
 }
 
-// Throws UserError "option KEY RULE" when `condition` is false; for XxxOptions::Check(), which names the field
-// (CheckOption(*this, steps, steps >= 0, "must be 0 (no limit) or positive")) and never spells its key.
-template <class Options, class T>
-void CheckOption(const Options& options, const T& field, bool condition, std::string_view rule) {
-  if (!condition) FailOption(OptionKey(options, field), rule);
-}
+// A failed CheckField (base/declared_fields.h) on options: OptionError "option KEY RULE", a user's error.
+template <class Options>
+requires requires { Options::kSection; }
+struct FieldCheckFailure<Options> {
+  template <class T>
+  [[noreturn]] static void Throw(const char* name, const T&, std::string_view rule) {
+    FailOption(OptionKeyOf(Options::kSection, name), rule);
+  }
+};
 
 }  // namespace p2n

@@ -5,7 +5,7 @@
 namespace p2n {
 
 void RunOptions::Check() const {
-  CheckOption(*this, threads, threads >= 0, format("must be 0 (every core) or more, not {}", threads));
+  CheckField(*this, threads, threads >= 0, format("must be 0 (every core) or more, not {}", threads));
 }
 
 }  // namespace p2n

@@ -144,8 +144,8 @@ JobEnd SubmitAndWait(const SlurmOptions& options, const fs::path& dir, const Sta
 }  // namespace
 
 void SlurmOptions::Check() const {
-  CheckOption(*this, cpus, cpus >= 0, format("must be 0 (a whole node) or more, not {}", cpus));
-  CheckOption(*this, retries, retries >= 0, format("must be 0 or more, not {}", retries));
+  CheckField(*this, cpus, cpus >= 0, format("must be 0 (a whole node) or more, not {}", cpus));
+  CheckField(*this, retries, retries >= 0, format("must be 0 or more, not {}", retries));
 }
 
 void RequireSbatch() {

@@ -13,16 +13,16 @@
 namespace p2n {
 
 void SplatTrainerOptions::Check() const {
-  CheckField(*this, steps, steps >= 0, "be at least 0");
+  CheckField(*this, steps, steps >= 0, "must be at least 0");
   for (const double* rate : {&position_lr, &final_position_lr, &colour_lr, &opacity_lr, &scale_lr, &rotation_lr}) {
-    CheckField(*this, *rate, *rate > 0 && std::isfinite(*rate), "be positive");
+    CheckField(*this, *rate, *rate > 0 && std::isfinite(*rate), "must be positive");
   }
-  CheckField(*this, sh_interval, sh_interval > 0, "be positive");
-  CheckField(*this, densify_interval, densify_interval > 0, "be positive");
-  CheckField(*this, densify_until, densify_until >= 0 && densify_until <= 1, "be in [0, 1]");
-  CheckField(*this, densify_gradient, densify_gradient > 0, "be positive");
-  CheckField(*this, prune_opacity, prune_opacity >= 0 && prune_opacity < 1, "be in [0, 1)");
-  CheckField(*this, ssim_weight, ssim_weight >= 0 && ssim_weight <= 1, "be in [0, 1]");
+  CheckField(*this, sh_interval, sh_interval > 0, "must be positive");
+  CheckField(*this, densify_interval, densify_interval > 0, "must be positive");
+  CheckField(*this, densify_until, densify_until >= 0 && densify_until <= 1, "must be in [0, 1]");
+  CheckField(*this, densify_gradient, densify_gradient > 0, "must be positive");
+  CheckField(*this, prune_opacity, prune_opacity >= 0 && prune_opacity < 1, "must be in [0, 1)");
+  CheckField(*this, ssim_weight, ssim_weight >= 0 && ssim_weight <= 1, "must be in [0, 1]");
 }
 
 SplatTrainer::SplatTrainer(Gaussians<float> gaussians, const SplatScene& scene, const SplatTrainerOptions& options)

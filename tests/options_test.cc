@@ -24,7 +24,7 @@ struct ExampleOptions {
     v("verbose", verbose, "print more", "", OptionKind::kRuntime);
     v("mode", mode, "preset", "", OptionKind::kResult, {"fast", "slow"});
   }
-  void Check() const { CheckOption(*this, steps, steps > 0, "must be positive, not " + std::to_string(steps)); }
+  void Check() const { CheckField(*this, steps, steps > 0, "must be positive, not " + std::to_string(steps)); }
 };
 
 enum class Colour { kRed, kGreen, kBlue };
@@ -58,8 +58,8 @@ struct PaintOptions {
     v("coats", coats, "coats of paint");
   }
   void Check() const {
-    CheckOption(*this, coats, coats >= 1 || colour != Colour::kRed,
-                format("must be at least 1 when {} is {}", OptionKey(*this, colour), EnumName(colour)));
+    CheckField(*this, coats, coats >= 1 || colour != Colour::kRed,
+               format("must be at least 1 when {} is {}", OptionKey(*this, colour), EnumName(colour)));
   }
 };
 

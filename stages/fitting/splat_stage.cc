@@ -46,19 +46,19 @@ constexpr double kNearShare = 0.01;  // the near plane, of the cameras' extent
 }  // namespace
 
 void SplatOptions::Check() const {
-  CheckOption(*this, time_budget, time_budget >= 0, "must be 0 (by the preset) or positive");
-  CheckOption(*this, steps, steps >= 0, "must be 0 (no limit) or positive");
-  CheckOption(*this, sh_degree, sh_degree >= 0 && sh_degree <= kMaxShDegree, "must be 0..3");
-  CheckOption(*this, init_width, init_width >= 8 && init_width <= 8192, "must be 8..8192");
-  CheckOption(*this, max_gaussians, max_gaussians >= 1, "must be positive");
-  CheckOption(*this, blocks, blocks >= 1 && blocks <= 64, "must be 1..64");
-  CheckOption(*this, coarse, coarse >= 0 && coarse <= 1, "must be 0..1");
-  CheckOption(*this, max_image_size, max_image_size == 0 || max_image_size >= 16,
-              "must be 0 (as they are) or at least 16 pixels");
-  CheckOption(*this, ssim_weight, ssim_weight >= 0 && ssim_weight <= 1, "must be 0..1");
-  CheckOption(*this, eval_interval, eval_interval > 0, "must be positive");
-  CheckOption(*this, checkpoint_interval, checkpoint_interval >= 0, "must be 0 (none) or positive");
-  CheckOption(*this, photo_memory, photo_memory > 0 && std::isfinite(photo_memory), "must be positive");
+  CheckField(*this, time_budget, time_budget >= 0, "must be 0 (by the preset) or positive");
+  CheckField(*this, steps, steps >= 0, "must be 0 (no limit) or positive");
+  CheckField(*this, sh_degree, sh_degree >= 0 && sh_degree <= kMaxShDegree, "must be 0..3");
+  CheckField(*this, init_width, init_width >= 8 && init_width <= 8192, "must be 8..8192");
+  CheckField(*this, max_gaussians, max_gaussians >= 1, "must be positive");
+  CheckField(*this, blocks, blocks >= 1 && blocks <= 64, "must be 1..64");
+  CheckField(*this, coarse, coarse >= 0 && coarse <= 1, "must be 0..1");
+  CheckField(*this, max_image_size, max_image_size == 0 || max_image_size >= 16,
+             "must be 0 (as they are) or at least 16 pixels");
+  CheckField(*this, ssim_weight, ssim_weight >= 0 && ssim_weight <= 1, "must be 0..1");
+  CheckField(*this, eval_interval, eval_interval > 0, "must be positive");
+  CheckField(*this, checkpoint_interval, checkpoint_interval >= 0, "must be 0 (none) or positive");
+  CheckField(*this, photo_memory, photo_memory > 0 && std::isfinite(photo_memory), "must be positive");
 }
 
 double SplatTimeBudget(const SplatOptions& options, PresetName train_preset) {

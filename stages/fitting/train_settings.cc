@@ -29,32 +29,32 @@ SceneSpace ResolveSceneSpace(const TrainOptions& options, const ImportedDataset&
 }
 
 void TrainOptions::Check() const {
-  CheckOption(*this, time_budget, time_budget >= 0, "must be 0 (the preset's) or positive");
-  CheckOption(*this, steps, steps >= 0, "must be 0 (no limit) or positive");
-  CheckOption(*this, batch_samples, batch_samples >= 0 && batch_samples <= (1 << 24), "must be 0..16777216");
-  CheckOption(*this, march_samples, march_samples >= 0 && march_samples <= 8192, "must be 0..8192");
-  CheckOption(*this, hash_table_log2, hash_table_log2 == 0 || (hash_table_log2 >= 10 && hash_table_log2 <= 24),
-              "must be 0 (the preset's) or 10..24");
+  CheckField(*this, time_budget, time_budget >= 0, "must be 0 (the preset's) or positive");
+  CheckField(*this, steps, steps >= 0, "must be 0 (no limit) or positive");
+  CheckField(*this, batch_samples, batch_samples >= 0 && batch_samples <= (1 << 24), "must be 0..16777216");
+  CheckField(*this, march_samples, march_samples >= 0 && march_samples <= 8192, "must be 0..8192");
+  CheckField(*this, hash_table_log2, hash_table_log2 == 0 || (hash_table_log2 >= 10 && hash_table_log2 <= 24),
+             "must be 0 (the preset's) or 10..24");
   for (const int* resolution : {&plane_resolution, &plane_depth_resolution}) {
-    CheckOption(*this, *resolution, *resolution == 0 || (*resolution >= 8 && *resolution <= 8192),
-                "must be 0 (by the scene) or 8..8192");
+    CheckField(*this, *resolution, *resolution == 0 || (*resolution >= 8 && *resolution <= 8192),
+               "must be 0 (by the scene) or 8..8192");
   }
-  CheckOption(*this, vanilla_samples, vanilla_samples >= 1 && vanilla_samples <= 1024, "must be 1..1024");
-  CheckOption(*this, learning_rate, learning_rate >= 0 && learning_rate < 1, "must be 0 (the field's) or in (0, 1)");
-  CheckOption(*this, distortion, !distortion.value || *distortion.value >= 0,
-              format("must be auto or a weight >= 0, not {}", AutoOrNumberText(distortion)));
-  CheckOption(*this, depth, !depth.value || (*depth.value >= 0 && std::isfinite(*depth.value)),
-              format("must be auto or a weight >= 0, not {}", AutoOrNumberText(depth)));
-  CheckOption(*this, refine_cameras, !refine_cameras || field != FieldKind::kVanilla,
-              format("needs {} ngp or planes (the vanilla field has no gradient with respect to its input)",
-                     OptionKey(*this, field)));
-  CheckOption(*this, eval_interval, eval_interval > 0, "must be positive");
-  CheckOption(*this, eval_share, eval_share > 0 && eval_share <= 1, "must be in (0, 1]");
-  CheckOption(*this, eval_pixels, eval_pixels >= 0, "must be 0 (all) or positive");
-  CheckOption(*this, final_eval_pixels, final_eval_pixels >= 0, "must be 0 (all) or positive");
-  CheckOption(*this, checkpoint_interval, checkpoint_interval >= 0, "must be 0 (none) or positive");
-  CheckOption(*this, photo_memory, photo_memory > 0 && std::isfinite(photo_memory), "must be positive");
-  CheckOption(*this, blocks, blocks >= 1 && blocks <= 64, "must be 1..64");
+  CheckField(*this, vanilla_samples, vanilla_samples >= 1 && vanilla_samples <= 1024, "must be 1..1024");
+  CheckField(*this, learning_rate, learning_rate >= 0 && learning_rate < 1, "must be 0 (the field's) or in (0, 1)");
+  CheckField(*this, distortion, !distortion.value || *distortion.value >= 0,
+             format("must be auto or a weight >= 0, not {}", AutoOrNumberText(distortion)));
+  CheckField(*this, depth, !depth.value || (*depth.value >= 0 && std::isfinite(*depth.value)),
+             format("must be auto or a weight >= 0, not {}", AutoOrNumberText(depth)));
+  CheckField(*this, refine_cameras, !refine_cameras || field != FieldKind::kVanilla,
+             format("needs {} ngp or planes (the vanilla field has no gradient with respect to its input)",
+                    OptionKey(*this, field)));
+  CheckField(*this, eval_interval, eval_interval > 0, "must be positive");
+  CheckField(*this, eval_share, eval_share > 0 && eval_share <= 1, "must be in (0, 1]");
+  CheckField(*this, eval_pixels, eval_pixels >= 0, "must be 0 (all) or positive");
+  CheckField(*this, final_eval_pixels, final_eval_pixels >= 0, "must be 0 (all) or positive");
+  CheckField(*this, checkpoint_interval, checkpoint_interval >= 0, "must be 0 (none) or positive");
+  CheckField(*this, photo_memory, photo_memory > 0 && std::isfinite(photo_memory), "must be positive");
+  CheckField(*this, blocks, blocks >= 1 && blocks <= 64, "must be 1..64");
 }
 
 double ResolvedTimeBudget(const TrainOptions& options) {

@@ -176,11 +176,11 @@ void AddImages(const std::vector<std::variant<IngestedImage, SkippedPhoto>>& res
 }  // namespace
 
 void IngestOptions::Check() const {
-  CheckOption(*this, max_image_size, max_image_size == 0 || max_image_size >= 16,
-              format("must be 0 (keep the size) or at least 16 pixels, not {}", max_image_size));
-  CheckOption(*this, min_images, min_images >= 1, format("must be at least 1, not {}", min_images));
+  CheckField(*this, max_image_size, max_image_size == 0 || max_image_size >= 16,
+             format("must be 0 (keep the size) or at least 16 pixels, not {}", max_image_size));
+  CheckField(*this, min_images, min_images >= 1, format("must be at least 1, not {}", min_images));
   const std::optional<double> frames = video_frames.value;
-  CheckOption(
+  CheckField(
       *this, video_frames, !frames || (*frames >= 1 && *frames <= 100000 && *frames == std::floor(*frames)),
       format("must be auto or a whole number of frames from 1 to 100000, not {}", AutoOrNumberText(video_frames)));
 }

@@ -278,12 +278,12 @@ ExportReport::Mesh WriteMesh(const NerfModel& model, const ExportOptions& option
 }  // namespace
 
 void ExportOptions::Check() const {
-  CheckOption(*this, resolution, resolution >= 8 && resolution <= 1024, "must be 8..1024");
-  CheckOption(*this, threshold, threshold >= 0 && std::isfinite(threshold), "must be 0 (from the field) or positive");
-  CheckOption(*this, points_width, points_width >= 8 && points_width <= 8192, "must be 8..8192");
-  CheckOption(*this, max_triangles, max_triangles >= 0, "must be 0 (all) or positive");
-  CheckOption(*this, texture_size, texture_size >= 64 && texture_size <= 16384, "must be 64..16384");
-  CheckOption(*this, points_opacity, points_opacity > 0 && points_opacity <= 1, "must be in (0, 1]");
+  CheckField(*this, resolution, resolution >= 8 && resolution <= 1024, "must be 8..1024");
+  CheckField(*this, threshold, threshold >= 0 && std::isfinite(threshold), "must be 0 (from the field) or positive");
+  CheckField(*this, points_width, points_width >= 8 && points_width <= 8192, "must be 8..8192");
+  CheckField(*this, max_triangles, max_triangles >= 0, "must be 0 (all) or positive");
+  CheckField(*this, texture_size, texture_size >= 64 && texture_size <= 16384, "must be 64..16384");
+  CheckField(*this, points_opacity, points_opacity > 0 && points_opacity <= 1, "must be in (0, 1]");
 }
 
 void ExportStage::Run(StageContext& context) const {

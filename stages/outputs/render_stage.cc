@@ -340,16 +340,16 @@ ViewRenderer ChooseRenderer(const RenderStageOptions& options, const RenderInput
 }  // namespace
 
 void RenderStageOptions::Check() const {
-  CheckOption(*this, path_file, path != PathChoice::kFile || !path_file.empty(),
-              format("must name a file when {} is file", OptionKey(*this, path)));
-  CheckOption(*this, frames, frames >= 1 && frames <= 100000, "must be 1..100000");
-  CheckOption(*this, width, width >= 0 && width <= 16384, "must be 0 (the photos') or 1..16384");
+  CheckField(*this, path_file, path != PathChoice::kFile || !path_file.empty(),
+             format("must name a file when {} is file", OptionKey(*this, path)));
+  CheckField(*this, frames, frames >= 1 && frames <= 100000, "must be 1..100000");
+  CheckField(*this, width, width >= 0 && width <= 16384, "must be 0 (the photos') or 1..16384");
   const std::optional<double>& degrees = elevation.value;
-  CheckOption(*this, elevation, !degrees || (*degrees > -90 && *degrees < 90), "must be between -90 and 90 degrees");
-  CheckOption(*this, radius, radius >= 0 && std::isfinite(radius), "must be 0 (from the cameras) or positive");
-  CheckOption(*this, fps, fps > 0 && fps <= 240, "must be in (0, 240]");
-  CheckOption(*this, step_scale, step_scale == 0 || (step_scale >= 0.01 && step_scale <= 100),
-              "must be 0 (by the scene) or 0.01..100");
+  CheckField(*this, elevation, !degrees || (*degrees > -90 && *degrees < 90), "must be between -90 and 90 degrees");
+  CheckField(*this, radius, radius >= 0 && std::isfinite(radius), "must be 0 (from the cameras) or positive");
+  CheckField(*this, fps, fps > 0 && fps <= 240, "must be in (0, 240]");
+  CheckField(*this, step_scale, step_scale == 0 || (step_scale >= 0.01 && step_scale <= 100),
+             "must be 0 (by the scene) or 0.01..100");
 }
 
 std::vector<PinholeCamera> ReadCameraPath(const fs::path& file, const PinholeCamera& reference) {

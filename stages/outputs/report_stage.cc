@@ -334,7 +334,7 @@ std::string ExportSection(const ExportResult& result, const ExportReport& export
 }  // namespace
 
 void ReportOptions::Check() const {
-  CheckOption(*this, image_width, image_width >= 32 && image_width <= 4096, "must be 32..4096");
+  CheckField(*this, image_width, image_width >= 32 && image_width <= 4096, "must be 32..4096");
 }
 
 void ReportStage::Run(StageContext& context) const {

@@ -99,10 +99,10 @@ SparseTracks TracksOf(const ColmapModel& model, const std::vector<const ColmapIm
 }  // namespace
 
 void PosesOptions::Check() const {
-  CheckOption(*this, holdout_every, holdout_every >= 0, "must be 0 (none) or positive");
-  CheckOption(*this, train_views, train_views >= 0, "must be 0 (all) or positive");
-  CheckOption(*this, max_image_size, max_image_size == 0 || max_image_size >= 16,
-              format("must be 0 (as they are) or at least 16 pixels, not {}", max_image_size));
+  CheckField(*this, holdout_every, holdout_every >= 0, "must be 0 (none) or positive");
+  CheckField(*this, train_views, train_views >= 0, "must be 0 (all) or positive");
+  CheckField(*this, max_image_size, max_image_size == 0 || max_image_size >= 16,
+             format("must be 0 (as they are) or at least 16 pixels, not {}", max_image_size));
 }
 
 void PosesStage::Run(StageContext& context) const {

@@ -119,17 +119,17 @@ fs::path MatchAndMap(const ColmapRun& colmap, const SfmOptions& options, size_t 
 }  // namespace
 
 void SfmOptions::Check() const {
-  CheckOption(*this, exhaustive_max_images, exhaustive_max_images >= 2, "must be at least 2");
-  CheckOption(*this, sequential_overlap, sequential_overlap >= 1, "must be at least 1");
-  CheckOption(*this, retrieval_neighbours, retrieval_neighbours >= 1, "must be at least 1");
-  CheckOption(*this, max_image_size, max_image_size >= 100,
-              format("must be at least 100 pixels, not {}", max_image_size));
-  CheckOption(*this, max_num_features, max_num_features >= 100, "must be at least 100");
-  CheckOption(*this, block_images, block_images >= 1, "must be at least 1");
-  CheckOption(*this, hierarchical_min_images, hierarchical_min_images >= 0, "must be 0 (never) or a photo count");
-  CheckOption(*this, leaf_max_images, leaf_max_images >= 8, "must be at least 8");
-  CheckOption(*this, min_registered, min_registered > 0 && min_registered <= 1, "must be in (0, 1]");
-  CheckOption(*this, colmap, !colmap.empty(), "must name the COLMAP program");
+  CheckField(*this, exhaustive_max_images, exhaustive_max_images >= 2, "must be at least 2");
+  CheckField(*this, sequential_overlap, sequential_overlap >= 1, "must be at least 1");
+  CheckField(*this, retrieval_neighbours, retrieval_neighbours >= 1, "must be at least 1");
+  CheckField(*this, max_image_size, max_image_size >= 100,
+             format("must be at least 100 pixels, not {}", max_image_size));
+  CheckField(*this, max_num_features, max_num_features >= 100, "must be at least 100");
+  CheckField(*this, block_images, block_images >= 1, "must be at least 1");
+  CheckField(*this, hierarchical_min_images, hierarchical_min_images >= 0, "must be 0 (never) or a photo count");
+  CheckField(*this, leaf_max_images, leaf_max_images >= 8, "must be at least 8");
+  CheckField(*this, min_registered, min_registered > 0 && min_registered <= 1, "must be in (0, 1]");
+  CheckField(*this, colmap, !colmap.empty(), "must name the COLMAP program");
 }
 
 std::map<std::string, std::string> SfmStage::ExternalInputs(const Workspace& workspace, const Config& config) const {
