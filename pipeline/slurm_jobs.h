@@ -9,7 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/slurm.h"
+#include "pipeline/slurm_options.h"
+#include "pipeline/workspace.h"
 
 namespace p2n::slurm {
 
