@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 out=${1:-/tmp/fit_image_bench}
 seconds=${2:-120}
 bin=build/cli/photo2nerf
-data=../shared/data
+data=${P2N_DATA_DIR:-../shared/data}
 [ -x "$bin" ] || { echo "build first: $bin is missing" >&2; exit 1; }
 mkdir -p "$out"
 oiiotool "$data/fox/images/0001.jpg" --resize 512x0 -o "$out/fox_0001_512.png"

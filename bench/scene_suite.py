@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""The scene suite: every scene in ../shared/data at a short and a normal budget, one table.
+"""The scene suite: every shared scene ($P2N_DATA_DIR, else the team's ../shared/data) at a short and a normal
+budget, one table.
 
 A default changes only when this table shows that no scene loses more than 0.3 dB at either budget. Each scene is
 imported (or solved by COLMAP) once; each budget then trains the field and bakes the splats on a copy of that
@@ -26,7 +27,7 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-DATA = os.path.join(ROOT, "..", "shared", "data")
+DATA = os.environ.get("P2N_DATA_DIR") or os.path.join(ROOT, "..", "shared", "data")
 BIN = os.path.join(ROOT, "build", "cli", "photo2nerf")
 COMPARE = os.path.join(ROOT, "build", "bench", "compare_cameras")
 

@@ -49,77 +49,124 @@ double MlpFlops(const p2n::MlpConfig& c) {
   return 2 * macs * 3;
 }
 
-}  // namespace
+// A batch of samples as the trainer steps on: `chunks` chunks of `per_chunk`, and the whole of them.
+struct Batch {
+  int chunks = 64, per_chunk = 0, repeats = 7;
+  std::vector<Eigen::MatrixXf> positions, directions;
+  Eigen::MatrixXf all_positions;
 
-int main(int argc, char** argv) {
-  p2n::KeepFreedBlocksInHeap();  // as photo2nerf does
-  const int n = argc > 1 ? std::atoi(argv[1]) : 65536;
-  const int repeats = argc > 2 ? std::atoi(argv[2]) : 7;
-  const int chunks = 64;
-  const int per_chunk = n / chunks;
+  Batch(int n, int repeat_count) : per_chunk(n / chunks), repeats(repeat_count), positions(chunks), directions(chunks) {
+    all_positions.resize(3, per_chunk * chunks);
+    for (int c = 0; c < chunks; ++c) {
+      positions[c] = (Eigen::MatrixXf::Random(3, per_chunk).array() * 0.5f + 0.5f).matrix();
+      directions[c] = Eigen::MatrixXf::Random(3, per_chunk).colwise().normalized();
+      all_positions.middleCols(c * per_chunk, per_chunk) = positions[c];
+    }
+  }
+  double samples() const { return double(per_chunk) * chunks; }
+};
 
-  // Dense GEMM of the MLP's shape, chunked over threads like the trainer.
+// GFLOP/s of a dense GEMM of the MLP's shape, chunked over threads like the trainer, and of one large GEMM.
+std::pair<double, double> GemmRates(const Batch& batch) {
   const Eigen::MatrixXf w = Eigen::MatrixXf::Random(64, 64);
-  std::vector<Eigen::MatrixXf> inputs(chunks, Eigen::MatrixXf::Random(64, per_chunk)), outputs(chunks);
+  std::vector<Eigen::MatrixXf> inputs(batch.chunks, Eigen::MatrixXf::Random(64, batch.per_chunk)),
+      outputs(batch.chunks);
   const double gemm_seconds = MedianSeconds(
-      repeats, [&] { tbb::parallel_for(0, chunks, [&](int c) { outputs[c].noalias() = w * inputs[c]; }); });
-  const double gemm_gflops = 2.0 * 64 * 64 * per_chunk * chunks / gemm_seconds / 1e9;
+      batch.repeats, [&] { tbb::parallel_for(0, batch.chunks, [&](int c) { outputs[c].noalias() = w * inputs[c]; }); });
   const Eigen::MatrixXf a = Eigen::MatrixXf::Random(2048, 2048), b = Eigen::MatrixXf::Random(2048, 2048);
   Eigen::MatrixXf product(2048, 2048);
   const double big_seconds = MedianSeconds(3, [&] { product.noalias() = a * b; });
-  const double big_gflops = 2.0 * 2048 * 2048 * 2048 / big_seconds / 1e9;
+  return {2.0 * 64 * 64 * batch.samples() / gemm_seconds / 1e9, 2.0 * 2048 * 2048 * 2048 / big_seconds / 1e9};
+}
 
-  p2n::NgpFieldConfig config;
-  p2n::NgpField<float> field(config, 1);
-  const double mlp_flops = MlpFlops(field.density_mlp().config()) + MlpFlops(field.colour_mlp().config());
-  std::vector<Eigen::MatrixXf> positions(chunks), directions(chunks);
-  for (int c = 0; c < chunks; ++c) {
-    positions[c] = (Eigen::MatrixXf::Random(3, per_chunk).array() * 0.5f + 0.5f).matrix();
-    directions[c] = Eigen::MatrixXf::Random(3, per_chunk).colwise().normalized();
-  }
-  std::vector<std::vector<float>> d_dense(chunks, std::vector<float>(field.num_dense_params()));
-  // MLPs alone: forward and backward of both networks on the encoded inputs.
-  std::vector<p2n::RadianceField<float>::Cache> caches(chunks);
-  const double mlp_seconds = MedianSeconds(repeats, [&] {
-    tbb::parallel_for(0, chunks, [&](int c) {
+// The MLPs alone: forward and backward of both networks on the encoded inputs.
+double MlpSeconds(p2n::NgpField<float>& field, const Batch& batch) {
+  std::vector<std::vector<float>> d_dense(batch.chunks, std::vector<float>(field.num_dense_params()));
+  return MedianSeconds(batch.repeats, [&] {
+    tbb::parallel_for(0, batch.chunks, [&](int c) {
       Eigen::MatrixXf density_out, rgb, d_in;
       p2n::Mlp<float>::Cache density_cache, colour_cache;
-      const Eigen::MatrixXf encoded = Eigen::MatrixXf::Constant(32, per_chunk, 0.01f);
-      const Eigen::MatrixXf colour_in = Eigen::MatrixXf::Constant(31, per_chunk, 0.1f);
+      const Eigen::MatrixXf encoded = Eigen::MatrixXf::Constant(32, batch.per_chunk, 0.01f);
+      const Eigen::MatrixXf colour_in = Eigen::MatrixXf::Constant(31, batch.per_chunk, 0.1f);
       field.density_mlp().Forward(encoded, &density_out, &density_cache);
       field.colour_mlp().Forward(colour_in, &rgb, &colour_cache);
       field.colour_mlp().Backward(colour_cache, rgb, d_dense[c].data(), &d_in);
       field.density_mlp().Backward(density_cache, density_out, d_dense[c].data(), &d_in);
     });
   });
-  // The whole field as the trainer runs it: the grid's encoding of the whole batch, then chunk by chunk the
-  // networks and spherical harmonics, forward and backward, then the grid's backward pass over the whole batch (its
-  // gradient accumulates over the repeats, as nothing here consumes it).
-  Eigen::MatrixXf all_positions(3, per_chunk * chunks);
-  for (int c = 0; c < chunks; ++c) all_positions.middleCols(c * per_chunk, per_chunk) = positions[c];
-  const auto field_seconds = [&](p2n::NgpField<float>& measured) {
-    std::vector<std::vector<float>> d_params(chunks, std::vector<float>(measured.num_dense_params()));
-    return MedianSeconds(repeats, [&] {
-      Eigen::MatrixXf encoded, d_encoded(measured.encoding().output_dims(), all_positions.cols());
-      measured.encoding().Forward(all_positions, &encoded);
-      tbb::parallel_for(0, chunks, [&](int c) {
-        Eigen::MatrixXf density, rgb, d_chunk;
-        measured.ForwardEncoded(positions[c], encoded.middleCols(c * per_chunk, per_chunk), directions[c], &density,
-                                &rgb, &caches[c]);
-        measured.Backward(caches[c], density, rgb, d_params[c].data(), &d_chunk);
-        d_encoded.middleCols(c * per_chunk, per_chunk) = d_chunk;
-      });
-      measured.encoding().Backward(all_positions, d_encoded);
+}
+
+// The whole field as the trainer runs it: the grid's encoding of the whole batch, then chunk by chunk the networks
+// and spherical harmonics, forward and backward, then the grid's backward pass over the whole batch (its gradient
+// accumulates over the repeats, as nothing here consumes it).
+double FieldSeconds(p2n::NgpField<float>& field, const Batch& batch) {
+  std::vector<std::vector<float>> d_params(batch.chunks, std::vector<float>(field.num_dense_params()));
+  std::vector<p2n::RadianceField<float>::Cache> caches(batch.chunks);
+  return MedianSeconds(batch.repeats, [&] {
+    Eigen::MatrixXf encoded, d_encoded(field.encoding().output_dims(), batch.all_positions.cols());
+    field.encoding().Forward(batch.all_positions, &encoded);
+    tbb::parallel_for(0, batch.chunks, [&](int c) {
+      Eigen::MatrixXf density, rgb, d_chunk;
+      field.ForwardEncoded(batch.positions[c], encoded.middleCols(c * batch.per_chunk, batch.per_chunk),
+                           batch.directions[c], &density, &rgb, &caches[c]);
+      field.Backward(caches[c], density, rgb, d_params[c].data(), &d_chunk);
+      d_encoded.middleCols(c * batch.per_chunk, batch.per_chunk) = d_chunk;
     });
-  };
-  // The encoding alone, as the trainer calls it (the whole batch at once).
-  const auto grid_seconds = [&](p2n::Encoding<float>& grid) {
-    Eigen::MatrixXf encoded;
-    const Eigen::MatrixXf d_grid = Eigen::MatrixXf::Random(grid.output_dims(), all_positions.cols());
-    return std::pair(MedianSeconds(repeats, [&] { grid.Forward(all_positions, &encoded); }),
-                     MedianSeconds(repeats, [&] { grid.Backward(all_positions, d_grid); }));
-  };
-  const double samples = double(per_chunk) * chunks;
+    field.encoding().Backward(batch.all_positions, d_encoded);
+  });
+}
+
+// The encoding alone, as the trainer calls it (the whole batch at once): forward and backward seconds.
+std::pair<double, double> GridSeconds(p2n::Encoding<float>& grid, const Batch& batch) {
+  Eigen::MatrixXf encoded;
+  const Eigen::MatrixXf d_grid = Eigen::MatrixXf::Random(grid.output_dims(), batch.all_positions.cols());
+  return std::pair(MedianSeconds(batch.repeats, [&] { grid.Forward(batch.all_positions, &encoded); }),
+                   MedianSeconds(batch.repeats, [&] { grid.Backward(batch.all_positions, d_grid); }));
+}
+
+// The field's grid as NgpFieldConfig has it, as the default preset trains it (a table of 2^17 entries a level) and as
+// the quality preset does (8 levels of 4 features); then the planes (train.field planes) as the default preset trains
+// them.
+void PrintEncodings(const p2n::NgpFieldConfig& config, const Batch& batch, double mlp_seconds) {
+  const double samples = batch.samples();
+  for (const auto& [name, layout] : {std::pair("NgpFieldConfig", config.grid),
+                                     std::pair("default preset", p2n::PresetFor(p2n::PresetName::kDefault).grid),
+                                     std::pair("quality preset", p2n::PresetFor(p2n::PresetName::kQuality).grid)}) {
+    p2n::NgpFieldConfig measured_config = config;
+    measured_config.grid = layout;
+    p2n::NgpField<float> measured(measured_config, 1);
+    const double whole = FieldSeconds(measured, batch);
+    const auto [forward, backward] = GridSeconds(measured.encoding(), batch);
+    std::printf(
+        "%-15s grid %2dx%d, 2^%d: whole field fwd+bwd %.2f M samples/s (MLPs %.0f%% of its time); grid "
+        "forward %.2f, backward %.2f M samples/s\n",
+        name, layout.levels, layout.features_per_level, layout.log2_table_size, samples / whole / 1e6,
+        100 * mlp_seconds / whole, samples / forward / 1e6, samples / backward / 1e6);
+  }
+  p2n::NgpFieldConfig planes_config = config;
+  planes_config.planes = p2n::PlanesFor(p2n::SceneSpace::kForward);
+  p2n::NgpField<float> planes(planes_config, 1);
+  const double whole = FieldSeconds(planes, batch);
+  const auto [forward, backward] = GridSeconds(planes.encoding(), batch);
+  std::printf(
+      "planes %d x %d, %d^2 x %d: whole field fwd+bwd %.2f M samples/s (MLPs %.0f%% of its time); planes forward "
+      "%.2f, backward %.2f M samples/s\n",
+      planes_config.planes->levels, planes_config.planes->features_per_level, planes_config.planes->finest_resolution,
+      planes_config.planes->depth_resolution, samples / whole / 1e6, 100 * mlp_seconds / whole, samples / forward / 1e6,
+      samples / backward / 1e6);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  p2n::KeepFreedBlocksInHeap();  // as photo2nerf does
+  const Batch batch(argc > 1 ? std::atoi(argv[1]) : 65536, argc > 2 ? std::atoi(argv[2]) : 7);
+  const auto [gemm_gflops, big_gflops] = GemmRates(batch);
+  p2n::NgpFieldConfig config;
+  p2n::NgpField<float> field(config, 1);
+  const double mlp_flops = MlpFlops(field.density_mlp().config()) + MlpFlops(field.colour_mlp().config());
+  const double mlp_seconds = MlpSeconds(field, batch);
+  const double samples = batch.samples();
   std::printf("samples per batch                 %.0f\n", samples);
   std::printf("GEMM 64x64 * 64xN (chunked)       %.1f GFLOP/s\n", gemm_gflops);
   std::printf("GEMM 2048^3                       %.1f GFLOP/s\n", big_gflops);
@@ -127,33 +174,6 @@ int main(int argc, char** argv) {
               mlp_flops * samples / mlp_seconds / 1e9, 100 * mlp_flops * samples / mlp_seconds / 1e9 / gemm_gflops,
               samples / mlp_seconds / 1e6);
   std::printf("MLP FLOPs per sample (fwd+bwd)    %.0f\n", mlp_flops);
-  // The field's grid as NgpFieldConfig has it, as the default preset trains it (a table of 2^17 entries a level)
-  // and as the quality preset does (8 levels of 4 features).
-  for (const auto& [name, layout] : {std::pair("NgpFieldConfig", config.grid),
-                                     std::pair("default preset", p2n::PresetFor(p2n::PresetName::kDefault).grid),
-                                     std::pair("quality preset", p2n::PresetFor(p2n::PresetName::kQuality).grid)}) {
-    p2n::NgpFieldConfig measured_config = config;
-    measured_config.grid = layout;
-    p2n::NgpField<float> measured(measured_config, 1);
-    const double whole = field_seconds(measured);
-    const auto [forward, backward] = grid_seconds(measured.encoding());
-    std::printf(
-        "%-15s grid %2dx%d, 2^%d: whole field fwd+bwd %.2f M samples/s (MLPs %.0f%% of its time); grid "
-        "forward %.2f, backward %.2f M samples/s\n",
-        name, layout.levels, layout.features_per_level, layout.log2_table_size, samples / whole / 1e6,
-        100 * mlp_seconds / whole, samples / forward / 1e6, samples / backward / 1e6);
-  }
-  // The planes (train.field planes) as the default preset trains them.
-  p2n::NgpFieldConfig planes_config = config;
-  planes_config.planes = p2n::PlanesFor(p2n::SceneSpace::kForward);
-  p2n::NgpField<float> planes(planes_config, 1);
-  const double whole = field_seconds(planes);
-  const auto [forward, backward] = grid_seconds(planes.encoding());
-  std::printf(
-      "planes %d x %d, %d^2 x %d: whole field fwd+bwd %.2f M samples/s (MLPs %.0f%% of its time); planes forward "
-      "%.2f, backward %.2f M samples/s\n",
-      planes_config.planes->levels, planes_config.planes->features_per_level, planes_config.planes->finest_resolution,
-      planes_config.planes->depth_resolution, samples / whole / 1e6, 100 * mlp_seconds / whole, samples / forward / 1e6,
-      samples / backward / 1e6);
+  PrintEncodings(config, batch, mlp_seconds);
   return 0;
 }

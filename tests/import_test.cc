@@ -23,7 +23,7 @@ namespace p2n::testing {
 namespace fs = std::filesystem;
 namespace {
 
-const fs::path kData = fs::path(P2N_SOURCE_DIR) / ".." / "shared" / "data";
+const fs::path kData = P2N_DATA_DIR;  // the shared scenes (tests/CMakeLists.txt)
 
 // Runs the import stage on `input` (images at most `max_image_size` on their longest side, transparent ones shown on
 // `background`); returns the written transforms.json.
@@ -435,7 +435,7 @@ TEST_CASE("import: broken and hostile datasets are refused, naming the file and 
 
 TEST_CASE("import: the shared datasets (fox, lego, lego_200, fern)", "[import][data]") {
   if (!fs::exists(kData / "lego")) {
-    WARN("../shared/data is absent: skipping the shared-dataset importer test");
+    WARN(kData.string() << " is absent: skipping the shared-dataset importer test");
     return;
   }
   TempDir dir;

@@ -88,30 +88,39 @@ std::string SkipReason(const nlohmann::json& report, const std::string& file) {
 
 // The table of unusual and bad photos (issue 7): for each, whether ingest keeps it (and what training then sees)
 // or skips it with a reason that names what is wrong. All go into one folder with three ordinary photos.
-TEST_CASE("ingest: a table of unusual and bad photos, each kept as training expects or skipped with its reason",
-          "[ingest][bad_input]") {
-  struct Row {
-    std::string file;                                                               // its name in the photo folder
-    std::function<void(const fs::path&)> make;                                      // writes it
-    std::string skip_reason;                                                        // empty: kept
-    std::function<void(const nlohmann::json& entry, const TrainView& view)> check;  // for kept files
+namespace {
+
+// A photo of the table: its file, how it is written, and the reason ingest skips it or what it keeps.
+struct PhotoRow {
+  std::string file;                                                               // its name in the photo folder
+  std::function<void(const fs::path&)> make;                                      // writes it
+  std::string skip_reason;                                                        // empty: kept
+  std::function<void(const nlohmann::json& entry, const TrainView& view)> check;  // for kept files
+};
+
+// Writes the test image of `seed`.
+constexpr auto TablePhoto = [](int seed) {
+  return [seed](const fs::path& path) { Write(MakeImage(40, 20, seed), path); };
+};
+constexpr auto SolidPhoto = [](int channels, OIIO::TypeDesc type, std::vector<float> value) {
+  return [=](const fs::path& path) {
+    OIIO::ImageSpec spec(40, 20, channels, type);
+    spec.attribute("oiio:UnassociatedAlpha", 1);  // the values as they are, as photos store them
+    OIIO::ImageBuf buffer(spec);
+    OIIO::ImageBufAlgo::fill(buffer, value);
+    REQUIRE(buffer.write(path.string()));
   };
-  const auto image = [](int seed) { return [seed](const fs::path& path) { Write(MakeImage(40, 20, seed), path); }; };
-  const auto solid = [](int channels, OIIO::TypeDesc type, std::vector<float> value) {
-    return [=](const fs::path& path) {
-      OIIO::ImageSpec spec(40, 20, channels, type);
-      spec.attribute("oiio:UnassociatedAlpha", 1);  // the values as they are, as photos store them
-      OIIO::ImageBuf buffer(spec);
-      OIIO::ImageBufAlgo::fill(buffer, value);
-      REQUIRE(buffer.write(path.string()));
-    };
-  };
-  const auto pixel_near = [](const TrainView& view, int x, int y, std::vector<int> expected, int tolerance) {
-    for (int c = 0; c < view.channels; ++c) {
-      CHECK(std::abs(view.pixels[(size_t(y) * view.camera.width + x) * view.channels + c] - expected[c]) <= tolerance);
-    }
-  };
-  const std::vector<Row> rows = {
+};
+constexpr auto CheckPixelNear = [](const TrainView& view, int x, int y, std::vector<int> expected, int tolerance) {
+  for (int c = 0; c < view.channels; ++c) {
+    CHECK(std::abs(view.pixels[(size_t(y) * view.camera.width + x) * view.channels + c] - expected[c]) <= tolerance);
+  }
+};
+
+// Photos ingest must skip, each with its reason.
+std::vector<PhotoRow> SkippedPhotos() {
+  return {
+
       {"huge.png", WriteHugePng, "declared size 100000x100000x3 is beyond what photo2nerf reads", nullptr},
       {"truncated.jpg",
        [](const fs::path& path) {
@@ -136,22 +145,28 @@ TEST_CASE("ingest: a table of unusual and bad photos, each kept as training expe
          WriteText(path, ReadText(path).substr(0, 33) + std::string("\x74\x6f\x6f\x42tEXtonly a few bytes", 24));
        },
        "damaged PNG: chunk 'tEXt' declares 1953460034 bytes in a file of 57", nullptr},
-      {"zz_copy.png", image(0), "the same pixels as base0.png", nullptr},
-      {"sixteen_bit.png", solid(3, OIIO::TypeDesc::UINT16, {1.0f, 0.5f, 0.0f}), "",
-       [&](const nlohmann::json&, const TrainView& view) {
+      {"zz_copy.png", TablePhoto(0), "the same pixels as base0.png", nullptr},
+  };
+}
+
+// Photos kept in another encoding than 8-bit RGB: 16 bits, grey, alpha.
+std::vector<PhotoRow> KeptEncodings() {
+  return {
+      {"sixteen_bit.png", SolidPhoto(3, OIIO::TypeDesc::UINT16, {1.0f, 0.5f, 0.0f}), "",
+       [](const nlohmann::json&, const TrainView& view) {
          CHECK(view.channels == 3);
-         pixel_near(view, 5, 5, {255, 128, 0}, 0);
+         CheckPixelNear(view, 5, 5, {255, 128, 0}, 0);
        }},
-      {"grey.jpg", solid(1, OIIO::TypeDesc::UINT8, {0.6f}), "",
-       [&](const nlohmann::json& entry, const TrainView& view) {
+      {"grey.jpg", SolidPhoto(1, OIIO::TypeDesc::UINT8, {0.6f}), "",
+       [](const nlohmann::json& entry, const TrainView& view) {
          CHECK(entry["channels"] == 1);
          CHECK(view.channels == 3);
-         pixel_near(view, 5, 5, {153, 153, 153}, 2);
+         CheckPixelNear(view, 5, 5, {153, 153, 153}, 2);
        }},
-      {"grey_alpha.png", solid(2, OIIO::TypeDesc::UINT8, {0.6f, 0.2f}), "",
-       [&](const nlohmann::json&, const TrainView& view) {
+      {"grey_alpha.png", SolidPhoto(2, OIIO::TypeDesc::UINT8, {0.6f, 0.2f}), "",
+       [](const nlohmann::json&, const TrainView& view) {
          CHECK(view.channels == 4);
-         pixel_near(view, 5, 5, {153, 153, 153, 51}, 0);
+         CheckPixelNear(view, 5, 5, {153, 153, 153, 51}, 0);
        }},
       {"alpha.png",
        [](const fs::path& path) {
@@ -161,17 +176,23 @@ TEST_CASE("ingest: a table of unusual and bad photos, each kept as training expe
          REQUIRE(buffer.write(path.string()));
        },
        "",
-       [&](const nlohmann::json&, const TrainView& view) {
+       [](const nlohmann::json&, const TrainView& view) {
          CHECK(view.channels == 4);
-         pixel_near(view, 5, 5, {0, 255, 0, 0}, 0);  // straight alpha: a transparent pixel keeps its colour
-         pixel_near(view, 30, 5, {0, 0, 255, 255}, 0);
+         CheckPixelNear(view, 5, 5, {0, 255, 0, 0}, 0);  // straight alpha: a transparent pixel keeps its colour
+         CheckPixelNear(view, 30, 5, {0, 0, 255, 255}, 0);
        }},
+  };
+}
+
+// Photos kept from CMYK, linear light, EXIF rotation and a non-ASCII name.
+std::vector<PhotoRow> KeptConversions() {
+  return {
       {"cmyk.jpg", WriteRedCmykJpeg, "",
-       [&](const nlohmann::json& entry, const TrainView& view) {
+       [](const nlohmann::json& entry, const TrainView& view) {
          CHECK(entry["from_cmyk"] == true);
          CHECK(entry["name"] == "cmyk_jpg.png");  // re-encoded as RGB: COLMAP never sees the CMYK file
          CHECK(view.channels == 3);
-         pixel_near(view, 5, 5, {255, 0, 0}, 8);
+         CheckPixelNear(view, 5, 5, {255, 0, 0}, 8);
        }},
       {"cmyk.tif",
        [](const fs::path& path) {
@@ -184,40 +205,48 @@ TEST_CASE("ingest: a table of unusual and bad photos, each kept as training expe
          REQUIRE(buffer.write(path.string()));
        },
        "",
-       [&](const nlohmann::json& entry, const TrainView& view) {
+       [](const nlohmann::json& entry, const TrainView& view) {
          CHECK(entry["from_cmyk"] == true);
-         pixel_near(view, 5, 5, {0, 255, 0}, 0);
+         CheckPixelNear(view, 5, 5, {0, 255, 0}, 0);
        }},
-      {"linear.exr", solid(3, OIIO::TypeDesc::HALF, {0.214f, 0.214f, 0.214f}), "",
-       [&](const nlohmann::json& entry, const TrainView& view) {
+      {"linear.exr", SolidPhoto(3, OIIO::TypeDesc::HALF, {0.214f, 0.214f, 0.214f}), "",
+       [](const nlohmann::json& entry, const TrainView& view) {
          CHECK(entry["name"] == "linear_exr.png");
-         pixel_near(view, 5, 5, {128, 128, 128}, 1);  // linear 0.214 is sRGB 0.5
+         CheckPixelNear(view, 5, 5, {128, 128, 128}, 1);  // linear 0.214 is sRGB 0.5
        }},
       {"rotated.jpg", [](const fs::path& path) { Write(MakeImage(40, 20, 5), path, 6); }, "",
-       [&](const nlohmann::json& entry, const TrainView& view) {
+       [](const nlohmann::json& entry, const TrainView& view) {
          // Orientation 6: turned 90 degrees clockwise, so the stored left (red) half becomes the top.
          CHECK(entry["exif_orientation"] == 6);
          REQUIRE(view.camera.width == 20);
          REQUIRE(view.camera.height == 40);
-         pixel_near(view, 10, 5, {255, 0, 0}, 40);
-         pixel_near(view, 10, 35, {0, 0, 255}, 40);
+         CheckPixelNear(view, 10, 5, {255, 0, 0}, 40);
+         CheckPixelNear(view, 10, 35, {0, 0, 255}, 40);
        }},
-      {"vue n°1 été.png", image(3), "",
-       [&](const nlohmann::json& entry, const TrainView& view) {
+      {"vue n°1 été.png", TablePhoto(3), "",
+       [](const nlohmann::json& entry, const TrainView& view) {
          CHECK(entry["name"] == "vue n°1 été.png");
-         pixel_near(view, 5, 5, {255, 0, 0}, 0);
+         CheckPixelNear(view, 5, 5, {255, 0, 0}, 0);
        }},
   };
+}
 
+}  // namespace
+
+TEST_CASE("ingest: a table of unusual and bad photos, each kept as training expects or skipped with its reason",
+          "[ingest][bad_input]") {
+  std::vector<PhotoRow> rows = SkippedPhotos();
+  for (std::vector<PhotoRow> more : {KeptEncodings(), KeptConversions()})
+    rows.insert(rows.end(), more.begin(), more.end());
   IngestFixture f;
-  for (int i = 0; i < 3; ++i) image(i)(f.photos / ("base" + std::to_string(i) + ".png"));
-  for (const Row& row : rows) row.make(f.photos / row.file);
+  for (int i = 0; i < 3; ++i) TablePhoto(i)(f.photos / ("base" + std::to_string(i) + ".png"));
+  for (const PhotoRow& row : rows) row.make(f.photos / row.file);
   fs::create_directories(f.photos / "folder.jpg");  // not a file: ignored
-  image(9)(f.photos / ".hidden.png");               // hidden: ignored
+  TablePhoto(9)(f.photos / ".hidden.png");          // hidden: ignored
   const nlohmann::json report = f.Run();
 
   size_t kept = 3;
-  for (const Row& row : rows) {
+  for (const PhotoRow& row : rows) {
     INFO("photo " << row.file);
     if (!row.skip_reason.empty()) {
       CHECK_THAT(SkipReason(report, row.file), Catch::Contains(row.skip_reason));

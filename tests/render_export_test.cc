@@ -229,33 +229,10 @@ TEST_CASE("render stage: a camera path file is read back as written, bad ones ar
   CHECK_THROWS_WITH(ReadCameraPath(dir / "bad.json", camera), Catch::Contains("frames"));
 }
 
-TEST_CASE("export stage: mesh and point cloud open in Assimp, finite, in the source or the normalised frame",
-          "[export]") {
-  StageWorkspace setup;
-  Config config = SmallStageConfig(150);
-  config.Set("export.obj", true, "test");
-  config.Set("export.frame", "normalized", "test");
-  config.Set("export.threshold", 2.0, "test");       // a young field's densities are low
-  config.Set("export.points_opacity", 0.5, "test");  // and so are its opacities
-  setup.runner.Run(setup.workspace, config, Until("export"));
-  const fs::path out = setup.dir / "ws" / "50_export";
-  const nlohmann::json report = ReadJsonFile(out / "export_report.json");
-  REQUIRE(report["mesh"]["triangles"].get<size_t>() > 100);
-  // Every training view's depths (fewer than 200 of them).
-  const nlohmann::json poses = ReadJsonFile(setup.dir / "ws" / "20_poses" / "transforms.json");
-  size_t training_views = 0;
-  for (const nlohmann::json& frame : poses["frames"]) training_views += frame["split"] == "train";
-  CHECK(report["depth_views"].get<size_t>() == training_views);
-  // The small scene is unbounded (a transforms.json dataset): the mesh covers the cube the views look at, inside
-  // the scene box.
-  const nlohmann::json& region = report["mesh"]["region"];
-  CHECK(region["kind"] == "focus");
-  const double half_size = region["half_size"].get<double>();
-  CHECK((half_size > 0.05 && half_size <= 1.0));
-  const Eigen::Vector3d centre(region["centre"][0].get<double>(), region["centre"][1].get<double>(),
-                               region["centre"][2].get<double>());
-  CHECK(centre.cwiseAbs().maxCoeff() + half_size <= 1.0 + 1e-9);
-
+// The export's mesh.ply and mesh.obj (every vertex finite and inside the region of `centre` and `half_size`, the
+// report's triangles), its textured mesh.glb and its point cloud, as Assimp reads them; the mesh's vertices.
+std::vector<aiVector3D> CheckMeshFiles(const fs::path& out, const nlohmann::json& report, const Eigen::Vector3d& centre,
+                                       double half_size) {
   std::vector<aiVector3D> normalized;
   for (const char* file : {"mesh.ply", "mesh.obj"}) {
     Assimp::Importer importer;
@@ -292,6 +269,38 @@ TEST_CASE("export stage: mesh and point cloud open in Assimp, finite, in the sou
     CHECK(scene->mMeshes[0]->mNumVertices == report["points"]["count"].get<size_t>());
     CHECK(scene->mMeshes[0]->HasVertexColors(0));
   }
+
+  return normalized;
+}
+
+TEST_CASE("export stage: mesh and point cloud open in Assimp, finite, in the source or the normalised frame",
+          "[export]") {
+  StageWorkspace setup;
+  Config config = SmallStageConfig(150);
+  config.Set("export.obj", true, "test");
+  config.Set("export.frame", "normalized", "test");
+  config.Set("export.threshold", 2.0, "test");       // a young field's densities are low
+  config.Set("export.points_opacity", 0.5, "test");  // and so are its opacities
+  setup.runner.Run(setup.workspace, config, Until("export"));
+  const fs::path out = setup.dir / "ws" / "50_export";
+  const nlohmann::json report = ReadJsonFile(out / "export_report.json");
+  REQUIRE(report["mesh"]["triangles"].get<size_t>() > 100);
+  // Every training view's depths (fewer than 200 of them).
+  const nlohmann::json poses = ReadJsonFile(setup.dir / "ws" / "20_poses" / "transforms.json");
+  size_t training_views = 0;
+  for (const nlohmann::json& frame : poses["frames"]) training_views += frame["split"] == "train";
+  CHECK(report["depth_views"].get<size_t>() == training_views);
+  // The small scene is unbounded (a transforms.json dataset): the mesh covers the cube the views look at, inside
+  // the scene box.
+  const nlohmann::json& region = report["mesh"]["region"];
+  CHECK(region["kind"] == "focus");
+  const double half_size = region["half_size"].get<double>();
+  CHECK((half_size > 0.05 && half_size <= 1.0));
+  const Eigen::Vector3d centre(region["centre"][0].get<double>(), region["centre"][1].get<double>(),
+                               region["centre"][2].get<double>());
+  CHECK(centre.cwiseAbs().maxCoeff() + half_size <= 1.0 + 1e-9);
+
+  const std::vector<aiVector3D> normalized = CheckMeshFiles(out, report, centre, half_size);
 
   // In the source frame, applying applied_transform gives back the normalised vertices.
   config.Set("export.frame", "source", "test");

@@ -322,9 +322,48 @@ TEST_CASE("sfm stage in blocks: extraction and matching as parts, a failed match
   CHECK(!fs::exists(staging / "matching"));
 }
 
+// View `i` of the synthetic scene stored one of the eight ways a folder of real photos may hold it, and its file name.
+OIIO::ImageBuf MessyEncoding(const OIIO::ImageBuf& view, int i, std::string* file) {
+  const std::string stem = format("v{:02}", i);
+  OIIO::ImageBuf out;
+  switch (i % 8) {
+    case 0:
+      *file = format("vue n°{} été.png", i), out.copy(view);
+      break;
+    case 1:
+      *file = stem + "_16bit.png", out.copy(view, OIIO::TypeDesc::UINT16);
+      break;
+    case 2:
+      *file = stem + ".jpg", out.copy(view);
+      break;
+    case 3:  // stored turned 90 degrees counterclockwise, with the EXIF tag that turns it back
+      *file = stem + "_rotated.jpg", out = OIIO::ImageBufAlgo::rotate270(view);
+      out.specmod().attribute("Orientation", 6);
+      break;
+    case 4:
+      *file = stem + "_alpha.png";
+      out = OIIO::ImageBufAlgo::channels(view, 4, {0, 1, 2, -1}, {0.0f, 0.0f, 0.0f, 1.0f}, {"R", "G", "B", "A"});
+      break;
+    case 5:
+      *file = stem + "_grey.jpg", out = OIIO::ImageBufAlgo::channels(view, 1, {1});
+      break;
+    case 6: {
+      *file = stem + "_cmyk.tif";  // C = 1 - R, M = 1 - G, Y = 1 - B, no black ink
+      const OIIO::ImageBuf inks = OIIO::ImageBufAlgo::invert(view);
+      out = OIIO::ImageBufAlgo::channels(inks, 4, {0, 1, 2, -1}, {0.0f, 0.0f, 0.0f, 0.0f}, {"C", "M", "Y", "K"});
+      out.specmod().attribute("tiff:ColorSpace", "CMYK");
+      break;
+    }
+    default:
+      *file = stem + "_small.png", out = OIIO::ImageBufAlgo::resize(view, "", 0, OIIO::ROI(0, 240, 0, 180));
+      break;
+  }
+  return out;
+}
+
 // A messy photo folder (issue 7): the synthetic scene's views stored every way a folder of real photos may hold
 // them (16-bit, grey, alpha, CMYK, EXIF-rotated, another size, non-ASCII names with spaces), a copy of one photo
-// and three photos of an unrelated scene (LLFF fern, when ../shared/data has it). Every view of the scene is
+// and three photos of an unrelated scene (LLFF fern, when the shared scenes have it). Every view of the scene is
 // registered with its true pose, the copy is skipped by ingest, and the unrelated photos and a grey one are left out
 // by name, each with its reason.
 TEST_CASE("sfm + poses on a messy folder: every encoding registered, the copy skipped, another scene left out",
@@ -344,55 +383,22 @@ TEST_CASE("sfm + poses on a messy folder: every encoding registered, the copy sk
     const nlohmann::json& frame = truth["frames"][i];
     OIIO::ImageBuf view((dir / "views" / frame["file_path"].get<std::string>()).string());
     REQUIRE(view.read(0, 0, true, OIIO::TypeDesc::UINT8));
-    const std::string stem = format("v{:02}", i);
     std::string file;
-    OIIO::ImageBuf out;
-    switch (i % 8) {
-      case 0:
-        file = format("vue n°{} été.png", i), out.copy(view);
-        break;
-      case 1:
-        file = stem + "_16bit.png", out.copy(view, OIIO::TypeDesc::UINT16);
-        break;
-      case 2:
-        file = stem + ".jpg", out.copy(view);
-        break;
-      case 3:  // stored turned 90 degrees counterclockwise, with the EXIF tag that turns it back
-        file = stem + "_rotated.jpg", out = OIIO::ImageBufAlgo::rotate270(view);
-        out.specmod().attribute("Orientation", 6);
-        break;
-      case 4:
-        file = stem + "_alpha.png";
-        out = OIIO::ImageBufAlgo::channels(view, 4, {0, 1, 2, -1}, {0.0f, 0.0f, 0.0f, 1.0f}, {"R", "G", "B", "A"});
-        break;
-      case 5:
-        file = stem + "_grey.jpg", out = OIIO::ImageBufAlgo::channels(view, 1, {1});
-        break;
-      case 6: {
-        file = stem + "_cmyk.tif";  // C = 1 - R, M = 1 - G, Y = 1 - B, no black ink
-        const OIIO::ImageBuf inks = OIIO::ImageBufAlgo::invert(view);
-        out = OIIO::ImageBufAlgo::channels(inks, 4, {0, 1, 2, -1}, {0.0f, 0.0f, 0.0f, 0.0f}, {"C", "M", "Y", "K"});
-        out.specmod().attribute("tiff:ColorSpace", "CMYK");
-        break;
-      }
-      default:
-        file = stem + "_small.png", out = OIIO::ImageBufAlgo::resize(view, "", 0, OIIO::ROI(0, 240, 0, 180));
-        break;
-    }
+    const OIIO::ImageBuf out = MessyEncoding(view, i, &file);
     if (i == 0) REQUIRE(view.write((photos / "zz_copy.png").string()));
     REQUIRE(out.write((photos / file).string(),
                       out.spec().format == OIIO::TypeDesc::UINT16 ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::UINT8));
     true_pose_of_source[file] = ReadMatrix(frame["transform_matrix"]);
   }
   std::vector<std::string> unrelated;
-  const fs::path fern = fs::path(P2N_SOURCE_DIR) / ".." / "shared" / "data" / "fern" / "images_8";
+  const fs::path fern = fs::path(P2N_DATA_DIR) / "fern" / "images_8";
   for (int i = 0; i < 3 && fs::exists(fern); ++i) {
     const OIIO::ImageBuf photo((fern / format("image{:03}.png", i)).string());
     unrelated.push_back(format("fern_{}.png", i));
     REQUIRE(OIIO::ImageBufAlgo::resize(photo, "", 0, OIIO::ROI(0, 320, 0, 240))
                 .write((photos / unrelated.back()).string()));
   }
-  if (unrelated.empty()) WARN("../shared/data/fern is absent: the unrelated photos are left out of this test");
+  if (unrelated.empty()) WARN(fern.string() << " is absent: the unrelated photos are left out of this test");
   // A photo of nothing: one grey.
   OIIO::ImageBuf blank(OIIO::ImageSpec(320, 240, 3, OIIO::TypeDesc::UINT8));
   OIIO::ImageBufAlgo::fill(blank, {0.5f, 0.5f, 0.5f});

@@ -179,7 +179,7 @@ std::string ErrorAfterEdit(const fs::path& file, const nlohmann::json& written, 
 
 }  // namespace
 
-TEST_CASE("Reports between stages read back exactly what was written", "[reports]") {
+TEST_CASE("Reports between stages read back exactly what was written: ingest and sfm", "[reports]") {
   TempDir dir;
   const IngestReport ingest = SomeIngestReport();
   WriteJsonAtomic(dir.path() / "ingest_report.json", ingest.ToJson());
@@ -203,7 +203,10 @@ TEST_CASE("Reports between stages read back exactly what was written", "[reports
   unfocused.median_axis_to_focus_angle_deg.reset();
   WriteJsonAtomic(dir.path() / "sfm_report.json", unfocused.ToJson());
   CHECK_FALSE(SfmReport::Read(dir.path() / "sfm_report.json").median_axis_to_focus_angle_deg.has_value());
+}
 
+TEST_CASE("Reports between stages read back exactly what was written: train and splat", "[reports]") {
+  TempDir dir;
   const TrainReport train = SomeTrainReport();
   WriteJsonAtomic(dir.path() / "train_report.json", train.ToJson());
   const TrainReport train_read = TrainReport::Read(dir.path() / "train_report.json");
@@ -236,7 +239,10 @@ TEST_CASE("Reports between stages read back exactly what was written", "[reports
   CHECK(SplatReport::Read(dir.path() / "splat_report.json").view_share == 1);
   WriteJsonAtomic(dir.path() / "off.json", SplatReport{}.ToJson());
   CHECK_FALSE(SplatReport::Read(dir.path() / "off.json").enabled);
+}
 
+TEST_CASE("Reports between stages read back exactly what was written: render and export", "[reports]") {
+  TempDir dir;
   const EvalReport eval = SomeEvalReport();
   WriteJsonAtomic(dir.path() / "eval.json", eval.ToJson());
   const EvalReport eval_read = EvalReport::Read(dir.path() / "eval.json");

@@ -1,7 +1,5 @@
 #include "stages/fitting/splat_optimisation.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <chrono>
 #include <numeric>

@@ -1,8 +1,5 @@
 #include "stages/fitting/train_blocks.h"
 
-#include <tbb/parallel_for.h>
-
-#include <numeric>
 #include <optional>
 
 #include "base/errors.h"
